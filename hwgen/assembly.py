@@ -1,0 +1,34 @@
+"""Which parts a design has, in build order. Each family turns the plan into Parts."""
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+
+from .design import Plan
+from .parts import Part
+
+
+def _disks(plan: Plan) -> Iterator[Part]:
+    from .parts.disk import build_disk
+    for spec in plan.disks:
+        yield build_disk(spec)
+
+
+def _backbone(plan: Plan) -> Iterator[Part]:
+    from .parts.backbone import build_backbone
+    yield build_backbone(plan.backbone)
+
+
+# (family, how many parts it yields, builder)
+FAMILIES: list[tuple[str, Callable[[Plan], int], Callable[[Plan], Iterator[Part]]]] = [
+    ("disks", lambda p: len(p.disks), _disks),
+    ("backbone", lambda p: 1, _backbone),
+]
+
+
+def part_count(plan: Plan) -> int:
+    return sum(count(plan) for _, count, _ in FAMILIES)
+
+
+def build_parts(plan: Plan) -> Iterator[Part]:
+    for _, _, build in FAMILIES:
+        yield from build(plan)

@@ -1,0 +1,102 @@
+"""`hwgen build`: parameters -> plan -> parts -> files, written atomically.
+
+Everything is written into a fresh temporary folder beside the target; only when every
+file is complete does it replace ``out/<design>/``. A failure at any point leaves the old
+outputs exactly as they were.
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from . import __version__, export
+from .assembly import build_parts, part_count
+from .design import Plan, plan as make_plan
+from .params import LoadedDesign
+
+# Steps run on the finished files before they are published: (name, step(plan, folder, manifest)).
+# Later stages (checks, renders) add themselves here; each may add entries to the manifest.
+POST_BUILD: list[tuple[str, Callable[[Plan, Path, dict], None]]] = []
+
+
+@dataclass
+class BuildResult:
+    folder: Path
+    manifest: dict
+    plan: Plan
+
+
+def build(loaded: LoadedDesign, out_root: Path, progress: Callable[[str, int, int], None] | None = None,
+          post_build: bool = True) -> BuildResult:
+    """Build every part and file of the design into ``out_root/<design>/``.
+
+    ``progress(part_name, done, total)`` is called after each part is written.
+    """
+    plan = make_plan(loaded.design)
+    out_root.mkdir(parents=True, exist_ok=True)
+    target = out_root / loaded.design.design
+    tmp = Path(tempfile.mkdtemp(prefix=f".{loaded.design.design}.", suffix=".tmp", dir=out_root))
+    try:
+        manifest = _write_all(loaded, plan, tmp, progress)
+        if post_build:
+            for _name, step in POST_BUILD:
+                step(plan, tmp, manifest)
+        export.write_json(manifest, tmp / "manifest.json")
+        _publish(tmp, target)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return BuildResult(target, manifest, plan)
+
+
+def _write_all(loaded: LoadedDesign, plan: Plan, folder: Path, progress) -> dict:
+    (folder / "stl").mkdir()
+    (folder / "step").mkdir()
+    parts, entries = [], []
+    total = part_count(plan)
+    for part in build_parts(plan):
+        files = {"stl": folder / "stl" / f"{part.name}.stl", "step": folder / "step" / f"{part.name}.step"}
+        export.write_stl(part.solid, files["stl"])
+        export.write_step(part.solid, files["step"])
+        entries.append(export.part_entry(part, files, folder))
+        parts.append(part)
+        if progress:
+            progress(part.name, len(parts), total)
+    export.write_assembly(parts, loaded.design.design, folder / "assembly.step")
+    export.write_backbone_dxf(plan.backbone, plan.stations, folder / "backbone_template.dxf")
+    return {
+        "design": loaded.design.design,
+        "hwgen_version": __version__,
+        "params_file": loaded.source,
+        "params_sha256": loaded.sha256,
+        "files": {
+            "assembly": {"path": "assembly.step", "sha256": export.sha256(folder / "assembly.step")},
+            "backbone_template": {"path": "backbone_template.dxf",
+                                  "sha256": export.sha256(folder / "backbone_template.dxf")},
+        },
+        "parts": entries,
+        "design_report": export.design_report(plan),
+    }
+
+
+def _publish(tmp: Path, target: Path) -> None:
+    """Swap the finished folder in: rename the old one aside, rename the new one in, drop the old."""
+    os.chmod(tmp, 0o755)
+    old = None
+    if target.exists():
+        old = target.with_name(f".{target.name}.old-{os.getpid()}")
+        shutil.rmtree(old, ignore_errors=True)
+        os.rename(target, old)
+    try:
+        os.rename(tmp, target)
+    except BaseException:
+        if old is not None:
+            os.rename(old, target)
+        raise
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+

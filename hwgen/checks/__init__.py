@@ -1,0 +1,1 @@
+"""Checks read the exported files back; they never look at the builders' internals."""

@@ -1,0 +1,126 @@
+"""Measure exported meshes: plane sections into closed loops, holes and their centres.
+
+Used by the validation checks and by the tests; everything here starts from a file on disk
+and the placement recorded in the manifest.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+WELD_DECIMALS = 6   # section endpoints are welded after rounding to this many mm decimals
+
+
+@dataclass(frozen=True)
+class Loop:
+    """A closed section loop in robot coordinates, projected onto the disk's (x, z) plane."""
+
+    points: np.ndarray          # (n, 2) x, z
+    area: float                 # unsigned, mm²
+    centroid: tuple[float, float]
+
+    @property
+    def extent(self) -> tuple[float, float]:
+        return tuple(self.points.max(axis=0) - self.points.min(axis=0))
+
+    @property
+    def equivalent_diameter(self) -> float:
+        return float(2 * np.sqrt(self.area / np.pi))
+
+
+def load_mesh(path: str | Path):
+    import trimesh
+    return trimesh.load_mesh(str(path), process=True)
+
+
+def chain_loops(segments: np.ndarray) -> list[np.ndarray]:
+    """Chain (m, 2, d) line segments sharing endpoints into closed polylines."""
+    keys = np.round(segments, WELD_DECIMALS)
+    flat = keys.reshape(-1, keys.shape[-1])
+    _, ids = np.unique(flat, axis=0, return_inverse=True)
+    ids = ids.reshape(-1, 2)
+    adj: dict[int, list[int]] = {}
+    for s, (a, b) in enumerate(ids):
+        if a == b:
+            continue
+        adj.setdefault(a, []).append(s)
+        adj.setdefault(b, []).append(s)
+    used = np.zeros(len(ids), bool)
+    pts_of = {}
+    for s, (a, b) in enumerate(ids):
+        pts_of[a] = segments[s, 0]
+        pts_of[b] = segments[s, 1]
+    loops = []
+    for start in range(len(ids)):
+        if used[start] or ids[start, 0] == ids[start, 1]:
+            continue
+        used[start] = True
+        first, cur = ids[start]
+        chain = [first, cur]
+        while cur != first:
+            nxt = next((s for s in adj.get(cur, []) if not used[s]), None)
+            if nxt is None:
+                break  # open chain: not a closed loop, dropped
+            used[nxt] = True
+            a, b = ids[nxt]
+            cur = b if a == cur else a
+            chain.append(cur)
+        if cur == first and len(chain) > 3:
+            loops.append(np.array([pts_of[k] for k in chain[:-1]]))
+    return loops
+
+
+def _area_centroid(p: np.ndarray) -> tuple[float, tuple[float, float]]:
+    x, y = p[:, 0], p[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    cross = x * yn - xn * y
+    a = cross.sum() / 2
+    cx = ((x + xn) * cross).sum() / (6 * a)
+    cy = ((y + yn) * cross).sum() / (6 * a)
+    return abs(float(a)), (float(cx), float(cy))
+
+
+def section_loops(mesh, placement: np.ndarray, origin, normal) -> list[Loop]:
+    """Section a mesh (file coordinates) by a plane and return loops in robot (x, z).
+
+    ``origin`` and ``normal`` are in file coordinates; the loops are mapped through
+    ``placement`` and projected on robot x and z (the disk plane).
+    """
+    import trimesh
+    segs = trimesh.intersections.mesh_plane(mesh, plane_normal=normal, plane_origin=origin)
+    if len(segs) == 0:
+        return []
+    h = np.c_[segs.reshape(-1, 3), np.ones(len(segs) * 2)] @ np.asarray(placement).T
+    robot = h[:, :3].reshape(-1, 2, 3)
+    out = []
+    for loop in chain_loops(robot[:, :, [0, 2]]):
+        area, c = _area_centroid(loop)
+        out.append(Loop(loop, area, c))
+    return sorted(out, key=lambda lp: -lp.area)
+
+
+@dataclass(frozen=True)
+class DiskSection:
+    """A disk cut at its mid-plane: the outline, the backbone slot and every hole."""
+
+    outline: Loop
+    inner: list[Loop]         # all inner loops: slot (possibly with merged eyelets) and holes
+    thickness: float          # measured from the mesh along the disk normal
+    y_mid: float              # robot y of the mid-plane
+
+
+def disk_mid_section(stl_path: str | Path, placement) -> DiskSection:
+    """Cut a disk file halfway through its thickness (disk files lie flat: thickness along file Z)."""
+    mesh = load_mesh(stl_path)
+    zmin, zmax = mesh.bounds[:, 2]
+    mid = (zmin + zmax) / 2
+    loops = section_loops(mesh, placement, [0, 0, mid], [0, 0, 1])
+    y_mid = float((np.asarray(placement) @ [0, 0, mid, 1])[1])
+    return DiskSection(loops[0], loops[1:], float(zmax - zmin), y_mid)
+
+
+def read_manifest(folder: str | Path) -> dict:
+    return json.loads((Path(folder) / "manifest.json").read_text())

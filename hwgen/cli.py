@@ -1,0 +1,141 @@
+"""The `hwgen` command line: build, routing, schema.
+
+Exit codes: 0 success, 1 design findings that fail, 2 bad input or usage.
+"""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from .params import InputError, load
+
+EXIT_OK, EXIT_FINDINGS, EXIT_BAD_INPUT = 0, 1, 2
+
+app = typer.Typer(add_completion=False, no_args_is_help=True,
+                  help="Print files, checks and pictures for tendon-driven continuum robots.")
+out = Console()
+err = Console(stderr=True)
+
+PARAMS = typer.Argument(..., help="design parameter YAML", show_default=False)
+OUT = typer.Option(Path("out"), "--out", help="output root; the design goes to OUT/<design>/")
+
+
+def _load(path: Path):
+    try:
+        return load(path)
+    except InputError as e:
+        err.print(f"[bold red]error:[/] {e.file}: [bold]{e.path or '<document>'}[/]: {e.message}",
+                  highlight=False, soft_wrap=True)
+        raise typer.Exit(EXIT_BAD_INPUT) from None
+
+
+@app.command()
+def build(params: Path = PARAMS, out_dir: Path = OUT,
+          quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar")) -> None:
+    """Build every part (STL, STEP), assembly.step, the backbone DXF and manifest.json."""
+    loaded = _load(params)
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from .build import build as run_build
+
+    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                  console=err, disable=quiet, transient=True) as bar:
+        task = bar.add_task(f"building {loaded.design.design}", total=None)
+
+        def progress(name: str, done: int, total: int) -> None:
+            bar.update(task, total=total, completed=done, description=f"built {name}")
+
+        result = run_build(loaded, out_dir, progress)
+    n = len(result.manifest["parts"])
+    out.print(f"{loaded.design.design}: {n} parts written to {result.folder}", highlight=False)
+    failed = [c for c in result.manifest.get("checks", []) if not c.get("passed", True)
+              and c.get("severity") == "error"]
+    if result.plan.findings:
+        for f in result.plan.findings:
+            err.print(f"[yellow]finding:[/] {f}", highlight=False)
+    if failed:
+        err.print(f"[red]{len(failed)} check(s) failed[/]; see {result.folder}")
+        raise typer.Exit(EXIT_FINDINGS)
+
+
+@app.command()
+def routing(params: Path = PARAMS,
+            as_json: bool = typer.Option(False, "--json", help="print JSON instead of tables")) -> None:
+    """The eyelet table per station and tendon, merges, backbone crossings and table deviations."""
+    loaded = _load(params)
+    from .design import plan as make_plan
+    from .routing import table_deviations
+
+    plan = make_plan(loaded.design)
+    devs = table_deviations(plan.paths)
+    if as_json:
+        from .export import design_report
+        rep = design_report(plan)
+        rep["deviations"] = [{"tendon": d.tendon, "station": d.station, "table": d.table,
+                              "function": d.function, "distance_mm": d.distance} for d in devs]
+        out.print_json(json.dumps(rep))
+        return
+    t = Table(title=f"{loaded.design.design}: eyelets (mm, disk frame at its mid-plane)")
+    for col in ("i", "y", "tendons", "x", "z", "Ø", "worst α°", "note"):
+        t.add_column(col, justify="right" if col not in ("tendons", "note") else "left")
+    for d in plan.disks:
+        for h in d.holes:
+            note = []
+            if len(h.tendons) > 1:
+                note.append("shared")
+            if h.in_slot:
+                note.append("crosses backbone")
+            t.add_row(str(d.index), f"{d.y:g}", ",".join(h.tendons), f"{h.x:.3f}", f"{h.z:.3f}",
+                      f"{h.diameter:.3f}", f"{h.worst_angle_deg:.1f}", " ".join(note))
+    out.print(t)
+    if plan.merges:
+        out.print("[bold]merged eyelets[/]")
+        for m in plan.merges:
+            out.print(f"  station {m.station}: {', '.join(m.tendons)} ({m.kind})", highlight=False)
+    if plan.backbone.holes:
+        out.print("[bold]backbone holes[/] (tendon crosses the strip)")
+        for h in plan.backbone.holes:
+            out.print(f"  {h.tendon} at station {h.station:g}: x={h.x:.3f} y={h.y:.3f} Ø{h.diameter:.3f}",
+                      highlight=False)
+    for f in plan.findings:
+        out.print(f"[yellow]finding:[/] {f}", highlight=False)
+    if devs:
+        dt = Table(title="table versus function (mm)")
+        for col in ("tendon", "i", "table x", "table z", "fn x", "fn z", "deviation"):
+            dt.add_column(col, justify="right")
+        for dv in devs:
+            style = "red" if dv.distance > 0.1 else None
+            dt.add_row(dv.tendon, str(dv.station), f"{dv.table[0]:.3f}", f"{dv.table[1]:.3f}",
+                       f"{dv.function[0]:.3f}", f"{dv.function[1]:.3f}", f"{dv.distance:.3f}", style=style)
+        out.print(dt)
+
+
+@app.command()
+def schema() -> None:
+    """Print the JSON Schema of the parameter YAML (for editors)."""
+    from .params import json_schema
+    sys.stdout.write(json.dumps(json_schema(), indent=2) + "\n")
+
+
+def main() -> None:
+    try:
+        app(standalone_mode=False)
+    except typer.Exit as e:
+        sys.exit(e.exit_code)
+    except typer.Abort:
+        sys.exit(EXIT_BAD_INPUT)
+    except Exception as e:  # click usage errors
+        import click
+        if isinstance(e, click.exceptions.ClickException):
+            e.show()
+            sys.exit(EXIT_BAD_INPUT)
+        raise
+
+
+if __name__ == "__main__":
+    main()

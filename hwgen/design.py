@@ -1,0 +1,210 @@
+"""From parameters to a buildable plan: holes per disk, merges, backbone holes (numpy only).
+
+The plan is everything the part builders need, as frozen plain data, plus the design report
+(shared and overlapping eyelets, tendons crossing the backbone). Nothing here imports CadQuery.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import kinematics as kin
+from .params import Design
+from .routing import TendonPath, tendon_paths
+
+SAME_POSITION_MM = 1e-6  # eyelets closer than this share one hole
+SWEEP_STEP_DEG = 1.0     # resolution of the bending sweep used to size eyelets
+
+
+@dataclass(frozen=True)
+class Hole:
+    """An eyelet hole: centre (x, z) on the disk mid-plane, axis in disk coordinates (x, y, z)."""
+
+    x: float
+    z: float
+    axis: tuple[float, float, float]
+    diameter: float
+    tendons: tuple[str, ...]
+    worst_angle_deg: float   # largest tendon angle to the axis over the sweep
+    in_slot: bool            # the centre lies inside the backbone slot: the strip needs a hole here
+
+
+@dataclass(frozen=True)
+class DiskSpec:
+    """One tendon-support disk, ready to build."""
+
+    index: int
+    y: float
+    role: str                # "base", "inner" or "tip"
+    thickness: float
+    outer_diameter: float
+    slot_width: float        # along x
+    slot_height: float       # along z
+    holes: tuple[Hole, ...]
+    edge_size: float         # chamfer at hole rims, 0 for none
+    knot_pockets: tuple[tuple[float, float, float, float], ...] = ()  # (x, z, diameter, depth), base side
+    mount_holes: tuple[tuple[float, float, float], ...] = ()          # (x, z, diameter), through
+
+    @property
+    def name(self) -> str:
+        return f"disk_{self.index:02d}"
+
+
+@dataclass(frozen=True)
+class BackboneHole:
+    tendon: str
+    station: float           # disk index, or a fraction between two disks
+    x: float
+    y: float
+    diameter: float
+
+
+@dataclass(frozen=True)
+class BackboneSpec:
+    height: float
+    thickness: float
+    y_start: float           # robot y of the strip's base end (negative: clamping length)
+    y_end: float
+    holes: tuple[BackboneHole, ...]
+    name: str = "backbone"
+
+
+@dataclass(frozen=True)
+class Merge:
+    station: int
+    tendons: tuple[str, ...]
+    kind: str                # "shared": same position, one hole; "overlap": holes intersect
+
+
+@dataclass(frozen=True)
+class Plan:
+    design: Design
+    paths: list[TendonPath]
+    disks: tuple[DiskSpec, ...]
+    backbone: BackboneSpec
+    merges: tuple[Merge, ...]
+    findings: tuple[str, ...] = field(default=())
+
+    @property
+    def stations(self) -> tuple[float, ...]:
+        return self.design.stations
+
+
+def hole_diameter(d: float, thickness: float, alpha: float, clearance: float, minimum: float) -> float:
+    """Smallest hole a tendon of diameter d passes at angle alpha (rad) through a wall this thick."""
+    return max(minimum, d / np.cos(alpha) + thickness * np.tan(alpha) + clearance)
+
+
+def _sweep(design: Design) -> np.ndarray:
+    a = design.disks.eyelets.sweep_deg
+    n = int(round(2 * a / SWEEP_STEP_DEG)) + 1
+    return kin.kappas_for_angles(np.linspace(-a, a, n), design.backbone.length)
+
+
+def _rest_axes(design: Design, path: TendonPath) -> np.ndarray:
+    """(N, 3) eyelet axes for one tendon in the straight robot."""
+    n = len(path.points)
+    if design.disks.eyelets.axis == "normal":
+        return np.tile([0.0, 1.0, 0.0], (n, 1))
+    into, out = kin.segment_directions_local(design.stations, path.points, 0.0)
+    s = np.nan_to_num(into[0]) + np.nan_to_num(out[0])
+    return s / np.linalg.norm(s, axis=1, keepdims=True)
+
+
+def _worst_angles(design: Design, path: TendonPath, axes: np.ndarray) -> np.ndarray:
+    """(N,) largest angle between the tendon and the given axes over the sweep, rad."""
+    into, out = kin.segment_directions_local(design.stations, path.points, _sweep(design))
+    worst = np.zeros(len(path.points))
+    for seg in (into, out):
+        cos = np.abs(np.einsum("kni,ni->kn", seg, axes))
+        ang = np.arccos(np.clip(cos, -1, 1))
+        worst = np.fmax(worst, np.nanmax(np.where(np.isnan(ang), -1, ang), axis=0))
+    return worst
+
+
+def plan(design: Design) -> Plan:
+    d = design
+    st = d.stations
+    n = len(st)
+    paths = tendon_paths(d)
+    dk = d.disks
+    slot_w = d.backbone.height + 2 * dk.slot_clearance
+    slot_h = d.backbone.thickness + 2 * dk.slot_clearance
+    tendon_d = d.tendon_material.diameter
+    proc = d.process
+    rest_axes = {p.name: _rest_axes(d, p) for p in paths}
+
+    disks, merges = [], []
+    for i in range(n):
+        role = "base" if i == 0 else "tip" if i == n - 1 else "inner"
+        thick = dk.thickness if role == "inner" else dk.end_thickness
+        groups: list[list[TendonPath]] = []
+        for p in paths:
+            for g in groups:
+                if np.linalg.norm(g[0].points[i] - p.points[i]) < SAME_POSITION_MM:
+                    g.append(p)
+                    break
+            else:
+                groups.append([p])
+        holes = []
+        for g in groups:
+            ax = np.sum([rest_axes[p.name][i] for p in g], axis=0)
+            ax /= np.linalg.norm(ax)
+            axes = np.tile(ax, (n, 1))
+            alpha = max(_worst_angles(d, p, axes)[i] for p in g)
+            x, z = (float(v) for v in g[0].points[i])
+            dia = hole_diameter(tendon_d, thick, alpha, proc.hole_clearance, proc.min_hole)
+            in_slot = abs(x) <= slot_w / 2 and abs(z) <= slot_h / 2
+            holes.append(Hole(x, z, tuple(float(a) for a in ax), float(dia), tuple(p.name for p in g),
+                              float(np.degrees(alpha)), in_slot))
+            if len(g) > 1:
+                merges.append(Merge(i, tuple(p.name for p in g), "shared"))
+        for a in range(len(holes)):
+            for b in range(a + 1, len(holes)):
+                ha, hb = holes[a], holes[b]
+                if np.hypot(ha.x - hb.x, ha.z - hb.z) < (ha.diameter + hb.diameter) / 2:
+                    merges.append(Merge(i, ha.tendons + hb.tendons, "overlap"))
+        pockets, mounts = (), ()
+        if role == "base":
+            to = dk.tie_off
+            pockets = tuple((h.x, h.z, max(to.pocket_diameter, h.diameter + 2 * proc.min_wall), to.pocket_depth)
+                            for h in holes if not h.in_slot)
+        if role == "tip":
+            mounts = tuple((x, z, dk.tip_mount.hole_diameter) for x, z in dk.tip_mount.positions)
+        disks.append(DiskSpec(i, float(st[i]), role, thick, dk.outer_diameter, slot_w, slot_h, tuple(holes),
+                              dk.eyelets.edge_size if dk.eyelets.edge == "chamfer" else 0.0, pockets, mounts))
+
+    bb_holes, findings = _backbone_holes(d, paths, disks)
+    backbone = BackboneSpec(d.backbone.height, d.backbone.thickness, -d.backbone.extra_base,
+                            d.backbone.length + d.backbone.extra_tip, tuple(bb_holes))
+    return Plan(d, paths, tuple(disks), backbone, tuple(merges), tuple(findings))
+
+
+def _backbone_holes(d: Design, paths: list[TendonPath], disks: list[DiskSpec]):
+    """Holes the strip needs where tendons cross its plane (z = 0) within its height."""
+    half_h = d.backbone.height / 2
+    st = np.asarray(d.stations)
+    out, findings = [], []
+    for p in paths:
+        x, z = p.points[:, 0], p.points[:, 1]
+        for i in range(len(st)):
+            hole = next((h for h in disks[i].holes if p.name in h.tendons), None)
+            if hole is not None and hole.in_slot:
+                out.append(BackboneHole(p.name, float(i), float(x[i]), float(st[i]), hole.diameter))
+        for i in range(len(st) - 1):
+            z0, z1 = z[i], z[i + 1]
+            if z0 == 0 and z1 == 0 and (abs(x[i]) < half_h or abs(x[i + 1]) < half_h):
+                findings.append(f"{p.name}: runs in the backbone plane between stations {i} and {i + 1}")
+                continue
+            if z0 * z1 < 0:  # crosses strictly between the disks
+                f = z0 / (z0 - z1)
+                xc = x[i] + f * (x[i + 1] - x[i])
+                if abs(xc) < half_h:
+                    seg = np.array([x[i + 1] - x[i], st[i + 1] - st[i], z1 - z0])
+                    beta = np.arccos(abs(seg[2]) / np.linalg.norm(seg))
+                    dia = hole_diameter(d.tendon_material.diameter, d.backbone.thickness, beta,
+                                        d.process.hole_clearance, d.process.min_hole)
+                    out.append(BackboneHole(p.name, i + f, float(xc), float(st[i] + f * (st[i + 1] - st[i])),
+                                            float(dia)))
+    return out, findings

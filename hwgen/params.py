@@ -1,0 +1,316 @@
+"""The parameter YAML: its schema (pydantic v2) and loading with clear errors.
+
+Units are millimetres and degrees throughout; every field says so in its description.
+Coordinates are the paper's: the backbone runs along +y from the base disk at y = 0,
+x spans the backbone's height, z its thickness; positive curvature bends toward +z.
+
+Loading is two passes: pydantic checks each field's type and range, then
+:func:`_check_design` checks what spans fields (station counts, channels, names, eyelets
+inside the disk). Both report through :class:`InputError`, which names the file, the field
+path and what is wrong.
+"""
+from __future__ import annotations
+
+import hashlib
+import math
+import re
+from pathlib import Path
+from typing import Annotated, Literal
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
+
+Length = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+NonNegLength = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+Coord = Annotated[float, Field(allow_inf_nan=False)]
+Name = Annotated[str, Field(min_length=1, max_length=64)]
+
+
+class InputError(Exception):
+    """Bad input: the file, the field path (``tendons[2].routing.table``) and what is wrong."""
+
+    def __init__(self, file: str | Path, path: str, message: str):
+        self.file, self.path, self.message = str(file), path, message
+        super().__init__(f"{file}: {path or '<document>'}: {message}")
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Backbone(_Model):
+    """The carbon-fibre strip (Table I)."""
+
+    length: Length = Field(description="L: length between the base and tip disk mid-planes, mm")
+    height: Length = Field(description="h: strip width along x, mm")
+    thickness: Length = Field(description="t: strip thickness along z, mm")
+    extra_base: NonNegLength = Field(0.0, description="strip length below the base disk for clamping, mm")
+    extra_tip: NonNegLength = Field(0.0, description="strip length beyond the tip disk for the tensioner clamp, mm")
+
+
+class Eyelets(_Model):
+    """How eyelet holes are sized and shaped."""
+
+    axis: Literal["bisector", "normal"] = Field(
+        "bisector", description="hole axis: bisector of the tendon's straight segments, or normal to the disk")
+    edge: Literal["chamfer", "none"] = Field("chamfer", description="edge break at both hole ends")
+    edge_size: NonNegLength = Field(0.2, description="chamfer leg at the hole rim, mm")
+    sweep_deg: Length = Field(90.0, description="bending sweep ±deg over which the worst tendon angle is taken")
+
+
+class TieOff(_Model):
+    """Knot pockets on the outer face of the base disk."""
+
+    pocket_diameter: Length = Field(3.0, description="diameter of the recess a knot sits in, mm")
+    pocket_depth: Length = Field(1.5, description="depth of the recess from the base disk's outer face, mm")
+
+
+class TipMount(_Model):
+    """Bolt pattern on the tip disk that the tensioner housing fastens to."""
+
+    hole_diameter: Length = Field(3.4, description="clearance hole for the screws (M3 normal fit), mm")
+    positions: tuple[tuple[Coord, Coord], ...] = Field(
+        ((-22.0, 14.0), (22.0, 14.0), (-22.0, -14.0), (22.0, -14.0)),
+        description="hole centres (x, z) on the tip disk, mm")
+
+
+class Disks(_Model):
+    """The tendon-support disks."""
+
+    count: int = Field(ge=2, le=200, description="N: number of disks, base (i = 0) to tip (i = N-1)")
+    spacing: Length | None = Field(None, description="ΔL: equal spacing between disks, mm (or give stations)")
+    stations: tuple[Coord, ...] | None = Field(None, description="explicit y_i of every disk, mm, increasing")
+    thickness: Length = Field(description="thickness of the inner disks along y, mm")
+    end_thickness: Length = Field(description="thickness of the base and tip disks, mm")
+    outer_diameter: Length = Field(description="outer diameter, mm")
+    slot_clearance: NonNegLength = Field(description="clearance per side between strip and slot, mm")
+    eyelets: Eyelets = Field(default_factory=Eyelets)
+    tie_off: TieOff = Field(default_factory=TieOff)
+    tip_mount: TipMount = Field(default_factory=TipMount)
+
+    @model_validator(mode="after")
+    def _one_station_rule(self):
+        if (self.spacing is None) == (self.stations is None):
+            raise ValueError("give exactly one of 'spacing' or 'stations'")
+        return self
+
+
+class RoutingFunction(_Model):
+    """A fully supported path of eq. (3), sampled at the stations (s = y_i).
+
+    straight: (x, z) = (x0, z0)
+    cosine:   the `axis` coordinate is a·cos(kπs/L + φ); the other is its offset
+    helix:    (x, z) = a·(sin(kπs/L + φ), cos(kπs/L + φ)) plus the offsets
+    """
+
+    kind: Literal["straight", "cosine", "helix"]
+    a: Coord = Field(0.0, description="amplitude a, mm")
+    k: Coord = Field(1.0, description="number of half waves over L (the k in kπs/L)")
+    axis: Literal["x", "z"] = Field("z", description="cosine only: the coordinate that varies")
+    phase_deg: Coord = Field(0.0, description="phase φ added to kπs/L, deg")
+    x0: Coord = Field(0.0, description="constant offset in x, mm")
+    z0: Coord = Field(0.0, description="constant offset in z, mm")
+
+
+class Routing(_Model):
+    table: tuple[tuple[Coord, Coord], ...] | None = Field(
+        None, description="one (x, z) per station, mm, as in Table II; used for the geometry when given")
+    function: RoutingFunction | None = Field(None, description="eq. (3) path; sampled at the stations")
+    mirror: bool = Field(False, description="also route this tendon reflected through the backbone plane (z -> -z)")
+    mirror_name: Name | None = Field(None, description="name of the mirrored tendon (default: <name>_m)")
+
+    @model_validator(mode="after")
+    def _has_a_path(self):
+        if self.table is None and self.function is None:
+            raise ValueError("give a 'table', a 'function' or both")
+        return self
+
+
+class Tendon(_Model):
+    name: Name = Field(description="tendon name, used in reports and labels")
+    channel: Name = Field(description="tensioner channel the tendon ends on")
+    routing: Routing
+    budget_mm: NonNegLength | None = Field(
+        None, description="allowed length change over the sweep, mm (default: 0.2 unless on the actuating channel)")
+
+
+class TendonMaterial(_Model):
+    name: str = Field(description="what the tendon is")
+    diameter: Length = Field(description="d: tendon diameter, mm")
+    break_load: Length = Field(description="break load, N")
+
+
+class Process(_Model):
+    name: str = Field(description="printer and material")
+    min_wall: Length = Field(description="thinnest wall that prints reliably, mm")
+    min_hole: Length = Field(description="smallest through hole that prints open, mm")
+    hole_clearance: NonNegLength = Field(description="added to a hole's diameter over what passes through it, mm")
+    build_volume: tuple[Length, Length, Length] = Field(description="printer build volume x, y, z, mm")
+
+
+class Tensioner(_Model):
+    """The tensioner at the tip: one channel per independently tensioned group."""
+
+    channels: tuple[Name, ...] = Field(min_length=1, description="channel names, one worm drive each")
+    actuating_channel: Name = Field(description="the channel of the actuating (antagonistic) tendons")
+
+
+class Design(_Model):
+    design: Name = Field(description="design name; names the output folder")
+    backbone: Backbone
+    disks: Disks
+    tendon_material: TendonMaterial
+    process: Process
+    tensioner: Tensioner
+    tendons: tuple[Tendon, ...] = Field(min_length=1)
+
+    @property
+    def stations(self) -> tuple[float, ...]:
+        d = self.disks
+        if d.stations is not None:
+            return tuple(d.stations)
+        return tuple(i * d.spacing for i in range(d.count))
+
+
+class LoadedDesign(_Model):
+    """A validated design and where it came from."""
+
+    design: Design
+    source: str
+    sha256: str
+
+
+def _path(loc) -> str:
+    out = ""
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        else:
+            out += ("." if out else "") + str(part)
+    return out
+
+
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """SafeLoader that refuses a key given twice in one mapping."""
+
+
+def _construct_mapping(loader, node, deep=False):
+    seen = set()
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node, deep=deep)
+        if key in seen:
+            raise yaml.constructor.ConstructorError(
+                None, None, f"duplicate key {key!r}", key_node.start_mark)
+        seen.add(key)
+    return yaml.SafeLoader.construct_mapping(loader, node, deep)
+
+
+_UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
+
+
+def load(path: str | Path) -> LoadedDesign:
+    """Read, validate and check a design YAML; raise :class:`InputError` on any fault."""
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as e:
+        raise InputError(path, "", f"cannot read the file ({e.strerror})") from None
+    try:
+        data = yaml.load(raw.decode("utf-8"), Loader=_UniqueKeyLoader)
+    except UnicodeDecodeError:
+        raise InputError(path, "", "not UTF-8 text") from None
+    except yaml.YAMLError as e:
+        mark = getattr(e, "problem_mark", None)
+        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
+        problem = getattr(e, "problem", None) or str(e)
+        raise InputError(path, "", f"YAML syntax: {where}{problem}") from None
+    if not isinstance(data, dict):
+        raise InputError(path, "", "the document must be a mapping of sections (design, backbone, disks, ...)")
+    try:
+        design = Design.model_validate(data)
+    except ValidationError as e:
+        err = e.errors()[0]
+        loc = [p for p in err["loc"] if not (isinstance(p, str) and p.startswith("function-"))]
+        msg = err["msg"]
+        if err["type"] == "extra_forbidden":
+            msg = "unknown key"
+        elif "input" in err and err["type"] not in ("missing",):
+            msg += f" (got {err['input']!r})"
+        extra = f" (and {len(e.errors()) - 1} more)" if len(e.errors()) > 1 else ""
+        raise InputError(path, _path(loc), msg + extra) from None
+    _check_design(design, path)
+    return LoadedDesign(design=design, source=str(path), sha256=hashlib.sha256(raw).hexdigest())
+
+
+def _check_design(d: Design, file: Path) -> None:
+    """Checks that span fields; each raises InputError with the field path."""
+    if not SAFE_NAME.match(d.design):
+        raise InputError(file, "design", f"{d.design!r} is not a safe file name (letters, digits, _ and -)")
+    n = d.disks.count
+    if d.disks.stations is not None:
+        st = d.disks.stations
+        if len(st) != n:
+            raise InputError(file, "disks.stations", f"has {len(st)} stations, disks.count is {n}")
+        if any(b <= a for a, b in zip(st, st[1:])):
+            raise InputError(file, "disks.stations", "stations must increase strictly")
+        if abs(st[0]) > 1e-9 or abs(st[-1] - d.backbone.length) > 1e-6:
+            raise InputError(file, "disks.stations",
+                             f"must run from 0 to backbone.length = {d.backbone.length} mm")
+    elif abs(d.disks.spacing * (n - 1) - d.backbone.length) > 1e-6:
+        raise InputError(file, "disks.spacing",
+                         f"{n - 1} gaps of {d.disks.spacing} mm give {d.disks.spacing * (n - 1):g} mm, "
+                         f"backbone.length is {d.backbone.length} mm")
+    half_slot = d.backbone.height / 2 + d.disks.slot_clearance
+    if half_slot >= d.disks.outer_diameter / 2:
+        raise InputError(file, "disks.outer_diameter",
+                         f"{d.disks.outer_diameter} mm does not enclose the backbone slot ({2 * half_slot:g} mm)")
+    if d.disks.eyelets.edge_size >= d.disks.thickness / 2:
+        raise InputError(file, "disks.eyelets.edge_size", "must be less than half the disk thickness")
+    if d.disks.tie_off.pocket_depth >= d.disks.end_thickness / 2:
+        raise InputError(file, "disks.tie_off.pocket_depth", "must be less than half the end disk thickness")
+
+    channels = d.tensioner.channels
+    for i, c in enumerate(channels):
+        if not SAFE_NAME.match(c):
+            raise InputError(file, f"tensioner.channels[{i}]", f"{c!r} is not a safe file name")
+        if c in channels[:i]:
+            raise InputError(file, f"tensioner.channels[{i}]", f"duplicate channel {c!r}")
+    if d.tensioner.actuating_channel not in channels:
+        raise InputError(file, "tensioner.actuating_channel",
+                         f"{d.tensioner.actuating_channel!r} is not one of the channels {list(channels)}")
+
+    names: dict[str, str] = {}
+    r_out = d.disks.outer_diameter / 2
+    for i, t in enumerate(d.tendons):
+        where = f"tendons[{i}]"
+        own = [(t.name, f"{where}.name")]
+        if t.routing.mirror:
+            own.append((t.routing.mirror_name or f"{t.name}_m", f"{where}.routing.mirror_name"))
+        for name, p in own:
+            if not SAFE_NAME.match(name):
+                raise InputError(file, p, f"{name!r} is not a safe file name (letters, digits, _ and -)")
+            if name in names:
+                raise InputError(file, p, f"duplicate tendon name {name!r} (also at {names[name]})")
+            names[name] = p
+        if t.channel not in channels:
+            raise InputError(file, f"{where}.channel",
+                             f"unknown channel {t.channel!r}; tensioner.channels are {list(channels)}")
+        if t.routing.table is not None and len(t.routing.table) != n:
+            raise InputError(file, f"{where}.routing.table",
+                             f"has {len(t.routing.table)} rows, there are {n} stations")
+        # eyelet positions as the geometry will use them (table first, else the function)
+        from .routing import sample_function  # local: routing imports this module
+        pts = t.routing.table if t.routing.table is not None else sample_function(
+            t.routing.function, d.stations, d.backbone.length)
+        for j, (x, z) in enumerate(pts):
+            if math.hypot(x, z) >= r_out:
+                p = f"{where}.routing.table[{j}]" if t.routing.table is not None else f"{where}.routing.function"
+                raise InputError(file, p, f"eyelet at station {j} (x={x:g}, z={z:g}) lies outside "
+                                          f"the disk (radius {r_out:g} mm)")
+
+
+def json_schema() -> dict:
+    return Design.model_json_schema()
+

@@ -1,0 +1,38 @@
+"""Part builders: frozen specs from :mod:`hwgen.design` in, CadQuery solids out.
+
+Every builder returns a :class:`Part`: the solid in its print orientation (largest flat
+face on the XY plane, resting on Z = 0) and the placement that maps it to robot coordinates.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Part:
+    name: str
+    role: str                       # "disk", "backbone", ...
+    solid: object                   # cadquery.Solid in print orientation
+    placement: np.ndarray           # 4x4: part file coordinates -> robot coordinates, mm
+    color: tuple[float, float, float, float]
+    station: int | None = None
+    meta: dict = field(default_factory=dict)   # extra manifest fields (channel, ...)
+
+
+def placement(rotation, translation) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, :3] = rotation
+    m[:3, 3] = translation
+    return m
+
+
+# Disk files lie in XY with their base-side face on Z = 0: file (X, Y, Z) = robot (x, -z, y - y0).
+DISK_ROTATION = np.array([[1.0, 0.0, 0.0],
+                          [0.0, 0.0, 1.0],
+                          [0.0, -1.0, 0.0]])
+
+
+def disk_placement(y_mid: float, thickness: float) -> np.ndarray:
+    return placement(DISK_ROTATION, [0.0, y_mid - thickness / 2, 0.0])

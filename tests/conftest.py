@@ -1,0 +1,26 @@
+"""Shared fixtures: the shipped designs are built once per test session into a temp folder."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PARAMS = ROOT / "params"
+
+
+@pytest.fixture(scope="session")
+def built(tmp_path_factory):
+    """build(name) -> output folder of params/<name>.yaml, built once per session."""
+    from hwgen.build import build
+    from hwgen.params import load
+
+    cache: dict[str, Path] = {}
+    root = tmp_path_factory.mktemp("out")
+
+    def get(name: str) -> Path:
+        if name not in cache:
+            cache[name] = build(load(PARAMS / f"{name}.yaml"), root).folder
+        return cache[name]
+
+    return get
