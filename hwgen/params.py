@@ -157,6 +157,15 @@ class Tensioner(_Model):
     actuating_channel: Name = Field(description="the channel of the actuating (antagonistic) tendons")
 
 
+class CheckSettings(_Model):
+    """How `hwgen check` sweeps the bending angle and what it tolerates."""
+
+    max_angle_deg: Length = Field(90.0, description="tendon lengths are swept from -max to +max bending, deg")
+    step_deg: Length = Field(1.0, description="step of the bending sweep, deg")
+    position_tol_mm: Length = Field(0.01, description="largest eyelet offset from design intent, mm")
+    interference_tol_mm3: Length = Field(0.01, description="largest intersection volume of two parts, mm³")
+
+
 class Design(_Model):
     design: Name = Field(description="design name; names the output folder")
     backbone: Backbone
@@ -165,6 +174,7 @@ class Design(_Model):
     process: Process
     tensioner: Tensioner
     tendons: tuple[Tendon, ...] = Field(min_length=1)
+    check: CheckSettings = Field(default_factory=CheckSettings, description="validation sweep and tolerances")
 
     @property
     def stations(self) -> tuple[float, ...]:
