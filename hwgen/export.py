@@ -27,7 +27,8 @@ def write_step(solid, path: Path) -> None:
 
 
 def write_stl(solid, path: Path) -> None:
-    solid.exportStl(str(path), tolerance=STL_TOLERANCE_MM, angularTolerance=STL_ANGULAR_RAD, ascii=False)
+    solid.exportStl(str(path), tolerance=STL_TOLERANCE_MM, angularTolerance=STL_ANGULAR_RAD, ascii=False,
+                    relative=False)
 
 
 def location(matrix: np.ndarray):

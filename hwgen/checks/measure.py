@@ -83,11 +83,11 @@ def _area_centroid(p: np.ndarray) -> tuple[float, tuple[float, float]]:
     return abs(float(a)), (float(cx), float(cy))
 
 
-def section_loops(mesh, placement: np.ndarray, origin, normal) -> list[Loop]:
-    """Section a mesh (file coordinates) by a plane and return loops in robot (x, z).
+def section_loops(mesh, placement: np.ndarray, origin, normal, axes=(0, 2)) -> list[Loop]:
+    """Section a mesh (file coordinates) by a plane and return its closed loops, largest first.
 
     ``origin`` and ``normal`` are in file coordinates; the loops are mapped through
-    ``placement`` and projected on robot x and z (the disk plane).
+    ``placement`` and projected on the robot ``axes`` (default x and z: the disk plane).
     """
     import trimesh
     segs = trimesh.intersections.mesh_plane(mesh, plane_normal=normal, plane_origin=origin)
@@ -96,7 +96,7 @@ def section_loops(mesh, placement: np.ndarray, origin, normal) -> list[Loop]:
     h = np.c_[segs.reshape(-1, 3), np.ones(len(segs) * 2)] @ np.asarray(placement).T
     robot = h[:, :3].reshape(-1, 2, 3)
     out = []
-    for loop in chain_loops(robot[:, :, [0, 2]]):
+    for loop in chain_loops(robot[:, :, list(axes)]):
         area, c = _area_centroid(loop)
         out.append(Loop(loop, area, c))
     return sorted(out, key=lambda lp: -lp.area)

@@ -92,8 +92,20 @@ def build_disk(spec: DiskSpec) -> Part:
     if tools:
         body = body.cut(*tools)
     solid = body if isinstance(body, cq.Solid) else body.Solids()[0]
-    return Part(spec.name, "disk", solid, disk_placement(spec.y, T), COLOR, station=spec.index,
+    place = disk_placement(spec.y, T)
+    if spec.knot_pockets:
+        # print with the pocketed face up, so the largest flat face rests on the plate
+        solid = solid.rotate(cq.Vector(0, 0, 0), cq.Vector(1, 0, 0), 180).translate(cq.Vector(0, 0, T))
+        place = place @ flip_about_x(T)
+    return Part(spec.name, "disk", solid, place, COLOR, station=spec.index,
                 meta={"disk_role": spec.role, "thickness_mm": T})
+
+
+def flip_about_x(thickness: float) -> np.ndarray:
+    """Inverse of the print flip (half turn about X, lifted by the thickness); it is its own inverse."""
+    m = np.diag([1.0, -1.0, -1.0, 1.0])
+    m[2, 3] = thickness
+    return m
 
 
 __all__ = ["build_disk", "DISK_ROTATION"]
