@@ -18,8 +18,13 @@ EXIT_OK, EXIT_FINDINGS, EXIT_BAD_INPUT = 0, 1, 2
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="Print files, checks and pictures for tendon-driven continuum robots.")
-out = Console()
-err = Console(stderr=True)
+# piped output (CI logs, files) gets a page wide enough that tables do not wrap
+out = Console(width=None if sys.stdout.isatty() else 160)
+err = Console(stderr=True, width=None if sys.stderr.isatty() else 160)
+
+
+def _mm(v: float) -> str:
+    return f"{v + 0.0:.3f}"  # + 0.0 turns -0.0 into 0.0
 
 PARAMS = typer.Argument(..., help="design parameter YAML", show_default=False)
 OUT = typer.Option(Path("out"), "--out", help="output root; the design goes to OUT/<design>/")
@@ -90,7 +95,7 @@ def routing(params: Path = PARAMS,
                 note.append("shared")
             if h.in_slot:
                 note.append("crosses backbone")
-            t.add_row(str(d.index), f"{d.y:g}", ",".join(h.tendons), f"{h.x:.3f}", f"{h.z:.3f}",
+            t.add_row(str(d.index), f"{d.y:g}", ",".join(h.tendons), _mm(h.x), _mm(h.z),
                       f"{h.diameter:.3f}", f"{h.worst_angle_deg:.1f}", " ".join(note))
     out.print(t)
     if plan.merges:
@@ -100,7 +105,7 @@ def routing(params: Path = PARAMS,
     if plan.backbone.holes:
         out.print("[bold]backbone holes[/] (tendon crosses the strip)")
         for h in plan.backbone.holes:
-            out.print(f"  {h.tendon} at station {h.station:g}: x={h.x:.3f} y={h.y:.3f} Ø{h.diameter:.3f}",
+            out.print(f"  {h.tendon} at station {h.station:g}: x={_mm(h.x)} y={_mm(h.y)} Ø{h.diameter:.3f}",
                       highlight=False)
     for f in plan.findings:
         out.print(f"[yellow]finding:[/] {f}", highlight=False)
@@ -110,8 +115,8 @@ def routing(params: Path = PARAMS,
             dt.add_column(col, justify="right")
         for dv in devs:
             style = "red" if dv.distance > 0.1 else None
-            dt.add_row(dv.tendon, str(dv.station), f"{dv.table[0]:.3f}", f"{dv.table[1]:.3f}",
-                       f"{dv.function[0]:.3f}", f"{dv.function[1]:.3f}", f"{dv.distance:.3f}", style=style)
+            dt.add_row(dv.tendon, str(dv.station), *(_mm(v) for v in (*dv.table, *dv.function, dv.distance)),
+                       style=style)
         out.print(dt)
 
 
@@ -123,18 +128,8 @@ def schema() -> None:
 
 
 def main() -> None:
-    try:
-        app(standalone_mode=False)
-    except typer.Exit as e:
-        sys.exit(e.exit_code)
-    except typer.Abort:
-        sys.exit(EXIT_BAD_INPUT)
-    except Exception as e:  # click usage errors
-        import click
-        if isinstance(e, click.exceptions.ClickException):
-            e.show()
-            sys.exit(EXIT_BAD_INPUT)
-        raise
+    # standalone mode: typer.Exit(code) exits with that code, usage errors exit 2
+    app()
 
 
 if __name__ == "__main__":
