@@ -1,0 +1,48 @@
+"""The command line: routing tables, deviations, schema, and a build through the console script."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import yaml
+
+from .conftest import PARAMS
+
+
+def _run(*args, timeout=300):
+    return subprocess.run([sys.executable, "-m", "hwgen.cli", *args], capture_output=True, text=True,
+                          timeout=timeout)
+
+
+def test_routing_reports_table_deviation_station_by_station():
+    r = _run("routing", str(PARAMS / "paper-table2.yaml"), "--json")
+    assert r.returncode == 0, r.stderr
+    rep = json.loads(r.stdout)
+    c2 = {d["station"]: d["distance_mm"] for d in rep["deviations"] if d["tendon"] == "C2"}
+    assert len(c2) == 13
+    # Table II types 19.4 where 25 cos(3π·22.5/270) = 17.678 at every odd station
+    assert all(abs(c2[i] - (19.4 - 25 * 2 ** -0.5)) < 1e-9 for i in range(1, 13, 2))
+    assert all(c2[i] < 1e-9 for i in range(0, 13, 2))
+    h = [d["distance_mm"] for d in rep["deviations"] if d["tendon"] == "H"]
+    assert max(h) < 0.04  # 17.7 typed for 17.678
+    shared = {(m["station"], tuple(m["tendons"])) for m in rep["merges"] if m["kind"] == "shared"}
+    assert {0, 4, 8, 12} <= {s for s, _ in shared}
+    assert (6, ("C1", "C2")) in shared  # also shared at the middle disk: both at (0, 0)
+
+
+def test_routing_table_prints_for_people():
+    r = _run("routing", str(PARAMS / "prototype.yaml"))
+    assert r.returncode == 0, r.stderr
+    assert "crosses backbone" in r.stdout and "shared" in r.stdout
+    assert "table versus function" not in r.stdout  # the prototype names no tables
+
+
+def test_schema_is_json_schema_matching_the_yaml_keys():
+    r = _run("schema")
+    assert r.returncode == 0
+    schema = json.loads(r.stdout)
+    assert schema["additionalProperties"] is False
+    doc = yaml.safe_load((PARAMS / "prototype.yaml").read_text())
+    assert set(doc) <= set(schema["properties"])
+    assert "mm" in schema["$defs"]["Backbone"]["properties"]["length"]["description"]
