@@ -166,6 +166,18 @@ class CheckSettings(_Model):
     interference_tol_mm3: Length = Field(0.01, description="largest intersection volume of two parts, mm³")
 
 
+class Render(_Model):
+    """Pictures, drawing and bill of materials (`hwgen render`)."""
+
+    explode_mm: NonNegLength = Field(20.0, description="exploded views: gap added between neighbouring disks; "
+                                                       "other parts move this far from their assembly, mm")
+    bend_deg: Annotated[float, Field(ge=-360, le=360, allow_inf_nan=False)] = Field(
+        90.0, description="bending angle θ = κL of the bent picture, deg")
+    width_px: int = Field(1800, ge=400, le=8000, description="width of the PNG pictures, px")
+    tie_off_mm: NonNegLength = Field(60.0, description="tendon added at the base for the knot, mm")
+    spool_mm: NonNegLength = Field(150.0, description="tendon added at the tip to reach and wrap the tensioner, mm")
+
+
 class Design(_Model):
     design: Name = Field(description="design name; names the output folder")
     backbone: Backbone
@@ -175,6 +187,7 @@ class Design(_Model):
     tensioner: Tensioner
     tendons: tuple[Tendon, ...] = Field(min_length=1)
     check: CheckSettings = Field(default_factory=CheckSettings, description="validation sweep and tolerances")
+    render: Render = Field(default_factory=Render, description="pictures, drawing and bill of materials")
 
     @property
     def stations(self) -> tuple[float, ...]:
