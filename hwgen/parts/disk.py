@@ -67,7 +67,8 @@ def _eyelet_tool(h: Hole, thickness: float, edge: float, base_side: bool, tip_si
     return cones
 
 
-def build_disk(spec: DiskSpec) -> Part:
+def blank_and_tools(spec: DiskSpec) -> tuple[cq.Solid, list[cq.Solid]]:
+    """The extruded face (outline, slot, normal holes, bolt holes) and every solid still to cut."""
     T = spec.thickness
     sk = cq.Sketch().circle(spec.outer_diameter / 2)
     sk = sk.push([(0, 0)]).rect(spec.slot_width, spec.slot_height, mode="s")
@@ -77,7 +78,7 @@ def build_disk(spec: DiskSpec) -> Part:
         sk = sk.push([_to_file(h.x, h.z)]).circle(h.diameter / 2, mode="s")
     for x, z, dia in spec.mount_holes:
         sk = sk.push([_to_file(x, z)]).circle(dia / 2, mode="s")
-    body = cq.Workplane("XY").placeSketch(sk.reset().clean()).extrude(T).val()
+    blank = cq.Workplane("XY").placeSketch(sk.reset().clean()).extrude(T).val()
 
     # The base disk's outer face (file Z = 0) carries knot pockets instead of chamfers.
     base_side = spec.role != "base"
@@ -89,8 +90,14 @@ def build_disk(spec: DiskSpec) -> Part:
     for x, z, dia, depth in spec.knot_pockets:
         fx, fy = _to_file(x, z)
         tools.append(cq.Solid.makeCylinder(dia / 2, depth + TOOL_OVERRUN, cq.Vector(fx, fy, -TOOL_OVERRUN)))
+    return blank, tools
+
+
+def build_disk(spec: DiskSpec) -> Part:
+    T = spec.thickness
+    body, tools = blank_and_tools(spec)
     if tools:
-        body = body.cut(*tools)
+        body = body.cut(*tools)  # one boolean with every tool
     solid = body if isinstance(body, cq.Solid) else body.Solids()[0]
     place = disk_placement(spec.y, T)
     if spec.knot_pockets:

@@ -1,0 +1,80 @@
+"""`make bench`: where the time goes, printed as a table. Nothing here is asserted.
+
+Run: python -m hwgen.bench [PARAMS]
+"""
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from rich.console import Console
+from rich.table import Table
+
+ROWS: list[tuple[str, float, str]] = []
+
+
+def timed(label: str, note: str = ""):
+    class _T:
+        def __enter__(self):
+            self.t = time.perf_counter()
+            return self
+
+        def __exit__(self, *exc):
+            ROWS.append((label, time.perf_counter() - self.t, note))
+    return _T()
+
+
+def _cut_one_by_one(spec):
+    """The slow way, for comparison: the same blank and tools, one boolean per tool."""
+    from hwgen.parts.disk import blank_and_tools
+    body, tools = blank_and_tools(spec)
+    for tool in tools:
+        body = body.cut(tool)
+    return body
+
+
+def main(argv: list[str]) -> None:
+    params_path = Path(argv[0]) if argv else Path("params/prototype.yaml")
+    with timed("import numpy, pydantic, yaml (schema, routing)"):
+        from hwgen import design, params
+    with timed("import cadquery", "a command that builds no solid skips this"):
+        import cadquery  # noqa: F401
+    with timed("load + validate YAML"):
+        loaded = params.load(params_path)
+    with timed("plan: eyelets sized over the sweep", "numpy, all tendons and stations"):
+        plan = design.plan(loaded.design)
+    from hwgen.export import write_step, write_stl
+    from hwgen.parts.disk import build_disk
+    disks = []
+    with timed(f"build {len(plan.disks)} disks", "one face extruded once + one cut"):
+        for s in plan.disks:
+            disks.append(build_disk(s))
+    with timed(f"same {len(plan.disks)} disks, tools cut one by one", "for comparison"):
+        for s in plan.disks:
+            _cut_one_by_one(s)
+    with tempfile.TemporaryDirectory() as tmp:
+        with timed(f"export {len(disks)} disks STL"):
+            for p in disks:
+                write_stl(p.solid, Path(tmp) / f"{p.name}.stl")
+        with timed(f"export {len(disks)} disks STEP"):
+            for p in disks:
+                write_step(p.solid, Path(tmp) / f"{p.name}.step")
+        from hwgen.build import build
+        with timed("hwgen build, parts and files only", "no post-build steps"):
+            build(loaded, Path(tmp) / "a", post_build=False)
+        with timed("hwgen build, everything", "with checks and renders where registered"):
+            build(loaded, Path(tmp) / "b")
+
+    t = Table(title=f"hwgen benchmark: {params_path}")
+    t.add_column("step")
+    t.add_column("seconds", justify="right")
+    t.add_column("note")
+    for label, sec, note in ROWS:
+        t.add_row(label, f"{sec:.3f}", note)
+    Console().print(t)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
