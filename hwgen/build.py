@@ -23,6 +23,15 @@ from .params import LoadedDesign
 POST_BUILD: list[tuple[str, Callable[[Plan, Path, dict], None]]] = []
 
 
+def _checks(plan: Plan, folder: Path, manifest: dict) -> None:
+    """Measure the fresh files; manifest["checks"], report.json, lengths.png, summary.md."""
+    from .checks.run import post_build
+    post_build(plan, folder, manifest)
+
+
+POST_BUILD.append(("checks", _checks))
+
+
 @dataclass
 class BuildResult:
     folder: Path

@@ -121,6 +121,42 @@ def routing(params: Path = PARAMS,
 
 
 @app.command()
+def check(params: Path = PARAMS, out_dir: Path = OUT,
+          report: Path = typer.Option(None, "--report", help="also write the JSON report here"),
+          junit: Path = typer.Option(None, "--junit", help="also write JUnit XML here (one test case per check)"),
+          verbose: bool = typer.Option(False, "--verbose", "-v", help="list every check, not only findings"),
+          quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar")) -> None:
+    """Measure the built files: eyelets, tendon lengths over the bending sweep, clearances, parts.
+
+    Builds first only when the outputs are missing or made from other parameters; part files
+    edited since the build are measured as they are. Exit 1 when a check fails.
+    """
+    loaded = _load(params)
+    from .checks.report import print_report, write_json, write_junit
+    from .checks.run import check_design
+
+    with err.status(f"checking {loaded.design.design}", spinner="dots") if not quiet else _nothing():
+        rep, folder, rebuilt = check_design(loaded, out_dir)
+    if rebuilt:
+        err.print(f"built {folder} first ({rebuilt})", highlight=False)
+    print_report(rep, out, verbose=verbose)
+    if report is not None:
+        write_json(rep, report)
+    if junit is not None:
+        write_junit(rep, junit)
+    if not rep["ok"]:
+        raise typer.Exit(EXIT_FINDINGS)
+
+
+class _nothing:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+
+@app.command()
 def schema() -> None:
     """Print the JSON Schema of the parameter YAML (for editors)."""
     from .params import json_schema

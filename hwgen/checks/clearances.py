@@ -1,0 +1,278 @@
+"""Clearances measured on the exported geometry: walls around eyelets, hole size against the
+process and against the tendon's angle, tendon-to-tendon distance, and backbone crossings.
+
+Walls are measured between the loops of three disk cuts (the mid-plane and the two axis cuts
+either side of it, inside the cylindrical part of the bores; rims broken by chamfers are not
+walls). Section polygons are inscribed in the true circles, so a hole's polygon is smaller
+than the hole by up to the STL's chordal tolerance: walls beside holes are reduced and hole
+diameters enlarged by that much before they are compared.
+"""
+from __future__ import annotations
+
+from itertools import combinations
+from pathlib import Path
+
+import numpy as np
+
+from .. import kinematics as kin
+from ..export import STL_TOLERANCE_MM
+from .base import Check
+from .lengths import EyeletMap, inside, loop_gap, points_to_polyline
+
+SAG_MM = STL_TOLERANCE_MM      # chordal deviation of the STL: section polygons sit this far inside holes
+
+
+def _hole_names(emap: EyeletMap, report: dict) -> dict[int, dict[int, str]]:
+    """disk station -> {id(mid-plane hole loop): name} for every measured hole."""
+    names: dict[int, dict[int, str]] = {}
+    for e in emap.eyelets:
+        if e.hole is not None:
+            names.setdefault(e.station, {})
+            key = id(e.hole.loop)
+            prev = names[e.station].get(key)
+            label = f"eyelet {'+'.join(e.tendons)}"
+            names[e.station][key] = label if prev is None else f"{prev} / {'+'.join(e.tendons)}"
+    for disk in emap.disks:
+        rd = next(r for r in report["disks"] if r["index"] == disk.station)
+        for mh in disk.holes:
+            if id(mh.loop) in names.get(disk.station, {}):
+                continue
+            for m in rd.get("mount_holes", []):
+                if inside(mh.loop.points, m[:2]):
+                    names.setdefault(disk.station, {})[id(mh.loop)] = f"mount hole ({m[0]:g}, {m[1]:g})"
+                    break
+            else:
+                x, z = mh.centre
+                names.setdefault(disk.station, {})[id(mh.loop)] = f"hole at ({x:.2f}, {z:.2f})"
+    return names
+
+
+def wall_checks(emap: EyeletMap, report: dict, min_wall: float) -> list[Check]:
+    """Eyelet-to-edge, eyelet-to-eyelet and eyelet-to-slot walls, one check of each per disk."""
+    out = []
+    names = _hole_names(emap, report)
+    for disk in emap.disks:
+        mids = {id(mh.loop): mh for mh in disk.holes}
+        nm = names.get(disk.station, {})
+        edge, pair, slot = [], [], []       # (wall, place, section y)
+        for y, outline, inner in disk.sections:
+            s_loop = next((lp for lp in inner if inside(lp.points, (0.0, 0.0))), None)
+            holes = [lp for lp in inner if lp is not s_loop]
+            label = {}
+            for lp in holes:
+                c = np.asarray(lp.centroid)
+                near = min(mids.values(), key=lambda mh: np.hypot(*(mh.centre - c)), default=None)
+                label[id(lp)] = nm.get(id(near.loop), "hole") if near is not None else "hole"
+            for lp in holes:
+                edge.append((float(points_to_polyline(lp.points, outline.points).min()) - SAG_MM,
+                             label[id(lp)], y))
+                if s_loop is not None:
+                    slot.append((loop_gap(lp.points, s_loop.points) - SAG_MM, label[id(lp)], y))
+            for a, b in combinations(holes, 2):
+                pair.append((loop_gap(a.points, b.points) - 2 * SAG_MM, f"{label[id(a)]} and {label[id(b)]}", y))
+        # holes that the geometry merged: no wall at all
+        for st, part, ta, tb, kind in emap.merged_pairs:
+            if st != disk.station:
+                continue
+            what = f"eyelet {'+'.join(ta)} and " + ("the backbone slot" if kind == "slot" else f"eyelet {'+'.join(tb)}")
+            (slot if kind == "slot" else pair).append((0.0, f"{what} merge into one opening", disk.y_mid))
+        for cid, kind, items in (("eyelet.wall.edge", "to the outer edge", edge),
+                                 ("eyelet.wall.eyelet", "between holes", pair),
+                                 ("eyelet.wall.slot", "to the backbone slot", slot)):
+            where = {"part": disk.part, "station": disk.station}
+            if not items:
+                out.append(Check(cid, "error", True, f"{disk.part}: no hole near enough to measure a wall {kind}",
+                                 None, min_wall, where))
+                continue
+            w, place, _y = min(items, key=lambda it: it[0])
+            bad = sorted({p for v, p, _ in items if v < min_wall})
+            ok = not bad
+            if ok:
+                msg = f"{disk.part}: thinnest wall {kind} {w:.3f} mm ({place}), process minimum {min_wall:g} mm"
+            else:
+                msg = (f"{disk.part}: wall {kind} {w:.3f} mm at {place} is under the process minimum "
+                       f"{min_wall:g} mm" + (f"; also thin: {', '.join(p for p in bad if p != place)}"
+                                             if len(bad) > 1 else ""))
+            out.append(Check(cid, "error", ok, msg, max(w, 0.0), min_wall, {**where, "at": place}))
+    return out
+
+
+def hole_checks(emap: EyeletMap, min_hole: float, tendon_d: float, angles_deg: np.ndarray,
+                length: float) -> list[Check]:
+    """Smallest eyelet versus the process; tendon angle through each eyelet versus its size and axis.
+
+    A tendon of diameter d crossing a wall of thickness T at angle α to the hole axis needs a
+    hole of at least d/cos α + T tan α (the builder's rule without its clearance); less and
+    the hole edge pinches it. α is taken over the whole sweep from the measured positions.
+    """
+    out = []
+    for disk in emap.disks:
+        ey = [e for e in emap.eyelets if e.station == disk.station and e.hole is not None]
+        where = {"part": disk.part, "station": disk.station}
+        if not ey:
+            continue
+        small = min(ey, key=lambda e: e.hole.diameter)
+        d = small.hole.diameter + 2 * SAG_MM
+        ok = d >= min_hole
+        nm = "+".join(small.tendons)
+        msg = (f"{disk.part}: smallest eyelet Ø{small.hole.diameter:.3f} mm ({nm}; the STL polygon, "
+               f"{2 * SAG_MM:g} mm under the true hole at most), process minimum {min_hole:g} mm"
+               if ok else f"{disk.part}: eyelet {nm} is Ø{small.hole.diameter:.3f} mm, under the process minimum "
+                          f"{min_hole:g} mm; it may print closed")
+        out.append(Check("eyelet.min_hole", "error", ok, msg, small.hole.diameter, min_hole, {**where, "tendon": nm}))
+
+    kappa = kin.kappas_for_angles(angles_deg, length)
+    T_of = {d.station: d.thickness for d in emap.disks}
+    part_of = {d.station: d.part for d in emap.disks}
+    for name, xz in emap.positions.items():
+        into, outof = kin.segment_directions_local(emap.stations_y, xz, kappa)
+        worst = None   # (margin, station, alpha, need, have)
+        for e in emap.eyelets:
+            if name not in e.tendons or e.hole is None or e.hole.axis is None:
+                continue
+            i = e.station
+            ax = e.hole.axis
+            dirs = np.concatenate([into[:, i], outof[:, i]])
+            dirs = dirs[~np.isnan(dirs[:, 0])]
+            cos = np.clip(np.abs(dirs @ ax), 0, 1)
+            k = int(np.argmin(cos))
+            alpha = float(np.arccos(cos[k]))
+            need = tendon_d / np.cos(alpha) + T_of[i] * np.tan(alpha)
+            have = e.hole.diameter + 2 * SAG_MM
+            margin = have - need
+            if worst is None or margin < worst[0]:
+                ang = float(np.concatenate([angles_deg, angles_deg])[~np.isnan(np.concatenate(
+                    [into[:, i, 0], outof[:, i, 0]]))][k])
+                worst = (margin, i, np.degrees(alpha), need, e.hole.diameter, ang)
+        if worst is None:
+            continue
+        margin, i, a, need, have, ang = worst
+        where = {"tendon": name, "part": part_of.get(i, f"disk_{i:02d}"), "station": i, "angle_deg": ang}
+        ok = margin >= 0
+        if ok:
+            msg = (f"{name}: tightest eyelet {where['part']}, Ø{have:.3f} mm for {need:.3f} mm needed at "
+                   f"{a:.1f}° to its axis (bending {ang:+g}°)")
+        else:
+            msg = (f"{name} is pinched in {where['part']}: the eyelet is Ø{have:.3f} mm but at {a:.1f}° to "
+                   f"its axis (bending {ang:+g}°) the tendon needs {need:.3f} mm")
+        out.append(Check("eyelet.tendon_angle", "error", ok, msg, have, need, where))
+    return out
+
+
+def segment_distance(p0, p1, q0, q1) -> np.ndarray:
+    """Closest distance between segments p0-p1 and q0-q1 (arrays (..., 3)), clamped to the ends."""
+    d1, d2, r = p1 - p0, q1 - q0, p0 - q0
+    a = np.einsum("...i,...i", d1, d1)
+    e = np.einsum("...i,...i", d2, d2)
+    b = np.einsum("...i,...i", d1, d2)
+    c = np.einsum("...i,...i", d1, r)
+    f = np.einsum("...i,...i", d2, r)
+    den = a * e - b * b
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.where(den > 1e-12 * a * e, np.clip((b * f - c * e) / den, 0, 1), 0.0)
+        t = (b * s + f) / e
+        s = np.where(t < 0, np.clip(-c / a, 0, 1), np.where(t > 1, np.clip((b - c) / a, 0, 1), s))
+    t = np.clip(t, 0, 1)
+    diff = p0 + d1 * s[..., None] - (q0 + d2 * t[..., None])
+    return np.sqrt(np.einsum("...i,...i", diff, diff))
+
+
+def tendon_pair_checks(emap: EyeletMap, report: dict, tendon_d: float, angles_deg: np.ndarray,
+                       length: float) -> list[Check]:
+    """Closest approach of every two tendons over the sweep, away from the eyelets they share."""
+    kappa = kin.kappas_for_angles(angles_deg, length)
+    pts = {n: kin.points_in_space(emap.stations_y, xz, kappa) for n, xz in emap.positions.items()}
+    shared: dict[tuple[str, str], list[int]] = {}
+    for rd in report["disks"]:
+        for h in rd["holes"]:
+            for a, b in combinations(h["tendons"], 2):
+                shared.setdefault(tuple(sorted((a, b))), []).append(rd["index"])
+    out = []
+    for a, b in combinations(pts, 2):
+        key = tuple(sorted((a, b)))
+        sh = set(shared.get(key, []))
+        P, Q = pts[a], pts[b]
+        n = P.shape[1]
+        keep = [j for j in range(n - 1) if j not in sh and j + 1 not in sh]
+        where = {"tendons": [a, b]}
+        if sh:
+            out.append(Check("tendon.contact", "info", True,
+                             f"{a} and {b} share eyelets at stations {sorted(sh)}: they touch there by design",
+                             None, None, {**where, "stations": sorted(sh)}))
+        if not keep:
+            continue
+        j = np.array(keep)
+        dist = segment_distance(P[:, j], P[:, j + 1], Q[:, j], Q[:, j + 1])   # (K, len(keep))
+        k, m = np.unravel_index(int(np.argmin(dist)), dist.shape)
+        dmin = float(dist[k, m])
+        seg = int(j[m])
+        ang = float(angles_deg[k])
+        ok = dmin >= tendon_d
+        span = f"between stations {seg} and {seg + 1}"
+        msg = (f"{a} and {b}: closest {dmin:.3f} mm {span} at {ang:+g}° (tendon Ø{tendon_d:g} mm)" if ok else
+               f"{a} and {b} rub: {dmin:.3f} mm apart {span} at {ang:+g}° bending, less than the tendon "
+               f"diameter {tendon_d:g} mm")
+        out.append(Check("tendon.clearance", "error", ok, msg, dmin, tendon_d,
+                         {**where, "segment": [seg, seg + 1], "angle_deg": ang}))
+    return out
+
+
+def dxf_holes(path: Path) -> list[tuple[float, float, float]]:
+    """Circles on the HOLES layer of the backbone template: (x, y, radius) in robot mm."""
+    import ezdxf
+    doc = ezdxf.readfile(str(path))
+    return [(float(c.dxf.center.x), float(c.dxf.center.y), float(c.dxf.radius))
+            for c in doc.modelspace().query('CIRCLE[layer=="HOLES"]')]
+
+
+def crossings(emap: EyeletMap, half_height: float) -> list[tuple[str, float, float, float]]:
+    """Where each tendon meets the backbone plane within the strip, straight robot: (tendon, station, x, y)."""
+    out = []
+    ys = emap.stations_y
+    in_slot = {(t, e.station) for e in emap.eyelets if e.status == "in_slot" for t in e.tendons}
+    for name, xz in emap.positions.items():
+        x, z = xz[:, 0], xz[:, 1]
+        for i in range(len(ys)):
+            if (name, i) in in_slot:
+                out.append((name, float(i), float(x[i]), float(ys[i])))
+        for i in range(len(ys) - 1):
+            if (name, i) in in_slot or (name, i + 1) in in_slot:
+                continue
+            if z[i] * z[i + 1] < 0:
+                f = z[i] / (z[i] - z[i + 1])
+                xc = x[i] + f * (x[i + 1] - x[i])
+                if abs(xc) < half_height:
+                    out.append((name, i + f, float(xc), float(ys[i] + f * (ys[i + 1] - ys[i]))))
+    return out
+
+
+def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendon_d: float, tol: float,
+                    findings: list[str]) -> list[Check]:
+    """Every crossing of the strip has a hole in the DXF template and in the strip's STL."""
+    out = []
+    half_h = float(bb_outline.extent[0]) / 2 if bb_outline is not None else float("inf")
+    circles = dxf_holes(dxf_path) if dxf_path.exists() else []
+    r_t = tendon_d / 2
+    for name, st, x, y in crossings(emap, half_h):
+        where = {"tendon": name, "station": round(st, 4), "x": round(x, 4), "y": round(y, 4)}
+        at = f"station {st:g}" if float(st).is_integer() else f"between stations {int(st)} and {int(st) + 1}"
+        place = f"{name} crosses the backbone {at} (x={x:.2f}, y={y:.2f} mm)"
+        fit_dxf = [r - (np.hypot(cx - x, cy - y) + r_t) for cx, cy, r in circles]
+        best_dxf = max(fit_dxf, default=-np.inf)
+        in_dxf = best_dxf >= -tol
+        stl_fit = -np.inf
+        for lp in bb_holes or []:
+            if inside(lp.points, (x, y)):
+                stl_fit = float(points_to_polyline(np.array([[x, y]]), lp.points)[0]) + SAG_MM - r_t
+        in_stl = stl_fit >= -tol
+        missing = [w for w, ok in (("backbone_template.dxf", in_dxf), ("the backbone STL", in_stl)) if not ok]
+        if missing:
+            msg = f"{place} but {' and '.join(missing)} {'has' if len(missing) == 1 else 'have'} no hole it passes"
+        else:
+            msg = f"{place} through a hole in the template and the strip"
+        measured = float(min(best_dxf, stl_fit)) if np.isfinite(min(best_dxf, stl_fit)) else None
+        out.append(Check("backbone.crossing", "error", not missing, msg, measured, 0.0, where))
+    for f in findings:
+        out.append(Check("backbone.in_plane", "error", False, f"{f}: it would have to run through the strip",
+                         None, None, {}))
+    return out

@@ -1,0 +1,129 @@
+"""Whole parts: sound meshes, no two parts occupying the same space, each fits the printer."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import combinations
+from pathlib import Path
+
+import numpy as np
+
+from .base import Check
+from .measure import load_mesh
+
+NOT_PRINTED = {"backbone"}     # roles cut from stock rather than printed: no build-volume check
+VOLUME_REL_TOL = 0.01          # STL volume versus the solid's volume in the manifest
+BBOX_MARGIN_MM = 0.01          # boxes closer than this are tested for interference
+
+
+@dataclass
+class LoadedPart:
+    name: str
+    role: str
+    mesh: object               # trimesh.Trimesh in file coordinates
+    placement: np.ndarray
+    volume_mm3: float | None
+
+    def robot_bounds(self) -> np.ndarray:
+        v = self.mesh.vertices @ self.placement[:3, :3].T + self.placement[:3, 3]
+        return np.array([v.min(axis=0), v.max(axis=0)])
+
+
+def load_parts(folder: Path, manifest: dict) -> tuple[list[LoadedPart], list[Check]]:
+    parts, checks = [], []
+    for p in manifest["parts"]:
+        stl = folder / p["files"]["stl"]["path"]
+        try:
+            mesh = load_mesh(stl)
+        except Exception as e:  # unreadable file: say so and go on with the others
+            checks.append(Check("part.mesh", "error", False, f"{p['name']}: cannot read {stl.name} ({e})",
+                                None, None, {"part": p["name"]}))
+            continue
+        parts.append(LoadedPart(p["name"], p.get("role", ""), mesh, np.asarray(p["placement"], dtype=float),
+                                p.get("volume_mm3")))
+    return parts, checks
+
+
+def _manifold(mesh, placement: np.ndarray | None = None):
+    import manifold3d as m3d
+    v = np.asarray(mesh.vertices, dtype=np.float64)
+    if placement is not None:
+        v = v @ placement[:3, :3].T + placement[:3, 3]
+    return m3d.Manifold(m3d.Mesh(vert_properties=v.astype(np.float32),
+                                 tri_verts=np.asarray(mesh.faces, dtype=np.uint32)))
+
+
+def mesh_checks(parts: list[LoadedPart]) -> list[Check]:
+    """Watertight, consistently wound, positive volume, accepted by manifold3d, volume as built."""
+    import manifold3d as m3d
+    out = []
+    for p in parts:
+        m = p.mesh
+        faults = []
+        if not m.is_watertight:
+            faults.append("not watertight")
+        if not m.is_winding_consistent:
+            faults.append("inconsistent winding")
+        if m.is_watertight and m.volume <= 0:
+            faults.append("inside out (negative volume)")
+        status = _manifold(m).status()
+        if status != m3d.Error.NoError:
+            faults.append(f"not a manifold ({status.name})")
+        vol = float(m.volume) if m.is_watertight else None
+        where = {"part": p.name}
+        if faults:
+            out.append(Check("part.mesh", "error", False, f"{p.name}: mesh is " + ", ".join(faults),
+                             None, None, where))
+        else:
+            out.append(Check("part.mesh", "error", True,
+                             f"{p.name}: watertight manifold, {len(m.faces)} triangles, {vol:.1f} mm³",
+                             vol, None, where))
+        if vol is not None and p.volume_mm3:
+            rel = abs(vol - p.volume_mm3) / p.volume_mm3
+            ok = rel <= VOLUME_REL_TOL
+            out.append(Check("part.volume", "warning", ok,
+                             f"{p.name}: STL volume {vol:.1f} mm³ {'matches' if ok else 'differs from'} the solid's "
+                             f"{p.volume_mm3:.1f} mm³ ({rel * 100:.2f} %)", rel, VOLUME_REL_TOL, where))
+    return out
+
+
+def interference_checks(parts: list[LoadedPart], tol_mm3: float) -> list[Check]:
+    """Every pair whose boxes meet is intersected with manifold3d; a volume above ``tol_mm3`` fails."""
+    out = []
+    boxes = {p.name: p.robot_bounds() for p in parts}
+    cache = {}
+    tested = 0
+    for a, b in combinations(parts, 2):
+        ba, bb = boxes[a.name], boxes[b.name]
+        if np.any(ba[0] > bb[1] + BBOX_MARGIN_MM) or np.any(bb[0] > ba[1] + BBOX_MARGIN_MM):
+            continue
+        tested += 1
+        for p in (a, b):
+            if p.name not in cache:
+                cache[p.name] = _manifold(p.mesh, p.placement)
+        vol = float((cache[a.name] ^ cache[b.name]).volume())
+        ok = vol <= tol_mm3
+        where = {"parts": [a.name, b.name]}
+        msg = (f"{a.name} and {b.name}: no interference ({vol:.4f} mm³ shared)" if ok else
+               f"{a.name} and {b.name} interfere: they share {vol:.3f} mm³ (tolerance {tol_mm3:g} mm³)")
+        out.append(Check("part.interference", "error", ok, msg, vol, tol_mm3, where))
+    out.append(Check("part.interference.boxes", "info", True,
+                     f"{len(parts)} parts: {tested} pair(s) with touching bounding boxes intersected, "
+                     f"the other {len(parts) * (len(parts) - 1) // 2 - tested} are apart", float(tested), None, {}))
+    return out
+
+
+def build_volume_checks(parts: list[LoadedPart], build_volume) -> list[Check]:
+    """Each printed part, in its print orientation (turning it about Z allowed), fits the printer."""
+    out = []
+    bx, by, bz = build_volume
+    for p in parts:
+        if p.role in NOT_PRINTED:
+            continue
+        ext = p.mesh.bounds[1] - p.mesh.bounds[0]
+        fits = ext[2] <= bz and ((ext[0] <= bx and ext[1] <= by) or (ext[0] <= by and ext[1] <= bx))
+        size = " × ".join(f"{v:.1f}" for v in ext)
+        where = {"part": p.name}
+        msg = (f"{p.name}: {size} mm fits the build volume {bx:g} × {by:g} × {bz:g} mm" if fits else
+               f"{p.name}: {size} mm does not fit the build volume {bx:g} × {by:g} × {bz:g} mm")
+        out.append(Check("part.build_volume", "error", fits, msg, float(max(ext)), float(max(build_volume)), where))
+    return out

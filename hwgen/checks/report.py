@@ -1,0 +1,133 @@
+"""The check report for people and for CI: JSON, JUnit XML, a Markdown summary and a rich table."""
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+
+def _atomic_write(path: Path, text: str) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def write_json(report: dict, path: Path) -> None:
+    _atomic_write(path, json.dumps(report, indent=2) + "\n")
+
+
+def place(check: dict) -> str:
+    """A short label of where a check looked: part, tendon(s), station."""
+    w = check.get("where") or {}
+    bits = []
+    for key in ("part", "parts", "tendon", "tendons", "channel", "station"):
+        if key in w:
+            v = w[key]
+            v = "+".join(map(str, v)) if isinstance(v, list) else str(v)
+            bits.append(v if key != "station" else f"station {v}")
+    return " ".join(bits)
+
+
+def status(check: dict) -> str:
+    if check["passed"]:
+        return "pass"
+    return "FAIL" if check["severity"] == "error" else check["severity"]
+
+
+def write_junit(report: dict, path: Path) -> None:
+    """One test case per check; failing errors are failures, failing warnings print a warning."""
+    checks = report["checks"]
+    failures = sum(1 for c in checks if not c["passed"] and c["severity"] == "error")
+    suites = ET.Element("testsuites", name="hwgen check", tests=str(len(checks)), failures=str(failures))
+    suite = ET.SubElement(suites, "testsuite", name=f"hwgen check {report['design']}", tests=str(len(checks)),
+                          failures=str(failures), errors="0", skipped="0")
+    seen: dict[str, int] = {}
+    for c in checks:
+        name = c["id"] + (f" [{place(c)}]" if place(c) else "")
+        seen[name] = seen.get(name, 0) + 1
+        if seen[name] > 1:
+            name += f" #{seen[name]}"
+        case = ET.SubElement(suite, "testcase", classname=f"hwgen.{report['design']}.{c['id']}", name=name)
+        detail = f"measured={c['measured']} limit={c['limit']} where={json.dumps(c['where'])}"
+        if not c["passed"] and c["severity"] == "error":
+            fail = ET.SubElement(case, "failure", message=c["message"], type=c["id"])
+            fail.text = detail
+        else:
+            out = ET.SubElement(case, "system-out")
+            out.text = ("" if c["passed"] else f"{c['severity'].upper()}: ") + c["message"]
+    ET.indent(suites)
+    _atomic_write(path, '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(suites, encoding="unicode") + "\n")
+
+
+def _fmt(v) -> str:
+    if v is None:
+        return "–"
+    return f"{v:.4g}" if isinstance(v, float) else str(v)
+
+
+def write_summary(report: dict, path: Path) -> None:
+    """A short Markdown summary: verdict, tendon lengths, failing and warning findings."""
+    checks = report["checks"]
+    errs = [c for c in checks if not c["passed"] and c["severity"] == "error"]
+    warns = [c for c in checks if not c["passed"] and c["severity"] == "warning"]
+    sw = report["sweep"]
+    lines = [f"# {report['design']}: {'PASS' if report['ok'] else 'FAIL'}", "",
+             f"{len(checks)} checks: {len(errs)} failed, {len(warns)} warning(s). "
+             f"Tendon lengths by eq. (1)-(2) from the eyelets measured in the exported disks, "
+             f"bending -{sw['max_angle_deg']:g}° to +{sw['max_angle_deg']:g}° in {sw['step_deg']:g}° steps.", "",
+             "| tendon | channel | rest length mm | Δ at +max mm | Δ at −max mm | max abs Δ mm | budget mm | |",
+             "|---|---|---:|---:|---:|---:|---:|---|"]
+    for t in report["tendons"]:
+        lines.append(f"| {t['name']} | {t['channel']} | {t['rest_length_mm']:.3f} | {t['delta_at_max_mm']:+.4f} | "
+                     f"{t['delta_at_min_mm']:+.4f} | {t['max_abs_delta_mm']:.4f} | "
+                     f"{'–' if t['budget_mm'] is None else format(t['budget_mm'], 'g')} | "
+                     f"{'pass' if t['passed'] else '**FAIL**'} |")
+    for p in report.get("pairs", []):
+        lines += ["", f"Antagonistic pair {' and '.join(p['tendons'])} (channel {p['channel']}): "
+                      f"{p['take_up_mm']:+.3f} mm to take up at {p['at_angle_deg']:+g}°."]
+    if errs:
+        lines += ["", "## Failed", ""] + [f"- `{c['id']}` {c['message']}" for c in errs]
+    if warns:
+        lines += ["", "## Warnings", ""] + [f"- `{c['id']}` {c['message']}" for c in warns]
+    lines += ["", "Plot: `lengths.png`. Every check: `report.json`.", ""]
+    _atomic_write(path, "\n".join(lines))
+
+
+def print_report(report: dict, console, verbose: bool = False) -> None:
+    """Rich tables: tendons, then the findings (failures and warnings; every check if verbose)."""
+    from rich.table import Table
+
+    t = Table(title=f"{report['design']}: tendon lengths from the geometry (±{report['sweep']['max_angle_deg']:g}°)")
+    for col in ("tendon", "channel", "rest mm", "Δ+max mm", "Δ−max mm", "max |Δ| mm", "budget mm", ""):
+        t.add_column(col, justify="left" if col in ("tendon", "channel", "") else "right")
+    for r in report["tendons"]:
+        t.add_row(r["name"], r["channel"], f"{r['rest_length_mm']:.3f}", f"{r['delta_at_max_mm']:+.4f}",
+                  f"{r['delta_at_min_mm']:+.4f}", f"{r['max_abs_delta_mm']:.4f}",
+                  "–" if r["budget_mm"] is None else f"{r['budget_mm']:g}",
+                  "[green]pass[/]" if r["passed"] else "[bold red]FAIL[/]")
+    console.print(t)
+    shown = [c for c in report["checks"] if verbose or not c["passed"] or c["id"] == "tendon.take_up"]
+    ft = Table(title="findings" if not verbose else "checks")
+    for col in ("", "check", "where", "measured", "limit", "message"):
+        ft.add_column(col, overflow="fold")
+    style = {"pass": "green", "FAIL": "bold red", "warning": "yellow", "info": "cyan"}
+    for c in shown:
+        s = status(c) if not (c["passed"] and c["severity"] == "info") else "info"
+        ft.add_row(f"[{style.get(s, '')}]{s}[/]", c["id"], place(c), _fmt(c["measured"]), _fmt(c["limit"]),
+                   c["message"])
+    console.print(ft)
+    n_fail = sum(1 for c in report["checks"] if not c["passed"] and c["severity"] == "error")
+    n_warn = sum(1 for c in report["checks"] if not c["passed"] and c["severity"] == "warning")
+    verdict = "[bold green]PASS[/]" if report["ok"] else "[bold red]FAIL[/]"
+    console.print(f"{report['design']}: {verdict}: {len(report['checks'])} checks, {n_fail} failed, "
+                  f"{n_warn} warning(s)", highlight=False)

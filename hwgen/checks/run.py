@@ -1,0 +1,245 @@
+"""Run every check on a built design folder and gather one report.
+
+``run_checks`` measures the files listed in the manifest (whatever they hold now) and compares
+them with the design intent recorded there. ``check_design`` is what `hwgen check` runs: it
+builds only when the outputs are missing or were made from other parameters or another
+hwgen version; a part file edited after the build is measured, never rebuilt over.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from .. import __version__
+from .. import kinematics as kin
+from ..export import sha256
+from ..routing import table_deviations
+from .base import Check
+from .clearances import backbone_checks, hole_checks, tendon_pair_checks, wall_checks
+from .lengths import (backbone_section, length_checks, locate_eyelets, measure_disk, pair_take_up,
+                      sweep_angles, tendon_lengths)
+from .parts import build_volume_checks, interference_checks, load_parts, mesh_checks
+
+REPORT, PLOT, SUMMARY = "report.json", "lengths.png", "summary.md"
+TABLE_MATCH_MM = 0.1   # Table II gives one decimal: a table within this of its function samples it
+
+
+def _plain(v):
+    """numpy scalars and arrays to JSON-able Python values, recursively."""
+    if isinstance(v, dict):
+        return {str(k): _plain(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_plain(x) for x in v]
+    if isinstance(v, np.ndarray):
+        return _plain(v.tolist())
+    if isinstance(v, np.bool_):
+        return bool(v)
+    if isinstance(v, np.integer):
+        return int(v)
+    if isinstance(v, np.floating):
+        v = float(v)
+    if isinstance(v, float) and not np.isfinite(v):
+        return None
+    return v
+
+
+def _file_checks(folder: Path, manifest: dict) -> list[Check]:
+    out = []
+    entries = [(p["name"], f) for p in manifest["parts"] for f in p["files"].values()]
+    entries += [(k, f) for k, f in manifest.get("files", {}).items()]
+    changed, missing = [], []
+    for name, f in entries:
+        path = folder / f["path"]
+        if not path.exists():
+            missing.append(f["path"])
+        elif sha256(path) != f["sha256"]:
+            changed.append(f["path"])
+    if missing:
+        out.append(Check("files.present", "error", False, f"missing: {', '.join(missing)}", float(len(missing)),
+                         0.0, {"files": missing}))
+    else:
+        out.append(Check("files.present", "error", True, f"all {len(entries)} files of the manifest are present",
+                         0.0, 0.0, {}))
+    if changed:
+        out.append(Check("files.unchanged", "warning", False,
+                         f"changed since the build (sha256 differs from the manifest), measured as found: "
+                         f"{', '.join(changed)}", float(len(changed)), 0.0, {"files": changed}))
+    else:
+        out.append(Check("files.unchanged", "warning", True, "every file is as the build wrote it", 0.0, 0.0, {}))
+    return out
+
+
+def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
+    """Measure the design in ``folder`` and return the report (see README of issue 4 for its keys)."""
+    folder = Path(folder)
+    d = plan.design
+    s = d.check
+    rep_in = manifest["design_report"]
+    tol = s.position_tol_mm
+    checks: list[Check] = _file_checks(folder, manifest)
+    parts, c = load_parts(folder, manifest)
+    checks += c
+
+    disks = []
+    ys = rep_in["stations_mm"]
+    for p in manifest["parts"]:
+        if p.get("role") != "disk":
+            continue
+        stl = folder / p["files"]["stl"]["path"]
+        if not stl.exists():
+            continue
+        try:
+            dk = measure_disk(stl, p["placement"], p["name"], int(p["station"]))
+        except Exception as e:
+            checks.append(Check("disk.section", "error", False, f"{p['name']}: cannot be measured ({e})",
+                                None, None, {"part": p["name"]}))
+            continue
+        disks.append(dk)
+        dy = abs(dk.y_mid - ys[dk.station])
+        checks.append(Check("disk.station", "error", dy <= tol,
+                            f"{dk.part}: mid-plane at y={dk.y_mid:.4f} mm, station {dk.station} is at "
+                            f"y={ys[dk.station]:g} mm", dy, tol, {"part": dk.part, "station": dk.station}))
+
+    bb_outline, bb_holes = None, None
+    bb = next((p for p in manifest["parts"] if p.get("role") == "backbone"), None)
+    if bb is not None and (folder / bb["files"]["stl"]["path"]).exists():
+        try:
+            bb_outline, bb_holes = backbone_section(folder / bb["files"]["stl"]["path"], bb["placement"])
+        except Exception as e:
+            checks.append(Check("backbone.section", "error", False, f"{bb['name']}: cannot be measured ({e})",
+                                None, None, {"part": bb["name"]}))
+
+    emap, c = locate_eyelets(disks, rep_in, bb_holes, tol)
+    checks += c
+
+    angles = sweep_angles(s.max_angle_deg, s.step_deg)
+    L = d.backbone.length
+    tls = tendon_lengths(emap, rep_in, angles, L)
+    devs: dict[str, list] = {}
+    for dv in table_deviations(plan.paths):
+        devs.setdefault(dv.tendon, []).append((dv.station, dv.distance))
+    fdelta = {}
+    kappa = kin.kappas_for_angles(angles, L)
+    for p in plan.paths:
+        if p.function_points is not None:
+            Lf = kin.tendon_lengths(emap.stations_y, p.function_points, kappa)
+            fdelta[p.name] = float(np.abs(Lf - Lf[angles == 0][0]).max())
+    for name, dl in devs.items():
+        big = max(x for _, x in dl)
+        ok = big <= TABLE_MATCH_MM
+        at = [j for j, x in dl if x > max(TABLE_MATCH_MM, 0.5 * big)]
+        checks.append(Check("routing.table_vs_function", "warning", ok,
+                            f"{name}: eyelet table matches its eq. (3) function within {big:.4f} mm" if ok else
+                            f"{name}: eyelet table departs from the eq. (3) function it names by up to {big:.2f} mm "
+                            f"(stations {at}); the geometry follows the table",
+                            big, TABLE_MATCH_MM, {"tendon": name, "stations": at}))
+    checks += length_checks(tls, emap, devs, fdelta)
+    pair = pair_take_up(tls, d.tensioner.actuating_channel)
+    if pair:
+        checks.append(Check("tendon.take_up", "info", True,
+                            f"antagonistic pair {' and '.join(pair['tendons'])} (channel {pair['channel']}): one pays "
+                            f"out less than the other hauls in, {abs(pair['take_up_mm']):.3f} mm of "
+                            f"{'slack to take up' if pair['take_up_mm'] >= 0 else 'extra length to supply'} "
+                            f"at {pair['at_angle_deg']:+g}°", pair["take_up_mm"], None,
+                            {"channel": pair["channel"], "tendons": pair["tendons"]}))
+
+    proc, td = d.process, d.tendon_material.diameter
+    checks += wall_checks(emap, rep_in, proc.min_wall)
+    checks += hole_checks(emap, proc.min_hole, td, angles, L)
+    checks += tendon_pair_checks(emap, rep_in, td, angles, L)
+    checks += backbone_checks(emap, folder / manifest.get("files", {}).get("backbone_template", {}).get(
+        "path", "backbone_template.dxf"), bb_outline, bb_holes, td, tol, rep_in.get("findings", []))
+    checks += mesh_checks(parts)
+    checks += interference_checks(parts, s.interference_tol_mm3)
+    checks += build_volume_checks(parts, proc.build_volume)
+    try:
+        from .gears import gear_checks
+    except ImportError:
+        gear_checks = None
+    if gear_checks is not None:
+        checks += list(gear_checks(folder, manifest, plan))
+
+    ok = not any(c.severity == "error" and not bool(c.passed) for c in checks)
+    i0 = int(np.flatnonzero(angles == 0)[0])
+    return _plain({
+        "design": manifest["design"],
+        "ok": ok,
+        "hwgen_version": __version__,
+        "sweep": {"max_angle_deg": float(angles[-1]), "step_deg": s.step_deg, "angles_deg": angles.tolist()},
+        "checks": [c.to_json() for c in checks],
+        "tendons": [{
+            "name": t.name, "channel": t.channel, "source": "geometry",
+            "rest_length_mm": t.rest,
+            "delta_at_max_mm": float(t.delta[-1]), "delta_at_min_mm": float(t.delta[0]),
+            "max_abs_delta_mm": t.max_abs_delta, "budget_mm": t.budget, "passed": t.passed,
+            "stations_from_backbone": emap.via_backbone.get(t.name, []),
+            "stations_from_design": emap.unmeasured.get(t.name, []),
+            "delta_mm": [float(v) for v in t.delta],
+        } for t in tls],
+        "pairs": [pair] if pair else [],
+        "eyelets": [{
+            "station": e.station, "part": e.part, "tendons": list(e.tendons), "status": e.status,
+            "design_xz_mm": e.design_xz.tolist(),
+            "measured_xz_mm": None if e.measured_xz is None else [float(v) for v in e.measured_xz],
+            "offset_mm": None if not np.isfinite(e.offset) else e.offset,
+            "diameter_mm": None if e.hole is None else e.hole.diameter,
+            "axis": None if e.hole is None or e.hole.axis is None else e.hole.axis.tolist(),
+        } for e in emap.eyelets],
+        "rest_index": i0,
+    })
+
+
+def write_outputs(report: dict, folder: Path) -> None:
+    """report.json, lengths.png and summary.md into the design folder."""
+    from .plot import plot_lengths
+    from .report import write_json, write_summary
+    write_json(report, folder / REPORT)
+    plot_lengths(report, folder / PLOT)
+    write_summary(report, folder / SUMMARY)
+
+
+def post_build(plan, folder: Path, manifest: dict) -> None:
+    """The build's check step: measure the fresh files, record the checks, write the report files."""
+    report = run_checks(folder, manifest, plan)
+    manifest["checks"] = report["checks"]
+    manifest["checks_ok"] = report["ok"]
+    write_outputs(report, folder)
+
+
+def stale_reason(folder: Path, loaded) -> str | None:
+    """Why the outputs in ``folder`` cannot be checked as they are (None: they can)."""
+    mpath = folder / "manifest.json"
+    if not mpath.exists():
+        return "no outputs yet"
+    try:
+        m = json.loads(mpath.read_text())
+    except (OSError, ValueError):
+        return "manifest.json is unreadable"
+    if m.get("params_sha256") != loaded.sha256:
+        return "built from other parameters"
+    if m.get("hwgen_version") != __version__:
+        return f"built by hwgen {m.get('hwgen_version')}, this is {__version__}"
+    for p in m.get("parts", []):
+        for f in p.get("files", {}).values():
+            if not (folder / f["path"]).exists():
+                return f"{f['path']} is missing"
+    for f in m.get("files", {}).values():
+        if not (folder / f["path"]).exists():
+            return f"{f['path']} is missing"
+    return None
+
+
+def check_design(loaded, out_root: Path, progress=None) -> tuple[dict, Path, str | None]:
+    """Build if needed, then check. Returns (report, folder, why it was rebuilt or None)."""
+    from ..design import plan as make_plan
+    from .measure import read_manifest
+
+    folder = Path(out_root) / loaded.design.design
+    why = stale_reason(folder, loaded)
+    if why is not None:
+        from ..build import build
+        build(loaded, Path(out_root), progress)
+        return json.loads((folder / REPORT).read_text()), folder, why
+    return run_checks(folder, read_manifest(folder), make_plan(loaded.design)), folder, None
