@@ -32,6 +32,15 @@ def _checks(plan: Plan, folder: Path, manifest: dict) -> None:
 POST_BUILD.append(("checks", _checks))
 
 
+def _render(plan: Plan, folder: Path, manifest: dict) -> None:
+    """After the checks (the BOM reads their report.json): bom.csv, bom.md, PNG pictures, exploded.svg."""
+    from .render import step
+    step(plan, folder, manifest)
+
+
+POST_BUILD.append(("render", _render))
+
+
 @dataclass
 class BuildResult:
     folder: Path

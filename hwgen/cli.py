@@ -63,6 +63,8 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
     if result.plan.findings:
         for f in result.plan.findings:
             err.print(f"[yellow]finding:[/] {f}", highlight=False)
+    if result.manifest.get("render", {}).get("status") == "unavailable":
+        err.print(f"[yellow]warning:[/] {result.manifest['render']['message']}", highlight=False)
     if failed:
         err.print(f"[red]{len(failed)} check(s) failed[/]; see {result.folder}")
         raise typer.Exit(EXIT_FINDINGS)
@@ -146,6 +148,30 @@ def check(params: Path = PARAMS, out_dir: Path = OUT,
         write_junit(rep, junit)
     if not rep["ok"]:
         raise typer.Exit(EXIT_FINDINGS)
+
+
+@app.command()
+def render(params: Path = PARAMS, out_dir: Path = OUT,
+           quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner")) -> None:
+    """Pictures (exploded, assembled, bent PNG), the exploded SVG drawing and the bill of materials.
+
+    Builds first only when the outputs are missing or made from other parameters. Needs no
+    display or GPU; exit 1 when no offscreen OpenGL backend works (the message says what to install).
+    """
+    loaded = _load(params)
+    from .render import render_design
+
+    with err.status(f"drawing {loaded.design.design}", spinner="dots") if not quiet else _nothing():
+        entry, folder, rebuilt = render_design(loaded, out_dir)
+    if rebuilt:
+        err.print(f"built {folder} first ({rebuilt})", highlight=False)
+    out.print(f"{loaded.design.design}: bom.csv, bom.md written to {folder}", highlight=False)
+    if entry.get("status") != "ok":
+        err.print(f"[yellow]warning:[/] {entry.get('message', 'pictures not drawn')}", highlight=False)
+        raise typer.Exit(EXIT_FINDINGS)
+    for name, f in entry["files"].items():
+        size = f" ({f['width']} × {f['height']} px)" if "width" in f else ""
+        out.print(f"  {folder / name}{size}", highlight=False)
 
 
 class _nothing:

@@ -1,0 +1,265 @@
+"""Bill of materials: bom.csv and bom.md from the manifest (and the checks' report.json).
+
+Printed parts are the manifest's parts, one row per file, grouped by family (the part's
+``role``). Purchased parts:
+
+* the backbone strip (any part of a purchased family, or with ``"purchased": true`` in its
+  manifest entry): its cut size from the file's bounding box, its holes from the drill template;
+* every tendon, cut to its rest length plus the tie-off and spool allowances of ``render:``;
+  the rest length comes from the validator's ``report.json`` when the folder has one (measured
+  from the geometry), otherwise from eq. (2) at zero curvature on the design report's eyelets;
+* screws and nuts for the tip-mount bolt pattern, sized from the clearance holes;
+* hardware a part lists in its manifest entry as ``"hardware": [{"item", "qty", "size",
+  "material", "notes"}]`` (dowel pins, inserts, bearings of the tensioner), summed over parts.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+
+from . import kinematics as kin
+
+PURCHASED_ROLES = {"backbone"}     # families that are bought and cut, not printed
+REPORT = "report.json"             # written by the checks step, read here when present
+
+# ISO 273 "normal" clearance holes: hole diameter -> metric thread it clears.
+ISO273_NORMAL = {2.4: "M2", 2.9: "M2.5", 3.4: "M3", 4.5: "M4", 5.5: "M5", 6.6: "M6", 9.0: "M8"}
+CLEARANCE_MATCH_MM = 0.35          # a hole within this of a table size takes that thread
+
+FAMILY_LABELS = {
+    "disk": "tendon-support disk",
+    "backbone": "backbone strip",
+    "worm": "tensioner worm",
+    "wheel": "worm wheel",
+    "housing": "tensioner housing",
+    "clamp": "tendon clamp",
+    "shaft": "shaft",
+}
+
+COLUMNS = ["item", "category", "part", "family", "qty", "material", "size", "volume_mm3",
+           "rest_length_mm", "allowance_mm", "cut_length_mm", "file", "notes"]
+
+
+def family_label(role: str) -> str:
+    return FAMILY_LABELS.get(role, role.replace("_", " "))
+
+
+def is_purchased(entry: dict) -> bool:
+    return bool(entry.get("purchased")) or entry["role"] in PURCHASED_ROLES
+
+
+def thread_for_hole(diameter: float) -> str | None:
+    best = min(ISO273_NORMAL, key=lambda d: abs(d - diameter))
+    return ISO273_NORMAL[best] if abs(best - diameter) <= CLEARANCE_MATCH_MM else None
+
+
+def rest_lengths(folder: Path, manifest: dict) -> tuple[dict[str, float], str]:
+    """Tendon rest lengths (mm) and where they came from."""
+    path = Path(folder) / REPORT
+    if path.exists():
+        try:
+            rep = json.loads(path.read_text())
+            lengths = {t["name"]: float(t["rest_length_mm"]) for t in rep.get("tendons", [])}
+        except (OSError, ValueError, KeyError, TypeError):
+            lengths = {}
+        names = {t["name"] for t in manifest["design_report"]["tendons"]}
+        if lengths and names <= set(lengths):
+            return lengths, f"{REPORT}: rest lengths measured from the part files by the validator"
+    dr = manifest["design_report"]
+    st = dr["stations_mm"]
+    lengths = {t["name"]: float(kin.tendon_lengths(st, np.asarray(t["eyelets_xz_mm"]), 0.0)[0])
+               for t in dr["tendons"]}
+    return lengths, "eq. (2) at zero curvature on the design report's eyelets (no report.json)"
+
+
+def _size(entry: dict) -> str:
+    lo, hi = np.asarray(entry["bbox_mm"]["min"]), np.asarray(entry["bbox_mm"]["max"])
+    ext = sorted(hi - lo, reverse=True)
+    return " × ".join(f"{v:.4g}" for v in ext) + " mm"
+
+
+def _strip_holes(manifest: dict) -> int:
+    seen = {(round(h["x_mm"], 6), round(h["y_mm"], 6)) for h in manifest["design_report"]["backbone_holes"]}
+    return len(seen)
+
+
+def bom_rows(folder: Path, manifest: dict, design) -> tuple[list[dict], str]:
+    """Every row of the bill of materials (dicts keyed by COLUMNS) and the rest-length source."""
+    rows: list[dict] = []
+
+    def add(**kw):
+        row = {c: "" for c in COLUMNS} | kw
+        row["item"] = len(rows) + 1
+        rows.append(row)
+
+    for e in manifest["parts"]:
+        if is_purchased(e):
+            continue
+        add(category="printed", part=e["name"], family=e["role"], qty=1,
+            material=e.get("material", design.process.name), size=_size(e),
+            volume_mm3=f"{e['volume_mm3']:.1f}", file=e["files"]["stl"]["path"],
+            notes=_printed_note(e))
+
+    template = manifest.get("files", {}).get("backbone_template", {}).get("path", "backbone_template.dxf")
+    for e in manifest["parts"]:
+        if not is_purchased(e):
+            continue
+        notes = e.get("notes", "")
+        if e["role"] == "backbone":
+            n = _strip_holes(manifest)
+            notes = (f"cut to size; drill {n} hole{'s' if n != 1 else ''} from {template} (1:1 template)"
+                     if n else f"cut to size; {template} is the 1:1 template")
+            material = e.get("material", f"carbon-fibre/epoxy laminate, {design.backbone.thickness:g} mm")
+        else:
+            material = e.get("material", "")
+        add(category="purchased", part=e["name"], family=e["role"], qty=1, material=material,
+            size=_size(e), volume_mm3=f"{e['volume_mm3']:.1f}", file=e["files"]["step"]["path"], notes=notes)
+
+    lengths, source = rest_lengths(folder, manifest)
+    r = design.render
+    allowance = r.tie_off_mm + r.spool_mm
+    tm = design.tendon_material
+    for t in manifest["design_report"]["tendons"]:
+        rest = lengths[t["name"]]
+        add(category="purchased", part=f"tendon {t['name']}", family="tendon", qty=1,
+            material=tm.name, size=f"Ø{tm.diameter:g} mm", rest_length_mm=f"{rest:.2f}",
+            allowance_mm=f"{allowance:.1f}", cut_length_mm=f"{rest + allowance:.1f}",
+            notes=f"channel {t['channel']}; rest {rest:.1f} + tie-off {r.tie_off_mm:g} + spool {r.spool_mm:g} mm")
+
+    for item, qty, size, material, notes in _fasteners(manifest):
+        add(category="purchased", part=item, family="hardware", qty=qty, size=size, material=material, notes=notes)
+    return rows, source
+
+
+def _printed_note(e: dict) -> str:
+    bits = []
+    if "station" in e:
+        bits.append(f"station {e['station']}")
+    if e.get("disk_role") in ("base", "tip"):
+        bits.append(f"{e['disk_role']} disk")
+    if "channel" in e:
+        bits.append(f"channel {e['channel']}")
+    return "; ".join(bits)
+
+
+def _fasteners(manifest: dict) -> list[tuple[str, int, str, str, str]]:
+    """Screws and nuts of the tip mount, then hardware the parts list, summed by (item, size)."""
+    out: list[tuple[str, int, str, str, str]] = []
+    tip = max(manifest["design_report"]["disks"], key=lambda d: d["index"], default=None)
+    mounts = tip.get("mount_holes", []) if tip else []
+    if mounts:
+        dia = mounts[0][2]
+        thread = thread_for_hole(dia) or f"screw for Ø{dia:g} mm holes"
+        grip = tip["thickness_mm"]
+        out.append((f"{thread} socket head cap screw", len(mounts), f"{thread} × ({grip:g} mm + housing flange)",
+                    "steel, A2 stainless or 8.8", "fastens the tensioner housing to the tip disk"))
+        out.append((f"{thread} hex nut or heat-set insert", len(mounts), thread, "steel / brass insert",
+                    "nut under the tip disk, or an insert melted into the housing"))
+    summed: dict[tuple[str, str], list] = {}
+    for e in manifest["parts"]:
+        for h in e.get("hardware", []) or []:
+            key = (str(h.get("item", "hardware")), str(h.get("size", "")))
+            if key not in summed:
+                summed[key] = [0, str(h.get("material", "")), set()]
+            summed[key][0] += int(h.get("qty", 1))
+            summed[key][2].add(e["name"])
+    for (item, size), (qty, material, users) in summed.items():
+        out.append((item, qty, size, material, "for " + ", ".join(sorted(users))))
+    return out
+
+
+def family_table(manifest: dict, design, rows: list[dict] | None = None) -> list[dict]:
+    """One entry per part family, numbered in order of first appearance (the drawing's balloons)."""
+    out: list[dict] = []
+    for e in manifest["parts"]:
+        if any(f["role"] == e["role"] for f in out):
+            continue
+        members = [p for p in manifest["parts"] if p["role"] == e["role"]]
+        material = e.get("material") or (f"carbon-fibre laminate, {design.backbone.thickness:g} mm"
+                                          if e["role"] == "backbone" else design.process.name)
+        out.append({"item": len(out) + 1, "role": e["role"], "label": family_label(e["role"]),
+                    "qty": len(members), "material": material,
+                    "kind": "purchased" if is_purchased(e) else "printed",
+                    "parts": [p["name"] for p in members]})
+    return out
+
+
+def _csv(rows: list[dict]) -> str:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
+    return buf.getvalue()
+
+
+def _md_cell(v) -> str:
+    return str(v).replace("|", "\\|")
+
+
+def _markdown(manifest: dict, design, rows: list[dict], source: str) -> str:
+    printed = [r for r in rows if r["category"] == "printed"]
+    fam: dict[str, list[dict]] = {}
+    for r in printed:
+        fam.setdefault(r["family"], []).append(r)
+    total = sum(float(r["volume_mm3"]) for r in printed)
+    L = [f"# Bill of materials: {manifest['design']}", "",
+         f"From `{manifest.get('params_file', '')}` (sha256 {manifest.get('params_sha256', '')[:12]}), "
+         f"hwgen {manifest.get('hwgen_version', '')}.", "",
+         "## Printed parts", "",
+         f"Material: {design.process.name}. Total part volume {total / 1000:.1f} cm³ "
+         f"(≈ {total / 1000:.0f} ml of resin before supports and waste).", "",
+         "| family | qty | volume, cm³ |", "|---|---:|---:|"]
+    for role, rs in fam.items():
+        L.append(f"| {family_label(role)} | {len(rs)} | {sum(float(r['volume_mm3']) for r in rs) / 1000:.2f} |")
+    L += ["", "| # | part | family | qty | size | volume, mm³ | file | notes |",
+          "|---:|---|---|---:|---|---:|---|---|"]
+    for r in printed:
+        L.append(f"| {r['item']} | {r['part']} | {r['family']} | {r['qty']} | {r['size']} | {r['volume_mm3']} | "
+                 f"`{r['file']}` | {_md_cell(r['notes'])} |")
+    bought = [r for r in rows if r["category"] == "purchased" and r["family"] not in ("tendon", "hardware")]
+    tendons = [r for r in rows if r["family"] == "tendon"]
+    hardware = [r for r in rows if r["family"] == "hardware"]
+    L += ["", "## Purchased parts", "", "| # | part | qty | material | cut size | notes |", "|---:|---|---:|---|---|---|"]
+    for r in bought:
+        L.append(f"| {r['item']} | {r['part']} | {r['qty']} | {_md_cell(r['material'])} | {r['size']} | "
+                 f"{_md_cell(r['notes'])} |")
+    r_ = design.render
+    L += ["", f"### Tendons: {design.tendon_material.name}, Ø{design.tendon_material.diameter:g} mm", "",
+          f"Cut length = rest length + {r_.tie_off_mm:g} mm tie-off (knot at the base disk) + "
+          f"{r_.spool_mm:g} mm spool (to reach and wrap the tensioner). Rest lengths: {source}.", "",
+          "| # | tendon | channel | rest, mm | cut, mm |", "|---:|---|---|---:|---:|"]
+    for r in tendons:
+        ch = r["notes"].split(";")[0].removeprefix("channel ")
+        L.append(f"| {r['item']} | {r['part'].removeprefix('tendon ')} | {ch} | {r['rest_length_mm']} | "
+                 f"{r['cut_length_mm']} |")
+    total_cut = sum(float(r["cut_length_mm"]) for r in tendons)
+    L.append(f"| | total | | | {total_cut:.0f} |")
+    if hardware:
+        L += ["", "### Fasteners and hardware", "", "| # | item | qty | size | material | notes |",
+              "|---:|---|---:|---|---|---|"]
+        for r in hardware:
+            L.append(f"| {r['item']} | {r['part']} | {r['qty']} | {r['size']} | {_md_cell(r['material'])} | "
+                     f"{_md_cell(r['notes'])} |")
+    L += ["", "Also: glue for the disks on the strip (cyanoacrylate or epoxy).", ""]
+    return "\n".join(L)
+
+
+def write_bom(folder: Path, manifest: dict, design) -> list[dict]:
+    """bom.csv and bom.md into the folder; records them and the rest-length source in the manifest."""
+    from .export import sha256
+    folder = Path(folder)
+    rows, source = bom_rows(folder, manifest, design)
+    (folder / "bom.csv").write_text(_csv(rows), encoding="utf-8")
+    (folder / "bom.md").write_text(_markdown(manifest, design, rows, source), encoding="utf-8")
+    files = manifest.setdefault("files", {})
+    for key, name in (("bom_csv", "bom.csv"), ("bom_md", "bom.md")):
+        files[key] = {"path": name, "sha256": sha256(folder / name)}
+    manifest["bom"] = {"tendon_rest_length_source": source,
+                       "printed_parts": sum(r["qty"] for r in rows if r["category"] == "printed"),
+                       "tendon_cut_total_mm": round(sum(float(r["cut_length_mm"]) for r in rows
+                                                        if r["family"] == "tendon"), 1)}
+    return rows
