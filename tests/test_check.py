@@ -1,0 +1,288 @@
+"""`hwgen check`: each check passes on the prototype and fails, naming the place, on a design or
+a file made to break it. Faults the YAML cannot express are made in copies of the built files."""
+from __future__ import annotations
+
+import dataclasses
+import json
+import shutil
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+import yaml
+
+from hwgen.build import build
+from hwgen.checks.clearances import segment_distance
+from hwgen.checks.run import run_checks, stale_reason
+from hwgen.design import plan as make_plan
+from hwgen.export import sha256
+from hwgen.params import load
+
+from .conftest import PARAMS
+
+
+def _run(*args, timeout=300):
+    return subprocess.run([sys.executable, "-m", "hwgen.cli", *args], capture_output=True, text=True,
+                          timeout=timeout)
+
+
+def _copy(built, tmp_path, name="prototype"):
+    """A copy of the built design under tmp_path/out/<name>, safe to modify."""
+    root = tmp_path / "out"
+    shutil.copytree(built(name), root / name)
+    return root, root / name
+
+
+def _check(folder, params="prototype"):
+    manifest = json.loads((folder / "manifest.json").read_text())
+    return run_checks(folder, manifest, make_plan(load(PARAMS / f"{params}.yaml").design))
+
+
+def _failed(rep, cid):
+    return [c for c in rep["checks"] if c["id"] == cid and not c["passed"]]
+
+
+def test_prototype_passes_every_check_and_build_writes_report(built):
+    folder = built("prototype")
+    rep = json.loads((folder / "report.json").read_text())
+    assert rep["ok"] and rep["design"] == "prototype"
+    ids = {c["id"] for c in rep["checks"]}
+    for cid in ("eyelet.position", "eyelet.wall.edge", "eyelet.wall.eyelet", "eyelet.wall.slot", "eyelet.min_hole",
+                "eyelet.tendon_angle", "tendon.clearance", "tendon.contact", "backbone.crossing", "part.mesh",
+                "part.interference", "part.build_volume", "tendon.length", "tendon.take_up"):
+        assert cid in ids, cid
+    for c in rep["checks"]:
+        assert set(c) >= {"id", "severity", "passed", "message", "measured", "limit", "where"}
+        assert c["severity"] in ("error", "warning", "info")
+    # measured values, not placeholders: eyelets within a micrometre, thinnest edge wall ~ 36 - 30 - 0.4
+    pos = [c["measured"] for c in rep["checks"] if c["id"] == "eyelet.position"]
+    assert len(pos) == 13 and max(pos) < 1e-3
+    edge = min(c["measured"] for c in rep["checks"] if c["id"] == "eyelet.wall.edge")
+    assert 5.5 < edge < 5.6
+    # every disk pair with the strip through it is intersected; nothing is shared
+    inter = [c for c in rep["checks"] if c["id"] == "part.interference"]
+    assert len(inter) == 13 and all(c["measured"] < 1e-3 for c in inter)
+    contacts = {tuple(c["where"]["tendons"]): c["where"]["stations"] for c in rep["checks"] if c["id"] == "tendon.contact"}
+    assert contacts[("C1", "C2")] == [0, 6, 12]
+    # the build published the checks with the files
+    manifest = json.loads((folder / "manifest.json").read_text())
+    assert manifest["checks"] == rep["checks"]
+    assert (folder / "lengths.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    summary = (folder / "summary.md").read_text()
+    assert summary.startswith("# prototype: PASS") and "| C2 | C2 |" in summary
+
+
+def test_paper_table2_build_and_check_exit_1(built, tmp_path):
+    root, folder = _copy(built, tmp_path, "paper-table2")
+    assert "## Failed" in (folder / "summary.md").read_text()
+    r = _run("check", str(PARAMS / "paper-table2.yaml"), "--out", str(root), "--junit", str(tmp_path / "j.xml"))
+    assert r.returncode == 1, r.stderr
+    assert "built" not in r.stderr           # outputs were current: measured, not rebuilt
+    assert "paper-table2: FAIL" in r.stdout and "coupling budget" in r.stdout
+    suite = ET.parse(tmp_path / "j.xml").getroot().find("testsuite")
+    cases = suite.findall("testcase")
+    failures = [c for c in cases if c.find("failure") is not None]
+    assert int(suite.get("tests")) == len(cases) > 100
+    assert len(failures) == int(suite.get("failures")) == 1
+    assert failures[0].get("classname") == "hwgen.paper-table2.tendon.length"
+    assert "C2" in failures[0].find("failure").get("message")
+
+
+def test_check_exit_codes_and_report(built, tmp_path):
+    root, _ = _copy(built, tmp_path)
+    out = tmp_path / "r.json"
+    r = _run("check", str(PARAMS / "prototype.yaml"), "--out", str(root), "--report", str(out))
+    assert r.returncode == 0, r.stdout + r.stderr
+    rep = json.loads(out.read_text())
+    assert rep["ok"] and {t["name"] for t in rep["tendons"]} == {"A1", "A2", "C1", "C2", "H"}
+    for t in rep["tendons"]:
+        assert set(t) >= {"name", "source", "rest_length_mm", "delta_at_max_mm", "delta_at_min_mm",
+                          "max_abs_delta_mm", "budget_mm", "passed"}
+    bad = tmp_path / "bad.yaml"
+    bad.write_text((PARAMS / "prototype.yaml").read_text().replace("count: 13", "count: -1"))
+    r = _run("check", str(bad), "--out", str(root))
+    assert r.returncode == 2 and "disks.count" in r.stderr
+
+
+def test_staleness_is_inputs_not_outputs(built, tmp_path):
+    loaded = load(PARAMS / "prototype.yaml")
+    root, folder = _copy(built, tmp_path)
+    assert stale_reason(folder, loaded) is None
+    (folder / "stl" / "disk_03.stl").write_bytes(b"edited")          # changed file: measured, not rebuilt
+    assert stale_reason(folder, loaded) is None
+    (folder / "step" / "disk_03.step").unlink()
+    assert "disk_03.step" in stale_reason(folder, loaded)
+    other = load(PARAMS / "paper-table2.yaml")
+    assert stale_reason(folder, other) is not None
+    assert stale_reason(tmp_path / "nothing", loaded) == "no outputs yet"
+
+
+def test_moved_eyelet_in_exported_disk_is_caught(built, tmp_path):
+    """A fault the YAML cannot show: disk_05's C2 eyelet drilled 0.05 mm off, its STL replaced."""
+    from hwgen.export import write_stl
+    from hwgen.parts.disk import build_disk
+
+    root, folder = _copy(built, tmp_path)
+    plan = make_plan(load(PARAMS / "prototype.yaml").design)
+    spec = plan.disks[5]
+    holes = tuple(dataclasses.replace(h, x=h.x + 0.05) if h.tendons == ("C2",) else h for h in spec.holes)
+    stl = folder / "stl" / "disk_05.stl"
+    write_stl(build_disk(dataclasses.replace(spec, holes=holes)).solid, stl)
+    edited = sha256(stl)
+    r = _run("check", str(PARAMS / "prototype.yaml"), "--out", str(root), "--report", str(tmp_path / "r.json"))
+    assert r.returncode == 1, r.stdout
+    assert sha256(stl) == edited                      # not rebuilt over
+    rep = json.loads((tmp_path / "r.json").read_text())
+    bad = _failed(rep, "eyelet.position")
+    assert len(bad) == 1 and bad[0]["where"]["part"] == "disk_05"
+    assert "C2 eyelet" in bad[0]["message"] and "disk_05" in bad[0]["message"]
+    assert bad[0]["measured"] == pytest.approx(0.05, abs=2e-3)
+    assert any("stl/disk_05.stl" in c["message"] for c in _failed(rep, "files.unchanged"))
+    ey = [e for e in rep["eyelets"] if e["station"] == 5 and e["tendons"] == ["C2"]][0]
+    assert ey["measured_xz_mm"][0] == pytest.approx(0.05, abs=2e-3)
+    # the lengths are computed from where the hole is, not where it should be
+    base = {t["name"]: t for t in json.loads((built("prototype") / "report.json").read_text())["tendons"]}
+    now = {t["name"]: t for t in rep["tendons"]}
+    assert now["C2"]["rest_length_mm"] != base["C2"]["rest_length_mm"]
+    assert now["C1"]["rest_length_mm"] == pytest.approx(base["C1"]["rest_length_mm"], abs=1e-9)
+
+
+def test_hole_too_small_for_tendon_angle(built, tmp_path):
+    """disk_01's C2 eyelet (sized Ø1.15 for 16° of tendon angle) made Ø0.85: above the process
+    minimum, too small for the angle."""
+    from hwgen.export import write_stl
+    from hwgen.parts.disk import build_disk
+
+    _, folder = _copy(built, tmp_path)
+    plan = make_plan(load(PARAMS / "prototype.yaml").design)
+    spec = plan.disks[1]
+    holes = tuple(dataclasses.replace(h, diameter=0.85) if h.tendons == ("C2",) else h for h in spec.holes)
+    write_stl(build_disk(dataclasses.replace(spec, holes=holes)).solid, folder / "stl" / "disk_01.stl")
+    rep = _check(folder)
+    assert not rep["ok"]
+    bad = _failed(rep, "eyelet.tendon_angle")
+    assert [c["where"]["tendon"] for c in bad] == ["C2"]
+    assert bad[0]["where"]["part"] == "disk_01" and "pinched in disk_01" in bad[0]["message"]
+    assert bad[0]["measured"] == pytest.approx(0.85, abs=0.02) and bad[0]["limit"] > 0.9
+    assert not _failed(rep, "eyelet.min_hole") and not _failed(rep, "eyelet.position")
+
+
+def test_overlapping_parts_named_with_volume(built, tmp_path):
+    _, folder = _copy(built, tmp_path)
+    m = json.loads((folder / "manifest.json").read_text())
+    d1 = next(p for p in m["parts"] if p["name"] == "disk_01")
+    d1["placement"][1][3] += 21.0                   # 1.5 mm into disk_02
+    (folder / "manifest.json").write_text(json.dumps(m))
+    rep = _check(folder)
+    bad = _failed(rep, "part.interference")
+    assert len(bad) == 1 and set(bad[0]["where"]["parts"]) == {"disk_01", "disk_02"}
+    assert "disk_01 and disk_02 interfere" in bad[0]["message"]
+    # two disks overlapping by 1.5 mm of their Ø72 faces, less the slot and holes
+    assert 1.5 * np.pi * 36 ** 2 * 0.9 < bad[0]["measured"] < 1.5 * np.pi * 36 ** 2
+    assert any(c["where"]["part"] == "disk_01" for c in _failed(rep, "disk.station"))
+
+
+def test_crossing_without_a_hole(built, tmp_path):
+    import ezdxf
+
+    from hwgen.export import write_stl
+    from hwgen.parts.backbone import build_backbone
+
+    _, folder = _copy(built, tmp_path)
+    dxf = folder / "backbone_template.dxf"
+    doc = ezdxf.readfile(dxf)
+    msp = doc.modelspace()
+    gone = [c for c in msp.query('CIRCLE[layer=="HOLES"]') if abs(c.dxf.center.y - 45) < 1e-6 and abs(c.dxf.center.x) < 1e-6]
+    assert len(gone) == 1
+    msp.delete_entity(gone[0])
+    doc.saveas(dxf)
+    rep = _check(folder)
+    bad = _failed(rep, "backbone.crossing")
+    assert len(bad) == 1 and bad[0]["where"]["tendon"] == "C2" and bad[0]["where"]["station"] == 2
+    assert "C2 crosses the backbone station 2" in bad[0]["message"]
+    assert "backbone_template.dxf" in bad[0]["message"] and "STL" not in bad[0]["message"]
+
+    # and the strip itself without the hole at station 10
+    plan = make_plan(load(PARAMS / "prototype.yaml").design)
+    spec = plan.backbone
+    spec = dataclasses.replace(spec, holes=tuple(h for h in spec.holes if not (h.tendon == "C2" and h.station == 10)))
+    write_stl(build_backbone(spec).solid, folder / "stl" / "backbone.stl")
+    rep = _check(folder)
+    bad = {c["where"]["station"]: c["message"] for c in _failed(rep, "backbone.crossing")}
+    assert set(bad) == {2, 10}
+    assert "the backbone STL" in bad[10] and "backbone_template.dxf" not in bad[10]
+
+
+def test_broken_mesh_and_build_volume(built, tmp_path):
+    import trimesh
+
+    _, folder = _copy(built, tmp_path)
+    stl = folder / "stl" / "disk_07.stl"
+    mesh = trimesh.load_mesh(stl)
+    mesh.update_faces(np.arange(len(mesh.faces)) >= 5)      # five triangles gone: a hole in the skin
+    mesh.export(stl)
+    rep = _check(folder)
+    bad = _failed(rep, "part.mesh")
+    assert [c["where"]["part"] for c in bad] == ["disk_07"] and "not watertight" in bad[0]["message"]
+
+    small = load(PARAMS / "prototype.yaml").design
+    small = small.model_copy(update={"process": small.process.model_copy(update={"build_volume": (70, 70, 50)})})
+    m = json.loads((built("prototype") / "manifest.json").read_text())
+    rep = run_checks(built("prototype"), m, make_plan(small))
+    bad = _failed(rep, "part.build_volume")
+    assert len(bad) == 13 and "disk_00" in bad[0]["message"] and "does not fit" in bad[0]["message"]
+
+
+@pytest.fixture(scope="module")
+def broken_walls(tmp_path_factory):
+    """A design whose YAML makes thin walls: A1/A2 at 35.4 mm on a Ø72 disk (0.2 mm of rim left)
+    and two straight tendons X, Y 0.5 mm apart (their Ø0.8 eyelets run into one another)."""
+    doc = yaml.safe_load((PARAMS / "prototype.yaml").read_text())
+    doc["design"] = "thin-walls"
+    doc["tendons"][0]["routing"]["function"]["z0"] = 35.4
+    doc["tendons"] += [{"name": "X", "channel": "A", "routing": {"function": {"kind": "straight", "x0": 20, "z0": 20}}},
+                       {"name": "Y", "channel": "A", "routing": {"function": {"kind": "straight", "x0": 20.5, "z0": 20}}}]
+    root = tmp_path_factory.mktemp("thin")
+    src = root / "thin-walls.yaml"
+    src.write_text(yaml.safe_dump(doc, sort_keys=False))
+    folder = build(load(src), root / "out").folder
+    return json.loads((folder / "report.json").read_text())
+
+
+def test_eyelet_near_edge_fails_and_names_it(broken_walls):
+    bad = _failed(broken_walls, "eyelet.wall.edge")
+    assert {c["where"]["part"] for c in bad} == {f"disk_{i:02d}" for i in range(13)}
+    for c in bad:
+        assert c["message"].startswith(c["where"]["part"] + ": wall to the outer edge")
+        assert "eyelet A1" in c["message"] or "eyelet A2" in c["message"]
+        assert 0.15 < c["measured"] < 0.2 and c["limit"] == 0.8
+
+
+def test_merging_eyelets_fail_and_are_named(broken_walls):
+    bad = _failed(broken_walls, "eyelet.wall.eyelet")
+    assert len(bad) == 13
+    for c in bad:
+        assert "eyelet X and eyelet Y merge into one opening" in c["message"] and c["measured"] == 0
+    pos = _failed(broken_walls, "eyelet.position")
+    assert len(pos) == 13 and all("runs into another hole" in c["message"] for c in pos)
+    # 0.5 mm apart is still clear of each other for a Ø0.15 line
+    xy = [c for c in broken_walls["checks"] if c["id"] == "tendon.clearance" and c["where"]["tendons"] == ["X", "Y"]]
+    assert xy[0]["passed"] and xy[0]["measured"] == pytest.approx(0.5, abs=1e-6)
+    assert not broken_walls["ok"]
+
+
+def test_segment_distance_against_sampling():
+    rng = np.random.default_rng(4)
+    p0, p1, q0, q1 = (rng.normal(size=(60, 3)) for _ in range(4))
+    got = segment_distance(p0, p1, q0, q1)
+    s = np.linspace(0, 1, 301)
+    a = p0[:, None] + s[None, :, None] * (p1 - p0)[:, None]
+    b = q0[:, None] + s[None, :, None] * (q1 - q0)[:, None]
+    brute = np.linalg.norm(a[:, :, None] - b[:, None, :], axis=3).min(axis=(1, 2))
+    assert np.all(got <= brute + 1e-12) and np.all(brute - got < 1e-2)
+    # parallel and touching end to end
+    z = np.zeros(3)
+    assert segment_distance(z, np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), np.array([1.0, 1, 0])) == pytest.approx(1)
+    assert segment_distance(z, np.array([1.0, 0, 0]), np.array([2.0, 0, 0]), np.array([3.0, 0, 0])) == pytest.approx(1)
