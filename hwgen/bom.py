@@ -76,9 +76,14 @@ def rest_lengths(folder: Path, manifest: dict) -> tuple[dict[str, float], str]:
     return lengths, "eq. (2) at zero curvature on the design report's eyelets (no report.json)"
 
 
-def _size(entry: dict) -> str:
-    lo, hi = np.asarray(entry["bbox_mm"]["min"]), np.asarray(entry["bbox_mm"]["max"])
-    ext = sorted(hi - lo, reverse=True)
+def _size(folder: Path, entry: dict) -> str:
+    """Overall size, largest first, from the STL's vertices (the manifest's CAD box is loose)."""
+    try:
+        import trimesh
+        lo, hi = trimesh.load_mesh(str(Path(folder) / entry["files"]["stl"]["path"]), process=False).bounds
+    except (OSError, ValueError, KeyError):
+        lo, hi = np.asarray(entry["bbox_mm"]["min"]), np.asarray(entry["bbox_mm"]["max"])
+    ext = sorted(np.asarray(hi) - np.asarray(lo), reverse=True)
     return " × ".join(f"{v:.4g}" for v in ext) + " mm"
 
 
@@ -100,7 +105,7 @@ def bom_rows(folder: Path, manifest: dict, design) -> tuple[list[dict], str]:
         if is_purchased(e):
             continue
         add(category="printed", part=e["name"], family=e["role"], qty=1,
-            material=e.get("material", design.process.name), size=_size(e),
+            material=e.get("material", design.process.name), size=_size(folder, e),
             volume_mm3=f"{e['volume_mm3']:.1f}", file=e["files"]["stl"]["path"],
             notes=_printed_note(e))
 
@@ -117,7 +122,7 @@ def bom_rows(folder: Path, manifest: dict, design) -> tuple[list[dict], str]:
         else:
             material = e.get("material", "")
         add(category="purchased", part=e["name"], family=e["role"], qty=1, material=material,
-            size=_size(e), volume_mm3=f"{e['volume_mm3']:.1f}", file=e["files"]["step"]["path"], notes=notes)
+            size=_size(folder, e), volume_mm3=f"{e['volume_mm3']:.1f}", file=e["files"]["step"]["path"], notes=notes)
 
     lengths, source = rest_lengths(folder, manifest)
     r = design.render

@@ -189,10 +189,10 @@ def exploded_placements(parts: list[ScenePart], stations, explode_mm: float) -> 
         else:
             c = p.centre()
             shift[1] = e * float(np.interp(c[1], st, np.arange(len(st))))
-            if c[1] > st[-1]:
-                shift[1] += e
+            if c[1] > st[-1]:               # beyond the tip (the tensioner): clear of the tip disk
+                shift[1] += OWN_EXPLODE_FACTOR * e
             elif c[1] < st[0]:
-                shift[1] -= e
+                shift[1] -= OWN_EXPLODE_FACTOR * e
             own = c - group_centre
             n = np.linalg.norm(own)
             if n > 1.0:
@@ -488,7 +488,7 @@ class Renderer:
                 sw.GetTextProperty().SetBackgroundColor(*swatch)
                 sw.GetTextProperty().SetBackgroundOpacity(1.0)
                 sw.SetDisplayPosition(x, y)
-                ren.AddActor2D(sw)
+                ren.AddViewProp(sw)
                 x += int(2.2 * px)
             t = rc.vtkTextActor()
             t.SetInput(text)
@@ -496,7 +496,7 @@ class Renderer:
             t.GetTextProperty().SetFontSize(px)
             t.GetTextProperty().BoldOn()
             t.SetDisplayPosition(x, y)
-            ren.AddActor2D(t)
+            ren.AddViewProp(t)
         rens = self.window.GetRenderers()
         rens.RemoveAllItems()
         self.window.AddRenderer(ren)
@@ -515,7 +515,7 @@ class Renderer:
                 t.GetTextProperty().SetJustificationToCentered()
                 t.GetTextProperty().SetVerticalJustificationToCentered()
                 t.SetDisplayPosition(int(x), int(y))
-                ren.AddActor2D(t)
+                ren.AddViewProp(t)
         self.window.Render()
         if path is not None:
             write_png(self.rgb(W, H), path)

@@ -1,0 +1,129 @@
+"""Bill of materials: rows against the manifest, tendon lengths against the validator's report."""
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hwgen import bom
+from hwgen import kinematics as kin
+from hwgen.params import load
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def proto(built):
+    folder = built("prototype")
+    m = json.loads((folder / "manifest.json").read_text())
+    with open(folder / "bom.csv", newline="", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    return folder, m, rows, load(ROOT / "params" / "prototype.yaml").design
+
+
+def test_counts_match_the_manifest(proto):
+    _, m, rows, _ = proto
+    parts = [r for r in rows if r["family"] not in ("tendon", "hardware")]
+    assert sorted(r["part"] for r in parts) == sorted(p["name"] for p in m["parts"])
+    per_family = Counter()
+    for r in parts:
+        per_family[r["family"]] += int(r["qty"])
+    assert per_family == Counter(p["role"] for p in m["parts"])
+    printed = [r for r in rows if r["category"] == "printed"]
+    assert {r["family"] for r in printed} == {p["role"] for p in m["parts"] if not bom.is_purchased(p)}
+    assert m["bom"]["printed_parts"] == len(printed)
+    vol = {p["name"]: p["volume_mm3"] for p in m["parts"]}
+    for r in printed:
+        assert float(r["volume_mm3"]) == pytest.approx(vol[r["part"]], abs=0.05)
+        assert r["material"] == "SLA resin, Anycubic Photon M3"
+
+
+def test_strip_row_has_cut_size_and_template(proto):
+    _, m, rows, d = proto
+    (strip,) = [r for r in rows if r["family"] == "backbone"]
+    assert strip["category"] == "purchased"
+    length = d.backbone.length + d.backbone.extra_base + d.backbone.extra_tip
+    size = [float(v) for v in strip["size"].removesuffix(" mm").split(" × ")]
+    assert size == pytest.approx([length, d.backbone.height, d.backbone.thickness], abs=0.01)
+    holes = {(round(h["x_mm"], 6), round(h["y_mm"], 6)) for h in m["design_report"]["backbone_holes"]}
+    assert f"drill {len(holes)} holes from backbone_template.dxf" in strip["notes"]
+
+
+def test_tendon_cut_lengths_follow_the_validator(proto):
+    folder, m, rows, d = proto
+    report = json.loads((folder / "report.json").read_text())
+    rest = {t["name"]: t["rest_length_mm"] for t in report["tendons"]}
+    tendons = {r["part"].removeprefix("tendon "): r for r in rows if r["family"] == "tendon"}
+    assert set(tendons) == {t["name"] for t in m["design_report"]["tendons"]}
+    allowance = d.render.tie_off_mm + d.render.spool_mm
+    for name, r in tendons.items():
+        assert float(r["rest_length_mm"]) == pytest.approx(rest[name], abs=0.005)
+        assert float(r["cut_length_mm"]) == pytest.approx(rest[name] + allowance, abs=0.06)
+    assert m["bom"]["tendon_rest_length_source"].startswith("report.json")
+    md = (folder / "bom.md").read_text()
+    assert "report.json" in md and all(f"| {n} |" in md for n in tendons)
+
+
+def _copy(folder: Path, dst: Path) -> dict:
+    shutil.copytree(folder / "stl", dst / "stl")
+    shutil.copy(folder / "backbone_template.dxf", dst)
+    return json.loads((folder / "manifest.json").read_text())
+
+
+def test_rest_lengths_come_from_the_report_when_there_is_one(proto, tmp_path):
+    folder, _, _, d = proto
+    m = _copy(folder, tmp_path)
+    # no report: eq. (2) at zero curvature on the design's eyelets
+    rows, source = bom.bom_rows(tmp_path, m, d)
+    assert source.startswith("eq. (2)")
+    st = m["design_report"]["stations_mm"]
+    for t in m["design_report"]["tendons"]:
+        (r,) = [r for r in rows if r["part"] == f"tendon {t['name']}"]
+        expect = kin.tendon_lengths(st, np.asarray(t["eyelets_xz_mm"]), 0.0)[0]
+        assert float(r["rest_length_mm"]) == pytest.approx(expect, abs=0.005)
+    # a report with other numbers: the BOM follows the report, not the design
+    fake = {"tendons": [{"name": t["name"], "rest_length_mm": 100.0 + i}
+                        for i, t in enumerate(m["design_report"]["tendons"])]}
+    (tmp_path / "report.json").write_text(json.dumps(fake))
+    rows, source = bom.bom_rows(tmp_path, m, d)
+    assert source.startswith("report.json")
+    cut = [float(r["cut_length_mm"]) for r in rows if r["family"] == "tendon"]
+    allowance = d.render.tie_off_mm + d.render.spool_mm
+    assert cut == pytest.approx([100.0 + i + allowance for i in range(len(cut))])
+
+
+def test_allowances_are_parameters(proto, tmp_path):
+    folder, _, rows0, d = proto
+    m = _copy(folder, tmp_path)
+    shutil.copy(folder / "report.json", tmp_path)
+    d2 = d.model_copy(update={"render": d.render.model_copy(update={"tie_off_mm": 10.0, "spool_mm": 5.0})})
+    rows, _ = bom.bom_rows(tmp_path, m, d2)
+    before = {r["part"]: float(r["rest_length_mm"]) for r in rows0 if r["family"] == "tendon"}
+    for r in rows:
+        if r["family"] == "tendon":
+            assert float(r["cut_length_mm"]) == pytest.approx(before[r["part"]] + 15.0, abs=0.06)
+
+
+def test_fasteners_from_the_tip_mount_and_part_hardware(proto, tmp_path):
+    folder, _, rows, d = proto
+    n = len(d.disks.tip_mount.positions)
+    screws = [r for r in rows if r["family"] == "hardware" and "screw" in r["part"]]
+    assert len(screws) == 1 and int(screws[0]["qty"]) == n and screws[0]["part"].startswith("M3")
+    m = _copy(folder, tmp_path)
+    for p, k in zip(m["parts"][:3], (1, 2, 3)):
+        p["hardware"] = [{"item": "dowel pin", "size": "Ø3 × 16", "qty": k, "material": "steel"}]
+    rows2, _ = bom.bom_rows(tmp_path, m, d)
+    (pins,) = [r for r in rows2 if r["part"] == "dowel pin"]
+    assert int(pins["qty"]) == 6 and pins["size"] == "Ø3 × 16"
+
+
+def test_thread_from_clearance_hole():
+    assert bom.thread_for_hole(3.4) == "M3"
+    assert bom.thread_for_hole(4.5) == "M4"
+    assert bom.thread_for_hole(3.2) == "M3"
+    assert bom.thread_for_hole(12.0) is None

@@ -1,0 +1,222 @@
+"""Pictures and the exploded drawing: measured from the files the build wrote."""
+from __future__ import annotations
+
+import json
+import shutil
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from hwgen import render
+from hwgen.params import load
+
+ROOT = Path(__file__).resolve().parents[1]
+PNGS = ("exploded.png", "assembled.png", "bent.png")
+SVG = "{http://www.w3.org/2000/svg}"
+WHITE = 0.97          # a pixel whose every channel is above this is background
+SHADE = (0.45, 1.3)   # lit colours are the family colour times a shade in this range
+NEAR = 0.07           # ... give or take this RGB distance (0..1)
+
+
+def _manifest(folder: Path) -> dict:
+    return json.loads((folder / "manifest.json").read_text())
+
+
+def _image(path: Path) -> np.ndarray:
+    return np.asarray(Image.open(path).convert("RGB"), dtype=float) / 255
+
+
+def fractions(img: np.ndarray, palette: dict) -> dict[str, float]:
+    """Share of all pixels that are background, and that are each palette colour in some shade."""
+    p = img.reshape(-1, 3)
+    bg = p.min(axis=1) > WHITE
+    out = {"background": float(bg.mean())}
+    for name, c in palette.items():
+        c = np.asarray(c, float)
+        s = np.clip(p @ c / (c @ c), *SHADE)
+        near = np.linalg.norm(p - s[:, None] * c, axis=1) < NEAR
+        out[name] = float((near & ~bg).mean())
+    return out
+
+
+@pytest.fixture(scope="module")
+def proto(built):
+    folder = built("prototype")
+    m = _manifest(folder)
+    assert m["render"]["status"] == "ok", m["render"].get("message")
+    return folder, m
+
+
+def test_pictures_exist_at_the_stated_size(proto):
+    folder, m = proto
+    width = load(ROOT / "params" / "prototype.yaml").design.render.width_px
+    assert width >= 1600
+    for name in PNGS:
+        im = Image.open(folder / name)
+        rec = m["render"]["files"][name]
+        assert im.size == (width, rec["height"]) == (rec["width"], rec["height"]), name
+        assert 0.4 * width <= im.size[1] <= 1.4 * width
+
+
+def test_pictures_are_not_blank_and_show_each_family(proto):
+    folder, m = proto
+    pal = m["render"]["palette"]
+    roles = {p["role"] for p in m["parts"]}
+    assert set(pal) == roles
+    for name in PNGS:
+        img = _image(folder / name)
+        assert img.std() > 0.1, f"{name} is flat"
+        f = fractions(img, pal)
+        assert 0.3 < f["background"] < 0.95, (name, f)
+        for role in roles:
+            assert f[role] > 0.01, (name, role, f)
+    # exploded: 13 disks outweigh one strip; background and family colours explain nearly every pixel
+    f = fractions(_image(folder / "exploded.png"), pal)
+    assert f["disk"] > 2 * f["backbone"], f
+    assert sum(f.values()) > 0.95, f
+
+
+def test_family_colours_are_distinct(proto):
+    _, m = proto
+    cols = np.array(list(m["render"]["palette"].values()))
+    d = np.linalg.norm(cols[:, None] - cols[None], axis=2) + np.eye(len(cols))
+    assert d.min() > render.SAME_COLOUR
+
+
+def test_bent_picture_shows_every_tendon(proto):
+    folder, m = proto
+    f = fractions(_image(folder / "bent.png"), m["render"]["tendon_colours"])
+    for name in m["render"]["tendon_colours"]:
+        assert f[name] > 5e-4, (name, f)
+
+
+def _foreground(path: Path, size=(400, 400)) -> np.ndarray:
+    img = np.asarray(Image.open(path).convert("L").resize(size)) / 255
+    return img < WHITE
+
+
+def test_bent_differs_from_straight(proto, tmp_path):
+    """The same view at 0° and at the design's angle: the silhouettes barely overlap."""
+    folder, m = proto
+    for name in ("manifest.json",):
+        shutil.copy(folder / name, tmp_path / name)
+    shutil.copytree(folder / "stl", tmp_path / "stl")
+    s = m["render"]["settings"]
+    straight = render.render_pictures(tmp_path, m, render.Settings(s["width_px"], s["explode_mm"], 0.0))
+    a = _foreground(tmp_path / "bent.png")
+    b = _foreground(folder / "bent.png")
+    iou = (a & b).sum() / (a | b).sum()
+    assert iou < 0.6, iou
+    # and the straight pose is the assembled robot: the tendons run straight along y
+    assert straight["images"]["bent.png"]["width"] == s["width_px"]
+
+
+def test_bend_points_follow_eq1():
+    st = np.linspace(0, 270, 13)
+    kappa = np.pi / 2 / 270
+    tip = render.bend_points(np.array([[0.0, 270.0, 0.0]]), st, kappa)[0]
+    r = 1 / kappa
+    assert tip == pytest.approx([0.0, r, r], abs=1e-9)        # a quarter circle toward +z
+    below = render.bend_points(np.array([[5.0, -20.0, 1.0]]), st, kappa)[0]
+    assert below == pytest.approx([5.0, -20.0, 1.0])          # the clamped end stays put
+    beyond = render.bend_points(np.array([[0.0, 290.0, 0.0]]), st, kappa)[0]
+    assert beyond == pytest.approx([0.0, r, r + 20.0], abs=1e-9)   # straight on along the tip tangent
+
+
+def test_svg_has_a_balloon_and_a_row_per_family(proto):
+    folder, m = proto
+    root = ET.parse(folder / "exploded.svg").getroot()
+    roles = []
+    for p in m["parts"]:
+        if p["role"] not in roles:
+            roles.append(p["role"])
+    groups = root.iter(f"{SVG}g")
+    by_class: dict[str, list] = {}
+    for g in groups:
+        by_class.setdefault(g.get("class"), []).append(g)
+    balloons, rows = by_class.get("balloon", []), by_class.get("bom-row", [])
+    assert [b.get("data-family") for b in sorted(balloons, key=lambda g: int(g.get("data-item")))] == roles
+    assert [r.get("data-family") for r in rows] == roles
+    assert sorted(b.get("data-item") for b in balloons) == sorted(r.get("data-item") for r in rows)
+    for b in balloons:       # the number in the balloon is its row's item number
+        assert "".join(b.find(f"{SVG}text").itertext()) == b.get("data-item")
+    for r in rows:           # each row names its quantity as the manifest counts it
+        cells = ["".join(t.itertext()) for t in r.iter(f"{SVG}text")]
+        assert int(cells[2]) == sum(p["role"] == r.get("data-family") for p in m["parts"])
+    parts = {g.get("data-part") for g in by_class["part"] if g.find(f"{SVG}path") is not None}
+    assert parts == {p["name"] for p in m["parts"]}
+
+
+def test_hidden_lines_are_removed():
+    """A segment passing behind a nearer surface is cut where it is covered."""
+    from hwgen.drawing import visible_runs
+    W, H = 100, 20
+    zbuf = np.ones((H, W))
+    zbuf[:, 40:60] = 0.2                         # a wall in front, columns 40..59
+    project = lambda P: P.copy()                 # world = display pixels, z = depth  # noqa: E731
+    seg = np.array([[[5.0, 10.0, 0.5], [95.0, 10.0, 0.5]]])
+    runs, _ = visible_runs(seg, project, zbuf, 1e-3)
+    assert len(runs) == 2
+    assert runs[0][1][0] == pytest.approx(40, abs=1.5) and runs[1][0][0] == pytest.approx(60, abs=1.5)
+    front = seg.copy()
+    front[..., 2] = 0.1
+    assert len(visible_runs(front, project, zbuf, 1e-3)[0]) == 1
+
+
+def test_new_families_are_drawn_without_code_changes(proto, tmp_path):
+    """Parts of an unknown role (a tensioner) get their own colour, balloon and table row."""
+    import trimesh
+
+    from hwgen import bom
+    folder, m = proto
+    shutil.copytree(folder / "stl", tmp_path / "stl")
+    m = json.loads(json.dumps(m))
+    for i, (x, z) in enumerate([(-20, 15), (20, -15)]):
+        name = f"worm_{i}"
+        trimesh.creation.cylinder(4, 30, sections=24).export(tmp_path / "stl" / f"{name}.stl")
+        place = np.eye(4)
+        place[:3, 3] = [x, 300, z]
+        m["parts"].append({"name": name, "role": "worm", "channel": f"C{i}", "placement": place.tolist(),
+                           "color": m["parts"][0]["color"], "volume_mm3": 1500.0,
+                           "bbox_mm": {"min": [-4, -4, -15], "max": [4, 4, 15]},
+                           "files": {"stl": {"path": f"stl/{name}.stl", "sha256": ""},
+                                     "step": {"path": f"step/{name}.step", "sha256": ""}}})
+    design = load(ROOT / "params" / "prototype.yaml").design
+    table = bom.family_table(m, design)
+    res = render.render_pictures(tmp_path, m, render.Settings(1600, 20.0, 90.0), table)
+    assert set(res["palette"]) == {"disk", "backbone", "worm"}
+    assert res["palette"]["worm"] != res["palette"]["disk"]      # same manifest colour, new picture colour
+    f = fractions(_image(tmp_path / "exploded.png"), res["palette"])
+    assert f["worm"] > 1e-3, f
+    assert res["svg"]["balloons"] == res["svg"]["rows"] == 3
+
+
+def test_no_backend_still_builds(tmp_path, monkeypatch):
+    """With rendering forced off, the build succeeds, writes the BOM and says what to install."""
+    from hwgen.build import build
+    monkeypatch.setenv(render.BACKEND_ENV, "none")
+    res = build(load(ROOT / "params" / "prototype.yaml"), tmp_path)
+    entry = res.manifest["render"]
+    assert entry["status"] == "unavailable"
+    assert "apt-get install" in entry["message"] and "vtk-osmesa" in entry["message"]
+    assert (res.folder / "bom.csv").exists() and (res.folder / "stl" / "disk_00.stl").exists()
+    assert not any((res.folder / n).exists() for n in PNGS + ("exploded.svg",))
+    assert json.loads((res.folder / "manifest.json").read_text())["render"]["status"] == "unavailable"
+
+
+def test_a_crashing_renderer_is_reported(proto, tmp_path, monkeypatch):
+    """The child process failing (a broken driver) costs the pictures, not the step."""
+    folder, m = proto
+    monkeypatch.setattr(render.sys, "executable", "/bin/false")
+    m = json.loads(json.dumps(m))
+    shutil.copytree(folder / "stl", tmp_path / "stl")
+    for name in ("backbone_template.dxf",):
+        shutil.copy(folder / name, tmp_path / name)
+    from hwgen.design import plan
+    render.step(plan(load(ROOT / "params" / "prototype.yaml").design), tmp_path, m)
+    assert m["render"]["status"] == "unavailable"
+    assert "exit code 1" in m["render"]["message"]
+    assert (tmp_path / "bom.md").exists()
