@@ -118,6 +118,18 @@ def _name_range(names: list[str]) -> str:
     return names[0] if len(names) == 1 else (", ".join(names) if len(names) <= 3 else f"{names[0]} … {names[-1]}")
 
 
+def _anchor_member(members: dict[str, list[np.ndarray]], to_page, axis: np.ndarray) -> np.ndarray | None:
+    """Visible points (page) of the family member a balloon points at: a well-visible one near
+    the middle of the family along the drawing's axis."""
+    pts = {name: to_page(np.vstack(v)) for name, v in members.items() if sum(len(x) for x in v)}
+    if not pts:
+        return None
+    most = max(len(v) for v in pts.values())
+    mid = np.median(np.vstack(list(pts.values())) @ axis)
+    good = [v for v in pts.values() if len(v) >= 0.5 * most]
+    return min(good, key=lambda v: abs(np.mean(v @ axis) - mid))
+
+
 def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: dict, colours: dict,
                        table: list[dict], path: Path, title: str) -> dict:
     """Draw the exploded assembly as visible lines with one balloon per family and a parts table."""
@@ -165,12 +177,12 @@ def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: d
     reach = ((page_pts - centre) @ normal).max() + BALLOON_GAP
     anchors, balloons = {}, []
     for row in table:
-        fam = visible_pts.get(row["role"], {})
-        best = max(fam.items(), key=lambda kv: sum(len(x) for x in kv[1]), default=None)
-        if best is None or not sum(len(x) for x in best[1]):
+        pts = _anchor_member(visible_pts.get(row["role"], {}), to_page, axis)
+        if pts is None:
             continue
-        pts = to_page(np.vstack(best[1]))
-        anchor = pts[np.argmin(np.linalg.norm(pts - np.median(pts, axis=0), axis=1))]
+        # the member's edge nearest the balloons, near its middle: a short leader that crosses nothing
+        along_m = (pts - np.median(pts, axis=0)) @ axis
+        anchor = pts[np.argmax((pts - centre) @ normal - 0.5 * np.abs(along_m))]
         anchors[row["item"]] = anchor
         along = (anchor - centre) @ axis
         balloons.append([row, along])
