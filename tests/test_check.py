@@ -201,7 +201,7 @@ def test_crossing_without_a_hole(built, tmp_path):
     rep = _check(folder)
     bad = _failed(rep, "backbone.crossing")
     assert len(bad) == 1 and bad[0]["where"]["tendon"] == "C2" and bad[0]["where"]["station"] == 2
-    assert "C2 crosses the backbone station 2" in bad[0]["message"]
+    assert "C2 crosses the backbone at station 2 (x=0.00, y=45.00 mm)" in bad[0]["message"]
     assert "backbone_template.dxf" in bad[0]["message"] and "STL" not in bad[0]["message"]
 
     # and the strip itself without the hole at station 10
@@ -213,6 +213,19 @@ def test_crossing_without_a_hole(built, tmp_path):
     bad = {c["where"]["station"]: c["message"] for c in _failed(rep, "backbone.crossing")}
     assert set(bad) == {2, 10}
     assert "the backbone STL" in bad[10] and "backbone_template.dxf" not in bad[10]
+
+
+def test_strip_holes_checked_against_crossing_angle(built):
+    """The strip is 0.59 mm thick and C2 crosses it at 52-57° to its normal: a square Ø0.8 hole is
+    narrower than the line's path through it (a warning: the line bears on the edge)."""
+    rep = json.loads((built("prototype") / "report.json").read_text())
+    ang = {(c["where"]["tendon"], c["where"]["station"]): c for c in rep["checks"] if c["id"] == "backbone.hole_angle"}
+    assert len(ang) == 7 and all(c["severity"] == "warning" for c in ang.values())
+    c2 = ang[("C2", 2)]
+    assert not c2["passed"] and c2["measured"] == pytest.approx(0.8, abs=0.02)
+    beta = np.radians(57.0)   # at ±90° of bending
+    assert c2["limit"] == pytest.approx(0.15 / np.cos(beta) + 0.59 * np.tan(beta), abs=0.02)
+    assert ang[("C2", 6)]["passed"]          # the Ø2.22 hole it shares with C1 at the middle disk is wide enough
 
 
 def test_broken_mesh_and_build_volume(built, tmp_path):

@@ -17,7 +17,7 @@ import numpy as np
 from .. import kinematics as kin
 from ..export import STL_TOLERANCE_MM
 from .base import Check
-from .lengths import EyeletMap, inside, loop_gap, points_to_polyline
+from .lengths import EyeletMap, inside, loop_gap, num, points_to_polyline
 
 SAG_MM = STL_TOLERANCE_MM      # chordal deviation of the STL: section polygons sit this far inside holes
 
@@ -43,7 +43,7 @@ def _hole_names(emap: EyeletMap, report: dict) -> dict[int, dict[int, str]]:
                     break
             else:
                 x, z = mh.centre
-                names.setdefault(disk.station, {})[id(mh.loop)] = f"hole at ({x:.2f}, {z:.2f})"
+                names.setdefault(disk.station, {})[id(mh.loop)] = f"hole at ({num(x, 2)}, {num(z, 2)})"
     return names
 
 
@@ -246,24 +246,53 @@ def crossings(emap: EyeletMap, half_height: float) -> list[tuple[str, float, flo
     return out
 
 
+def crossing_angles(emap: EyeletMap, name: str, st: float, angles_deg: np.ndarray, length: float) -> np.ndarray:
+    """(K,) angle of the tendon to the strip's normal where it crosses, for each bending angle, rad.
+
+    At a disk the directions into and out of the eyelet are both taken; between disks the
+    chord is compared with the strip's normal at that arc length.
+    """
+    kappa = kin.kappas_for_angles(angles_deg, length)
+    xz = emap.positions[name]
+    z = np.array([0.0, 0.0, 1.0])
+    if float(st).is_integer():
+        into, outof = kin.segment_directions_local(emap.stations_y, xz, kappa)
+        i = int(st)
+        c = np.fmin(np.abs(np.nan_to_num(into[:, i] @ z, nan=1.0)), np.abs(np.nan_to_num(outof[:, i] @ z, nan=1.0)))
+    else:
+        i = int(st)
+        P = kin.points_in_space(emap.stations_y, xz, kappa)
+        seg = P[:, i + 1] - P[:, i]
+        seg /= np.linalg.norm(seg, axis=1, keepdims=True)
+        y_c = emap.stations_y[i] + (st - i) * (emap.stations_y[i + 1] - emap.stations_y[i])
+        R, _ = kin.frames([y_c], kappa)
+        n = R[:, 0] @ z
+        c = np.abs(np.einsum("ki,ki->k", seg, n))
+    return np.arccos(np.clip(c, 0, 1))
+
+
 def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendon_d: float, tol: float,
-                    findings: list[str]) -> list[Check]:
-    """Every crossing of the strip has a hole in the DXF template and in the strip's STL."""
+                    findings: list[str], strip_t: float | None = None, angles_deg: np.ndarray | None = None,
+                    length: float | None = None) -> list[Check]:
+    """Every crossing of the strip has a hole in the DXF template and in the strip's STL, and
+    (a warning) the hole is wide enough for the angle the tendon crosses the strip at."""
     out = []
     half_h = float(bb_outline.extent[0]) / 2 if bb_outline is not None else float("inf")
     circles = dxf_holes(dxf_path) if dxf_path.exists() else []
     r_t = tendon_d / 2
     for name, st, x, y in crossings(emap, half_h):
         where = {"tendon": name, "station": round(st, 4), "x": round(x, 4), "y": round(y, 4)}
-        at = f"station {st:g}" if float(st).is_integer() else f"between stations {int(st)} and {int(st) + 1}"
-        place = f"{name} crosses the backbone {at} (x={x:.2f}, y={y:.2f} mm)"
+        at = f"at station {st:g}" if float(st).is_integer() else f"between stations {int(st)} and {int(st) + 1}"
+        place = f"{name} crosses the backbone {at} (x={num(x, 2)}, y={num(y, 2)} mm)"
         fit_dxf = [r - (np.hypot(cx - x, cy - y) + r_t) for cx, cy, r in circles]
         best_dxf = max(fit_dxf, default=-np.inf)
         in_dxf = best_dxf >= -tol
+        dia = [2 * circles[int(np.argmax(fit_dxf))][2]] if in_dxf else []
         stl_fit = -np.inf
         for lp in bb_holes or []:
             if inside(lp.points, (x, y)):
                 stl_fit = float(points_to_polyline(np.array([[x, y]]), lp.points)[0]) + SAG_MM - r_t
+                dia.append(lp.equivalent_diameter + 2 * SAG_MM)
         in_stl = stl_fit >= -tol
         missing = [w for w, ok in (("backbone_template.dxf", in_dxf), ("the backbone STL", in_stl)) if not ok]
         if missing:
@@ -272,6 +301,19 @@ def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendo
             msg = f"{place} through a hole in the template and the strip"
         measured = float(min(best_dxf, stl_fit)) if np.isfinite(min(best_dxf, stl_fit)) else None
         out.append(Check("backbone.crossing", "error", not missing, msg, measured, 0.0, where))
+        if dia and strip_t is not None and angles_deg is not None:
+            beta = crossing_angles(emap, name, st, angles_deg, length)
+            k = int(np.argmax(beta))
+            b = float(beta[k])
+            need = tendon_d / np.cos(b) + strip_t * np.tan(b)
+            have = float(min(dia))
+            ok = have >= need
+            txt = (f"{name} crosses the {strip_t:.2f} mm strip {at} at up to {np.degrees(b):.0f}° to its normal "
+                   f"(bending {angles_deg[k]:+g}°): a hole drilled square to the strip needs Ø{need:.2f} mm")
+            msg = (f"{txt}; it is Ø{have:.2f} mm" if ok else
+                   f"{txt} to let it through untouched, it is Ø{have:.2f} mm: the line bears on the hole's edge")
+            out.append(Check("backbone.hole_angle", "warning", ok, msg, have, float(need),
+                             {**where, "angle_deg": float(angles_deg[k])}))
     for f in findings:
         out.append(Check("backbone.in_plane", "error", False, f"{f}: it would have to run through the strip",
                          None, None, {}))

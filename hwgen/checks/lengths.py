@@ -28,6 +28,12 @@ NEAR_FACTOR = 3.0            # an unmatched hole within this many design diamete
 
 # ---------------------------------------------------------------- plane geometry helpers
 
+def num(v: float, digits: int = 3) -> str:
+    """A coordinate for a message: fixed decimals, never "-0.000"."""
+    t = f"{v:.{digits}f}"
+    return t[1:] if t.startswith("-") and float(t) == 0 else t
+
+
 def inside(poly: np.ndarray, pt) -> bool:
     """Point in polygon (even-odd rule) for a closed (n, 2) polyline."""
     x, y = float(pt[0]), float(pt[1])
@@ -133,8 +139,8 @@ def _nearest(loops: list[Loop], c: np.ndarray, within: float):
     return best
 
 
-def backbone_section(stl: Path, placement) -> tuple[Loop, list[Loop]]:
-    """The strip cut halfway through its thickness: outline and holes in robot (x, y)."""
+def backbone_section(stl: Path, placement) -> tuple[Loop, list[Loop], float]:
+    """The strip cut halfway through its thickness: outline and holes in robot (x, y), and its thickness."""
     import trimesh
     mesh = load_mesh(stl)
     zmin, zmax = (float(v) for v in mesh.bounds[:, 2])
@@ -150,7 +156,7 @@ def backbone_section(stl: Path, placement) -> tuple[Loop, list[Loop]]:
         c = (float(((x + xn) * cr).sum() / (6 * a)), float(((y + yn) * cr).sum() / (6 * a)))
         loops.append(Loop(pts, abs(float(a)), c))
     loops.sort(key=lambda lp: -lp.area)
-    return loops[0], loops[1:]
+    return loops[0], loops[1:], zmax - zmin
 
 
 # ---------------------------------------------------------------- matching eyelets to tendons
@@ -285,7 +291,7 @@ def locate_eyelets(disks: list[DiskSections], report: dict, backbone_holes: list
     for disk, mh in extra:
         x, z = mh.centre
         checks.append(Check("eyelet.unexpected", "warning", False,
-                            f"{disk.part}: a hole at x={x:.3f}, z={z:.3f} mm (Ø{mh.diameter:.2f}) "
+                            f"{disk.part}: a hole at x={num(x)}, z={num(z)} mm (Ø{mh.diameter:.2f}) "
                             f"matches no eyelet or mount hole of the design",
                             float(mh.diameter), None, {"part": disk.part, "station": disk.station,
                                                        "x": float(x), "z": float(z)}))
@@ -309,17 +315,17 @@ def _position_checks(report: dict, eyelets: list[Eyelet], tol: float) -> list[Ch
             elif e.status == "moved":
                 worst = max(worst, e.offset)
                 mx, mz = e.measured_xz
-                bad.append(f"{name} eyelet is at x={mx:.3f}, z={mz:.3f}, {e.offset:.3f} mm from its design "
-                           f"position x={x:.3f}, z={z:.3f}")
+                bad.append(f"{name} eyelet is at x={num(mx)}, z={num(mz)}, {e.offset:.3f} mm from its design "
+                           f"position x={num(x)}, z={num(z)}")
             elif e.status == "merged":
                 worst = float("inf")
-                bad.append(f"{name} eyelet at x={x:.3f}, z={z:.3f} runs into another hole and cannot be located")
+                bad.append(f"{name} eyelet at x={num(x)}, z={num(z)} runs into another hole and cannot be located")
             elif e.status == "into_slot":
                 worst = float("inf")
-                bad.append(f"{name} eyelet at x={x:.3f}, z={z:.3f} opens into the backbone slot")
+                bad.append(f"{name} eyelet at x={num(x)}, z={num(z)} opens into the backbone slot")
             else:
                 worst = float("inf")
-                bad.append(f"{name} eyelet at x={x:.3f}, z={z:.3f} is missing")
+                bad.append(f"{name} eyelet at x={num(x)}, z={num(z)} is missing")
         where = {"part": part, "station": i}
         if bad:
             out.append(Check("eyelet.position", "error", False, f"{part}: " + "; ".join(bad),

@@ -102,11 +102,11 @@ def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
                             f"{dk.part}: mid-plane at y={dk.y_mid:.4f} mm, station {dk.station} is at "
                             f"y={ys[dk.station]:g} mm", dy, tol, {"part": dk.part, "station": dk.station}))
 
-    bb_outline, bb_holes = None, None
+    bb_outline, bb_holes, strip_t = None, None, None
     bb = next((p for p in manifest["parts"] if p.get("role") == "backbone"), None)
     if bb is not None and (folder / bb["files"]["stl"]["path"]).exists():
         try:
-            bb_outline, bb_holes = backbone_section(folder / bb["files"]["stl"]["path"], bb["placement"])
+            bb_outline, bb_holes, strip_t = backbone_section(folder / bb["files"]["stl"]["path"], bb["placement"])
         except Exception as e:
             checks.append(Check("backbone.section", "error", False, f"{bb['name']}: cannot be measured ({e})",
                                 None, None, {"part": bb["name"]}))
@@ -150,7 +150,8 @@ def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     checks += hole_checks(emap, proc.min_hole, td, angles, L)
     checks += tendon_pair_checks(emap, rep_in, td, angles, L)
     checks += backbone_checks(emap, folder / manifest.get("files", {}).get("backbone_template", {}).get(
-        "path", "backbone_template.dxf"), bb_outline, bb_holes, td, tol, rep_in.get("findings", []))
+        "path", "backbone_template.dxf"), bb_outline, bb_holes, td, tol, rep_in.get("findings", []),
+        strip_t, angles, L)
     checks += mesh_checks(parts)
     checks += interference_checks(parts, s.interference_tol_mm3)
     checks += build_volume_checks(parts, proc.build_volume)
