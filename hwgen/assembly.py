@@ -18,10 +18,22 @@ def _backbone(plan: Plan) -> Iterator[Part]:
     yield build_backbone(plan.backbone)
 
 
+def _tensioner(plan: Plan) -> Iterator[Part]:
+    from .parts.tensioner import build_tensioner
+    yield from build_tensioner(plan)
+
+
+def _tensioner_count(plan: Plan) -> int:
+    from .tensioner import layout
+    lay = layout(plan)
+    return sum(2 + len(u.clamps) for u in lay.units) + 1
+
+
 # (family, how many parts it yields, builder)
 FAMILIES: list[tuple[str, Callable[[Plan], int], Callable[[Plan], Iterator[Part]]]] = [
     ("disks", lambda p: len(p.disks), _disks),
     ("backbone", lambda p: 1, _backbone),
+    ("tensioner", _tensioner_count, _tensioner),
 ]
 
 

@@ -325,3 +325,10 @@ def engagement_length(pair: WormPair) -> float:
     if depth <= 0:
         return 0.0
     return 2 * math.sqrt(pair.ra2 ** 2 - (pair.ra2 - depth) ** 2)
+
+
+def worm_pair(t) -> WormPair:
+    """The pair described by a :class:`hwgen.params.Tensioner` section."""
+    return WormPair(module=t.module, starts=t.worm_starts, teeth=t.wheel_teeth,
+                    worm_pitch_diameter=t.worm_pitch_diameter, pressure_angle_deg=t.pressure_angle_deg,
+                    face_width=t.face_width, worm_length=t.worm_length, backlash=t.backlash)

@@ -155,6 +155,34 @@ class Tensioner(_Model):
 
     channels: tuple[Name, ...] = Field(min_length=1, description="channel names, one worm drive each")
     actuating_channel: Name = Field(description="the channel of the actuating (antagonistic) tendons")
+    module: float = Field(1.25, ge=0.3, le=3.0, allow_inf_nan=False,
+                          description="axial module of the worm = transverse module of the wheel, mm")
+    worm_starts: int = Field(1, ge=1, le=4, description="thread starts z1 of the worm")
+    wheel_teeth: int = Field(24, ge=6, le=120, description="teeth z2 of the worm wheel")
+    worm_pitch_diameter: float = Field(14.0, gt=0, le=40, allow_inf_nan=False,
+                                       description="d1: pitch diameter of the worm, mm")
+    pressure_angle_deg: float = Field(20.0, ge=10, le=30, allow_inf_nan=False,
+                                      description="axial pressure angle of the worm thread, deg")
+    face_width: float = Field(8.0, gt=0, le=30, allow_inf_nan=False, description="face width of the wheel, mm")
+    worm_length: float = Field(24.0, gt=0, le=60, allow_inf_nan=False, description="threaded length of the worm, mm")
+    backlash: float = Field(0.1, ge=0, le=0.5, allow_inf_nan=False,
+                            description="added to the centre distance (d1 + d2)/2, mm")
+    friction_coefficient: float = Field(0.1, gt=0, le=1, allow_inf_nan=False,
+                                        description="μ of the worm/wheel material pair (self-locking needs lead angle < atan μ)")
+    spool_diameter: float = Field(10.0, gt=0, le=40, allow_inf_nan=False,
+                                  description="diameter of the spool core the tendon winds on, mm")
+    resin_strength: float = Field(35.0, gt=0, le=200, allow_inf_nan=False,
+                                  description="tensile strength of the printed resin, MPa")
+    safety_factor: float = Field(2.0, ge=1, le=10, allow_inf_nan=False,
+                                 description="required ratio of resin strength to the Lewis tooth stress at the tendon break load")
+    hex_key: float = Field(2.5, gt=0, le=6, allow_inf_nan=False,
+                           description="across-flats of the hex key that turns each worm, mm")
+    shaft_diameter: float = Field(3.0, gt=0, le=6, allow_inf_nan=False,
+                                  description="diameter of the ISO 2338 dowel pins the wheels and worms turn on, mm")
+    press_fit: float = Field(0.05, ge=0, le=0.3, allow_inf_nan=False,
+                             description="diametral interference of a pin pressed into a printed bore, mm")
+    running_fit: float = Field(0.2, ge=0, le=0.6, allow_inf_nan=False,
+                               description="diametral clearance of a printed part turning on a pin or in a bore, mm")
 
 
 class CheckSettings(_Model):
@@ -303,6 +331,14 @@ def _check_design(d: Design, file: Path) -> None:
     if d.tensioner.actuating_channel not in channels:
         raise InputError(file, "tensioner.actuating_channel",
                          f"{d.tensioner.actuating_channel!r} is not one of the channels {list(channels)}")
+    from .gears import worm_pair  # local: gears is numpy only but keep the import graph one-way
+    ts = d.tensioner
+    for field_name, msg in worm_pair(ts).problems(ts.friction_coefficient, d.process.min_wall):
+        raise InputError(file, f"tensioner.{field_name}", msg)
+    if ts.hex_key / math.cos(math.pi / 6) + 2 * d.process.min_wall >= ts.worm_pitch_diameter - 2.5 * ts.module:
+        raise InputError(file, "tensioner.hex_key",
+                         f"a {ts.hex_key:g} mm hex socket does not fit in the worm's core "
+                         f"({ts.worm_pitch_diameter - 2.5 * ts.module:g} mm) with {d.process.min_wall:g} mm walls")
 
     names: dict[str, str] = {}
     r_out = d.disks.outer_diameter / 2

@@ -1,0 +1,428 @@
+"""Layout of the worm-gear tensioner at the tip (numpy only, no CAD kernel).
+
+Robot frame as everywhere: the backbone along +y, the tip disk's outer face at
+y = y_face, x across the strip, z through it. The tensioner sits on that face.
+
+One *unit* per channel: a wheel part (gear + spool drum) turning on two dowel stubs along
+z, and a worm along x meshing on the wheel's +y side. Every tendon runs in its own plane
+z = z_e (its tip eyelet's z) in one straight line from the tip eyelet to the tangent point
+on the -x side of its channel's drum, so it touches nothing on the way; the drum's
+winding zones sit at those z, the wheel beside them (or between them), the housing's
+shelves above and below. All units share one wheel-axis x (X_u) and one spine wall on
++x that carries the worms' hex journals: every worm is turned from outside through the
+spine with a hex key. Units are stacked along +y; the units whose parts would reach the
+strip's clamp go beyond it. X_u is the smallest value for which every tendon clears every
+other part of the layout by the margin below (the exported meshes are measured again by
+the tests and checks).
+
+The actuating pair (channel A: A1 at z = +30, A2 at z = -30) winds on one drum in the
+same sense: turning the worm shortens both equally, which is how the paper pre-tensions
+the pair so the beam stays straight (Sect. III-A, IV). Wound in opposite senses the
+worm would bend the robot instead of tensioning it.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .design import Plan
+from .gears import WORM_TO_MESH, WormPair, worm_pair
+
+# Spool and wheel part (mm)
+WIND_WIDTH = 3.0         # axial length of one tendon's winding zone
+FLANGE_HEIGHT = 2.5      # flange radius above the drum core: holds a few turns of 0.15 mm line
+FLANGE = 1.2             # flange thickness (≥ 0.8 mm process wall)
+CLAMP_GAP = 3.5          # axial gap between the inner flange and the wheel face, room for the clamp
+HUB_WALL = 2.0           # radial wall of the drum around the pin bore
+# Tendon clamp: an M2 screw into a heat-set insert in the wheel face (standard M2 insert sizes)
+CLAMP_SCREW = 2.0        # M2
+CLAMP_INSERT_BORE = 3.2  # bore for an M2 × 4 heat-set insert
+CLAMP_INSERT_DEPTH = 4.0
+CLAMP_PLATE = (6.0, 5.0, 1.5)   # clamp plate x, y, thickness
+CLAMP_HEAD = 1.4         # M2 low head (ISO 7380) height above the plate
+ANCHOR_HOLE = 1.0        # axial hole through the inner flange the tendon leaves the drum by
+# Housing (mm)
+GAP = 0.5                # axial gap between a turning part and a housing face
+SHELF = 4.0              # shelf and bar thickness
+SPINE = 5.0              # spine wall thickness (x)
+BASE = 6.0               # base plate thickness (y), on the tip disk
+POST = 7.0               # far worm bearing post, square section
+BOSS = 3.5               # radius of the pin bosses and bars around a dowel
+UNIT_GAP = 2.0           # y gap between neighbouring units' parts
+PIN_ENGAGE = 5.0         # dowel length inside a turning part's bore
+PIN_LENGTHS = (8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30)   # ISO 2338 lengths for Ø3, mm
+STRIP_CLAMP_Z = (-1.5, 6.0)   # strip clamp block, z range (set screws from +z)
+STRIP_CLAMP_X = 2.0       # block beyond the strip's edges, x
+STRIP_SLOT_CLEARANCE = 0.05   # per side, strip in its slot
+SET_SCREW_INSERT = 4.0    # M3 heat-set insert bore for the strip's set screws
+MOUNT_INSERT = 4.0        # M3 heat-set insert bore for the tip-disk screws
+TENDON_HOLE = 3.0         # minimum hole through the base plate around a tendon
+# Layout search
+TENDON_MARGIN = 0.5       # layout clearance from a tendon to any other part (tests require ≥ d)
+X_STEP = 0.5
+MAX_EXIT_DEG = 20.0      # largest turn of a tendon at its tip eyelet (the shared C hole is sized for 28°)
+X_SEARCH = 80.0
+
+
+@dataclass(frozen=True)
+class TendonRun:
+    """A tendon's free span: from its tip eyelet (on the tip face) to its spool's tangent point."""
+
+    tendon: str
+    channel: str
+    start: tuple[float, float, float]
+    end: tuple[float, float, float]
+    exit_angle_deg: float           # angle to +y at the tip face
+
+    @property
+    def length(self) -> float:
+        return float(np.linalg.norm(np.subtract(self.end, self.start)))
+
+
+@dataclass(frozen=True)
+class Unit:
+    """One channel's worm drive, in robot coordinates (mm)."""
+
+    channel: str
+    tendons: tuple[str, ...]
+    side: int                                    # +1: right column (+x), -1: left column, turned 180° about z
+    center: tuple[float, float]                  # wheel axis (x, y)
+    z_part: tuple[float, float]                  # wheel part: drum + gear, along z
+    zones: tuple[tuple[float, float], ...]       # winding zones
+    flanges: tuple[tuple[float, float], ...]     # flange slabs (z ranges)
+    z_gear: tuple[float, float]                  # gear face width
+    clamps: tuple[tuple[float, float], ...]      # (z of the wheel face, direction -1 below / +1 above)
+    worm_y: float
+    worm_z: float
+    upper_shelf: tuple[float, float]
+    lower_bar: tuple[float, float]
+    pins: tuple[float, float]                    # dowel lengths: lower, upper (wheel); worm pin below
+
+    @property
+    def z_wheel_mid(self) -> float:
+        return (self.z_gear[0] + self.z_gear[1]) / 2
+
+
+@dataclass(frozen=True)
+class TensionerLayout:
+    pair: WormPair
+    y_face: float
+    x_u: float
+    spine: tuple[float, float]                  # |x| range of both spines
+    post: tuple[float, float]                   # |x| range of every far post
+    worm_x: tuple[float, float]                 # |x| range of every worm (far end, spine outer face)
+    worm_file_to_mesh: np.ndarray               # 4x4 worm file -> mesh frame
+    hex_journal: float                          # length of the journal carrying the hex socket
+    units: tuple[Unit, ...]
+    runs: tuple[TendonRun, ...]
+    spool_radius: float
+    winding_radius: float
+    flange_radius: float
+    hub_radius: float
+    strip: tuple[float, float, float, float]    # strip x half-width, z half-thickness, y start of clamp, y end
+    clamp_block: tuple[float, float, float, float, float, float]   # x0, x1, y0, y1, z0, z1
+    base: tuple[float, float, float, float, float, float]          # x0, x1, y0, y1, z0, z1
+    mount_holes: tuple[tuple[float, float, float], ...]            # (x, z, bore) on the base plate
+    tendon_holes: tuple[tuple[float, float, float], ...]           # (x, z, diameter) through the base plate
+    tensioner: object                                              # the params section
+
+    def unit(self, channel: str) -> Unit:
+        return next(u for u in self.units if u.channel == channel)
+
+    # --- placements: part file -> robot --------------------------------------------------
+    def mesh_to_robot(self, unit: Unit) -> np.ndarray:
+        """Mesh frame of :mod:`hwgen.gears` -> robot: mesh X -> side·y (toward the worm),
+        mesh Y (worm axis) -> -side·x, mesh Z (wheel axis) -> +z; origin at the wheel's mid-plane."""
+        m = np.eye(4)
+        s = unit.side
+        m[:3, :3] = np.array([[0.0, -s, 0.0], [s, 0.0, 0.0], [0.0, 0.0, 1.0]])
+        m[:3, 3] = [unit.center[0], unit.center[1], unit.z_wheel_mid]
+        return m
+
+    def wheel_placement(self, unit: Unit) -> np.ndarray:
+        """Wheel files: axis = file Z, the part's lowest face on Z = 0."""
+        t = np.eye(4)
+        t[2, 3] = -(unit.z_wheel_mid - unit.z_part[0])
+        return self.mesh_to_robot(unit) @ t
+
+    def worm_placement(self, unit: Unit) -> np.ndarray:
+        return self.mesh_to_robot(unit) @ self.worm_file_to_mesh
+
+
+def _wheel_stack(zs: list[float], b: float):
+    """Winding zones, flanges, gear and clamp faces along z for tendons at heights zs."""
+    zs = sorted(zs)
+    half = WIND_WIDTH / 2
+    gaps = [(zs[i + 1] - zs[i], i) for i in range(len(zs) - 1)]
+    need = b + 2 * (half + FLANGE + CLAMP_GAP)
+    zones = tuple((z - half, z + half) for z in zs)
+    if gaps and max(gaps)[0] >= need:
+        _, i = max(gaps)
+        mid = (zs[i] + zs[i + 1]) / 2
+        gear = (mid - b / 2, mid + b / 2)
+        clamps = ((gear[0], -1.0), (gear[1], 1.0))
+    elif zs[0] >= 0:        # all above the strip plane: the wheel goes below, toward it
+        top = zs[0] - half - FLANGE - CLAMP_GAP
+        gear = (top - b, top)
+        clamps = ((gear[1], 1.0),)
+    else:
+        bot = zs[-1] + half + FLANGE + CLAMP_GAP
+        gear = (bot, bot + b)
+        clamps = ((gear[0], -1.0),)
+    flanges = []
+    for lo, hi in zones:
+        flanges += [(lo - FLANGE, lo), (hi, hi + FLANGE)]
+    z_part = (min(gear[0], zones[0][0] - FLANGE), max(gear[1], zones[-1][1] + FLANGE))
+    return zones, tuple(flanges), gear, clamps, z_part
+
+
+def _pin_length(span: float) -> float:
+    """Shortest standard dowel covering a pressed span plus PIN_ENGAGE in the turning part."""
+    need = span + GAP + PIN_ENGAGE
+    for n in PIN_LENGTHS:
+        if n >= need:
+            return float(n)
+    raise ValueError(f"no standard Ø3 dowel is {need:.1f} mm long (longest {PIN_LENGTHS[-1]} mm)")
+
+
+def _seg_point_dist(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> float:
+    ab = b - a
+    t = np.clip(np.dot(p - a, ab) / max(np.dot(ab, ab), 1e-12), 0, 1)
+    return float(np.linalg.norm(a + t * ab - p))
+
+
+def _seg_rect_dist(a, b, x0, x1, y0, y1) -> float:
+    t = np.linspace(0, 1, max(2, int(np.linalg.norm(b - a) / 0.25) + 1))[:, None]
+    pts = a + t * (b - a)
+    dx = np.maximum.reduce([x0 - pts[:, 0], np.zeros(len(pts)), pts[:, 0] - x1])
+    dy = np.maximum.reduce([y0 - pts[:, 1], np.zeros(len(pts)), pts[:, 1] - y1])
+    return float(np.min(np.hypot(dx, dy)))
+
+
+def _tangent_point(p: np.ndarray, c: np.ndarray, r: float, side: int) -> np.ndarray:
+    """Tangent point on circle (c, r) of the line from p, on the drum's side facing x = 0
+    (-x for the right column, +x for the left)."""
+    d = c - p
+    dist = np.linalg.norm(d)
+    if dist <= r:
+        raise ValueError("tendon eyelet inside its spool")
+    base = math.atan2(d[1], d[0])
+    off = math.asin(r / dist)
+    best = None
+    for s in (1, -1):
+        ang = base + s * off
+        tlen = math.sqrt(dist ** 2 - r ** 2)
+        t = p + tlen * np.array([math.cos(ang), math.sin(ang)])
+        if best is None or side * t[0] < side * best[0]:
+            best = t
+    return best
+
+
+def layout(plan: Plan) -> TensionerLayout:
+    d = plan.design
+    ts = d.tensioner
+    pair = worm_pair(ts)
+    tip = plan.disks[-1]
+    y_face = tip.y + tip.thickness / 2
+    tendon_d = d.tendon_material.diameter
+    r_s = ts.spool_diameter / 2
+    r_w = r_s + tendon_d / 2
+    r_f = r_s + FLANGE_HEIGHT
+    pin_r = ts.shaft_diameter / 2
+    hub_r = max(pin_r + ts.running_fit / 2 + HUB_WALL, r_s)
+    if r_s < pin_r + ts.running_fit / 2 + d.process.min_wall:
+        raise ValueError(f"tensioner.spool_diameter {ts.spool_diameter:g} mm leaves no wall around "
+                         f"the Ø{ts.shaft_diameter:g} mm pin")
+    a = pair.center_distance
+    b = pair.face_width
+    strip_half_x = d.backbone.height / 2
+    strip_half_z = d.backbone.thickness / 2
+    y_end = d.backbone.length + d.backbone.extra_tip
+
+    # eyelets at the tip, per channel
+    eyelets: dict[str, list[tuple[str, float, float]]] = {c: [] for c in ts.channels}
+    for p in plan.paths:
+        x, z = (float(v) for v in p.points[-1])
+        eyelets[p.channel].append((p.name, x, z))
+    for c, ts_ in eyelets.items():
+        if not ts_:
+            raise ValueError(f"tensioner channel {c!r} has no tendon")
+        xs = {round(x, 6) for _, x, _ in ts_}
+        if len(xs) > 1:
+            raise ValueError(f"channel {c!r}: its tendons leave the tip at different x {sorted(xs)}; a drum "
+                             f"winds tendons lying in planes z = const that share one tangent line")
+    for c, ts_ in eyelets.items():
+        zs = sorted(z for _, _, z in ts_)
+        for z0, z1 in zip(zs, zs[1:]):
+            if z1 - z0 < WIND_WIDTH + 2 * FLANGE:
+                raise ValueError(f"channel {c!r}: tendons at z = {z0:g} and {z1:g} are too close to wind "
+                                 f"side by side ({WIND_WIDTH + 2 * FLANGE:g} mm needed)")
+
+    # z stack of each unit
+    stacks = {}
+    for c in ts.channels:
+        zs = [z for _, _, z in eyelets[c]]
+        zones, flanges, gear, clamps, z_part = _wheel_stack(zs, b)
+        zw = (gear[0] + gear[1]) / 2
+        hi = max(z_part[1], zw + pair.ra1)
+        upper = (hi + GAP, hi + GAP + SHELF)
+        lower = (z_part[0] - GAP - SHELF, z_part[0] - GAP)
+        pins = (_pin_length(SHELF), _pin_length(upper[0] - GAP - z_part[1] + SHELF))
+        stacks[c] = (zones, flanges, gear, clamps, z_part, zw, upper, lower, pins, (lower[0], upper[1]))
+
+    clamp_y1 = y_end + 2.0
+    clamp_block = (-strip_half_x - STRIP_CLAMP_X, strip_half_x + STRIP_CLAMP_X, y_face + BASE, clamp_y1,
+                   STRIP_CLAMP_Z[0], STRIP_CLAMP_Z[1])
+
+    def hits_clamp(c):
+        z0, z1 = stacks[c][9]
+        return z0 < clamp_block[5] + GAP and z1 > clamp_block[4] - GAP
+    order = [c for c in ts.channels if not hits_clamp(c)] + [c for c in ts.channels if hits_clamp(c)]
+
+    def solve(lift: float):
+        # two columns, right (+x) and left (-x), alternating in build order; a left unit is a
+        # right unit turned 180° about z (same parts, worm on the wheel's -y side)
+        side = {c: (1 if i % 2 == 0 else -1) for i, c in enumerate(order)}
+        wheel_reach = max(pair.ra2, r_f, BOSS) + UNIT_GAP / 2
+        worm_reach = a + max(pair.ra1, POST / 2) + UNIT_GAP / 2
+        centers_y: dict[str, float] = {}
+        y_next = {1: y_face + BASE + GAP + lift, -1: y_face + BASE + GAP + lift}
+        for c in order:
+            s = side[c]
+            below, above = (wheel_reach, worm_reach) if s > 0 else (worm_reach, wheel_reach)
+            floor = clamp_y1 + GAP if hits_clamp(c) else y_next[s]
+            yc = max(y_next[s], floor) + below
+            centers_y[c] = yc
+            y_next[s] = yc + above
+
+        # worm along x: file Z (its axis) runs from the spine inward; thread centred on the wheel
+        L = pair.worm_length
+
+        def build(x_u: float):
+            n = round(-L / (2 * pair.pitch))
+            x_thread = x_u - n * pair.pitch                  # |x| of the thread's spine-side end
+            spine_in = max(x_thread, x_u + pair.ra2 + GAP) + GAP
+            spine = (spine_in, spine_in + SPINE)
+            hex_journal = spine[1] - x_thread                # worm file Z from the outer end to the thread
+            ty = -hex_journal + n * pair.pitch               # a thread space on the wheel's tooth at mesh y = 0
+            wf = np.eye(4)
+            wf[:3, :3] = WORM_TO_MESH
+            wf[:3, 3] = [a, ty, 0.0]
+            x_outer = x_u - ty                               # |x| of worm file Z = 0 (= spine outer face)
+            x_far = x_outer - (hex_journal + L)
+            post = (x_far - GAP - POST, x_far - GAP)
+            units = []
+            for c in order:
+                zones, flanges, gear, clamps, z_part, zw, upper, lower, pins, _ = stacks[c]
+                s = side[c]
+                units.append(Unit(c, tuple(n_ for n_, _, _ in eyelets[c]), s, (s * x_u, centers_y[c]), z_part,
+                                  zones, flanges, gear, clamps, centers_y[c] + s * a, zw, upper, lower,
+                                  (pins[0], pins[1])))
+            runs = []
+            for u in units:
+                for name, x, z in eyelets[u.channel]:
+                    p0 = np.array([x, y_face])
+                    t = _tangent_point(p0, np.array(u.center), r_w, u.side)
+                    ang = math.degrees(math.atan2(abs(t[0] - x), t[1] - y_face))
+                    runs.append(TendonRun(name, u.channel, (x, y_face, z), (float(t[0]), float(t[1]), z), ang))
+            return spine, hex_journal, wf, (x_far, x_outer), post, tuple(units), tuple(runs)
+
+        def clearance(spine, post, worm_x, units, runs) -> tuple[float, str]:
+            worst, what = math.inf, ""
+            need_z = tendon_d / 2 + TENDON_MARGIN
+            for r in runs:
+                p0, p1 = np.array(r.start[:2]), np.array(r.end[:2])
+                z = r.start[2]
+                shapes = []
+                for u in units:
+                    cx, cy = u.center
+                    s = u.side
+                    own = u.channel == r.channel
+
+                    def zin(z0, z1):
+                        return z0 - need_z < z < z1 + need_z
+
+                    def rect(x0, x1, y0, y1):
+                        xs = sorted((s * x0, s * x1))
+                        return (xs[0], xs[1], min(y0, y1), max(y0, y1))
+                    if not own:
+                        if zin(*u.z_part):
+                            shapes.append((f"{u.channel} spool", "circle", (cx, cy, max(r_f, hub_r))))
+                        if zin(*u.z_gear):
+                            shapes.append((f"{u.channel} wheel", "circle", (cx, cy, pair.ra2)))
+                    reach = CLAMP_PLATE[2] + CLAMP_HEAD
+                    for zc, sz in u.clamps:
+                        if zin(min(zc, zc + sz * reach), max(zc, zc + sz * reach)):
+                            shapes.append((f"{u.channel} clamp", "circle", (cx, cy, pair.rf2)))
+                    if zin(u.worm_z - pair.ra1, u.worm_z + pair.ra1):
+                        shapes.append((f"{u.channel} worm", "rect", rect(worm_x[0], worm_x[1], u.worm_y - pair.ra1,
+                                                                         u.worm_y + pair.ra1)))
+                    if zin(u.worm_z - POST / 2, u.upper_shelf[1]):
+                        shapes.append((f"{u.channel} post", "rect", rect(post[0], post[1], u.worm_y - POST / 2,
+                                                                         u.worm_y + POST / 2)))
+                    if zin(*u.upper_shelf):
+                        shapes.append((f"{u.channel} shelf", "rect", rect(post[0], spine[1], cy - s * BOSS,
+                                                                          u.worm_y + s * POST / 2)))
+                        shapes.append((f"{u.channel} boss", "circle", (cx, cy, BOSS)))
+                    if zin(u.z_part[1], u.upper_shelf[0]):
+                        shapes.append((f"{u.channel} boss", "circle", (cx, cy, BOSS)))
+                    if zin(*u.lower_bar):
+                        shapes.append((f"{u.channel} bar", "rect", rect(abs(cx) - BOSS, spine[1], cy - BOSS, cy + BOSS)))
+                for s in (1, -1):
+                    xs = sorted((s * spine[0], s * spine[1] * 10))
+                    shapes.append(("spine", "rect", (xs[0], xs[1], y_face, math.inf)))
+                cb = clamp_block
+                if cb[4] - need_z < z < cb[5] + need_z:
+                    shapes.append(("strip clamp", "rect", (cb[0], cb[1], cb[2], cb[3])))
+                for name, kind, g in shapes:
+                    if kind == "circle":
+                        dist = _seg_point_dist(p0, p1, np.array(g[:2])) - g[2]
+                    else:
+                        dist = _seg_rect_dist(p0, p1, *g)
+                    if dist < worst:
+                        worst, what = dist, f"tendon {r.tendon} passes {name} at {dist:.2f} mm"
+            return worst, what
+
+        x_min = max(abs(x) for v in eyelets.values() for _, x, _ in v) + r_w + TENDON_MARGIN
+        x_u = x_min
+        last = ""
+        while x_u < x_min + X_SEARCH:
+            spine, hex_journal, wf, worm_x, post, units, runs = build(x_u)
+            worst, last = clearance(spine, post, worm_x, units, runs)
+            # the far posts stay on their own side of x = 0, clear of the other column
+            if worst >= tendon_d + TENDON_MARGIN and post[0] >= UNIT_GAP / 2:
+                break
+            x_u += X_STEP
+        else:
+            raise ValueError(f"no tensioner layout keeps every tendon clear: {last}")
+        return x_u, spine, hex_journal, wf, worm_x, post, units, runs
+
+    # Lift the stack off the tip until no tendon turns by more than MAX_EXIT_DEG at its tip eyelet.
+    lift = 0.0
+    for _ in range(8):
+        x_u, spine, hex_journal, wf, worm_x, post, units, runs = solve(lift)
+        need = max((abs(r.end[0] - r.start[0]) / math.tan(math.radians(MAX_EXIT_DEG)) - (r.end[1] - r.start[1])
+                    for r in runs), default=0.0)
+        if need <= 1e-6:
+            break
+        lift += need + X_STEP
+    else:
+        raise ValueError(f'no tensioner layout turns every tendon by less than {MAX_EXIT_DEG}° at the tip')
+
+    # base plate under everything, holes for the tendons and the tip disk's screws
+    z_all = [v for u in units for v in (u.lower_bar[0], u.upper_shelf[1])]
+    r_tip = tip.outer_diameter / 2
+    base = (-spine[1], spine[1], y_face, y_face + BASE,
+            min(min(z_all), -r_tip), max(max(z_all), r_tip))
+    holes: dict[tuple[float, float], float] = {}
+    for r in runs:
+        drift = BASE * math.tan(math.radians(r.exit_angle_deg))
+        key = (round(r.start[0], 6), round(r.start[2], 6))
+        holes[key] = max(holes.get(key, 0.0), TENDON_HOLE + 2 * drift)
+    tendon_holes = tuple((x, z, dia) for (x, z), dia in holes.items())
+    mount = tuple((x, z, MOUNT_INSERT) for x, z, _ in tip.mount_holes)
+    return TensionerLayout(pair, y_face, x_u, spine, post, worm_x, wf, hex_journal, units, runs, r_s, r_w, r_f,
+                           hub_r, (strip_half_x, strip_half_z, y_face, y_end), clamp_block, base, mount,
+                           tendon_holes, ts)
