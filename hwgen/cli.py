@@ -63,7 +63,7 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
     if result.plan.findings:
         for f in result.plan.findings:
             err.print(f"[yellow]finding:[/] {f}", highlight=False)
-    if result.manifest.get("render", {}).get("status") == "unavailable":
+    if result.manifest.get("render", {}).get("status") in ("unavailable", "failed"):
         err.print(f"[yellow]warning:[/] {result.manifest['render']['message']}", highlight=False)
     if failed:
         err.print(f"[red]{len(failed)} check(s) failed[/]; see {result.folder}")

@@ -66,6 +66,14 @@ class RenderUnavailable(RuntimeError):
     """No offscreen OpenGL backend: the message says what failed and what to install."""
 
 
+class RenderFailed(RuntimeError):
+    """The renderer ran but stopped on an error of its own (a bad file, a bug): not a backend problem."""
+
+
+OUTPUTS = ("exploded.png", "assembled.png", "bent.png", "exploded.svg")
+EXIT_NO_BACKEND = 3      # the child's exit code for RenderUnavailable
+
+
 # --------------------------------------------------------------------------- scene data
 
 @dataclass
@@ -518,7 +526,10 @@ class Renderer:
                 ren.AddViewProp(t)
         self.window.Render()
         if path is not None:
-            write_png(self.rgb(W, H), path)
+            img = self.rgb(W, H)
+            if img.min() == img.max():
+                raise RenderUnavailable(f"the offscreen {self.backend} drew nothing (no working OpenGL context)")
+            write_png(img, path)
         return ren, W, H
 
     def rgb(self, W: int, H: int) -> np.ndarray:
@@ -644,7 +655,7 @@ def run_child(folder: Path, manifest: dict, settings: Settings, svg_table: list[
     attempts[0].pop("DISPLAY", None)            # offscreen: EGL first, never a stale X display
     if os.environ.get("DISPLAY"):
         attempts.append(dict(os.environ))       # then the display's own OpenGL, if there is one
-    errors = []
+    errors, backend = [], True
     for env in attempts:
         try:
             proc = subprocess.run([sys.executable, "-m", "hwgen.render"], input=job, capture_output=True,
@@ -655,9 +666,13 @@ def run_child(folder: Path, manifest: dict, settings: Settings, svg_table: list[
         lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
         if proc.returncode == 0 and lines:
             return json.loads(lines[-1])
-        tail = (proc.stderr.strip().splitlines() or [f"exit code {proc.returncode}"])[-1]
-        errors.append(tail[:300])
-    raise RenderUnavailable("; ".join(errors))
+        tail = (proc.stderr.strip().splitlines() or [""])[-1][:300]
+        if proc.returncode < 0:          # killed by a signal: the OpenGL driver crashed
+            errors.append(f"the renderer crashed (signal {-proc.returncode}) {tail}".strip())
+        else:
+            errors.append(tail or f"the renderer stopped with exit code {proc.returncode}")
+            backend = proc.returncode == EXIT_NO_BACKEND
+    raise (RenderUnavailable if backend else RenderFailed)("; ".join(errors))
 
 
 def _child_main() -> int:
@@ -667,7 +682,7 @@ def _child_main() -> int:
                                  job.get("svg_table"))
     except RenderUnavailable as e:
         print(f"RenderUnavailable: {e}", file=sys.stderr)
-        return 3
+        return EXIT_NO_BACKEND
     print(json.dumps(result))
     return 0
 
@@ -681,11 +696,15 @@ def step(plan, folder: Path, manifest: dict) -> None:
     rows = bom.write_bom(folder, manifest, design)
     settings = Settings(design.render.width_px, design.render.explode_mm, design.render.bend_deg)
     entry: dict = {"settings": settings.__dict__}
+    for name in OUTPUTS:                 # never leave pictures of an earlier design beside this one
+        (Path(folder) / name).unlink(missing_ok=True)
     t = time.perf_counter()
     try:
         result = run_child(folder, manifest, settings, bom.family_table(manifest, design, rows))
     except RenderUnavailable as e:
         entry |= {"status": "unavailable", "message": f"pictures not drawn: {e}. {INSTALL_HINT}"}
+    except RenderFailed as e:
+        entry |= {"status": "failed", "message": f"pictures not drawn, the renderer stopped: {e}"}
     else:
         files = {}
         for name, size in result.pop("images").items():

@@ -207,16 +207,43 @@ def test_no_backend_still_builds(tmp_path, monkeypatch):
     assert json.loads((res.folder / "manifest.json").read_text())["render"]["status"] == "unavailable"
 
 
-def test_a_crashing_renderer_is_reported(proto, tmp_path, monkeypatch):
-    """The child process failing (a broken driver) costs the pictures, not the step."""
+@pytest.mark.parametrize("child, status, words", [
+    ("#!/bin/sh\nkill -SEGV $$\n", "unavailable", ("crashed (signal 11)", "apt-get install")),
+    ("#!/bin/sh\necho 'ValueError: bad mesh' >&2\nexit 1\n", "failed", ("ValueError: bad mesh",)),
+])
+def test_a_failing_renderer_is_reported(proto, tmp_path, monkeypatch, child, status, words):
+    """The child process crashing (a broken driver) or stopping on an error costs the pictures, not the step."""
     folder, m = proto
-    monkeypatch.setattr(render.sys, "executable", "/bin/false")
+    fake = tmp_path / "python"
+    fake.write_text(child)
+    fake.chmod(0o755)
+    monkeypatch.setattr(render.sys, "executable", str(fake))
+    out = tmp_path / "out"
+    shutil.copytree(folder / "stl", out / "stl")
+    (out / "bent.png").write_bytes(b"an old picture")
     m = json.loads(json.dumps(m))
-    shutil.copytree(folder / "stl", tmp_path / "stl")
-    for name in ("backbone_template.dxf",):
-        shutil.copy(folder / name, tmp_path / name)
     from hwgen.design import plan
-    render.step(plan(load(ROOT / "params" / "prototype.yaml").design), tmp_path, m)
-    assert m["render"]["status"] == "unavailable"
-    assert "exit code 1" in m["render"]["message"]
-    assert (tmp_path / "bom.md").exists()
+    render.step(plan(load(ROOT / "params" / "prototype.yaml").design), out, m)
+    assert m["render"]["status"] == status
+    for w in words:
+        assert w in m["render"]["message"]
+    assert (out / "bom.md").exists() and not (out / "bent.png").exists()
+
+
+def test_hwgen_render_command(proto, tmp_path, monkeypatch):
+    """`hwgen render` on up-to-date outputs draws in place; without a backend it says so and exits 1."""
+    from typer.testing import CliRunner
+
+    from hwgen.cli import app
+    folder, _ = proto
+    shutil.copytree(folder, tmp_path / folder.name)
+    params = str(ROOT / "params" / "prototype.yaml")
+    res = CliRunner().invoke(app, ["render", params, "--out", str(tmp_path), "-q"])
+    assert res.exit_code == 0, res.output
+    assert "bent.png (1800 × 1800 px)" in res.output and "built" not in res.output
+    monkeypatch.setenv(render.BACKEND_ENV, "none")
+    res = CliRunner().invoke(app, ["render", params, "--out", str(tmp_path), "-q"])
+    assert res.exit_code == 1
+    assert "vtk-osmesa" in res.output
+    m = json.loads((tmp_path / folder.name / "manifest.json").read_text())
+    assert m["render"]["status"] == "unavailable" and (tmp_path / folder.name / "bom.csv").exists()
