@@ -240,8 +240,16 @@ def build_tensioner(plan: Plan) -> Iterator[Part]:
         yield Part(f"tensioner_worm_{u.channel}", "tensioner_worm", worm, wp, WORM_COLOR,
                    meta={**meta, "mesh_with": f"tensioner_wheel_{u.channel}", **pair.summary()})
         hp = lay.wheel_placement(u)
+        d = plan.design.tendon_material.diameter
+        # the run meets its own drum tangentially: the last stretch, where it is closer to the
+        # drum than 1.5 tendon diameters, is where it is meant to touch and is not checked
+        trim = math.sqrt((lay.winding_radius + 1.5 * d) ** 2 - lay.winding_radius ** 2)
+        runs = [{"tendon": r.tendon, "start": list(r.start), "end": list(r.end),
+                 "exit_angle_deg": r.exit_angle_deg, "own_part_trim_mm": trim}
+                for r in lay.runs if r.channel == u.channel]
         yield Part(f"tensioner_wheel_{u.channel}", "tensioner_wheel", wheels[key], hp, WHEEL_COLOR,
-                   meta={**meta, "spool_diameter_mm": 2 * lay.spool_radius,
+                   meta={**meta, "tendon_runs": runs, "winding_radius_mm": lay.winding_radius,
+                         "flange_radius_mm": lay.flange_radius, "spool_diameter_mm": 2 * lay.spool_radius,
                          "winding_zones_z_mm": [list(z) for z in u.zones],
                          "dowels_mm": [f"ISO 2338 {ts.shaft_diameter:g} x {n:g}" for n in u.pins]})
         rc = clamp_site(lay)
