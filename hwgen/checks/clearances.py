@@ -64,7 +64,7 @@ def wall_checks(emap: EyeletMap, report: dict, min_wall: float) -> list[Check]:
                 near = min(mids.values(), key=lambda mh: np.hypot(*(mh.centre - c)), default=None)
                 label[id(lp)] = nm.get(id(near.loop), "hole") if near is not None else "hole"
             for lp in holes:
-                edge.append((float(points_to_polyline(lp.points, outline.points).min()) - SAG_MM,
+                edge.append((loop_gap(lp.points, outline.points) - SAG_MM,
                              label[id(lp)], y))
                 if s_loop is not None:
                     slot.append((loop_gap(lp.points, s_loop.points) - SAG_MM, label[id(lp)], y))
@@ -75,7 +75,7 @@ def wall_checks(emap: EyeletMap, report: dict, min_wall: float) -> list[Check]:
             if st != disk.station:
                 continue
             what = f"eyelet {'+'.join(ta)} and " + ("the backbone slot" if kind == "slot" else f"eyelet {'+'.join(tb)}")
-            (slot if kind == "slot" else pair).append((0.0, f"{what} merge into one opening", disk.y_mid))
+            (slot if kind == "slot" else pair).append((0.0, f"{what} (merged into one opening)", disk.y_mid))
         for cid, kind, items in (("eyelet.wall.edge", "to the outer edge", edge),
                                  ("eyelet.wall.eyelet", "between holes", pair),
                                  ("eyelet.wall.slot", "to the backbone slot", slot)):

@@ -45,10 +45,8 @@ def inside(poly: np.ndarray, pt) -> bool:
     return bool(np.count_nonzero(crosses & (x < xi)) % 2)
 
 
-def points_to_polyline(pts: np.ndarray, poly: np.ndarray) -> np.ndarray:
-    """Distance from each point (n, 2) to a closed polyline (m, 2): (n,)."""
-    a = poly
-    b = np.roll(poly, -1, axis=0)
+def _point_segment_distance(pts: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(n,) distance from each point to the nearest of the segments a[i]-b[i]."""
     ab = b - a
     ll = np.einsum("ij,ij->i", ab, ab)
     ll = np.where(ll == 0, 1.0, ll)
@@ -58,9 +56,38 @@ def points_to_polyline(pts: np.ndarray, poly: np.ndarray) -> np.ndarray:
     return np.sqrt(np.einsum("nmj,nmj->nm", d, d)).min(axis=1)
 
 
+def points_to_polyline(pts: np.ndarray, poly: np.ndarray) -> np.ndarray:
+    """Distance from each point (n, 2) to a closed polyline (m, 2): (n,)."""
+    return _point_segment_distance(pts, poly, np.roll(poly, -1, axis=0))
+
+
+def _one_side(pts: np.ndarray, poly: np.ndarray, bound: float) -> float:
+    """Closest distance from the vertices ``pts`` to the closed polyline ``poly``, knowing it is
+    at most ``bound``: only points and segments within reach of each other are compared."""
+    lo, hi = poly.min(axis=0) - bound, poly.max(axis=0) + bound
+    P = pts[np.all((pts >= lo) & (pts <= hi), axis=1)]
+    if len(P) == 0:
+        return float("inf")
+    a, b = poly, np.roll(poly, -1, axis=0)
+    reach = bound + float(np.sqrt(((b - a) ** 2).sum(axis=1)).max())
+    plo, phi = P.min(axis=0) - reach, P.max(axis=0) + reach
+    keep = np.all((a >= plo) & (a <= phi), axis=1)
+    if not keep.any():
+        return float("inf")
+    return float(_point_segment_distance(P, a[keep], b[keep]).min())
+
+
 def loop_gap(a: np.ndarray, b: np.ndarray) -> float:
-    """Closest distance between two closed polylines (material between two holes' edges)."""
-    return float(min(points_to_polyline(a, b).min(), points_to_polyline(b, a).min()))
+    """Closest distance between two closed polylines (material between two holes' edges).
+
+    Exact: the closest pair of two polylines that do not cross always has a vertex of one of
+    them at one end, so both vertex sets are measured against the other polyline. A pair of
+    vertices gives an upper bound first, which prunes everything out of reach.
+    """
+    k = int(np.argmin(((a - b.mean(axis=0)) ** 2).sum(axis=1)))
+    j = int(np.argmin(((b - a[k]) ** 2).sum(axis=1)))
+    bound = float(np.hypot(*(a[k] - b[j])))
+    return min(bound, _one_side(a, b, bound), _one_side(b, a, bound))
 
 
 # ---------------------------------------------------------------- disks
@@ -94,8 +121,9 @@ def _robot_y(placement: np.ndarray, z_file: float) -> float:
     return float((placement @ [0.0, 0.0, z_file, 1.0])[1])
 
 
-def measure_disk(stl: Path, placement, part: str, station: int) -> DiskSections:
-    mesh = load_mesh(stl)
+def measure_disk(stl: Path, placement, part: str, station: int, mesh=None) -> DiskSections:
+    """Cut one disk file (or its already loaded ``mesh``) and find its outline, slot and holes."""
+    mesh = load_mesh(stl) if mesh is None else mesh
     P = np.asarray(placement, dtype=float)
     zmin, zmax = (float(v) for v in mesh.bounds[:, 2])
     T = zmax - zmin
