@@ -10,13 +10,16 @@ Printed parts are the manifest's parts, one row per file, grouped by family (the
   from the geometry), otherwise from eq. (2) at zero curvature on the design report's eyelets;
 * screws and nuts for the tip-mount bolt pattern, sized from the clearance holes;
 * hardware a part lists in its manifest entry as ``"hardware": [{"item", "qty", "size",
-  "material", "notes"}]`` (dowel pins, inserts, bearings of the tensioner), summed over parts.
+  "material", "notes"}]``, summed over parts; and the tensioner's own words for it (the
+  entries ``dowels_mm``, ``screw``, ``mount``, ``strip_clamp``: "4 x M3 heat-set inserts, ...",
+  "ISO 2338 3 x 10"), summed by identical text, a leading "N x " read as the quantity.
 """
 from __future__ import annotations
 
 import csv
 import io
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -30,15 +33,11 @@ REPORT = "report.json"             # written by the checks step, read here when 
 ISO273_NORMAL = {2.4: "M2", 2.9: "M2.5", 3.4: "M3", 4.5: "M4", 5.5: "M5", 6.6: "M6", 9.0: "M8"}
 CLEARANCE_MATCH_MM = 0.35          # a hole within this of a table size takes that thread
 
-FAMILY_LABELS = {
-    "disk": "tendon-support disk",
-    "backbone": "backbone strip",
-    "worm": "tensioner worm",
-    "wheel": "worm wheel",
-    "housing": "tensioner housing",
-    "clamp": "tendon clamp",
-    "shaft": "shaft",
-}
+FAMILY_LABELS = {"disk": "tendon-support disk", "backbone": "backbone strip"}   # others: the role, spaced
+
+# Manifest entries in which a part names its hardware in words, and what to call each item.
+HARDWARE_TEXT = {"dowels_mm": "dowel pin ", "screw": "", "mount": "", "strip_clamp": ""}
+LEADING_QTY = re.compile(r"^\s*(\d+)\s*[x×]\s+(.+)$")
 
 COLUMNS = ["item", "category", "part", "family", "qty", "material", "size", "volume_mm3",
            "rest_length_mm", "allowance_mm", "cut_length_mm", "file", "notes"]
@@ -156,14 +155,29 @@ def _fasteners(manifest: dict) -> list[tuple[str, int, str, str, str]]:
     out: list[tuple[str, int, str, str, str]] = []
     tip = max(manifest["design_report"]["disks"], key=lambda d: d["index"], default=None)
     mounts = tip.get("mount_holes", []) if tip else []
+    housing_says = any("mount" in e for e in manifest["parts"])   # the housing names what takes the screws
     if mounts:
         dia = mounts[0][2]
         thread = thread_for_hole(dia) or f"screw for Ø{dia:g} mm holes"
         grip = tip["thickness_mm"]
         out.append((f"{thread} socket head cap screw", len(mounts), f"{thread} × ({grip:g} mm + housing flange)",
                     "steel, A2 stainless or 8.8", "fastens the tensioner housing to the tip disk"))
-        out.append((f"{thread} hex nut or heat-set insert", len(mounts), thread, "steel / brass insert",
-                    "nut under the tip disk, or an insert melted into the housing"))
+        if not housing_says:
+            out.append((f"{thread} hex nut or heat-set insert", len(mounts), thread, "steel / brass insert",
+                        "nut under the tip disk, or an insert melted into the housing"))
+    words: dict[str, list] = {}
+    for e in manifest["parts"]:
+        for key, prefix in HARDWARE_TEXT.items():
+            vals = e.get(key)
+            for text in ([vals] if isinstance(vals, str) else vals if isinstance(vals, list) else []):
+                m = LEADING_QTY.match(str(text))
+                qty, what = (int(m[1]), m[2]) if m else (1, str(text))
+                item = prefix + what
+                words.setdefault(item, [0, []])
+                words[item][0] += qty
+                words[item][1].append(e["name"])
+    for item, (qty, users) in words.items():
+        out.append((item, qty, "", "", "for " + _names(sorted(set(users)))))
     summed: dict[tuple[str, str], list] = {}
     for e in manifest["parts"]:
         for h in e.get("hardware", []) or []:
@@ -173,8 +187,12 @@ def _fasteners(manifest: dict) -> list[tuple[str, int, str, str, str]]:
             summed[key][0] += int(h.get("qty", 1))
             summed[key][2].add(e["name"])
     for (item, size), (qty, material, users) in summed.items():
-        out.append((item, qty, size, material, "for " + ", ".join(sorted(users))))
+        out.append((item, qty, size, material, "for " + _names(sorted(users))))
     return out
+
+
+def _names(names: list[str]) -> str:
+    return ", ".join(names) if len(names) <= 4 else f"{', '.join(names[:3])} and {len(names) - 3} more"
 
 
 def family_table(manifest: dict, design, rows: list[dict] | None = None) -> list[dict]:

@@ -24,6 +24,7 @@ OUTLINE_WIDTH = 0.9
 BALLOON_R = 13.0
 BALLOON_GAP = 40.0           # balloons sit this far outside the drawing
 ROW_H = 22.0
+CHAR_W = 6.8                 # generous mean width of a 12-unit sans-serif character, for table columns
 FONT = "DejaVu Sans, Arial, Helvetica, sans-serif"
 
 
@@ -205,7 +206,10 @@ def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: d
         page_pts = np.vstack([page_pts, c + BALLOON_R, c - BALLOON_R])
 
     # ---- parts table: in the empty lower-right corner if it fits, else below the drawing
-    cols = [("Item", 44), ("Part family", 190), ("Qty", 40), ("Kind", 80), ("Material", 250), ("Parts", 190)]
+    body = [[str(row["item"]), row["label"], str(row["qty"]), row["kind"], row["material"],
+             _name_range(row["parts"])] for row in table]
+    heads = ["Item", "Part family", "Qty", "Kind", "Material", "Parts"]
+    cols = [(h, CHAR_W * max(len(c) for c in [h] + [b[i] for b in body]) + 12) for i, h in enumerate(heads)]
     tw = sum(w for _, w in cols)
     th = ROW_H * (len(table) + 1)
     xmax, ymax = page_pts.max(axis=0)
@@ -220,10 +224,8 @@ def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: d
     for name, w in cols:
         t.append(f'<text x="{x + 5:.1f}" y="{ROW_H - 7:.1f}" font-weight="bold">{name}</text>')
         x += w
-    for i, row in enumerate(table, start=1):
+    for i, (row, cells) in enumerate(zip(table, body), start=1):
         y = ROW_H * i
-        cells = [str(row["item"]), row["label"], str(row["qty"]), row["kind"], row["material"],
-                 _name_range(row["parts"])]
         t.append(f'<g class="bom-row" data-item="{row["item"]}" data-family="{escape(row["role"])}">'
                  f'<line x1="0" y1="{y:.1f}" x2="{tw}" y2="{y:.1f}" stroke="#000" stroke-width="0.4"/>')
         x = 0.0

@@ -47,6 +47,7 @@ SMOOTH_ANGLE_DEG = 20.0     # shading is smooth across edges flatter than this (
 BEND_PITCH_MM = 3.0         # the strip is cut this finely along y before it is bent (sagitta < 0.01 mm at 90°)
 TENDON_TUBE_MM = 0.7        # drawn radius of a tendon (the real 0.075 mm would be invisible)
 OWN_EXPLODE_FACTOR = 2.0    # parts off the backbone move this many explode distances from their group
+OWN_EXPLODE_SCALE = 1.0     # ... plus this many times their own distance from the housing centre
 STRIP_PULL_GAPS = 3.0       # the strip is drawn pulled out toward the base by this many explode distances
 MIN_LIGHTNESS = 0.28        # a family colour darker than this is lifted so its shading still reads
 BACKGROUND = (1.0, 1.0, 1.0)
@@ -54,12 +55,13 @@ TEXT_COLOUR = (0.12, 0.12, 0.12)
 
 # Qualitative colours (colour-blind friendly, after Okabe & Ito) for families whose own colour
 # clashes with one already used, and for tendons.
-FAMILY_PALETTE = [(0.90, 0.62, 0.00), (0.34, 0.71, 0.91), (0.00, 0.62, 0.45), (0.80, 0.47, 0.65),
+FAMILY_PALETTE = [(0.00, 0.62, 0.45), (0.80, 0.47, 0.65), (0.34, 0.71, 0.91), (0.90, 0.62, 0.00),
                   (0.84, 0.37, 0.00), (0.00, 0.45, 0.70), (0.60, 0.60, 0.60), (0.55, 0.35, 0.20)]
 TENDON_PALETTE = [(0.85, 0.10, 0.10), (0.10, 0.35, 0.85), (0.05, 0.60, 0.20), (0.60, 0.15, 0.70),
                   (0.95, 0.50, 0.00), (0.00, 0.65, 0.70), (0.75, 0.60, 0.00), (0.95, 0.35, 0.60)]
 LABEL_GAP_MM = 6.0          # disk numbers sit this far above the disk's top on screen
-SAME_COLOUR = 0.25          # RGB distance below which two family colours count as the same
+SAME_COLOUR = 0.12          # RGB distance (0..1) below which two lit colours look the same
+CONFUSE_SHADES = (0.6, 1.2)  # the range of lighting a face of the pictures gets, as a factor on its colour
 
 
 class RenderUnavailable(RuntimeError):
@@ -144,19 +146,28 @@ def families(manifest: dict) -> list[str]:
     return seen
 
 
+def confusable(a, b) -> bool:
+    """Two colours a person could take for one another once lit: some shades of them nearly meet."""
+    sh = np.linspace(*CONFUSE_SHADES, 13)[:, None]
+    A, B = sh * np.asarray(a, float)[:3], sh * np.asarray(b, float)[:3]
+    return bool(np.min(np.linalg.norm(A[:, None] - B[None], axis=2)) < SAME_COLOUR)
+
+
 def family_colours(manifest: dict) -> dict[str, tuple[float, float, float]]:
-    """One colour per family: the family's own manifest colour unless another family has it."""
+    """One colour per family: the family's own manifest colour unless it is confusable with one
+    already used (or the background), then the next palette colour that is not."""
     out: dict[str, tuple[float, float, float]] = {}
-    spare = iter(FAMILY_PALETTE)
+    candidates = list(FAMILY_PALETTE) + [tuple(c) for c in np.random.default_rng(0).uniform(0.1, 0.9, (64, 3))]
     for role in families(manifest):
         first = next(e for e in manifest["parts"] if e["role"] == role)
         rgb = np.asarray((first.get("color") or (0.7, 0.7, 0.7))[:3], dtype=float)
         if rgb.max() < MIN_LIGHTNESS:
             rgb = rgb + (MIN_LIGHTNESS - rgb.max())
-        taken = [np.asarray(c) for c in out.values()] + [np.asarray(BACKGROUND)]
-        while any(np.linalg.norm(rgb - c) < SAME_COLOUR for c in taken):
-            rgb = np.asarray(next(spare, tuple(np.random.default_rng(len(out)).uniform(0.2, 0.8, 3))))
-        out[role] = tuple(float(v) for v in rgb)
+        taken = list(out.values())
+        for cand in [tuple(rgb)] + candidates:
+            if not any(confusable(cand, c) for c in taken) and np.linalg.norm(np.asarray(cand) - 1.0) > 0.3:
+                break
+        out[role] = tuple(float(v) for v in cand)
     return out
 
 
@@ -176,17 +187,24 @@ def _runs_along_backbone(p: ScenePart, stations: np.ndarray) -> bool:
     return overlap > 1.5 * np.max(np.diff(stations))
 
 
-def exploded_placements(parts: list[ScenePart], stations, explode_mm: float) -> dict[str, np.ndarray]:
+def exploded_placements(parts: list[ScenePart], stations, explode_mm: float,
+                        toward_camera=None) -> dict[str, np.ndarray]:
     """4x4 file -> exploded robot coordinates for every part.
 
-    Disks move along y by station · explode; the strip is pulled out toward the base; any
-    other part rides with the disk nearest along y and moves a further OWN_EXPLODE_FACTOR
-    explode distances away from the centre of the parts around it (its own offset).
+    Disks move along y by station · explode; the strip is pulled out toward the base. The
+    other parts (the tensioner) ride with the disk nearest along y, clear of the tip disk;
+    the largest of them (the housing) stays put among them and every other one moves away
+    from its centre along its own offset, by OWN_EXPLODE_FACTOR explode distances plus half
+    the housing's width, so it comes out of the housing. Given the view, the offsets lie in
+    the picture plane: a part is moved beside the housing on the screen, not behind it.
     """
     st = np.asarray(stations, dtype=float)
     e = float(explode_mm)
     loose = [p for p in parts if p.station is None and not _runs_along_backbone(p, st)]
-    group_centre = np.mean([p.centre() for p in loose], axis=0) if loose else np.zeros(3)
+    anchor = max(loose, key=lambda p: np.prod(np.ptp(p.world_bounds(), axis=0)), default=None)
+    # a large group (the tensioner housing) needs more room than a gap to clear the tip disk on screen
+    loose_width = max((np.ptp(p.world_bounds()[:, [0, 2]], axis=0).max() for p in loose), default=0.0)
+    d = None if toward_camera is None else np.asarray(toward_camera, float) / np.linalg.norm(toward_camera)
     out = {}
     for p in parts:
         shift = np.zeros(3)
@@ -198,13 +216,20 @@ def exploded_placements(parts: list[ScenePart], stations, explode_mm: float) -> 
             c = p.centre()
             shift[1] = e * float(np.interp(c[1], st, np.arange(len(st))))
             if c[1] > st[-1]:               # beyond the tip (the tensioner): clear of the tip disk
-                shift[1] += OWN_EXPLODE_FACTOR * e
+                shift[1] += max(OWN_EXPLODE_FACTOR * e, loose_width)
             elif c[1] < st[0]:
                 shift[1] -= OWN_EXPLODE_FACTOR * e
-            own = c - group_centre
+            own = c - anchor.centre()
+            if d is not None:
+                own = own - d * (own @ d)
+                ahead = np.array([0.0, 1.0, 0.0]) - d * d[1]      # the robot's +y on the screen
+                ahead /= np.linalg.norm(ahead)
+                if own @ ahead < 0:            # never back toward the disks: sideways instead
+                    own = own - ahead * (own @ ahead)
             n = np.linalg.norm(own)
-            if n > 1.0:
-                shift += OWN_EXPLODE_FACTOR * e * own / n
+            if p is not anchor and n > 1.0:
+                # farther parts go farther (a worm and its wheel separate), and all clear the housing
+                shift += OWN_EXPLODE_SCALE * own + (OWN_EXPLODE_FACTOR * e + loose_width / 2) * own / n
         m = p.placement.copy()
         m[:3, 3] += shift
         out[p.name] = m
@@ -596,13 +621,14 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
     colours = family_colours(manifest)
     tcol = tendon_colours(report)
     timings["load_s"] = time.perf_counter() - t0
-    fam_legend = [(f"{role} ({sum(p.role == role for p in parts)})", colours[role]) for role in colours]
+    from .bom import family_label
+    fam_legend = [(f"{family_label(role)} ({sum(p.role == role for p in parts)})", colours[role]) for role in colours]
     images = {}
 
     t = time.perf_counter()
     d = np.asarray(ISOMETRIC.toward_camera, float)
     d /= np.linalg.norm(d)
-    ex = exploded_placements(parts, st, settings.explode_mm)
+    ex = exploded_placements(parts, st, settings.explode_mm, ISOMETRIC.toward_camera)
     posed = [pose_rigid(p, ex[p.name], d) for p in parts]
     _, W, H = r.draw(posed, colours, ISOMETRIC, folder / "exploded.png", labels=station_labels(posed, ISOMETRIC),
                      texts=_legend(fam_legend, f"{manifest['design']}: exploded, "

@@ -112,7 +112,7 @@ def test_allowances_are_parameters(proto, tmp_path):
 def test_fasteners_from_the_tip_mount_and_part_hardware(proto, tmp_path):
     folder, _, rows, d = proto
     n = len(d.disks.tip_mount.positions)
-    screws = [r for r in rows if r["family"] == "hardware" and "screw" in r["part"]]
+    screws = [r for r in rows if r["family"] == "hardware" and r["part"].endswith("socket head cap screw")]
     assert len(screws) == 1 and int(screws[0]["qty"]) == n and screws[0]["part"].startswith("M3")
     m = _copy(folder, tmp_path)
     for p, k in zip(m["parts"][:3], (1, 2, 3)):
@@ -127,3 +127,23 @@ def test_thread_from_clearance_hole():
     assert bom.thread_for_hole(4.5) == "M4"
     assert bom.thread_for_hole(3.2) == "M3"
     assert bom.thread_for_hole(12.0) is None
+
+
+def test_hardware_in_the_parts_own_words(proto, tmp_path):
+    """The tensioner names its pins, screws and inserts in words; the BOM sums them by text."""
+    folder, _, _, d = proto
+    m = _copy(folder, tmp_path)
+    for p in m["parts"]:                         # start from parts that say nothing
+        for key in bom.HARDWARE_TEXT:
+            p.pop(key, None)
+    rows, _ = bom.bom_rows(tmp_path, m, d)
+    assert any("nut" in r["part"] for r in rows if r["family"] == "hardware")
+    m["parts"][0]["dowels_mm"] = ["ISO 2338 3 x 10", "ISO 2338 3 x 14"]
+    m["parts"][1]["dowels_mm"] = ["ISO 2338 3 x 10"]
+    m["parts"][2]["mount"] = "4 x M3 heat-set inserts, screws from the tip disk's inner face"
+    rows, _ = bom.bom_rows(tmp_path, m, d)
+    hw = {r["part"]: int(r["qty"]) for r in rows if r["family"] == "hardware"}
+    assert hw["dowel pin ISO 2338 3 x 10"] == 2 and hw["dowel pin ISO 2338 3 x 14"] == 1
+    assert hw["M3 heat-set inserts, screws from the tip disk's inner face"] == 4
+    assert not any("nut" in k for k in hw)       # the housing says what takes the tip screws
+    assert hw["M3 socket head cap screw"] == len(d.disks.tip_mount.positions)
