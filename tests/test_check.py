@@ -133,14 +133,20 @@ def test_moved_eyelet_in_exported_disk_is_caught(built, tmp_path):
     stl = folder / "stl" / "disk_05.stl"
     write_stl(build_disk(dataclasses.replace(spec, holes=holes)).solid, stl)
     edited = sha256(stl)
+    # and disk_07 printed without its H eyelet
+    spec = plan.disks[7]
+    holes = tuple(h for h in spec.holes if h.tendons != ("H",))
+    write_stl(build_disk(dataclasses.replace(spec, holes=holes)).solid, folder / "stl" / "disk_07.stl")
     r = _run("check", str(PARAMS / "prototype.yaml"), "--out", str(root), "--report", str(tmp_path / "r.json"))
     assert r.returncode == 1, r.stdout
     assert sha256(stl) == edited                      # not rebuilt over
     rep = json.loads((tmp_path / "r.json").read_text())
-    bad = _failed(rep, "eyelet.position")
-    assert len(bad) == 1 and bad[0]["where"]["part"] == "disk_05"
-    assert "C2 eyelet" in bad[0]["message"] and "disk_05" in bad[0]["message"]
-    assert bad[0]["measured"] == pytest.approx(0.05, abs=2e-3)
+    bad = {c["where"]["part"]: c for c in _failed(rep, "eyelet.position")}
+    assert set(bad) == {"disk_05", "disk_07"}
+    assert bad["disk_05"]["message"].startswith("disk_05: C2 eyelet is at x=0.050")
+    assert bad["disk_05"]["measured"] == pytest.approx(0.05, abs=2e-3)
+    assert bad["disk_07"]["message"] == "disk_07: H eyelet at x=-17.678, z=17.678 is missing"
+    assert {t["name"]: t["stations_from_design"] for t in rep["tendons"]}["H"] == [7]
     assert any("stl/disk_05.stl" in c["message"] for c in _failed(rep, "files.unchanged"))
     ey = [e for e in rep["eyelets"] if e["station"] == 5 and e["tendons"] == ["C2"]][0]
     assert ey["measured_xz_mm"][0] == pytest.approx(0.05, abs=2e-3)
