@@ -1,0 +1,265 @@
+"""The tensioner as shipped: measured from the exported files of the prototype build."""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from hwgen.checks.gears import (INTERFERENCE_TOL_MM3, GAP_TOL_MM, axis, gear_checks, manifold, mesh_measure,
+                                tendon_checks, toward)
+from hwgen.checks.measure import load_mesh
+from hwgen.design import plan
+from hwgen.gears import worm_pair
+from hwgen.params import load
+from hwgen.tensioner import layout
+
+from .conftest import PARAMS
+
+
+@pytest.fixture(scope="module")
+def proto(built):
+    folder = built("prototype")
+    man = json.loads((folder / "manifest.json").read_text())
+    return folder, man, plan(load(PARAMS / "prototype.yaml").design)
+
+
+def _by_role(man, role):
+    return {p["channel"]: p for p in man["parts"] if p["role"] == role}
+
+
+def _rz(a):
+    m = np.eye(4)
+    m[:2, :2] = [[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]]
+    return m
+
+
+def test_one_worm_drive_per_channel(proto):
+    _, man, p = proto
+    channels = set(p.design.tensioner.channels)
+    assert set(_by_role(man, "tensioner_worm")) == channels
+    assert set(_by_role(man, "tensioner_wheel")) == channels
+    clamps = [q for q in man["parts"] if q["role"] == "tensioner_clamp"]
+    # one clamp per tendon end: the actuating drum carries both A1 and A2
+    assert sorted(q["channel"] for q in clamps) == sorted(t.channel for t in p.paths)
+    assert len([q for q in man["parts"] if q["role"] == "tensioner_housing"]) == 1
+    assert sorted(_by_role(man, "tensioner_wheel")["A"]["tendons"]) == ["A1", "A2"]
+
+
+def test_worm_and_wheel_files_are_closed_solids(proto):
+    folder, man, _ = proto
+    for role in ("tensioner_worm", "tensioner_wheel", "tensioner_clamp", "tensioner_housing"):
+        for q in (x for x in man["parts"] if x["role"] == role):
+            mesh = load_mesh(folder / q["files"]["stl"]["path"])
+            assert mesh.is_watertight and mesh.is_winding_consistent and mesh.is_volume, q["name"]
+            assert mesh.volume == pytest.approx(q["volume_mm3"], rel=0.01), q["name"]
+            assert mesh.body_count == 1, q["name"]
+
+
+def test_step_files_of_worm_and_wheel_are_valid_solids(proto):
+    import cadquery as cq
+    folder, man, _ = proto
+    for role in ("tensioner_worm", "tensioner_wheel"):
+        q = _by_role(man, role)["C1"]
+        shape = cq.importers.importStep(str(folder / q["files"]["step"]["path"])).val()
+        assert shape.isValid() and len(shape.Solids()) == 1
+        assert shape.Volume() == pytest.approx(q["volume_mm3"], rel=1e-4)
+
+
+def test_worm_has_a_thread_and_wheel_has_teeth(proto):
+    """Probe the files: along a line parallel to the worm's axis at the pitch radius, solid
+    and space alternate every half pitch; the wheel's mid-plane section has one tip per tooth."""
+    folder, man, p = proto
+    pair = worm_pair(p.design.tensioner)
+    worm_q = _by_role(man, "tensioner_worm")["C1"]
+    worm = load_mesh(folder / worm_q["files"]["stl"]["path"])
+    z_mid = worm.bounds[1, 2] - pair.worm_length / 2          # the thread ends at the far end
+    # the axial section (file plane Y = 0): turn file Y onto Z and slice with manifold3d
+    turn = np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0], [0, -1.0, 0, 0], [0, 0, 0, 1.0]])
+    polys = manifold(folder, worm_q, turn).slice(0.0).to_polygons()
+
+    def inside(pts):
+        hit = np.zeros(len(pts), bool)
+        for poly in polys:
+            x0, y0 = poly[:, 0], poly[:, 1]
+            x1, y1 = np.roll(x0, -1), np.roll(y0, -1)
+            for px, py, k in zip(pts[:, 0], pts[:, 1], range(len(pts))):
+                cross = (y0 > py) != (y1 > py)
+                xs = x0 + (py - y0) * (x1 - x0) / np.where(y1 == y0, 1, y1 - y0)
+                hit[k] ^= bool(np.count_nonzero(cross & (px < xs)) % 2)
+        return hit
+    zs = np.linspace(z_mid - pair.pitch * 2, z_mid + pair.pitch * 2, 400)
+    # after the turn, file (X, Z) lies in the slice plane as (x, y)
+    probe = inside(np.column_stack([np.full_like(zs, pair.r1), zs]))
+    assert 7 <= np.count_nonzero(np.diff(probe.astype(int))) <= 9      # 4 pitches: 8 flanks
+    assert not inside(np.array([[pair.ra1 + 0.05, z_mid]]))[0]
+    assert inside(np.array([[pair.rf1 - 0.05, z_mid]]))[0]
+
+    unit = layout(p).unit("C1")
+    wheel_q = _by_role(man, "tensioner_wheel")["C1"]
+    sec = manifold(folder, wheel_q, np.eye(4)).slice(unit.z_wheel_mid - unit.z_part[0]).to_polygons()
+    pts = np.vstack(sec)
+    r = np.hypot(pts[:, 0], pts[:, 1])
+    assert r.max() == pytest.approx(pair.ra2, abs=0.02)
+    tips = np.sort(np.mod(np.arctan2(pts[:, 1], pts[:, 0])[r > pair.ra2 - 0.05], 2 * np.pi))
+    gaps = np.diff(np.r_[tips, tips[0] + 2 * np.pi])
+    assert np.count_nonzero(gaps > math.pi / pair.teeth) == pair.teeth
+    # the tooth on +X at mid-width: the worm meshes there (wheel placement maps it onto the worm)
+    assert np.min(np.abs(np.angle(np.exp(1j * tips)))) < math.pi / (2 * pair.teeth)
+
+
+@pytest.mark.parametrize("channel", ["A", "C1", "C2", "H"])
+def test_nominal_mesh_no_interference_gap_within_backlash(proto, channel):
+    folder, man, p = proto
+    pair = worm_pair(p.design.tensioner)
+    worm, wheel = _by_role(man, "tensioner_worm")[channel], _by_role(man, "tensioner_wheel")[channel]
+    vol, gap = mesh_measure(manifold(folder, worm), manifold(folder, wheel), pair.backlash + 1.0)
+    assert vol <= INTERFERENCE_TOL_MM3
+    assert gap <= pair.backlash + GAP_TOL_MM
+    assert gap > 0.0         # teeth do not touch: the backlash is real
+
+
+def test_wheel_moved_toward_worm_interferes(proto):
+    folder, man, _ = proto
+    worm, wheel = _by_role(man, "tensioner_worm")["C1"], _by_role(man, "tensioner_wheel")["C1"]
+    wm = manifold(folder, worm)
+    moved = manifold(folder, wheel, toward(wheel, worm, 0.2))
+    vol, _ = mesh_measure(wm, moved)
+    assert vol > INTERFERENCE_TOL_MM3 * 10
+    away = manifold(folder, wheel, toward(wheel, worm, -0.2))
+    _, gap = mesh_measure(wm, away)
+    assert gap > 0.1
+
+
+def test_mesh_holds_through_the_motion_and_only_with_the_right_sense(proto):
+    """Turn the worm through one pitch and the wheel by 1/ratio of that: no interference.
+    Turning the wheel the wrong way collides, so the pose above is not luck."""
+    folder, man, p = proto
+    pair = worm_pair(p.design.tensioner)
+    worm, wheel = _by_role(man, "tensioner_worm")["H"], _by_role(man, "tensioner_wheel")["H"]
+    wm_mesh = load_mesh(folder / worm["files"]["stl"]["path"])
+    wh_mesh = load_mesh(folder / wheel["files"]["stl"]["path"])
+    import manifold3d as m3d
+
+    def man3(mesh, m):
+        v = np.asarray(mesh.vertices) @ m[:3, :3].T + m[:3, 3]
+        return m3d.Manifold(m3d.Mesh(vert_properties=v.astype(np.float32),
+                                     tri_verts=np.asarray(mesh.faces, dtype=np.uint32)))
+    pw, ph = np.asarray(worm["placement"]), np.asarray(wheel["placement"])
+    right, wrong = [], []
+    for psi in np.linspace(0, 2 * math.pi, 5, endpoint=False)[1:]:
+        w = man3(wm_mesh, pw @ _rz(psi))
+        right.append((w ^ man3(wh_mesh, ph @ _rz(-psi / pair.ratio))).volume())
+        wrong.append((w ^ man3(wh_mesh, ph @ _rz(psi / pair.ratio))).volume())
+    assert max(right) <= INTERFERENCE_TOL_MM3
+    assert max(wrong) > 1.0
+
+
+def test_centre_distance_from_placements(proto):
+    _, man, p = proto
+    pair = worm_pair(p.design.tensioner)
+    for ch, worm in _by_role(man, "tensioner_worm").items():
+        wheel = _by_role(man, "tensioner_wheel")[ch]
+        (pa, da), (pb, db) = axis(wheel), axis(worm)
+        n = np.cross(da, db)
+        assert np.linalg.norm(n) == pytest.approx(1.0)          # axes at right angles
+        assert abs(np.dot(pb - pa, n)) == pytest.approx((pair.worm_pitch_diameter + 2 * pair.r2) / 2 + pair.backlash)
+
+
+def test_every_tendon_clears_every_other_part(proto):
+    folder, man, p = proto
+    checks = tendon_checks(folder, man, p)
+    clear = [c for c in checks if c.id == "tensioner.tendon_clearance"]
+    assert sorted(c.where["tendon"] for c in clear) == sorted(t.name for t in p.paths)
+    d = p.design.tendon_material.diameter
+    for c in clear:
+        assert c.passed and c.measured >= d, c.message
+
+
+def test_tendon_runs_start_at_the_tip_eyelets(proto):
+    """The free spans start where the routing puts each tendon at the tip disk."""
+    _, man, p = proto
+    tip = p.disks[-1]
+    y_face = tip.y + tip.thickness / 2
+    runs = {r["tendon"]: r for q in man["parts"] for r in q.get("tendon_runs", [])}
+    for t in p.paths:
+        x, z = t.points[-1]
+        assert runs[t.name]["start"] == pytest.approx([x, y_face, z])
+        # each run lies in its plane z = const and ends on its own channel's wheel
+        assert runs[t.name]["end"][2] == pytest.approx(z)
+
+
+def test_gear_checks_pass_on_the_prototype(proto):
+    folder, man, p = proto
+    checks = gear_checks(folder, man, p)
+    failed = [c.message for c in checks if c.severity == "error" and not c.passed]
+    assert not failed
+    ids = {c.id for c in checks}
+    assert {"gear.center_distance", "gear.interference", "gear.gap", "gear.lewis", "gear.worm_torque",
+            "gear.self_locking", "gear.undercut", "gear.ratio", "gear.lead_angle"} <= ids
+    lewis = [c for c in checks if c.id == "gear.lewis"]
+    # the actuating drum carries two tendons: twice the stress of a single-tendon channel
+    sa = next(c for c in lewis if c.where["channel"] == "A").where["stress_mpa"]
+    sc = next(c for c in lewis if c.where["channel"] == "C1").where["stress_mpa"]
+    assert sa == pytest.approx(2 * sc)
+
+
+def test_tensioner_parts_fit_the_printer(proto):
+    folder, man, p = proto
+    vol = np.asarray(p.design.process.build_volume)
+    for q in man["parts"]:
+        if q["role"].startswith("tensioner"):
+            b = load_mesh(folder / q["files"]["stl"]["path"]).bounds
+            assert np.all(b[1] - b[0] <= vol), (q["name"], b)
+            assert b[0, 2] == pytest.approx(0.0, abs=1e-3), q["name"]   # rests on the build plate
+
+
+def test_worm_is_turned_from_outside(proto):
+    """A straight line along each worm's axis from its hex socket outward meets no part."""
+    folder, man, _ = proto
+    worms = _by_role(man, "tensioner_worm")
+    solids = [manifold(folder, q) for q in man["parts"] if q["role"] != "tensioner_worm"]
+    import manifold3d as m3d
+    for ch, q in worms.items():
+        m = np.asarray(q["placement"])
+        p0 = m[:3, 3]                       # the hex end face centre (file origin)
+        out = -m[:3, 2]                     # file -Z leaves the worm at its hex end
+        key_r = 1.2                         # a 2.5 mm key's inscribed radius
+        x = np.cross(out, [0, 0, 1.0])
+        x /= np.linalg.norm(x)
+        y = np.cross(out, x)
+        shaft = m3d.Manifold.cylinder(40.0, key_r, key_r, 16).transform(
+            np.column_stack([x, y, out, p0 + 0.05 * out]).tolist())
+        for s in solids:
+            assert (shaft ^ s).volume() < 1e-6, ch
+
+
+def test_turning_parts_clear_the_housing_at_every_angle(proto):
+    """Wheel (with its clamps) and worm turned about their own axes never touch the housing."""
+    folder, man, p = proto
+    housing = manifold(folder, next(q for q in man["parts"] if q["role"] == "tensioner_housing"))
+    for ch, wheel in _by_role(man, "tensioner_wheel").items():
+        worm = _by_role(man, "tensioner_worm")[ch]
+        ph, pw = np.asarray(wheel["placement"]), np.asarray(worm["placement"])
+        clamps = [q for q in man["parts"] if q["role"] == "tensioner_clamp" and q["channel"] == ch]
+        for a in np.linspace(0, 2 * math.pi, 6, endpoint=False):
+            turn = ph @ _rz(a) @ np.linalg.inv(ph)          # about the wheel's axis, in robot space
+            for q in [wheel] + clamps:
+                s = manifold(folder, q, turn @ np.asarray(q["placement"]))
+                assert s.min_gap(housing, 0.3) >= 0.05, (ch, q["name"], a)
+            w = manifold(folder, worm, pw @ _rz(a))
+            assert w.min_gap(housing, 0.3) >= 0.05, (ch, a)
+
+
+def test_hex_socket_for_the_key(proto):
+    folder, man, p = proto
+    key = p.design.tensioner.hex_key
+    worm_q = _by_role(man, "tensioner_worm")["A"]
+    polys = manifold(folder, worm_q, np.eye(4)).slice(2.0).to_polygons()
+    areas = sorted(abs(0.5 * np.sum(q[:, 0] * np.roll(q[:, 1], -1) - np.roll(q[:, 0], -1) * q[:, 1]))
+                   for q in polys)
+    hexagon = math.sqrt(3) / 2 * (key + 0.1) ** 2            # across flats: key + clearance
+    assert len(polys) == 2
+    assert areas[0] == pytest.approx(hexagon, rel=0.02)
+    assert areas[0] > math.sqrt(3) / 2 * key ** 2             # the key itself fits
