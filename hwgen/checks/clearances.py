@@ -132,18 +132,16 @@ def hole_checks(emap: EyeletMap, min_hole: float, tendon_d: float, angles_deg: n
                 continue
             i = e.station
             ax = e.hole.axis
-            dirs = np.concatenate([into[:, i], outof[:, i]])
-            dirs = dirs[~np.isnan(dirs[:, 0])]
-            cos = np.clip(np.abs(dirs @ ax), 0, 1)
+            dirs = np.concatenate([into[:, i], outof[:, i]])          # both segments, every bend
+            bends = np.concatenate([angles_deg, angles_deg])
+            valid = ~np.isnan(dirs[:, 0])                               # no segment before the base disk
+            cos = np.clip(np.abs(dirs[valid] @ ax), 0, 1)
             k = int(np.argmin(cos))
             alpha = float(np.arccos(cos[k]))
             need = tendon_d / np.cos(alpha) + T_of[i] * np.tan(alpha)
-            have = e.hole.diameter + 2 * SAG_MM
-            margin = have - need
+            margin = e.hole.diameter + 2 * SAG_MM - need
             if worst is None or margin < worst[0]:
-                ang = float(np.concatenate([angles_deg, angles_deg])[~np.isnan(np.concatenate(
-                    [into[:, i, 0], outof[:, i, 0]]))][k])
-                worst = (margin, i, np.degrees(alpha), need, e.hole.diameter, ang)
+                worst = (margin, i, np.degrees(alpha), need, e.hole.diameter, float(bends[valid][k]))
         if worst is None:
             continue
         margin, i, a, need, have, ang = worst
