@@ -177,7 +177,12 @@ def segment_distance(p0, p1, q0, q1) -> np.ndarray:
 
 def tendon_pair_checks(emap: EyeletMap, report: dict, tendon_d: float, angles_deg: np.ndarray,
                        length: float) -> list[Check]:
-    """Closest approach of every two tendons over the sweep, away from the eyelets they share."""
+    """Closest approach of every two tendons over the sweep, away from the eyelets they share.
+
+    Segments are compared bay by bay (between the same two disks): lines in different bays
+    have a disk between them. A segment that ends in an eyelet both tendons share touches the
+    other there by design; those segments are left out and the shared eyelets are listed.
+    """
     kappa = kin.kappas_for_angles(angles_deg, length)
     pts = {n: kin.points_in_space(emap.stations_y, xz, kappa) for n, xz in emap.positions.items()}
     shared: dict[tuple[str, str], list[int]] = {}

@@ -72,7 +72,13 @@ def _file_checks(folder: Path, manifest: dict) -> list[Check]:
 
 
 def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
-    """Measure the design in ``folder`` and return the report (see README of issue 4 for its keys)."""
+    """Measure the design in ``folder`` against the intent in its manifest; return the report.
+
+    Keys: ``design``, ``ok`` (no failing error), ``checks`` (Check records as dicts),
+    ``tendons`` (per tendon: rest length, change at ±max, largest change, budget, pass, and
+    the change at every swept angle), ``pairs`` (take-up of the antagonistic pair),
+    ``eyelets`` (each designed eyelet: where it was found), ``sweep``.
+    """
     folder = Path(folder)
     d = plan.design
     s = d.check
@@ -166,7 +172,6 @@ def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
         checks += list(gear_checks(folder, manifest, plan))
 
     ok = not any(c.severity == "error" and not bool(c.passed) for c in checks)
-    i0 = int(np.flatnonzero(angles == 0)[0])
     return _plain({
         "design": manifest["design"],
         "ok": ok,
@@ -191,7 +196,6 @@ def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
             "diameter_mm": None if e.hole is None else e.hole.diameter,
             "axis": None if e.hole is None or e.hole.axis is None else e.hole.axis.tolist(),
         } for e in emap.eyelets],
-        "rest_index": i0,
     })
 
 
