@@ -13,10 +13,14 @@ no backend works it records a message saying what to install and carries on.
 Views (parallel projection, robot coordinates: y along the backbone, bending toward +z):
 
 * exploded: disks spread along y by ``render.explode_mm`` per gap, the strip pulled out
-  toward the base, every other part moved away from the centre of its own group;
+  toward the base, the tensioner lifted clear of the tip disk and its parts moved out of
+  the housing along their own offsets (see :func:`exploded_placements`);
 * assembled: every part where the manifest places it, tendons drawn through their eyelets;
 * bent: the constant-curvature pose of eq. (1) at ``render.bend_deg``: disks moved rigidly
   to their frames T_i, the strip bent point by point, each tendon a tube through its eyelets.
+
+Each family keeps its manifest colour unless it could be taken for another family's once
+lit (:func:`confusable`); then it gets the next colour of FAMILY_PALETTE that cannot.
 """
 from __future__ import annotations
 
@@ -440,10 +444,11 @@ class View:
         return np.cross(u, d), u, d     # right, up, toward camera
 
 
-# The robot lies along screen-right, rising a little; seen from +x (strip height across),
-# +z toward the top of the picture and from a little below the base-tip line: holes show as
-# ellipses and the strip as a band, not an edge.
+# Exploded and assembled: the robot runs from the base (lower left) to the tip (upper right),
+# seen from +x, +z and the base side, so every disk shows its face and holes as an ellipse
+# and the strip reads as a band, not an edge.
 ISOMETRIC = View((0.62, -0.58, 0.55), (0.0, 0.25, 1.0))
+# Bent: mostly across the bending plane (the paper's Fig. 5), a little from the base and above.
 BENT = View((1.0, -0.25, 0.35), (0.0, 0.0, 1.0))
 
 
