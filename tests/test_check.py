@@ -66,7 +66,8 @@ def test_prototype_passes_every_check_and_build_writes_report(built):
     inter = {tuple(sorted(c["where"]["parts"])): c for c in rep["checks"] if c["id"] == "part.interference"}
     assert {("backbone", f"disk_{i:02d}") for i in range(13)} <= set(inter)
     assert all(c["passed"] and c["measured"] < 1e-3 for c in inter.values())
-    contacts = {tuple(c["where"]["tendons"]): c["where"]["stations"] for c in rep["checks"] if c["id"] == "tendon.contact"}
+    contacts = {tuple(c["where"]["tendons"]): c["where"]["stations"]
+                for c in rep["checks"] if c["id"] == "tendon.contact"}
     assert contacts[("C1", "C2")] == [0, 6, 12]
     # the build published the checks with the files
     manifest = json.loads((folder / "manifest.json").read_text())
@@ -210,7 +211,8 @@ def test_crossing_without_a_hole(built, tmp_path):
     dxf = folder / "backbone_template.dxf"
     doc = ezdxf.readfile(dxf)
     msp = doc.modelspace()
-    gone = [c for c in msp.query('CIRCLE[layer=="HOLES"]') if abs(c.dxf.center.y - 45) < 1e-6 and abs(c.dxf.center.x) < 1e-6]
+    gone = [c for c in msp.query('CIRCLE[layer=="HOLES"]')
+            if abs(c.dxf.center.y - 45) < 1e-6 and abs(c.dxf.center.x) < 1e-6]
     assert len(gone) == 1
     msp.delete_entity(gone[0])
     doc.saveas(dxf)
