@@ -74,7 +74,8 @@ def wall_checks(emap: EyeletMap, report: dict, min_wall: float) -> list[Check]:
         for st, part, ta, tb, kind in emap.merged_pairs:
             if st != disk.station:
                 continue
-            what = f"eyelet {'+'.join(ta)} and " + ("the backbone slot" if kind == "slot" else f"eyelet {'+'.join(tb)}")
+            other = {"slot": "the backbone slot", "mount": "a mount hole"}.get(kind, f"eyelet {'+'.join(tb)}")
+            what = f"eyelet {'+'.join(ta)} and {other}"
             (slot if kind == "slot" else pair).append((0.0, f"{what} (merged into one opening)", disk.y_mid))
         for cid, kind, items in (("eyelet.wall.edge", "to the outer edge", edge),
                                  ("eyelet.wall.eyelet", "between holes", pair),

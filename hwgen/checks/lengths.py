@@ -259,7 +259,11 @@ def locate_eyelets(disks: list[DiskSections], report: dict, backbone_holes: list
             if any(inside(mh.loop.points, m) for m in mounts):
                 mount_claimed.add(k)
         for k, group in claimed.items():
-            if len(group) == 1:
+            if k in mount_claimed:      # an eyelet run into a mount hole
+                for e in group:
+                    e.status = "merged"
+                    merged_pairs.append((i, disk.part, e.tendons, ("mount hole",), "mount"))
+            elif len(group) == 1:
                 e = group[0]
                 e.status = "ok"
                 e.measured_xz = e.hole.centre
