@@ -43,6 +43,7 @@ CLAMP_INSERT_DEPTH = 4.0
 CLAMP_PLATE = (6.0, 5.0, 1.5)   # clamp plate x, y, thickness
 CLAMP_HEAD = 1.4         # M2 low head (ISO 7380) height above the plate
 ANCHOR_HOLE = 1.0        # axial hole through the inner flange the tendon leaves the drum by
+CAP = 5.0                # end cap at the far end of a two-zone drum, holds the second clamp insert
 # Housing (mm)
 GAP = 0.5                # axial gap between a turning part and a housing face
 SHELF = 4.0              # shelf and bar thickness
@@ -92,13 +93,19 @@ class Unit:
     z_part: tuple[float, float]                  # wheel part: drum + gear, along z
     zones: tuple[tuple[float, float], ...]       # winding zones
     flanges: tuple[tuple[float, float], ...]     # flange slabs (z ranges)
+    caps: tuple[tuple[float, float], ...]        # end caps (z ranges), radius of the gear's root
     z_gear: tuple[float, float]                  # gear face width
     clamps: tuple[tuple[float, float], ...]      # (z of the wheel face, direction -1 below / +1 above)
     worm_y: float
     worm_z: float
     upper_shelf: tuple[float, float]
     lower_bar: tuple[float, float]
-    pins: tuple[float, float]                    # dowel lengths: lower, upper (wheel); worm pin below
+    pins: tuple[float, float]                    # dowel lengths: lower, upper (wheel)
+
+    @property
+    def gear_on_top(self) -> bool:
+        """The gear ends the stack at +z: the part prints upside down (gear face on the plate)."""
+        return self.z_gear[1] >= self.z_part[1] - 1e-9
 
     @property
     def z_wheel_mid(self) -> float:
@@ -141,41 +148,66 @@ class TensionerLayout:
         m[:3, 3] = [unit.center[0], unit.center[1], unit.z_wheel_mid]
         return m
 
-    def wheel_placement(self, unit: Unit) -> np.ndarray:
-        """Wheel files: axis = file Z, the part's lowest face on Z = 0."""
+    def stack_placement(self, unit: Unit) -> np.ndarray:
+        """The wheel part with its axis on Z and its lowest robot z at Z = 0 -> robot."""
         t = np.eye(4)
         t[2, 3] = -(unit.z_wheel_mid - unit.z_part[0])
         return self.mesh_to_robot(unit) @ t
+
+    @staticmethod
+    def wheel_flip(unit: Unit) -> np.ndarray:
+        """Stack frame -> file frame: turned over (180° about X) when the gear is on top, so
+        the gear's face is on the build plate; identity otherwise. Its own inverse."""
+        f = np.eye(4)
+        if unit.gear_on_top:
+            f[1, 1] = f[2, 2] = -1.0
+            f[2, 3] = unit.z_part[1] - unit.z_part[0]
+        return f
+
+    def wheel_placement(self, unit: Unit) -> np.ndarray:
+        """Wheel files: axis = file Z, the gear's face on Z = 0."""
+        return self.stack_placement(unit) @ self.wheel_flip(unit)
 
     def worm_placement(self, unit: Unit) -> np.ndarray:
         return self.mesh_to_robot(unit) @ self.worm_file_to_mesh
 
 
 def _wheel_stack(zs: list[float], b: float):
-    """Winding zones, flanges, gear and clamp faces along z for tendons at heights zs."""
+    """Winding zones, flanges, end caps, gear and clamp faces along z for tendons at heights zs.
+
+    The gear goes at one end of the stack (its face is the part's largest flat face and
+    prints on the plate): toward the strip plane when every tendon is on one side of it,
+    else above the top zone. A tendon whose zone is next to the gear is clamped on the
+    gear's face; one at the far end on an end cap there.
+    """
     zs = sorted(zs)
     half = WIND_WIDTH / 2
-    gaps = [(zs[i + 1] - zs[i], i) for i in range(len(zs) - 1)]
-    need = b + 2 * (half + FLANGE + CLAMP_GAP)
     zones = tuple((z - half, z + half) for z in zs)
-    if gaps and max(gaps)[0] >= need:
-        _, i = max(gaps)
-        mid = (zs[i] + zs[i + 1]) / 2
-        gear = (mid - b / 2, mid + b / 2)
-        clamps = ((gear[0], -1.0), (gear[1], 1.0))
-    elif zs[0] >= 0:        # all above the strip plane: the wheel goes below, toward it
-        top = zs[0] - half - FLANGE - CLAMP_GAP
-        gear = (top - b, top)
-        clamps = ((gear[1], 1.0),)
-    else:
-        bot = zs[-1] + half + FLANGE + CLAMP_GAP
-        gear = (bot, bot + b)
-        clamps = ((gear[0], -1.0),)
     flanges = []
     for lo, hi in zones:
         flanges += [(lo - FLANGE, lo), (hi, hi + FLANGE)]
-    z_part = (min(gear[0], zones[0][0] - FLANGE), max(gear[1], zones[-1][1] + FLANGE))
-    return zones, tuple(flanges), gear, clamps, z_part
+    reach = CLAMP_PLATE[2] + CLAMP_HEAD
+    caps, clamps = [], []
+    if zs[0] >= 0:          # all above the strip plane: the gear goes below, toward it
+        top = zones[0][0] - FLANGE - CLAMP_GAP
+        gear = (top - b, top)
+        clamps.append((gear[1], 1.0))
+        if len(zones) > 1:
+            caps.append((zones[-1][1], zones[-1][1] + CAP))
+            clamps.append((caps[-1][1], 1.0))
+    else:
+        bot = zones[-1][1] + FLANGE + CLAMP_GAP
+        gear = (bot, bot + b)
+        clamps.append((gear[0], -1.0))
+        if len(zones) > 1:
+            caps.append((zones[0][0] - CAP, zones[0][0]))
+            clamps.append((caps[-1][0], -1.0))
+    lo = min([gear[0], zones[0][0] - FLANGE] + [c[0] for c in caps])
+    hi = max([gear[1], zones[-1][1] + FLANGE] + [c[1] for c in caps])
+    z_part = (lo, hi)
+    ends = [z + s * reach for z, s in clamps]
+    span = (min([lo] + ends), max([hi] + ends))
+    return zones, tuple(flanges), tuple(caps), gear, tuple(clamps), z_part, span
 
 
 def _pin_length(span: float) -> float:
@@ -264,20 +296,21 @@ def layout(plan: Plan) -> TensionerLayout:
     stacks = {}
     for c in ts.channels:
         zs = [z for _, _, z in eyelets[c]]
-        zones, flanges, gear, clamps, z_part = _wheel_stack(zs, b)
+        zones, flanges, caps, gear, clamps, z_part, span = _wheel_stack(zs, b)
         zw = (gear[0] + gear[1]) / 2
-        hi = max(z_part[1], zw + pair.ra1)
+        hi = max(span[1], zw + pair.ra1)
+        lo = span[0]
         upper = (hi + GAP, hi + GAP + SHELF)
-        lower = (z_part[0] - GAP - SHELF, z_part[0] - GAP)
-        pins = (_pin_length(SHELF), _pin_length(upper[0] - GAP - z_part[1] + SHELF))
-        stacks[c] = (zones, flanges, gear, clamps, z_part, zw, upper, lower, pins, (lower[0], upper[1]))
+        lower = (lo - GAP - SHELF, lo - GAP)
+        pins = (_pin_length(z_part[0] - GAP - lower[0]), _pin_length(upper[1] - (z_part[1] + GAP)))
+        stacks[c] = (zones, flanges, caps, gear, clamps, z_part, zw, upper, lower, pins, (lower[0], upper[1]))
 
     clamp_y1 = y_end + 2.0
     clamp_block = (-strip_half_x - STRIP_CLAMP_X, strip_half_x + STRIP_CLAMP_X, y_face + BASE, clamp_y1,
                    STRIP_CLAMP_Z[0], STRIP_CLAMP_Z[1])
 
     def hits_clamp(c):
-        z0, z1 = stacks[c][9]
+        z0, z1 = stacks[c][-1]
         return z0 < clamp_block[5] + GAP and z1 > clamp_block[4] - GAP
     order = [c for c in ts.channels if not hits_clamp(c)] + [c for c in ts.channels if hits_clamp(c)]
 
@@ -315,10 +348,10 @@ def layout(plan: Plan) -> TensionerLayout:
             post = (x_far - GAP - POST, x_far - GAP)
             units = []
             for c in order:
-                zones, flanges, gear, clamps, z_part, zw, upper, lower, pins, _ = stacks[c]
+                zones, flanges, caps, gear, clamps, z_part, zw, upper, lower, pins, _ = stacks[c]
                 s = side[c]
                 units.append(Unit(c, tuple(n_ for n_, _, _ in eyelets[c]), s, (s * x_u, centers_y[c]), z_part,
-                                  zones, flanges, gear, clamps, centers_y[c] + s * a, zw, upper, lower,
+                                  zones, flanges, caps, gear, clamps, centers_y[c] + s * a, zw, upper, lower,
                                   (pins[0], pins[1])))
             runs = []
             for u in units:
@@ -352,6 +385,9 @@ def layout(plan: Plan) -> TensionerLayout:
                             shapes.append((f"{u.channel} spool", "circle", (cx, cy, max(r_f, hub_r))))
                         if zin(*u.z_gear):
                             shapes.append((f"{u.channel} wheel", "circle", (cx, cy, pair.ra2)))
+                        for cap in u.caps:
+                            if zin(*cap):
+                                shapes.append((f"{u.channel} cap", "circle", (cx, cy, pair.rf2)))
                     reach = CLAMP_PLATE[2] + CLAMP_HEAD
                     for zc, sz in u.clamps:
                         if zin(min(zc, zc + sz * reach), max(zc, zc + sz * reach)):
@@ -367,6 +403,8 @@ def layout(plan: Plan) -> TensionerLayout:
                                                                           u.worm_y + s * POST / 2)))
                         shapes.append((f"{u.channel} boss", "circle", (cx, cy, BOSS)))
                     if zin(u.z_part[1], u.upper_shelf[0]):
+                        shapes.append((f"{u.channel} boss", "circle", (cx, cy, BOSS)))
+                    if zin(u.lower_bar[1], u.z_part[0]):
                         shapes.append((f"{u.channel} boss", "circle", (cx, cy, BOSS)))
                     if zin(*u.lower_bar):
                         shapes.append((f"{u.channel} bar", "rect", rect(abs(cx) - BOSS, spine[1], cy - BOSS, cy + BOSS)))

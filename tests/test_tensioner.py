@@ -96,9 +96,11 @@ def test_worm_has_a_thread_and_wheel_has_teeth(proto):
     assert not inside(np.array([[pair.ra1 + 0.05, z_mid]]))[0]
     assert inside(np.array([[pair.rf1 - 0.05, z_mid]]))[0]
 
-    unit = layout(p).unit("C1")
     wheel_q = _by_role(man, "tensioner_wheel")["C1"]
-    sec = manifold(folder, wheel_q, np.eye(4)).slice(unit.z_wheel_mid - unit.z_part[0]).to_polygons()
+    lay = layout(p)
+    unit = lay.unit("C1")
+    z_file = (lay.wheel_flip(unit) @ [0, 0, unit.z_wheel_mid - unit.z_part[0], 1])[2]
+    sec = manifold(folder, wheel_q, np.eye(4)).slice(z_file).to_polygons()
     pts = np.vstack(sec)
     r = np.hypot(pts[:, 0], pts[:, 1])
     assert r.max() == pytest.approx(pair.ra2, abs=0.02)
@@ -148,10 +150,13 @@ def test_mesh_holds_through_the_motion_and_only_with_the_right_sense(proto):
                                      tri_verts=np.asarray(mesh.faces, dtype=np.uint32)))
     pw, ph = np.asarray(worm["placement"]), np.asarray(wheel["placement"])
     right, wrong = [], []
+    # turning the worm +ψ about its axis turns the wheel -ψ/ratio about robot +z; the wheel's
+    # file Z is robot ±z (files of gear-on-top wheels are turned over)
+    sense = ph[2, 2]
     for psi in np.linspace(0, 2 * math.pi, 5, endpoint=False)[1:]:
         w = man3(wm_mesh, pw @ _rz(psi))
-        right.append((w ^ man3(wh_mesh, ph @ _rz(-psi / pair.ratio))).volume())
-        wrong.append((w ^ man3(wh_mesh, ph @ _rz(psi / pair.ratio))).volume())
+        right.append((w ^ man3(wh_mesh, ph @ _rz(-sense * psi / pair.ratio))).volume())
+        wrong.append((w ^ man3(wh_mesh, ph @ _rz(sense * psi / pair.ratio))).volume())
     assert max(right) <= INTERFERENCE_TOL_MM3
     assert max(wrong) > 1.0
 

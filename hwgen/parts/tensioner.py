@@ -109,26 +109,33 @@ def wheel_solid(lay: TensionerLayout, unit: Unit, gear: cq.Solid, pin_bore: floa
     pieces.append(cq.Solid.makeCylinder(lay.hub_radius, height, cq.Vector(0, 0, 0)))
     for f0, f1 in unit.flanges:
         pieces.append(cq.Solid.makeCylinder(lay.flange_radius, f1 - f0, cq.Vector(0, 0, f0 - z_lo)))
+    for c0, c1 in unit.caps:
+        pieces.append(cq.Solid.makeCylinder(pair.rf2, c1 - c0, cq.Vector(0, 0, c0 - z_lo)))
     body = pieces[0].fuse(*pieces[1:])
     tools = [cq.Solid.makeCylinder(pin_bore / 2, height + 2 * TOOL, cq.Vector(0, 0, -TOOL))]
     rc = clamp_site(lay)
     ang = math.radians(CLAMP_ANGLE)
     for zc, s in unit.clamps:
         zf = zc - z_lo
-        # heat-set insert bore into the gear from the face the clamp sits on
+        # heat-set insert bore into the gear (or end cap) from the face the clamp sits on
         z_from = zf - CLAMP_INSERT_DEPTH if s > 0 else zf - TOOL
         tools.append(cq.Solid.makeCylinder(CLAMP_INSERT_BORE / 2, CLAMP_INSERT_DEPTH + TOOL,
                                            cq.Vector(rc * math.cos(ang), rc * math.sin(ang), z_from)))
-    # anchor holes: through the flange between each winding zone and the wheel
+    # anchor holes: through the flange between each winding zone and its clamp face
     r_anchor = lay.spool_radius + ANCHOR_HOLE / 2 + 0.3
-    for (w0, w1) in unit.zones:
-        towards_gear = 1 if (unit.z_gear[0] + unit.z_gear[1]) / 2 > (w0 + w1) / 2 else -1
-        f = next(f for f in unit.flanges if (f[0] >= w1 - 1e-9 if towards_gear > 0 else f[1] <= w0 + 1e-9)
-                 and abs((f[0] if towards_gear > 0 else f[1]) - (w1 if towards_gear > 0 else w0)) < 1e-6)
+    for zc, s in unit.clamps:
+        # on an end cap: through the cap; on the gear's face: through the flange nearest to it
+        slab = next((c for c in unit.caps if c[0] - 1e-9 <= zc <= c[1] + 1e-9), None) or \
+            min(unit.flanges, key=lambda f: abs((f[0] + f[1]) / 2 - zc))
+        f = slab
         tools.append(cq.Solid.makeCylinder(ANCHOR_HOLE / 2, f[1] - f[0] + 2 * TOOL,
                                            cq.Vector(r_anchor * math.cos(ang), r_anchor * math.sin(ang),
                                                      f[0] - z_lo - TOOL)))
-    return _one(body.cut(*tools))
+    solid = _one(body.cut(*tools))
+    if unit.gear_on_top:
+        from ..export import location
+        solid = _one(solid.moved(location(lay.wheel_flip(unit))))
+    return solid
 
 
 def clamp_solid() -> cq.Solid:
@@ -181,7 +188,7 @@ def housing_solid(lay: TensionerLayout, plan: Plan) -> cq.Solid:
         solids.append(_box(s * p0, s * sp1, cy - s * BOSS, wy + s * POST / 2, *u.upper_shelf))
         solids.append(_cyl(BOSS, (cx, cy, u.z_part[1] + GAP), (cx, cy, u.upper_shelf[1])))
         solids.append(_box(cx, s * sp1, cy - BOSS, cy + BOSS, *u.lower_bar))
-        solids.append(_cyl(BOSS, (cx, cy, u.lower_bar[0]), (cx, cy, u.lower_bar[1])))
+        solids.append(_cyl(BOSS, (cx, cy, u.lower_bar[0]), (cx, cy, u.z_part[0] - GAP)))
         solids.append(_box(s * p0, s * p1, wy - POST / 2, wy + POST / 2, wz - POST / 2, u.upper_shelf[1]))
         # dowel bores (press fit): wheel pins along z, worm pin along x through the post
         cuts.append(_cyl(pin_press / 2, (cx, cy, u.z_part[1]), (cx, cy, u.upper_shelf[1] + TOOL)))
@@ -259,7 +266,7 @@ def build_tensioner(plan: Plan) -> Iterator[Part]:
             t = placement(np.eye(3), [rc * math.cos(ang), rc * math.sin(ang),
                                       zf if s > 0 else zf - CLAMP_PLATE[2]])
             name = f"tensioner_clamp_{u.channel}" + (f"_{k + 1}" if len(u.clamps) > 1 else "")
-            yield Part(name, "tensioner_clamp", clamp, hp @ t, CLAMP_COLOR,
+            yield Part(name, "tensioner_clamp", clamp, lay.stack_placement(u) @ t, CLAMP_COLOR,
                        meta={**meta, "screw": "M2 x 6 ISO 7380 into an M2 x 4 heat-set insert"})
     hp = housing_placement(lay)
     robot_solid = housing_solid(lay, plan)
