@@ -80,6 +80,9 @@ def test_prototype_passes_every_check_and_build_writes_report(built):
 def test_paper_table2_build_and_check_exit_1(built, tmp_path):
     root, folder = _copy(built, tmp_path, "paper-table2")
     assert "## Failed" in (folder / "summary.md").read_text()
+    manifest = json.loads((folder / "manifest.json").read_text())      # what makes `hwgen build` exit 1
+    assert manifest["checks_ok"] is False
+    assert [c["id"] for c in manifest["checks"] if not c["passed"] and c["severity"] == "error"] == ["tendon.length"]
     r = _run("check", str(PARAMS / "paper-table2.yaml"), "--out", str(root), "--junit", str(tmp_path / "j.xml"))
     assert r.returncode == 1, r.stderr
     assert "built" not in r.stderr           # outputs were current: measured, not rebuilt
