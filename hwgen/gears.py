@@ -299,10 +299,10 @@ class WormPair:
                         f"worm root radius {self.rf1:.2f} mm leaves no core for a {self.module:g} mm module"))
         if self.thread_half_width(self.ra1) * 2 < min_wall:
             out.append(("pressure_angle_deg",
-                        f"worm thread tip {2 * self.thread_half_width(self.ra1):.2f} mm is thinner than the "
+                        f"worm thread tip {2 * self.thread_half_width(self.ra1):.3f} mm is thinner than the "
                         f"process minimum wall {min_wall:g} mm"))
         if self.tip_thickness < min_wall:
-            out.append(("module", f"wheel tooth tip {self.tip_thickness:.2f} mm is thinner than the process "
+            out.append(("module", f"wheel tooth tip {self.tip_thickness:.3f} mm is thinner than the process "
                                   f"minimum wall {min_wall:g} mm; use a larger module"))
         if self.worm_length < 2 * self.pitch:
             out.append(("worm_length", f"{self.worm_length:g} mm is under two pitches ({2 * self.pitch:.2f} mm)"))

@@ -35,6 +35,7 @@ WIND_WIDTH = 3.0         # axial length of one tendon's winding zone
 FLANGE_HEIGHT = 2.5      # flange radius above the drum core: holds a few turns of 0.15 mm line
 FLANGE = 1.2             # flange thickness (≥ 0.8 mm process wall)
 CLAMP_GAP = 3.5          # axial gap between the inner flange and the wheel face, room for the clamp
+WORM_CLEAR = 1.5         # least z distance from a worm to its own unit's tendon planes
 HUB_WALL = 2.0           # radial wall of the drum around the pin bore
 # Tendon clamp: an M2 screw into a heat-set insert in the wheel face (standard M2 insert sizes)
 CLAMP_SCREW = 2.0        # M2
@@ -172,7 +173,7 @@ class TensionerLayout:
         return self.mesh_to_robot(unit) @ self.worm_file_to_mesh
 
 
-def _wheel_stack(zs: list[float], b: float):
+def _wheel_stack(zs: list[float], b: float, worm_radius: float):
     """Winding zones, flanges, end caps, gear and clamp faces along z for tendons at heights zs.
 
     The gear goes at one end of the stack (its face is the part's largest flat face and
@@ -189,14 +190,14 @@ def _wheel_stack(zs: list[float], b: float):
     reach = CLAMP_PLATE[2] + CLAMP_HEAD
     caps, clamps = [], []
     if zs[0] >= 0:          # all above the strip plane: the gear goes below, toward it
-        top = zones[0][0] - FLANGE - CLAMP_GAP
+        top = min(zones[0][0] - FLANGE - CLAMP_GAP, zs[0] - WORM_CLEAR - worm_radius + b / 2)
         gear = (top - b, top)
         clamps.append((gear[1], 1.0))
         if len(zones) > 1:
             caps.append((zones[-1][1], zones[-1][1] + CAP))
             clamps.append((caps[-1][1], 1.0))
     else:
-        bot = zones[-1][1] + FLANGE + CLAMP_GAP
+        bot = max(zones[-1][1] + FLANGE + CLAMP_GAP, zs[-1] + WORM_CLEAR + worm_radius - b / 2)
         gear = (bot, bot + b)
         clamps.append((gear[0], -1.0))
         if len(zones) > 1:
@@ -296,7 +297,7 @@ def layout(plan: Plan) -> TensionerLayout:
     stacks = {}
     for c in ts.channels:
         zs = [z for _, _, z in eyelets[c]]
-        zones, flanges, caps, gear, clamps, z_part, span = _wheel_stack(zs, b)
+        zones, flanges, caps, gear, clamps, z_part, span = _wheel_stack(zs, b, pair.ra1)
         zw = (gear[0] + gear[1]) / 2
         hi = max(span[1], zw + pair.ra1)
         lo = span[0]
@@ -439,7 +440,7 @@ def layout(plan: Plan) -> TensionerLayout:
 
     # Lift the stack off the tip until no tendon turns by more than MAX_EXIT_DEG at its tip eyelet.
     lift = 0.0
-    for _ in range(8):
+    for _ in range(30):
         x_u, spine, hex_journal, wf, worm_x, post, units, runs = solve(lift)
         need = max((abs(r.end[0] - r.start[0]) / math.tan(math.radians(MAX_EXIT_DEG)) - (r.end[1] - r.start[1])
                     for r in runs), default=0.0)

@@ -268,3 +268,37 @@ def test_hex_socket_for_the_key(proto):
     assert len(polys) == 2
     assert areas[0] == pytest.approx(hexagon, rel=0.02)
     assert areas[0] > math.sqrt(3) / 2 * key ** 2             # the key itself fits
+
+
+@pytest.mark.parametrize("change", [
+    {"module": 1.5, "wheel_teeth": 30, "worm_pitch_diameter": 17},
+    {"worm_starts": 2, "worm_pitch_diameter": 20, "friction_coefficient": 0.3},
+    {"wheel_teeth": 40, "face_width": 6, "spool_diameter": 14},
+])
+def test_layout_adapts_to_other_gears(tmp_path, change):
+    """Bigger gears and worms: the layout keeps the units apart, the worms off their own
+    tendons' planes and the tendons' turn at the tip within its limit (numpy only)."""
+    import yaml
+
+    from hwgen.tensioner import MAX_EXIT_DEG, WORM_CLEAR
+    data = yaml.safe_load((PARAMS / "prototype.yaml").read_text())
+    data["tensioner"].update(change)
+    f = tmp_path / "v.yaml"
+    f.write_text(yaml.safe_dump(data))
+    p = plan(load(f).design)
+    lay = layout(p)
+    pair = lay.pair
+    assert pair.center_distance == pytest.approx(lay.units[0].worm_y - lay.units[0].center[1]
+                                                 if lay.units[0].side > 0 else
+                                                 lay.units[0].center[1] - lay.units[0].worm_y)
+    for u in lay.units:
+        zs = [t.points[-1][1] for t in p.paths if t.channel == u.channel]
+        assert min(abs(u.worm_z - z) for z in zs) >= pair.ra1 + WORM_CLEAR - 1e-9
+    assert max(r.exit_angle_deg for r in lay.runs) <= MAX_EXIT_DEG + 1e-6
+    # units in one column do not overlap along y
+    for s in (1, -1):
+        col = sorted((u for u in lay.units if u.side == s), key=lambda u: u.center[1])
+        for u, v in zip(col, col[1:]):
+            top = max(u.center[1] + pair.ra2, u.worm_y + pair.ra1) if s > 0 else u.center[1] + pair.ra2
+            bottom = min(v.center[1] - pair.ra2, v.worm_y - pair.ra1) if s < 0 else v.center[1] - pair.ra2
+            assert bottom > top
