@@ -181,17 +181,47 @@ def plan(design: Design) -> Plan:
     return Plan(d, paths, tuple(disks), backbone, tuple(merges), tuple(findings))
 
 
+def _strip_crossing_angle(design: Design, path: TendonPath, station: float) -> float:
+    """Worst angle (rad) between the tendon and the strip's normal where it crosses, over the sweep.
+
+    At a disk both segments count; between disks the chord is compared with the normal of the
+    bent strip at that arc length. The strip is thin, but the line crosses it steeply (C1 at the
+    prototype's middle disk meets it at about 75° to its normal), so this sets the hole, not the
+    disk's eyelet.
+    """
+    normal = np.array([0.0, 0.0, 1.0])
+    if float(station).is_integer():
+        return float(_worst_angles(design, path, np.tile(normal, (len(path.points), 1)))[int(station)])
+    kappa = _sweep(design)
+    i = int(station)
+    st = design.stations
+    P = kin.points_in_space(st, path.points, kappa)
+    seg = P[:, i + 1] - P[:, i]
+    seg /= np.linalg.norm(seg, axis=1, keepdims=True)
+    R, _ = kin.frames([st[i] + (station - i) * (st[i + 1] - st[i])], kappa)
+    cos = np.abs(np.einsum("ki,ki->k", seg, R[:, 0] @ normal))
+    return float(np.arccos(np.clip(cos, 0, 1)).max())
+
+
 def _backbone_holes(d: Design, paths: list[TendonPath], disks: list[DiskSpec]):
-    """Holes the strip needs where tendons cross its plane (z = 0) within its height."""
+    """Holes the strip needs where tendons cross its plane (z = 0) within its height,
+    each sized for the steepest angle the tendon meets the strip at over the sweep."""
     half_h = d.backbone.height / 2
     st = np.asarray(d.stations)
     out, findings = [], []
+
+    def strip_hole(p: TendonPath, station: float, x: float, y: float) -> BackboneHole:
+        beta = _strip_crossing_angle(d, p, station)
+        dia = hole_diameter(d.tendon_material.diameter, d.backbone.thickness, beta,
+                            d.process.hole_clearance, d.process.min_hole)
+        return BackboneHole(p.name, float(station), float(x), float(y), float(dia))
+
     for p in paths:
         x, z = p.points[:, 0], p.points[:, 1]
         for i in range(len(st)):
             hole = next((h for h in disks[i].holes if p.name in h.tendons), None)
             if hole is not None and hole.in_slot:
-                out.append(BackboneHole(p.name, float(i), float(x[i]), float(st[i]), hole.diameter))
+                out.append(strip_hole(p, i, x[i], st[i]))
         for i in range(len(st) - 1):
             z0, z1 = z[i], z[i + 1]
             if z0 == 0 and z1 == 0 and (abs(x[i]) < half_h or abs(x[i + 1]) < half_h):
@@ -201,10 +231,5 @@ def _backbone_holes(d: Design, paths: list[TendonPath], disks: list[DiskSpec]):
                 f = z0 / (z0 - z1)
                 xc = x[i] + f * (x[i + 1] - x[i])
                 if abs(xc) < half_h:
-                    seg = np.array([x[i + 1] - x[i], st[i + 1] - st[i], z1 - z0])
-                    beta = np.arccos(abs(seg[2]) / np.linalg.norm(seg))
-                    dia = hole_diameter(d.tendon_material.diameter, d.backbone.thickness, beta,
-                                        d.process.hole_clearance, d.process.min_hole)
-                    out.append(BackboneHole(p.name, i + f, float(xc), float(st[i] + f * (st[i + 1] - st[i])),
-                                            float(dia)))
+                    out.append(strip_hole(p, i + f, xc, st[i] + f * (st[i + 1] - st[i])))
     return out, findings

@@ -279,7 +279,7 @@ def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendo
                     findings: list[str], strip_t: float | None = None, angles_deg: np.ndarray | None = None,
                     length: float | None = None) -> list[Check]:
     """Every crossing of the strip has a hole in the DXF template and in the strip's STL, and
-    (a warning) the hole is wide enough for the angle the tendon crosses the strip at."""
+    the hole is wide enough for the steepest angle the tendon crosses the strip at."""
     out = []
     half_h = float(bb_outline.extent[0]) / 2 if bb_outline is not None else float("inf")
     circles = dxf_holes(dxf_path) if dxf_path.exists() else []
@@ -316,7 +316,7 @@ def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendo
                    f"(bending {angles_deg[k]:+g}°): a hole drilled square to the strip needs Ø{need:.2f} mm")
             msg = (f"{txt}; it is Ø{have:.2f} mm" if ok else
                    f"{txt} to let it through untouched, it is Ø{have:.2f} mm: the line bears on the hole's edge")
-            out.append(Check("backbone.hole_angle", "warning", ok, msg, have, float(need),
+            out.append(Check("backbone.hole_angle", "error", ok, msg, have, float(need),
                              {**where, "angle_deg": float(angles_deg[k])}))
     for f in findings:
         out.append(Check("backbone.in_plane", "error", False, f"{f}: it would have to run through the strip",
