@@ -26,7 +26,7 @@ def _tensioner(plan: Plan) -> Iterator[Part]:
 def _tensioner_count(plan: Plan) -> int:
     from .tensioner import layout
     lay = layout(plan)
-    return sum(2 + len(u.clamps) for u in lay.units) + 1
+    return sum(3 + len(u.clamps) for u in lay.units) + 1
 
 
 # (family, how many parts it yields, builder)

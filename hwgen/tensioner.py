@@ -4,16 +4,20 @@ Robot frame as everywhere: the backbone along +y, the tip disk's outer face at
 y = y_face, x across the strip, z through it. The tensioner sits on that face.
 
 One *unit* per channel: a wheel part (gear + spool drum) turning on two dowel stubs along
-z, and a worm along x meshing on the wheel's +y side. Every tendon runs in its own plane
-z = z_e (its tip eyelet's z) in one straight line from the tip eyelet to the tangent point
-on the -x side of its channel's drum, so it touches nothing on the way; the drum's
-winding zones sit at those z, the wheel beside them (or between them), the housing's
-shelves above and below. All units share one wheel-axis x (X_u) and one spine wall on
-+x that carries the worms' hex journals: every worm is turned from outside through the
-spine with a hex key. Units are stacked along +y; the units whose parts would reach the
-strip's clamp go beyond it. X_u is the smallest value for which every tendon clears every
-other part of the layout by the margin below (the exported meshes are measured again by
-the tests and checks).
+z, and a worm along x meshing on the wheel's +y side (-y in the left column). The worm
+enters from outside through a hole in the spine, turns on a dowel in the far post and in
+a bearing cap screwed over that hole, whose bore leaves its hex socket open to the key.
+
+Every tendon runs in its own plane z = z_e (its tip eyelet's z) in one straight line from
+the tip eyelet to the tangent point on the side of its channel's drum that faces x = 0,
+so it touches nothing on the way; the drum's winding zones sit at those z, the gear at one
+end of the drum, the housing's shelves above and below. Units alternate between a right
+column (+x) and a left one (a right unit turned 180° about z); both share one wheel-axis
+|x| (X_u) and a spine wall on their outer side that carries the worms. Units are stacked
+along +y; those whose parts would reach the strip's clamp go beyond it. X_u is the
+smallest value for which every tendon clears every other part of the layout by the
+margin below, and the stack is lifted off the tip until no tendon turns by more than
+MAX_EXIT_DEG at its tip eyelet (the exported meshes are measured again by the checks).
 
 The actuating pair (channel A: A1 at z = +30, A2 at z = -30) winds on one drum in the
 same sense: turning the worm shortens both equally, which is how the paper pre-tensions
@@ -48,7 +52,12 @@ CAP = 5.0                # end cap at the far end of a two-zone drum, holds the 
 # Housing (mm)
 GAP = 0.5                # axial gap between a turning part and a housing face
 SHELF = 4.0              # shelf and bar thickness
-SPINE = 5.0              # spine wall thickness (x)
+SPINE = 7.0              # spine wall thickness (x): holds the M3 inserts of the worm caps
+WORM_CAP = 4.0           # flange of the bearing cap that closes each worm's spine hole, x
+CAP_MARGIN = 6.0         # cap flange reaches this far beyond the worm's tip radius (screws at +3)
+COLLAR = 1.5             # thrust collar on the worm between its thread and hex journal, length
+COLLAR_STEP = 1.0        # its radial step over the journal (a small face: the worm prints on its end)
+AXIAL_PLAY = 0.25        # worm end play between the far post and the cap's spigot
 BASE = 6.0               # base plate thickness (y), on the tip disk
 POST = 7.0               # far worm bearing post, square section
 BOSS = 3.5               # radius of the pin bosses and bars around a dowel
@@ -60,6 +69,9 @@ STRIP_CLAMP_X = 2.0       # block beyond the strip's edges, x
 STRIP_SLOT_CLEARANCE = 0.05   # per side, strip in its slot
 SET_SCREW_INSERT = 4.0    # M3 heat-set insert bore for the strip's set screws
 MOUNT_INSERT = 4.0        # M3 heat-set insert bore for the tip-disk screws
+M3_INSERT = 4.0           # M3 x 5.7 heat-set insert bore (worm caps)
+M3_INSERT_DEPTH = 6.0
+M3_CLEARANCE = 3.4        # ISO 273 normal
 TENDON_HOLE = 3.0         # minimum hole through the base plate around a tendon
 # Layout search
 TENDON_MARGIN = 0.5       # layout clearance from a tendon to any other part (tests require ≥ d)
@@ -123,6 +135,11 @@ class TensionerLayout:
     worm_x: tuple[float, float]                 # |x| range of every worm (far end, spine outer face)
     worm_file_to_mesh: np.ndarray               # 4x4 worm file -> mesh frame
     hex_journal: float                          # length of the journal carrying the hex socket
+    spine_hole: float                           # diameter of the hole each worm enters the spine by
+    cap_spigot: float                           # cap spigot length from the flange's inner face, |x|
+    cap_half: float                             # half-size of the square cap flange
+    cap_screw: float                            # cap screws at worm_y ± this
+    worm_pin: float                             # dowel the worm's far end turns on, pressed into the post
     units: tuple[Unit, ...]
     runs: tuple[TendonRun, ...]
     spool_radius: float
@@ -320,7 +337,7 @@ def layout(plan: Plan) -> TensionerLayout:
         # right unit turned 180° about z (same parts, worm on the wheel's -y side)
         side = {c: (1 if i % 2 == 0 else -1) for i, c in enumerate(order)}
         wheel_reach = max(pair.ra2, r_f, BOSS) + UNIT_GAP / 2
-        worm_reach = a + max(pair.ra1, POST / 2) + UNIT_GAP / 2
+        worm_reach = a + max(pair.ra1 + CAP_MARGIN, POST / 2) + UNIT_GAP / 2
         centers_y: dict[str, float] = {}
         y_next = {1: y_face + BASE + GAP + lift, -1: y_face + BASE + GAP + lift}
         for c in order:
@@ -337,16 +354,20 @@ def layout(plan: Plan) -> TensionerLayout:
         def build(x_u: float):
             n = round(-L / (2 * pair.pitch))
             x_thread = x_u - n * pair.pitch                  # |x| of the thread's spine-side end
-            spine_in = max(x_thread, x_u + pair.ra2 + GAP) + GAP
+            # the worm goes in from outside through a hole in the spine that its collar passes;
+            # a bearing cap (spigot in that hole, flange screwed to the spine) carries the
+            # hex journal and holds the worm against the far post
+            spine_in = max(x_thread + COLLAR, x_u + pair.ra2 + GAP) + GAP
             spine = (spine_in, spine_in + SPINE)
-            hex_journal = spine[1] - x_thread                # worm file Z from the outer end to the thread
+            x_cap = spine[1] + WORM_CAP                      # |x| of the cap's and the worm's outer face
+            hex_journal = x_cap - x_thread                   # worm file Z from the outer end to the thread
             ty = -hex_journal + n * pair.pitch               # a thread space on the wheel's tooth at mesh y = 0
             wf = np.eye(4)
             wf[:3, :3] = WORM_TO_MESH
             wf[:3, 3] = [a, ty, 0.0]
-            x_outer = x_u - ty                               # |x| of worm file Z = 0 (= spine outer face)
+            x_outer = x_u - ty                               # |x| of worm file Z = 0 (= x_cap)
             x_far = x_outer - (hex_journal + L)
-            post = (x_far - GAP - POST, x_far - GAP)
+            post = (x_far - AXIAL_PLAY / 2 - POST, x_far - AXIAL_PLAY / 2)
             units = []
             for c in order:
                 zones, flanges, caps, gear, clamps, z_part, zw, upper, lower, pins, _ = stacks[c]
@@ -408,7 +429,8 @@ def layout(plan: Plan) -> TensionerLayout:
                     if zin(u.lower_bar[1], u.z_part[0]):
                         shapes.append((f"{u.channel} boss", "circle", (cx, cy, BOSS)))
                     if zin(*u.lower_bar):
-                        shapes.append((f"{u.channel} bar", "rect", rect(abs(cx) - BOSS, spine[1], cy - BOSS, cy + BOSS)))
+                        shapes.append((f"{u.channel} bar", "rect",
+                                       rect(abs(cx) - BOSS, spine[1], cy - BOSS, cy + BOSS)))
                 for s in (1, -1):
                     xs = sorted((s * spine[0], s * spine[1] * 10))
                     shapes.append(("spine", "rect", (xs[0], xs[1], y_face, math.inf)))
@@ -462,6 +484,9 @@ def layout(plan: Plan) -> TensionerLayout:
         holes[key] = max(holes.get(key, 0.0), TENDON_HOLE + 2 * drift)
     tendon_holes = tuple((x, z, dia) for (x, z), dia in holes.items())
     mount = tuple((x, z, MOUNT_INSERT) for x, z, _ in tip.mount_holes)
-    return TensionerLayout(pair, y_face, x_u, spine, post, worm_x, wf, hex_journal, units, runs, r_s, r_w, r_f,
+    return TensionerLayout(pair, y_face, x_u, spine, post, worm_x, wf, hex_journal,
+                           2 * pair.ra1 + 1.0,
+                           spine[1] - (worm_x[1] - hex_journal + COLLAR + AXIAL_PLAY / 2),
+                           pair.ra1 + CAP_MARGIN, pair.ra1 + CAP_MARGIN / 2, _pin_length(POST), units, runs, r_s, r_w, r_f,
                            hub_r, (strip_half_x, strip_half_z, y_face, y_end), clamp_block, base, mount,
                            tendon_holes, ts)

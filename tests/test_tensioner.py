@@ -44,12 +44,13 @@ def test_one_worm_drive_per_channel(proto):
     # one clamp per tendon end: the actuating drum carries both A1 and A2
     assert sorted(q["channel"] for q in clamps) == sorted(t.channel for t in p.paths)
     assert len([q for q in man["parts"] if q["role"] == "tensioner_housing"]) == 1
+    assert set(_by_role(man, "tensioner_cap")) == channels
     assert sorted(_by_role(man, "tensioner_wheel")["A"]["tendons"]) == ["A1", "A2"]
 
 
 def test_worm_and_wheel_files_are_closed_solids(proto):
     folder, man, _ = proto
-    for role in ("tensioner_worm", "tensioner_wheel", "tensioner_clamp", "tensioner_housing"):
+    for role in ("tensioner_worm", "tensioner_wheel", "tensioner_clamp", "tensioner_cap", "tensioner_housing"):
         for q in (x for x in man["parts"] if x["role"] == role):
             mesh = load_mesh(folder / q["files"]["stl"]["path"])
             assert mesh.is_watertight and mesh.is_winding_consistent and mesh.is_volume, q["name"]
@@ -248,6 +249,8 @@ def test_turning_parts_clear_the_housing_at_every_angle(proto):
         worm = _by_role(man, "tensioner_worm")[ch]
         ph, pw = np.asarray(wheel["placement"]), np.asarray(worm["placement"])
         clamps = [q for q in man["parts"] if q["role"] == "tensioner_clamp" and q["channel"] == ch]
+        cap = manifold(folder, _by_role(man, "tensioner_cap")[ch])
+        assert cap.min_gap(housing, 0.3) < 1e-6 and (cap ^ housing).volume() < 1e-3   # seated, not sunk
         for a in np.linspace(0, 2 * math.pi, 6, endpoint=False):
             turn = ph @ _rz(a) @ np.linalg.inv(ph)          # about the wheel's axis, in robot space
             for q in [wheel] + clamps:
@@ -255,6 +258,7 @@ def test_turning_parts_clear_the_housing_at_every_angle(proto):
                 assert s.min_gap(housing, 0.3) >= 0.05, (ch, q["name"], a)
             w = manifold(folder, worm, pw @ _rz(a))
             assert w.min_gap(housing, 0.3) >= 0.05, (ch, a)
+            assert w.min_gap(cap, 0.3) >= 0.05, (ch, a)    # the hex journal turns in the cap's bore
 
 
 def test_hex_socket_for_the_key(proto):

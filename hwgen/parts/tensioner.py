@@ -21,8 +21,8 @@ import numpy as np
 from ..design import Plan
 from ..gears import GearDesignError, WormPair
 from ..tensioner import (ANCHOR_HOLE, BOSS, CLAMP_INSERT_BORE, CLAMP_INSERT_DEPTH, CLAMP_PLATE, CLAMP_SCREW,
-                         GAP, MOUNT_INSERT, POST, SET_SCREW_INSERT, SHELF, STRIP_SLOT_CLEARANCE,
-                         TensionerLayout, Unit, layout)
+                         COLLAR, COLLAR_STEP, GAP, M3_CLEARANCE, M3_INSERT, M3_INSERT_DEPTH, POST,
+                         SET_SCREW_INSERT, SHELF, STRIP_SLOT_CLEARANCE, WORM_CAP, TensionerLayout, Unit, layout)
 from . import DISK_ROTATION, Part, placement
 
 WORM_COLOR = (0.75, 0.76, 0.78, 1.0)
@@ -42,9 +42,9 @@ def _wire(points) -> cq.Wire:
 
 # ---- worm -------------------------------------------------------------------------------
 def worm_solid(pair: WormPair, hex_journal: float, hex_key: float, pin_bore: float, pin_depth: float) -> cq.Solid:
-    """Worm along file Z: the hex journal from Z = 0, then the threaded length, then the far
-    end with a blind bore for the dowel it turns on. The thread is the trapezoid axial
-    profile swept along a helix (right hand), one sweep per start."""
+    """Worm along file Z: the hex journal from Z = 0, a thrust collar, the threaded length,
+    then the far end with a blind bore for the dowel it turns on. The thread is the
+    trapezoid axial profile swept along a helix (right hand), one sweep per start."""
     L = pair.worm_length
     z0 = hex_journal
     prof = pair.worm_axial_profile(ROOT_OVERLAP)
@@ -55,7 +55,8 @@ def worm_solid(pair: WormPair, hex_journal: float, hex_key: float, pin_bore: flo
     threads = [thread] + [thread.rotate(cq.Vector(), cq.Vector(0, 0, 1), 360.0 * j / pair.starts)
                           for j in range(1, pair.starts)]
     core = cq.Solid.makeCylinder(pair.rf1, hex_journal + L, cq.Vector(0, 0, 0))
-    body = core.fuse(*threads)
+    collar = cq.Solid.makeCylinder(pair.rf1 + COLLAR_STEP, COLLAR, cq.Vector(0, 0, hex_journal - COLLAR))
+    body = core.fuse(collar, *threads)
     af = hex_key + HEX_CLEARANCE
     r_hex = af / math.sqrt(3)
     hexagon = _wire([(r_hex * math.cos(math.radians(60 * k)), r_hex * math.sin(math.radians(60 * k)), -TOOL)
@@ -146,6 +147,36 @@ def clamp_solid() -> cq.Solid:
     return _one(plate.cut(hole))
 
 
+# ---- worm bearing cap ----------------------------------------------------------------
+def cap_solid(lay: TensionerLayout, screws_file: list[tuple[float, float]]) -> cq.Solid:
+    """Square flange (file Z from 0, the face outside the spine) with a spigot that locates
+    in the spine hole and ends at the worm's collar; bored for the hex journal and two M3
+    screws. Shares the worm's file frame."""
+    ts = lay.tensioner
+    h = lay.cap_half
+    flange = cq.Solid.makeBox(2 * h, 2 * h, WORM_CAP, cq.Vector(-h, -h, 0))
+    spigot = cq.Solid.makeCylinder((lay.spine_hole - ts.running_fit) / 2, lay.cap_spigot,
+                                   cq.Vector(0, 0, WORM_CAP))
+    body = flange.fuse(spigot)
+    length = WORM_CAP + lay.cap_spigot
+    tools = [cq.Solid.makeCylinder((2 * lay.pair.rf1 + ts.running_fit) / 2, length + 2 * TOOL,
+                                   cq.Vector(0, 0, -TOOL))]
+    for x, y in screws_file:
+        tools.append(cq.Solid.makeCylinder(M3_CLEARANCE / 2, WORM_CAP + 2 * TOOL, cq.Vector(x, y, -TOOL)))
+    return _one(body.cut(*tools))
+
+
+def cap_screws(lay: TensionerLayout, unit: Unit) -> tuple[tuple[float, float], ...]:
+    """(X, Y) of the cap's two screws in the worm's file frame (the same for every unit)."""
+    inv = np.linalg.inv(lay.worm_placement(unit))
+    s = unit.side
+    out = []
+    for dy in (-lay.cap_screw, lay.cap_screw):
+        p = inv @ [s * lay.worm_x[1], unit.worm_y + dy, unit.worm_z, 1.0]
+        out.append((round(float(p[0]), 6), round(float(p[1]), 6)))
+    return tuple(sorted(out))
+
+
 # ---- housing ----------------------------------------------------------------------------
 def _box(x0, x1, y0, y1, z0, z1) -> cq.Solid:
     xs, ys, zs = sorted((x0, x1)), sorted((y0, y1)), sorted((z0, z1))
@@ -164,7 +195,6 @@ def housing_solid(lay: TensionerLayout, plan: Plan) -> cq.Solid:
     boss, a lower bar and the far worm post."""
     ts = lay.tensioner
     pin_press = ts.shaft_diameter - ts.press_fit
-    journal_bore = 2 * lay.pair.rf1 + ts.running_fit
     bx0, bx1, by0, by1, bz0, bz1 = lay.base
     sp0, sp1 = lay.spine
     p0, p1 = lay.post
@@ -173,11 +203,11 @@ def housing_solid(lay: TensionerLayout, plan: Plan) -> cq.Solid:
     solids.append(_box(*cb))
     # each column's spine: one pad per unit over its y band and z span, stacked from the base
     # plate (consecutive pads overlap by a shelf thickness so they fuse into one wall)
-    reach = max(lay.pair.ra1, POST / 2)
+    reach = max(lay.cap_half, POST / 2)
     y_from = {1: by0, -1: by0}
     for u in sorted(lay.units, key=lambda u: u.center[1]):
         s = u.side
-        top = max(u.center[1] + lay.pair.ra2, u.worm_y + reach) if s > 0 else u.center[1] + lay.pair.ra2
+        top = max(u.center[1] + lay.pair.ra2, u.worm_y + reach)
         solids.append(_box(s * sp0, s * sp1, y_from[s], top, u.lower_bar[0], u.upper_shelf[1]))
         y_from[s] = top - SHELF
     cuts = []
@@ -194,8 +224,11 @@ def housing_solid(lay: TensionerLayout, plan: Plan) -> cq.Solid:
         cuts.append(_cyl(pin_press / 2, (cx, cy, u.z_part[1]), (cx, cy, u.upper_shelf[1] + TOOL)))
         cuts.append(_cyl(pin_press / 2, (cx, cy, u.lower_bar[0] - TOOL), (cx, cy, u.z_part[0])))
         cuts.append(_cyl(pin_press / 2, (s * (p0 - TOOL), wy, wz), (s * (p1 + TOOL), wy, wz)))
-        # hex journal bore through the spine (running fit): the key goes in from outside
-        cuts.append(_cyl(journal_bore / 2, (s * (sp0 - TOOL), wy, wz), (s * (sp1 + TOOL), wy, wz)))
+        # the hole the worm enters by (the cap's spigot locates in it) and the cap's inserts
+        cuts.append(_cyl(lay.spine_hole / 2, (s * (sp0 - TOOL), wy, wz), (s * (sp1 + TOOL), wy, wz)))
+        for dy in (-lay.cap_screw, lay.cap_screw):
+            cuts.append(_cyl(M3_INSERT / 2, (s * (sp1 - M3_INSERT_DEPTH), wy + dy, wz),
+                             (s * (sp1 + TOOL), wy + dy, wz)))
     # strip slot through the base plate into the clamp block, set-screw inserts from +z
     hx, hz, _, y_end = lay.strip
     c = STRIP_SLOT_CLEARANCE
@@ -233,10 +266,11 @@ def build_tensioner(plan: Plan) -> Iterator[Part]:
     if problems:
         raise GearDesignError("; ".join(f"tensioner.{f}: {m}" for f, m in problems))
     running = ts.shaft_diameter + ts.running_fit
-    worm = worm_solid(pair, lay.hex_journal, ts.hex_key, running, 5.5)
+    worm = worm_solid(pair, lay.hex_journal, ts.hex_key, running, lay.worm_pin - POST + 0.5)
     gear = gear_solid(pair)
     clamp = clamp_solid()
     wheels: dict[tuple, cq.Solid] = {}
+    caps: dict[tuple, cq.Solid] = {}
     for u in lay.units:
         key = tuple(np.round(np.array([*u.z_part, *u.z_gear, *np.ravel(u.zones), *np.ravel(u.clamps)])
                              - u.z_part[0], 6))
@@ -245,7 +279,15 @@ def build_tensioner(plan: Plan) -> Iterator[Part]:
         meta = {"channel": u.channel, "tendons": list(u.tendons)}
         wp = lay.worm_placement(u)
         yield Part(f"tensioner_worm_{u.channel}", "tensioner_worm", worm, wp, WORM_COLOR,
-                   meta={**meta, "mesh_with": f"tensioner_wheel_{u.channel}", **pair.summary()})
+                   meta={**meta, "mesh_with": f"tensioner_wheel_{u.channel}", "hex_key_mm": ts.hex_key,
+                         "dowels_mm": [f"ISO 2338 {ts.shaft_diameter:g} x {lay.worm_pin:g}, pressed into the far post"],
+                         **pair.summary()})
+        screws = cap_screws(lay, u)
+        if screws not in caps:
+            caps[screws] = cap_solid(lay, list(screws))
+        yield Part(f"tensioner_cap_{u.channel}", "tensioner_cap", caps[screws], wp, HOUSING_COLOR,
+                   meta={"channel": u.channel,
+                         "screws": "2 x M3 x 10 ISO 4762 into M3 x 5.7 heat-set inserts in the spine"})
         hp = lay.wheel_placement(u)
         d = plan.design.tendon_material.diameter
         # the run meets its own drum tangentially: the last stretch, where it is closer to the
