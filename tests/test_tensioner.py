@@ -306,3 +306,15 @@ def test_layout_adapts_to_other_gears(tmp_path, change):
             top = max(u.center[1] + pair.ra2, u.worm_y + pair.ra1) if s > 0 else u.center[1] + pair.ra2
             bottom = min(v.center[1] - pair.ra2, v.worm_y - pair.ra1) if s < 0 else v.center[1] - pair.ra2
             assert bottom > top
+
+
+def test_tendon_clearance_check_sees_a_part_in_the_way(proto):
+    """Shift the housing 2 mm along x (in a copy of the manifest): the base plate's tendon
+    holes move off the tendons and the check must fail, naming the housing."""
+    import copy
+    folder, man, p = proto
+    moved = copy.deepcopy(man)
+    h = next(q for q in moved["parts"] if q["role"] == "tensioner_housing")
+    h["placement"][0][3] += 2.0
+    failed = [c for c in tendon_checks(folder, moved, p) if c.id == "tensioner.tendon_clearance" and not c.passed]
+    assert failed and all(c.where["part"] == "tensioner_housing" for c in failed)

@@ -203,7 +203,9 @@ def tendon_checks(folder: Path, manifest: dict, plan) -> list[Check]:
         out.append(Check("tensioner.tendon_clearance", "error", ok,
                          f"tendon {r['tendon']}: free span from its tip eyelet to its spool: {near}, its own wheel "
                          f"{own_gap:.3f} mm short of the winding point (needs ≥ the tendon diameter {d:g} mm)",
-                         min(worst, own_gap), d, {"tendon": r["tendon"], "part": worst_part}))
+                         min(worst, own_gap), d,
+                         {"tendon": r["tendon"], "part": own if own_gap <= worst else worst_part,
+                          "nearest_other_part": worst_part, "nearest_other_mm": min(worst, TENDON_SEARCH_MM)}))
         out.append(Check("tensioner.exit_angle", "info", True,
                          f"tendon {r['tendon']}: turns {r['exit_angle_deg']:.1f}° at its tip eyelet toward its spool",
                          r["exit_angle_deg"], None, {"tendon": r["tendon"]}))
