@@ -54,7 +54,7 @@ GAP = 0.5                # axial gap between a turning part and a housing face
 SHELF = 4.0              # shelf and bar thickness
 SPINE = 7.0              # spine wall thickness (x): holds the M3 inserts of the worm caps
 WORM_CAP = 4.0           # flange of the bearing cap that closes each worm's spine hole, x
-CAP_MARGIN = 6.0         # cap flange reaches this far beyond the worm's tip radius (screws at +3)
+CAP_WALL = 1.5           # resin between the spine hole, the cap's screw inserts and the flange's edge
 COLLAR = 1.5             # thrust collar on the worm between its thread and hex journal, length
 COLLAR_STEP = 1.0        # its radial step over the journal (a small face: the worm prints on its end)
 AXIAL_PLAY = 0.25        # worm end play between the far post and the cap's spigot
@@ -287,6 +287,9 @@ def layout(plan: Plan) -> TensionerLayout:
                          f"the Ø{ts.shaft_diameter:g} mm pin")
     a = pair.center_distance
     b = pair.face_width
+    spine_hole = 2 * pair.ra1 + 1.0                 # the worm and its collar pass through
+    cap_screw = spine_hole / 2 + M3_INSERT / 2 + CAP_WALL
+    cap_half = cap_screw + M3_CLEARANCE / 2 + CAP_WALL
     strip_half_x = d.backbone.height / 2
     strip_half_z = d.backbone.thickness / 2
     y_end = d.backbone.length + d.backbone.extra_tip
@@ -337,7 +340,7 @@ def layout(plan: Plan) -> TensionerLayout:
         # right unit turned 180° about z (same parts, worm on the wheel's -y side)
         side = {c: (1 if i % 2 == 0 else -1) for i, c in enumerate(order)}
         wheel_reach = max(pair.ra2, r_f, BOSS) + UNIT_GAP / 2
-        worm_reach = a + max(pair.ra1 + CAP_MARGIN, POST / 2) + UNIT_GAP / 2
+        worm_reach = a + max(cap_half, POST / 2) + UNIT_GAP / 2
         centers_y: dict[str, float] = {}
         y_next = {1: y_face + BASE + GAP + lift, -1: y_face + BASE + GAP + lift}
         for c in order:
@@ -485,8 +488,8 @@ def layout(plan: Plan) -> TensionerLayout:
     tendon_holes = tuple((x, z, dia) for (x, z), dia in holes.items())
     mount = tuple((x, z, MOUNT_INSERT) for x, z, _ in tip.mount_holes)
     return TensionerLayout(pair, y_face, x_u, spine, post, worm_x, wf, hex_journal,
-                           2 * pair.ra1 + 1.0,
+                           spine_hole,
                            spine[1] - (worm_x[1] - hex_journal + COLLAR + AXIAL_PLAY / 2),
-                           pair.ra1 + CAP_MARGIN, pair.ra1 + CAP_MARGIN / 2, _pin_length(POST), units, runs, r_s, r_w, r_f,
+                           cap_half, cap_screw, _pin_length(POST), units, runs, r_s, r_w, r_f,
                            hub_r, (strip_half_x, strip_half_z, y_face, y_end), clamp_block, base, mount,
                            tendon_holes, ts)
