@@ -304,8 +304,11 @@ class WormPair:
         if self.tip_thickness < min_wall:
             out.append(("module", f"wheel tooth tip {self.tip_thickness:.3f} mm is thinner than the process "
                                   f"minimum wall {min_wall:g} mm; use a larger module"))
-        if self.worm_length < 2 * self.pitch:
-            out.append(("worm_length", f"{self.worm_length:g} mm is under two pitches ({2 * self.pitch:.2f} mm)"))
+        need = max(2 * self.pitch, engagement_length(self) + self.pitch)
+        if self.worm_length < need:
+            out.append(("worm_length", f"{self.worm_length:g} mm of thread does not cover the "
+                                       f"{engagement_length(self):.1f} mm the wheel's teeth reach plus a pitch "
+                                       f"({need:.1f} mm needed)"))
         return out
 
     def summary(self) -> dict:

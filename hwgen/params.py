@@ -335,6 +335,10 @@ def _check_design(d: Design, file: Path) -> None:
     ts = d.tensioner
     for field_name, msg in worm_pair(ts).problems(ts.friction_coefficient, d.process.min_wall):
         raise InputError(file, f"tensioner.{field_name}", msg)
+    if ts.spool_diameter < ts.shaft_diameter + ts.running_fit + 2 * d.process.min_wall:
+        raise InputError(file, "tensioner.spool_diameter",
+                         f"{ts.spool_diameter:g} mm leaves less than {d.process.min_wall:g} mm of wall around "
+                         f"the Ø{ts.shaft_diameter:g} mm pin's bore")
     if ts.hex_key / math.cos(math.pi / 6) + 2 * d.process.min_wall >= ts.worm_pitch_diameter - 2.5 * ts.module:
         raise InputError(file, "tensioner.hex_key",
                          f"a {ts.hex_key:g} mm hex socket does not fit in the worm's core "
