@@ -275,9 +275,9 @@ def test_hex_socket_for_the_key(proto):
 
 
 @pytest.mark.parametrize("change", [
-    {"module": 1.5, "wheel_teeth": 30, "worm_pitch_diameter": 17},
+    {"module": 1.5, "wheel_teeth": 30, "worm_pitch_diameter": 17, "worm_length": 30},
     {"worm_starts": 2, "worm_pitch_diameter": 20, "friction_coefficient": 0.3},
-    {"wheel_teeth": 40, "face_width": 6, "spool_diameter": 14},
+    {"wheel_teeth": 40, "face_width": 6, "spool_diameter": 14, "worm_length": 30},
 ])
 def test_layout_adapts_to_other_gears(tmp_path, change):
     """Bigger gears and worms: the layout keeps the units apart, the worms off their own
