@@ -7,8 +7,16 @@ channel, one wheel per distinct spool layout (the three single-tendon channels s
 theirs).
 
 Print orientations: worm and wheel stand on an end face with their axis along file Z;
-the clamp plate lies flat; the housing stands on its base plate (the face that bolts to
-the tip disk), file (X, Y, Z) = robot (x, -z, y - y_face).
+the clamp plate lies flat; the worm's bearing cap on its flange; the housing stands on
+its base plate (the face that bolts to the tip disk), file (X, Y, Z) = robot (x, -z, y - y_face).
+
+Assembly, as the geometry allows it: heat-set inserts into the housing (base plate, strip
+clamp, spine) and the wheels (clamp faces); housing onto the tip disk (4 × M3 from the
+disk's inner face) with the strip's tip in its slot, set screws down on the strip; each
+wheel between its shelf and bar, its two dowels pressed in from outside; each worm dowel
+pressed into its far post, the worm slid in through the spine onto it, the cap screwed
+over; tendons through the base plate holes, wound, led through the anchor hole and
+pinched under the clamp plate around its M2 screw.
 """
 from __future__ import annotations
 
@@ -101,8 +109,9 @@ def clamp_site(lay: TensionerLayout) -> float:
 
 
 def wheel_solid(lay: TensionerLayout, unit: Unit, gear: cq.Solid, pin_bore: float) -> cq.Solid:
-    """Gear + spool drum + flanges, file Z = robot z - unit.z_part[0]; bored for the pins,
-    the clamp's heat-set insert and the tendon's anchor hole."""
+    """Gear + spool drum + flanges (+ end cap), bored for the pins, the clamps' heat-set
+    inserts and the tendons' anchor holes. Built with Z = robot z - unit.z_part[0], then
+    turned over when the gear is on top so that its face rests on the plate."""
     z_lo = unit.z_part[0]
     pair = lay.pair
     height = unit.z_part[1] - z_lo
