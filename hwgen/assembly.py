@@ -24,8 +24,7 @@ def _tensioner(plan: Plan) -> Iterator[Part]:
 
 
 def _tensioner_count(plan: Plan) -> int:
-    from .tensioner import layout
-    lay = layout(plan)
+    lay = plan.require_tensioner()
     return sum(3 + len(u.clamps) for u in lay.units) + 1
 
 

@@ -55,11 +55,12 @@ def build(loaded: LoadedDesign, out_root: Path, progress: Callable[[str, int, in
     ``progress(part_name, done, total)`` is called after each part is written.
     """
     plan = make_plan(loaded.design)
+    total = part_count(plan)  # raises DesignError for a part family that cannot be made, before any write
     out_root.mkdir(parents=True, exist_ok=True)
     target = out_root / loaded.design.design
     tmp = Path(tempfile.mkdtemp(prefix=f".{loaded.design.design}.", suffix=".tmp", dir=out_root))
     try:
-        manifest = _write_all(loaded, plan, tmp, progress)
+        manifest = _write_all(loaded, plan, tmp, total, progress)
         if post_build:
             for _name, step in POST_BUILD:
                 step(plan, tmp, manifest)
@@ -71,11 +72,10 @@ def build(loaded: LoadedDesign, out_root: Path, progress: Callable[[str, int, in
     return BuildResult(target, manifest, plan)
 
 
-def _write_all(loaded: LoadedDesign, plan: Plan, folder: Path, progress) -> dict:
+def _write_all(loaded: LoadedDesign, plan: Plan, folder: Path, total: int, progress) -> dict:
     (folder / "stl").mkdir()
     (folder / "step").mkdir()
     parts, entries = [], []
-    total = part_count(plan)
     for part in build_parts(plan):
         files = {"stl": folder / "stl" / f"{part.name}.stl", "step": folder / "step" / f"{part.name}.step"}
         export.write_stl(part.solid, files["stl"])

@@ -5,13 +5,24 @@ The plan is everything the part builders need, as frozen plain data, plus the de
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from . import kinematics as kin
 from .params import Design
 from .routing import TendonPath, tendon_paths
+
+class DesignError(Exception):
+    """Parameters that each pass their checks but together make no buildable part.
+
+    ``path`` names the section of the YAML to change; the CLI reports it like bad input.
+    """
+
+    def __init__(self, path: str, message: str):
+        self.path, self.message = path, message
+        super().__init__(f"{path}: {message}")
+
 
 SAME_POSITION_MM = 1e-6  # eyelets closer than this share one hole
 SWEEP_STEP_DEG = 1.0     # resolution of the bending sweep used to size eyelets
@@ -85,6 +96,14 @@ class Plan:
     backbone: BackboneSpec
     merges: tuple[Merge, ...]
     findings: tuple[str, ...] = field(default=())
+    tensioner: object | None = None          # hwgen.tensioner.TensionerLayout, when one can be laid out
+    tensioner_error: str | None = None       # why not, otherwise
+
+    def require_tensioner(self):
+        """The tensioner layout, or a DesignError saying why this design has none."""
+        if self.tensioner is None:
+            raise DesignError("tensioner", self.tensioner_error or "no tensioner layout")
+        return self.tensioner
 
     @property
     def stations(self) -> tuple[float, ...]:
@@ -123,62 +142,90 @@ def _worst_angles(design: Design, path: TendonPath, axes: np.ndarray) -> np.ndar
     return worst
 
 
-def plan(design: Design) -> Plan:
-    d = design
-    st = d.stations
-    n = len(st)
-    paths = tendon_paths(d)
-    dk = d.disks
+def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, np.ndarray],
+               exits: dict[str, np.ndarray] | None = None) -> tuple[DiskSpec, list[Merge]]:
+    """Disk i with a hole per eyelet position, and its shared and overlapping eyelets.
+
+    ``exits`` (tip disk only): each tendon's direction onward from the disk in its frame,
+    toward the tensioner, which is fixed to the tip and so does not turn with bending.
+    """
+    n = len(d.stations)
+    dk, proc = d.disks, d.process
     slot_w = d.backbone.height + 2 * dk.slot_clearance
     slot_h = d.backbone.thickness + 2 * dk.slot_clearance
-    tendon_d = d.tendon_material.diameter
-    proc = d.process
-    rest_axes = {p.name: _rest_axes(d, p) for p in paths}
-
-    disks, merges = [], []
-    for i in range(n):
-        role = "base" if i == 0 else "tip" if i == n - 1 else "inner"
-        thick = dk.thickness if role == "inner" else dk.end_thickness
-        groups: list[list[TendonPath]] = []
-        for p in paths:
-            for g in groups:
-                if np.linalg.norm(g[0].points[i] - p.points[i]) < SAME_POSITION_MM:
-                    g.append(p)
-                    break
-            else:
-                groups.append([p])
-        holes = []
+    role = "base" if i == 0 else "tip" if i == n - 1 else "inner"
+    thick = dk.thickness if role == "inner" else dk.end_thickness
+    exits = exits or {}
+    groups: list[list[TendonPath]] = []
+    for p in paths:
         for g in groups:
-            ax = np.sum([rest_axes[p.name][i] for p in g], axis=0)
-            ax /= np.linalg.norm(ax)
-            axes = np.tile(ax, (n, 1))
-            alpha = max(_worst_angles(d, p, axes)[i] for p in g)
-            x, z = (float(v) for v in g[0].points[i])
-            dia = hole_diameter(tendon_d, thick, alpha, proc.hole_clearance, proc.min_hole)
-            in_slot = abs(x) <= slot_w / 2 and abs(z) <= slot_h / 2
-            holes.append(Hole(x, z, tuple(float(a) for a in ax), float(dia), tuple(p.name for p in g),
-                              float(np.degrees(alpha)), in_slot))
-            if len(g) > 1:
-                merges.append(Merge(i, tuple(p.name for p in g), "shared"))
-        for a in range(len(holes)):
-            for b in range(a + 1, len(holes)):
-                ha, hb = holes[a], holes[b]
-                if np.hypot(ha.x - hb.x, ha.z - hb.z) < (ha.diameter + hb.diameter) / 2:
-                    merges.append(Merge(i, ha.tendons + hb.tendons, "overlap"))
-        pockets, mounts = (), ()
-        if role == "base":
-            to = dk.tie_off
-            pockets = tuple((h.x, h.z, max(to.pocket_diameter, h.diameter + 2 * proc.min_wall), to.pocket_depth)
-                            for h in holes if not h.in_slot)
-        if role == "tip":
-            mounts = tuple((x, z, dk.tip_mount.hole_diameter) for x, z in dk.tip_mount.positions)
-        disks.append(DiskSpec(i, float(st[i]), role, thick, dk.outer_diameter, slot_w, slot_h, tuple(holes),
-                              dk.eyelets.edge_size if dk.eyelets.edge == "chamfer" else 0.0, pockets, mounts))
+            if np.linalg.norm(g[0].points[i] - p.points[i]) < SAME_POSITION_MM:
+                g.append(p)
+                break
+        else:
+            groups.append([p])
+    holes, merges = [], []
+    for g in groups:
+        own = [rest_axes[p.name][i] + exits.get(p.name, 0.0) for p in g]
+        ax = np.sum([v / np.linalg.norm(v) for v in own], axis=0)
+        ax /= np.linalg.norm(ax)
+        alpha = max(_worst_angles(d, p, np.tile(ax, (n, 1)))[i] for p in g)
+        for p in g:
+            if p.name in exits:
+                alpha = max(alpha, float(np.arccos(np.clip(abs(exits[p.name] @ ax), 0, 1))))
+        x, z = (float(v) for v in g[0].points[i])
+        dia = hole_diameter(d.tendon_material.diameter, thick, alpha, proc.hole_clearance, proc.min_hole)
+        in_slot = abs(x) <= slot_w / 2 and abs(z) <= slot_h / 2
+        holes.append(Hole(x, z, tuple(float(a) for a in ax), float(dia), tuple(p.name for p in g),
+                          float(np.degrees(alpha)), in_slot))
+        if len(g) > 1:
+            merges.append(Merge(i, tuple(p.name for p in g), "shared"))
+    for a in range(len(holes)):
+        for b in range(a + 1, len(holes)):
+            ha, hb = holes[a], holes[b]
+            if np.hypot(ha.x - hb.x, ha.z - hb.z) < (ha.diameter + hb.diameter) / 2:
+                merges.append(Merge(i, ha.tendons + hb.tendons, "overlap"))
+    pockets, mounts = (), ()
+    if role == "base":
+        to = dk.tie_off
+        pockets = tuple((h.x, h.z, max(to.pocket_diameter, h.diameter + 2 * proc.min_wall), to.pocket_depth)
+                        for h in holes if not h.in_slot)
+    if role == "tip":
+        mounts = tuple((x, z, dk.tip_mount.hole_diameter) for x, z in dk.tip_mount.positions)
+    spec = DiskSpec(i, float(d.stations[i]), role, thick, dk.outer_diameter, slot_w, slot_h, tuple(holes),
+                    dk.eyelets.edge_size if dk.eyelets.edge == "chamfer" else 0.0, pockets, mounts)
+    return spec, merges
 
+
+def plan(design: Design) -> Plan:
+    """Disks, strip and tensioner layout of a design, all as plain data.
+
+    The tip disk is planned twice: once to lay the tensioner out on it, then again with each
+    tendon's exit toward its spool, so the tip eyelets follow the bisector of the incoming
+    segment and the exit and are sized for both.
+    """
+    d = design
+    paths = tendon_paths(d)
+    rest_axes = {p.name: _rest_axes(d, p) for p in paths}
+    disks, merges = [], []
+    for i in range(len(d.stations)):
+        spec, m = _disk_spec(d, i, paths, rest_axes)
+        disks.append(spec)
+        merges += m
     bb_holes, findings = _backbone_holes(d, paths, disks)
     backbone = BackboneSpec(d.backbone.height, d.backbone.thickness, -d.backbone.extra_base,
                             d.backbone.length + d.backbone.extra_tip, tuple(bb_holes))
-    return Plan(d, paths, tuple(disks), backbone, tuple(merges), tuple(findings))
+    first = Plan(d, paths, tuple(disks), backbone, tuple(merges), tuple(findings))
+
+    from .tensioner import layout  # numpy only; it reads the Plan defined here
+    try:
+        lay = layout(first)
+    except ValueError as e:
+        return replace(first, tensioner_error=str(e))
+    exits = {r.tendon: np.subtract(r.end, r.start) / r.length for r in lay.runs}
+    tip, tip_merges = _disk_spec(d, len(disks) - 1, paths, rest_axes, exits)
+    merges = [m for m in merges if m.station != tip.index] + tip_merges
+    return replace(first, disks=(*disks[:-1], tip), merges=tuple(merges), tensioner=lay)
 
 
 def _strip_crossing_angle(design: Design, path: TendonPath, station: float) -> float:

@@ -30,7 +30,7 @@ from ..design import Plan
 from ..gears import GearDesignError, WormPair
 from ..tensioner import (ANCHOR_HOLE, BOSS, CLAMP_INSERT_BORE, CLAMP_INSERT_DEPTH, CLAMP_PLATE, CLAMP_SCREW,
                          COLLAR, COLLAR_STEP, GAP, M3_CLEARANCE, M3_INSERT, M3_INSERT_DEPTH, POST,
-                         SET_SCREW_INSERT, SHELF, STRIP_SLOT_CLEARANCE, WORM_CAP, TensionerLayout, Unit, layout)
+                         SET_SCREW_INSERT, SHELF, STRIP_SLOT_CLEARANCE, WORM_CAP, TensionerLayout, Unit)
 from . import DISK_ROTATION, Part, placement
 
 WORM_COLOR = (0.75, 0.76, 0.78, 1.0)
@@ -268,7 +268,7 @@ def housing_placement(lay: TensionerLayout) -> np.ndarray:
 
 def build_tensioner(plan: Plan) -> Iterator[Part]:
     from ..export import location
-    lay = layout(plan)
+    lay = plan.require_tensioner()
     ts = lay.tensioner
     pair = lay.pair
     problems = pair.problems(ts.friction_coefficient, plan.design.process.min_wall)
