@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import sys
+from contextlib import contextmanager
 from pathlib import Path
 
 import typer
@@ -30,13 +31,27 @@ PARAMS = typer.Argument(..., help="design parameter YAML", show_default=False)
 OUT = typer.Option(Path("out"), "--out", help="output root; the design goes to OUT/<design>/")
 
 
+def _bad_input(file, path: str, message: str) -> typer.Exit:
+    err.print(f"[bold red]error:[/] {file}: [bold]{path or '<document>'}[/]: {message}",
+              highlight=False, soft_wrap=True)
+    return typer.Exit(EXIT_BAD_INPUT)
+
+
 def _load(path: Path):
     try:
         return load(path)
     except InputError as e:
-        err.print(f"[bold red]error:[/] {e.file}: [bold]{e.path or '<document>'}[/]: {e.message}",
-                  highlight=False, soft_wrap=True)
-        raise typer.Exit(EXIT_BAD_INPUT) from None
+        raise _bad_input(e.file, e.path, e.message) from None
+
+
+@contextmanager
+def _design_errors(params: Path):
+    """Parameters that pass the schema but make no buildable part are bad input too."""
+    from .design import DesignError
+    try:
+        yield
+    except DesignError as e:
+        raise _bad_input(params, e.path, e.message) from None
 
 
 @app.command()
@@ -55,7 +70,8 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
         def progress(name: str, done: int, total: int) -> None:
             bar.update(task, total=total, completed=done, description=f"built {name}")
 
-        result = run_build(loaded, out_dir, progress)
+        with _design_errors(params):
+            result = run_build(loaded, out_dir, progress)
     n = len(result.manifest["parts"])
     out.print(f"{loaded.design.design}: {n} parts written to {result.folder}", highlight=False)
     failed = [c for c in result.manifest.get("checks", []) if not c.get("passed", True)
@@ -111,6 +127,8 @@ def routing(params: Path = PARAMS,
                       highlight=False)
     for f in plan.findings:
         out.print(f"[yellow]finding:[/] {f}", highlight=False)
+    if plan.tensioner_error:
+        out.print(f"[red]tensioner:[/] cannot be laid out: {plan.tensioner_error}", highlight=False)
     if devs:
         dt = Table(title="table versus function (mm)")
         for col in ("tendon", "i", "table x", "table z", "fn x", "fn z", "deviation"):
@@ -138,7 +156,8 @@ def check(params: Path = PARAMS, out_dir: Path = OUT,
     from .checks.run import check_design
 
     with err.status(f"checking {loaded.design.design}", spinner="dots") if not quiet else _nothing():
-        rep, folder, rebuilt = check_design(loaded, out_dir)
+        with _design_errors(params):
+            rep, folder, rebuilt = check_design(loaded, out_dir)
     if rebuilt:
         err.print(f"built {folder} first ({rebuilt})", highlight=False)
     print_report(rep, out, verbose=verbose)
@@ -162,7 +181,8 @@ def render(params: Path = PARAMS, out_dir: Path = OUT,
     from .render import render_design
 
     with err.status(f"drawing {loaded.design.design}", spinner="dots") if not quiet else _nothing():
-        entry, folder, rebuilt = render_design(loaded, out_dir)
+        with _design_errors(params):
+            entry, folder, rebuilt = render_design(loaded, out_dir)
     if rebuilt:
         err.print(f"built {folder} first ({rebuilt})", highlight=False)
     out.print(f"{loaded.design.design}: bom.csv, bom.md written to {folder}", highlight=False)

@@ -40,6 +40,10 @@ CASES = {
     "unsafe-tendon-name": (_edit(PROTO, "  - name: H ", "  - name: 'H/1' "), "tendons[3].name", "safe file name"),
     "spacing-mismatch": (_edit(PROTO, "  spacing: 22.5 ", "  spacing: 20 "), "disks.spacing", "backbone.length"),
     "not-a-mapping": ("- just\n- a list\n", "<document>", "mapping"),
+    # each field is fine, but C1 and H would have to wind on one drum in the same plane
+    "tensioner-cannot-be-laid-out": (_edit(_edit(PROTO, "    channel: H", "    channel: C1"),
+                                           "channels: [A, C1, C2, H]", "channels: [A, C1, C2]"),
+                                     "tensioner", "too close to wind side by side"),
 }
 
 
