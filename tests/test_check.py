@@ -370,3 +370,27 @@ def test_loop_gap_is_exact():
     t = np.linspace(0, 2 * np.pi, 64, endpoint=False)
     c = np.c_[np.cos(t), np.sin(t)]
     assert 1.0 <= loop_gap(c, c + [3, 0]) < 1.0 + 2 * (1 - np.cos(np.pi / 64)) + 1e-12
+
+
+def test_tip_eyelets_checked_against_the_exit_to_the_tensioner(built, tmp_path):
+    """The line turns at the tip eyelet toward its spool; a tip disk sized for the incoming
+    segment alone (as the builder once did) pinches the actuating pair there."""
+    from hwgen.design import _disk_spec, _rest_axes
+    from hwgen.export import write_stl
+    from hwgen.parts.disk import build_disk
+
+    d = load(PARAMS / "prototype.yaml").design
+    plan = make_plan(d)
+    tip = plan.disks[-1]
+    a1 = next(h for h in tip.holes if h.tendons == ("A1",))
+    exit_deg = next(r.exit_angle_deg for r in plan.tensioner.runs if r.tendon == "A1")
+    assert exit_deg > 5 and a1.worst_angle_deg > 0.4 * exit_deg   # the exit sets the axis and size
+
+    rest = {p.name: _rest_axes(d, p) for p in plan.paths}
+    blind, _ = _disk_spec(d, tip.index, plan.paths, rest)          # no exits: incoming segment only
+    _, folder = _copy(built, tmp_path)
+    write_stl(build_disk(blind).solid, folder / "stl" / f"{tip.name}.stl")
+    bad = _failed(_check(folder), "eyelet.tendon_angle")
+    assert {c["where"]["tendon"] for c in bad} >= {"A1", "A2"}
+    msg = next(c["message"] for c in bad if c["where"]["tendon"] == "A1")
+    assert msg.startswith(f"A1 is pinched in {tip.name}")

@@ -99,13 +99,16 @@ def wall_checks(emap: EyeletMap, report: dict, min_wall: float) -> list[Check]:
 
 
 def hole_checks(emap: EyeletMap, min_hole: float, tendon_d: float, angles_deg: np.ndarray,
-                length: float) -> list[Check]:
+                length: float, tip_exits: dict[str, np.ndarray] | None = None) -> list[Check]:
     """Smallest eyelet versus the process; tendon angle through each eyelet versus its size and axis.
 
     A tendon of diameter d crossing a wall of thickness T at angle α to the hole axis needs a
     hole of at least d/cos α + T tan α (the builder's rule without its clearance); less and
-    the hole edge pinches it. α is taken over the whole sweep from the measured positions.
+    the hole edge pinches it. α is taken over the whole sweep from the measured positions; at
+    the tip disk the tendon's exit toward its spool (``tip_exits``, tip frame) counts too.
     """
+    tip_exits = tip_exits or {}
+    last = max(d.station for d in emap.disks)
     out = []
     for disk in emap.disks:
         ey = [e for e in emap.eyelets if e.station == disk.station and e.hole is not None]
@@ -135,6 +138,9 @@ def hole_checks(emap: EyeletMap, min_hole: float, tendon_d: float, angles_deg: n
             ax = e.hole.axis
             dirs = np.concatenate([into[:, i], outof[:, i]])          # both segments, every bend
             bends = np.concatenate([angles_deg, angles_deg])
+            if i == last and name in tip_exits:                        # on to the tensioner, at any bend
+                dirs = np.concatenate([dirs, np.tile(tip_exits[name], (len(angles_deg), 1))])
+                bends = np.concatenate([bends, angles_deg])
             valid = ~np.isnan(dirs[:, 0])                               # no segment before the base disk
             cos = np.clip(np.abs(dirs[valid] @ ax), 0, 1)
             k = int(np.argmin(cos))

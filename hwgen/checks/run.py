@@ -154,7 +154,7 @@ def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
 
     proc, td = d.process, d.tendon_material.diameter
     checks += wall_checks(emap, rep_in, proc.min_wall)
-    checks += hole_checks(emap, proc.min_hole, td, angles, L)
+    checks += hole_checks(emap, proc.min_hole, td, angles, L, tip_exits(manifest))
     checks += tendon_pair_checks(emap, rep_in, td, angles, L)
     checks += backbone_checks(emap, folder / manifest.get("files", {}).get("backbone_template", {}).get(
         "path", "backbone_template.dxf"), bb_outline, bb_holes, td, tol, rep_in.get("findings", []),
@@ -206,6 +206,17 @@ def write_outputs(report: dict, folder: Path) -> None:
     write_json(report, folder / REPORT)
     plot_lengths(report, folder / PLOT)
     write_summary(report, folder / SUMMARY)
+
+
+def tip_exits(manifest: dict) -> dict[str, np.ndarray]:
+    """Each tendon's direction from its tip eyelet toward its spool, from the runs the tensioner
+    parts record. The tensioner is fixed to the tip disk, so in the tip frame it never turns."""
+    out = {}
+    for part in manifest["parts"]:
+        for r in part.get("tendon_runs", []):
+            v = np.subtract(r["end"], r["start"])
+            out[r["tendon"]] = v / np.linalg.norm(v)
+    return out
 
 
 def post_build(plan, folder: Path, manifest: dict) -> None:
