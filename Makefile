@@ -6,7 +6,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: build test bench clean venv
+.PHONY: build test bench docs-images clean venv
 
 venv: $(STAMP)
 
@@ -24,6 +24,14 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python -m hwgen.bench
+
+# the README's pictures, from a fresh build of the prototype
+docs-images: $(STAMP)
+	rm -rf .docs-build
+	$(BIN)/hwgen build params/prototype.yaml --out .docs-build -q
+	cp .docs-build/prototype/exploded.png docs/images/prototype-exploded.png
+	cp .docs-build/prototype/bent.png docs/images/prototype-bent.png
+	rm -rf .docs-build
 
 clean:
 	rm -rf out/*/ .pytest_cache

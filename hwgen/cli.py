@@ -148,8 +148,7 @@ def check(params: Path = PARAMS, out_dir: Path = OUT,
           quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar")) -> None:
     """Measure the built files: eyelets, tendon lengths over the bending sweep, clearances, parts.
 
-    Builds first only when the outputs are missing or made from other parameters; part files
-    edited since the build are measured as they are. Exit 1 when a check fails.
+    Builds first only when the outputs are missing or made from other parameters; part files edited since the build are measured as they are. Exit 1 when a check fails.
     """
     loaded = _load(params)
     from .checks.report import print_report, write_json, write_junit
@@ -174,8 +173,7 @@ def render(params: Path = PARAMS, out_dir: Path = OUT,
            quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner")) -> None:
     """Pictures (exploded, assembled, bent PNG), the exploded SVG drawing and the bill of materials.
 
-    Builds first only when the outputs are missing or made from other parameters. Needs no
-    display or GPU; exit 1 when no offscreen OpenGL backend works (the message says what to install).
+    Builds first only when the outputs are missing or made from other parameters. Needs no display or GPU; exit 1 when no offscreen OpenGL backend works (the message says what to install).
     """
     loaded = _load(params)
     from .render import render_design
