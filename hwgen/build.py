@@ -6,6 +6,7 @@ outputs exactly as they were.
 """
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import tempfile
@@ -70,6 +71,29 @@ def build(loaded: LoadedDesign, out_root: Path, progress: Callable[[str, int, in
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return BuildResult(target, manifest, plan)
+
+
+def stale_reason(folder: Path, loaded) -> str | None:
+    """Why the outputs in ``folder`` cannot be checked as they are (None: they can)."""
+    mpath = folder / "manifest.json"
+    if not mpath.exists():
+        return "no outputs yet"
+    try:
+        m = json.loads(mpath.read_text())
+    except (OSError, ValueError):
+        return "manifest.json is unreadable"
+    if m.get("params_sha256") != loaded.sha256:
+        return "built from other parameters"
+    if m.get("hwgen_version") != __version__:
+        return f"built by hwgen {m.get('hwgen_version')}, this is {__version__}"
+    for p in m.get("parts", []):
+        for f in p.get("files", {}).values():
+            if not (folder / f["path"]).exists():
+                return f"{f['path']} is missing"
+    for f in m.get("files", {}).values():
+        if not (folder / f["path"]).exists():
+            return f"{f['path']} is missing"
+    return None
 
 
 def _write_all(loaded: LoadedDesign, plan: Plan, folder: Path, total: int, progress) -> dict:

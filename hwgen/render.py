@@ -754,7 +754,7 @@ def render_design(loaded, out_root: Path) -> tuple[dict, Path, str | None]:
     parameters or another hwgen version; otherwise draws into the existing folder and rewrites
     its manifest. Returns (the manifest's render entry, the folder, why it was rebuilt or None).
     """
-    from .checks.run import stale_reason
+    from .build import stale_reason
     from .design import plan as make_plan
     from .export import write_json
 

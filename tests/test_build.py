@@ -5,7 +5,6 @@ import json
 
 import numpy as np
 import pytest
-import trimesh
 
 from hwgen.checks.measure import disk_mid_section, load_mesh, section_loops
 from hwgen.params import load

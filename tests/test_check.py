@@ -16,7 +16,8 @@ import yaml
 from hwgen import assembly
 from hwgen.build import build
 from hwgen.checks.clearances import segment_distance
-from hwgen.checks.run import run_checks, stale_reason
+from hwgen.build import stale_reason
+from hwgen.checks.run import run_checks
 from hwgen.design import plan as make_plan
 from hwgen.export import sha256
 from hwgen.params import load

@@ -227,38 +227,16 @@ def post_build(plan, folder: Path, manifest: dict) -> None:
     write_outputs(report, folder)
 
 
-def stale_reason(folder: Path, loaded) -> str | None:
-    """Why the outputs in ``folder`` cannot be checked as they are (None: they can)."""
-    mpath = folder / "manifest.json"
-    if not mpath.exists():
-        return "no outputs yet"
-    try:
-        m = json.loads(mpath.read_text())
-    except (OSError, ValueError):
-        return "manifest.json is unreadable"
-    if m.get("params_sha256") != loaded.sha256:
-        return "built from other parameters"
-    if m.get("hwgen_version") != __version__:
-        return f"built by hwgen {m.get('hwgen_version')}, this is {__version__}"
-    for p in m.get("parts", []):
-        for f in p.get("files", {}).values():
-            if not (folder / f["path"]).exists():
-                return f"{f['path']} is missing"
-    for f in m.get("files", {}).values():
-        if not (folder / f["path"]).exists():
-            return f"{f['path']} is missing"
-    return None
-
-
 def check_design(loaded, out_root: Path, progress=None) -> tuple[dict, Path, str | None]:
     """Build if needed, then check. Returns (report, folder, why it was rebuilt or None)."""
     from ..design import plan as make_plan
     from .measure import read_manifest
 
+    from ..build import build, stale_reason
+
     folder = Path(out_root) / loaded.design.design
     why = stale_reason(folder, loaded)
     if why is not None:
-        from ..build import build
         build(loaded, Path(out_root), progress)
         return json.loads((folder / REPORT).read_text()), folder, why
     return run_checks(folder, read_manifest(folder), make_plan(loaded.design)), folder, None
