@@ -244,7 +244,7 @@ def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: d
     svg = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0f}" height="{height:.0f}" '
            f'viewBox="0 0 {width:.1f} {height:.1f}" font-family="{FONT}">',
            f'<title>{escape(title)}</title>',
-           f'<rect width="100%" height="100%" fill="#fff"/>',
+           '<rect width="100%" height="100%" fill="#fff"/>',
            f'<text x="{margin}" y="{margin + 10}" font-size="18" font-weight="bold">{escape(title)}</text>',
            f'<text x="{margin}" y="{margin + 30}" font-size="11" fill="#444">Hidden lines removed; parallel '
            f'projection, the view of exploded.png; balloons number the part families of the table.</text>',
