@@ -10,16 +10,14 @@ Printed parts are the manifest's parts, one row per file, grouped by family (the
   from the geometry), otherwise from eq. (2) at zero curvature on the design report's eyelets;
 * screws and nuts for the tip-mount bolt pattern, sized from the clearance holes;
 * hardware a part lists in its manifest entry as ``"hardware": [{"item", "qty", "size",
-  "material", "notes"}]``, summed over parts; and the tensioner's own words for it (the
-  entries ``dowels_mm``, ``screw``, ``mount``, ``strip_clamp``: "4 x M3 heat-set inserts, ...",
-  "ISO 2338 3 x 10"), summed by identical text, a leading "N x " read as the quantity.
+  "material", "notes"}]``, summed over parts by item and size. An entry marked
+  ``"tip_mount": true`` is what takes the tip disk's screws, so no nuts are listed for them.
 """
 from __future__ import annotations
 
 import csv
 import io
 import json
-import re
 from pathlib import Path
 
 import numpy as np
@@ -32,12 +30,12 @@ REPORT = "report.json"             # written by the checks step, read here when 
 # ISO 273 "normal" clearance holes: hole diameter -> metric thread it clears.
 ISO273_NORMAL = {2.4: "M2", 2.9: "M2.5", 3.4: "M3", 4.5: "M4", 5.5: "M5", 6.6: "M6", 9.0: "M8"}
 CLEARANCE_MATCH_MM = 0.35          # a hole within this of a table size takes that thread
+SCREW_LENGTHS = (6, 8, 10, 12, 14, 16, 20, 25, 30, 35, 40)   # ISO 4762 preferred lengths, mm
+SCREW_END_MM = 0.5                 # a screw stops this far short of the end of its thread
+TIP_SCREW = "socket head cap screw ISO 4762"   # fastens the tensioner (or a fixture) to the tip disk
 
 FAMILY_LABELS = {"disk": "tendon-support disk", "backbone": "backbone strip"}   # others: the role, spaced
 
-# Manifest entries in which a part names its hardware in words, and what to call each item.
-HARDWARE_TEXT = {"dowels_mm": "dowel pin ", "screw": "", "mount": "", "strip_clamp": ""}
-LEADING_QTY = re.compile(r"^\s*(\d+)\s*[x×]\s+(.+)$")
 
 COLUMNS = ["item", "category", "part", "family", "qty", "material", "size", "volume_mm3",
            "rest_length_mm", "allowance_mm", "cut_length_mm", "file", "notes"]
@@ -151,44 +149,37 @@ def _printed_note(e: dict) -> str:
 
 
 def _fasteners(manifest: dict) -> list[tuple[str, int, str, str, str]]:
-    """Screws and nuts of the tip mount, then hardware the parts list, summed by (item, size)."""
-    out: list[tuple[str, int, str, str, str]] = []
+    """Screws (and nuts) of the tip mount and the hardware the parts list, summed by (item, size)."""
     tip = max(manifest["design_report"]["disks"], key=lambda d: d["index"], default=None)
     mounts = tip.get("mount_holes", []) if tip else []
-    housing_says = any("mount" in e for e in manifest["parts"])   # the housing names what takes the screws
+    # a part that lists what takes the tip screws (the tensioner's inserts) makes nuts unneeded
+    takes = [h for e in manifest["parts"] for h in e.get("hardware", []) or [] if h.get("tip_mount")]
+    listed: list[tuple[dict, str]] = []          # (hardware line, who needs it)
     if mounts:
         dia = mounts[0][2]
         thread = thread_for_hole(dia) or f"screw for Ø{dia:g} mm holes"
         grip = tip["thickness_mm"]
-        out.append((f"{thread} socket head cap screw", len(mounts), f"{thread} × ({grip:g} mm + housing flange)",
-                    "steel, A2 stainless or 8.8", "fastens the tensioner housing to the tip disk"))
-        if not housing_says:
-            out.append((f"{thread} hex nut or heat-set insert", len(mounts), thread, "steel / brass insert",
-                        "nut under the tip disk, or an insert melted into the housing"))
-    words: dict[str, list] = {}
-    for e in manifest["parts"]:
-        for key, prefix in HARDWARE_TEXT.items():
-            vals = e.get(key)
-            for text in ([vals] if isinstance(vals, str) else vals if isinstance(vals, list) else []):
-                m = LEADING_QTY.match(str(text))
-                qty, what = (int(m[1]), m[2]) if m else (1, str(text))
-                item = prefix + what
-                words.setdefault(item, [0, []])
-                words[item][0] += qty
-                words[item][1].append(e["name"])
-    for item, (qty, users) in words.items():
-        out.append((item, qty, "", "", "for " + _names(sorted(set(users)))))
+        depth = takes[0].get("thread_depth_mm") if takes else None
+        if depth:   # longest standard screw that stops short of the insert's far end
+            fits = [n for n in SCREW_LENGTHS if grip < n <= grip + depth - SCREW_END_MM]
+            size = f"{thread} × {max(fits)}" if fits else f"{thread} × ({grip:g} mm + up to {depth:g} mm)"
+        else:
+            size = f"{thread} × ({grip:g} mm + nut)"
+        listed.append(({"item": TIP_SCREW, "size": size, "qty": len(mounts), "material": "steel"},
+                       "the tip disk's bolt pattern"))
+        if not takes:
+            listed.append(({"item": "hex nut ISO 4032 or heat-set insert", "size": thread, "qty": len(mounts),
+                            "material": "steel / brass"}, "the tip disk's bolt pattern"))
+    listed += [(h, e["name"]) for e in manifest["parts"] for h in e.get("hardware", []) or []]
     summed: dict[tuple[str, str], list] = {}
-    for e in manifest["parts"]:
-        for h in e.get("hardware", []) or []:
-            key = (str(h.get("item", "hardware")), str(h.get("size", "")))
-            if key not in summed:
-                summed[key] = [0, str(h.get("material", "")), set()]
-            summed[key][0] += int(h.get("qty", 1))
-            summed[key][2].add(e["name"])
-    for (item, size), (qty, material, users) in summed.items():
-        out.append((item, qty, size, material, "for " + _names(sorted(users))))
-    return out
+    for h, user in listed:
+        key = (str(h.get("item", "hardware")), str(h.get("size", "")))
+        if key not in summed:
+            summed[key] = [0, str(h.get("material", "")), set()]
+        summed[key][0] += int(h.get("qty", 1))
+        summed[key][2].add(user)
+    return [(item, qty, size, material, "for " + _names(sorted(users)))
+            for (item, size), (qty, material, users) in summed.items()]
 
 
 def _names(names: list[str]) -> str:

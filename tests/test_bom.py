@@ -112,8 +112,8 @@ def test_allowances_are_parameters(proto, tmp_path):
 def test_fasteners_from_the_tip_mount_and_part_hardware(proto, tmp_path):
     folder, _, rows, d = proto
     n = len(d.disks.tip_mount.positions)
-    screws = [r for r in rows if r["family"] == "hardware" and r["part"].endswith("socket head cap screw")]
-    assert len(screws) == 1 and int(screws[0]["qty"]) == n and screws[0]["part"].startswith("M3")
+    screws = [r for r in rows if r["family"] == "hardware" and r["part"] == bom.TIP_SCREW]
+    assert len(screws) == 1 and int(screws[0]["qty"]) >= n and screws[0]["size"].startswith("M3")
     m = _copy(folder, tmp_path)
     for p, k in zip(m["parts"][:3], (1, 2, 3)):
         p["hardware"] = [{"item": "dowel pin", "size": "Ø3 × 16", "qty": k, "material": "steel"}]
@@ -129,21 +129,34 @@ def test_thread_from_clearance_hole():
     assert bom.thread_for_hole(12.0) is None
 
 
-def test_hardware_in_the_parts_own_words(proto, tmp_path):
-    """The tensioner names its pins, screws and inserts in words; the BOM sums them by text."""
-    folder, _, _, d = proto
-    m = _copy(folder, tmp_path)
-    for p in m["parts"]:                         # start from parts that say nothing
-        for key in bom.HARDWARE_TEXT:
-            p.pop(key, None)
-    rows, _ = bom.bom_rows(tmp_path, m, d)
-    assert any("nut" in r["part"] for r in rows if r["family"] == "hardware")
-    m["parts"][0]["dowels_mm"] = ["ISO 2338 3 x 10", "ISO 2338 3 x 14"]
-    m["parts"][1]["dowels_mm"] = ["ISO 2338 3 x 10"]
-    m["parts"][2]["mount"] = "4 x M3 heat-set inserts, screws from the tip disk's inner face"
-    rows, _ = bom.bom_rows(tmp_path, m, d)
-    hw = {r["part"]: int(r["qty"]) for r in rows if r["family"] == "hardware"}
-    assert hw["dowel pin ISO 2338 3 x 10"] == 2 and hw["dowel pin ISO 2338 3 x 14"] == 1
-    assert hw["M3 heat-set inserts, screws from the tip disk's inner face"] == 4
-    assert not any("nut" in k for k in hw)       # the housing says what takes the tip screws
-    assert hw["M3 socket head cap screw"] == len(d.disks.tip_mount.positions)
+def test_tensioner_hardware_matches_its_parts(proto, tmp_path):
+    """Counts follow from which parts exist: a dowel per worm and two per wheel, two M3 screws
+    and inserts per worm cap, an M2 screw and insert per clamp, inserts for the tip screws."""
+    folder, m, rows, d = proto
+    roles = [p["role"] for p in m["parts"]]
+    worms, wheels, caps, clamps = (roles.count(f"tensioner_{r}") for r in ("worm", "wheel", "cap", "clamp"))
+    assert worms == wheels == caps == len(d.tensioner.channels) and clamps >= wheels
+    hw: dict[tuple[str, str], int] = {}
+    for r in rows:
+        if r["family"] == "hardware":
+            hw[(r["part"], r["size"])] = hw.get((r["part"], r["size"]), 0) + int(r["qty"])
+    assert len(hw) == len([r for r in rows if r["family"] == "hardware"])   # one row per item and size
+    dowels = sum(q for (item, _), q in hw.items() if item.startswith("dowel pin"))
+    assert dowels == worms + 2 * wheels
+    n_tip = len(d.disks.tip_mount.positions)
+    # one line for every M3 × 10 cap screw: two per worm cap, and the tip disk's pattern
+    assert hw[(bom.TIP_SCREW, "M3 × 10")] == 2 * caps + n_tip
+    assert hw[("button head screw ISO 7380", "M2 × 6")] == clamps
+    assert hw[("heat-set insert", "M2 × 4")] == clamps
+    assert hw[("heat-set insert", "M3 × 5.7")] == 2 * caps + n_tip + 2      # caps, tip screws, strip set screws
+    assert not any("nut" in item for item, _ in hw)   # the housing's inserts take the tip screws
+    (size,) = [size for item, size in hw if item == bom.TIP_SCREW]
+    length = float(size.split("×")[1])    # through the tip disk, stopping inside the 5.7 mm insert
+    assert d.disks.end_thickness < length <= d.disks.end_thickness + 5.7 - 0.5
+
+    # without the parts' lists, the tip screws need nuts
+    m2 = _copy(folder, tmp_path)
+    for p in m2["parts"]:
+        p.pop("hardware", None)
+    rows2, _ = bom.bom_rows(tmp_path, m2, d)
+    assert any("nut" in r["part"] for r in rows2 if r["family"] == "hardware")

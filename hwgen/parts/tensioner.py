@@ -289,14 +289,15 @@ def build_tensioner(plan: Plan) -> Iterator[Part]:
         wp = lay.worm_placement(u)
         yield Part(f"tensioner_worm_{u.channel}", "tensioner_worm", worm, wp, WORM_COLOR,
                    meta={**meta, "mesh_with": f"tensioner_wheel_{u.channel}", "hex_key_mm": ts.hex_key,
-                         "dowels_mm": [f"ISO 2338 {ts.shaft_diameter:g} x {lay.worm_pin:g}, pressed into the far post"],
+                         "hardware": [_dowel(ts.shaft_diameter, lay.worm_pin, "pressed into the far post")],
                          **pair.summary()})
         screws = cap_screws(lay, u)
         if screws not in caps:
             caps[screws] = cap_solid(lay, list(screws))
         yield Part(f"tensioner_cap_{u.channel}", "tensioner_cap", caps[screws], wp, HOUSING_COLOR,
                    meta={"channel": u.channel,
-                         "screws": "2 x M3 x 10 ISO 4762 into M3 x 5.7 heat-set inserts in the spine"})
+                         "hardware": [_hw("socket head cap screw ISO 4762", "M3 × 10", 2, STEEL),
+                                      _hw("heat-set insert", "M3 × 5.7", 2, BRASS, "melted into the spine")]})
         hp = lay.wheel_placement(u)
         d = plan.design.tendon_material.diameter
         # the run meets its own drum tangentially: the last stretch, where it is closer to the
@@ -309,7 +310,7 @@ def build_tensioner(plan: Plan) -> Iterator[Part]:
                    meta={**meta, "tendon_runs": runs, "winding_radius_mm": lay.winding_radius,
                          "flange_radius_mm": lay.flange_radius, "spool_diameter_mm": 2 * lay.spool_radius,
                          "winding_zones_z_mm": [list(z) for z in u.zones],
-                         "dowels_mm": [f"ISO 2338 {ts.shaft_diameter:g} x {n:g}" for n in u.pins]})
+                         "hardware": [_dowel(ts.shaft_diameter, n, "pressed into the housing") for n in u.pins]})
         rc = clamp_site(lay)
         ang = math.radians(CLAMP_ANGLE)
         for k, (zc, s) in enumerate(u.clamps):
@@ -318,11 +319,28 @@ def build_tensioner(plan: Plan) -> Iterator[Part]:
                                       zf if s > 0 else zf - CLAMP_PLATE[2]])
             name = f"tensioner_clamp_{u.channel}" + (f"_{k + 1}" if len(u.clamps) > 1 else "")
             yield Part(name, "tensioner_clamp", clamp, lay.stack_placement(u) @ t, CLAMP_COLOR,
-                       meta={**meta, "screw": "M2 x 6 ISO 7380 into an M2 x 4 heat-set insert"})
+                       meta={**meta, "hardware": [
+                           _hw("button head screw ISO 7380", "M2 × 6", 1, STEEL),
+                           _hw("heat-set insert", "M2 × 4", 1, BRASS, "melted into the wheel face")]})
     hp = housing_placement(lay)
     robot_solid = housing_solid(lay, plan)
     inv = np.linalg.inv(hp)
     yield Part("tensioner_housing", "tensioner_housing", robot_solid.moved(location(inv)), hp, HOUSING_COLOR,
                meta={"channel": "all", "channels": [u.channel for u in lay.units],
-                     "mount": "4 x M3 heat-set inserts, screws from the tip disk's inner face",
-                     "strip_clamp": "2 x M3 set screws in heat-set inserts"})
+                     "hardware": [
+                         {**_hw("heat-set insert", "M3 × 5.7", len(lay.mount_holes), BRASS,
+                                "takes the tip-disk screws"), "tip_mount": True, "thread_depth_mm": 5.7},
+                         _hw("set screw ISO 4026", "M3 × 6", 2, STEEL, "clamps the strip's tip"),
+                         _hw("heat-set insert", "M3 × 5.7", 2, BRASS, "for the strip's set screws")]})
+
+
+STEEL, BRASS = "steel", "brass"
+
+
+def _hw(item: str, size: str, qty: int, material: str, notes: str = "") -> dict:
+    """One line of purchased hardware, as the bill of materials sums it (by item and size)."""
+    return {"item": item, "size": size, "qty": qty, "material": material, "notes": notes}
+
+
+def _dowel(diameter: float, length: float, notes: str) -> dict:
+    return _hw("dowel pin ISO 2338", f"Ø{diameter:g} × {length:g}", 1, "hardened steel", notes)
