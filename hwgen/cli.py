@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import json
 import sys
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 import typer
@@ -154,11 +154,8 @@ def check(params: Path = PARAMS, out_dir: Path = OUT,
     from .checks.report import print_report, write_json, write_junit
     from .checks.run import check_design
 
-    with err.status(f"checking {loaded.design.design}", spinner="dots") if not quiet else _nothing():
-        with _design_errors(params):
-            rep, folder, rebuilt = check_design(loaded, out_dir)
-    if rebuilt:
-        err.print(f"built {folder} first ({rebuilt})", highlight=False)
+    rep, folder = _on_outputs(params, f"checking {loaded.design.design}", quiet,
+                              lambda: check_design(loaded, out_dir))
     print_report(rep, out, verbose=verbose)
     if report is not None:
         write_json(rep, report)
@@ -178,11 +175,8 @@ def render(params: Path = PARAMS, out_dir: Path = OUT,
     loaded = _load(params)
     from .render import render_design
 
-    with err.status(f"drawing {loaded.design.design}", spinner="dots") if not quiet else _nothing():
-        with _design_errors(params):
-            entry, folder, rebuilt = render_design(loaded, out_dir)
-    if rebuilt:
-        err.print(f"built {folder} first ({rebuilt})", highlight=False)
+    entry, folder = _on_outputs(params, f"drawing {loaded.design.design}", quiet,
+                                lambda: render_design(loaded, out_dir))
     out.print(f"{loaded.design.design}: bom.csv, bom.md written to {folder}", highlight=False)
     if entry.get("status") != "ok":
         err.print(f"[yellow]warning:[/] {entry.get('message', 'pictures not drawn')}", highlight=False)
@@ -192,12 +186,15 @@ def render(params: Path = PARAMS, out_dir: Path = OUT,
         out.print(f"  {folder / name}{size}", highlight=False)
 
 
-class _nothing:
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        return False
+def _on_outputs(params: Path, doing: str, quiet: bool, run):
+    """Run a step on a design's outputs (it builds them first when they are missing or stale):
+    a spinner while it works, design errors reported as bad input, and a word when it rebuilt.
+    ``run()`` returns (result, folder, why it rebuilt or None)."""
+    with err.status(doing, spinner="dots") if not quiet else nullcontext(), _design_errors(params):
+        result, folder, rebuilt = run()
+    if rebuilt:
+        err.print(f"built {folder} first ({rebuilt})", highlight=False)
+    return result, folder
 
 
 @app.command()

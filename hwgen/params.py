@@ -25,6 +25,7 @@ SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
 Length = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 NonNegLength = Annotated[float, Field(ge=0, allow_inf_nan=False)]
 Coord = Annotated[float, Field(allow_inf_nan=False)]
+Finite = Annotated[float, Field(allow_inf_nan=False)]   # a finite number; bounds given per field
 Name = Annotated[str, Field(min_length=1, max_length=64)]
 
 
@@ -155,34 +156,29 @@ class Tensioner(_Model):
 
     channels: tuple[Name, ...] = Field(min_length=1, description="channel names, one worm drive each")
     actuating_channel: Name = Field(description="the channel of the actuating (antagonistic) tendons")
-    module: float = Field(1.25, ge=0.3, le=3.0, allow_inf_nan=False,
+    module: Finite = Field(1.25, ge=0.3, le=3.0,
                           description="axial module of the worm = transverse module of the wheel, mm")
     worm_starts: int = Field(1, ge=1, le=4, description="thread starts z1 of the worm")
     wheel_teeth: int = Field(24, ge=6, le=120, description="teeth z2 of the worm wheel")
-    worm_pitch_diameter: float = Field(14.0, gt=0, le=40, allow_inf_nan=False,
-                                       description="d1: pitch diameter of the worm, mm")
-    pressure_angle_deg: float = Field(20.0, ge=10, le=30, allow_inf_nan=False,
-                                      description="axial pressure angle of the worm thread, deg")
-    face_width: float = Field(8.0, gt=0, le=30, allow_inf_nan=False, description="face width of the wheel, mm")
-    worm_length: float = Field(24.0, gt=0, le=60, allow_inf_nan=False, description="threaded length of the worm, mm")
-    backlash: float = Field(0.1, ge=0, le=0.5, allow_inf_nan=False,
-                            description="added to the centre distance (d1 + d2)/2, mm")
-    friction_coefficient: float = Field(0.1, gt=0, le=1, allow_inf_nan=False,
-                                        description="μ of the worm/wheel material pair (self-locking needs lead angle < atan μ)")
-    spool_diameter: float = Field(10.0, gt=0, le=40, allow_inf_nan=False,
-                                  description="diameter of the spool core the tendon winds on, mm")
-    resin_strength: float = Field(35.0, gt=0, le=200, allow_inf_nan=False,
-                                  description="tensile strength of the printed resin, MPa")
-    safety_factor: float = Field(2.0, ge=1, le=10, allow_inf_nan=False,
-                                 description="required ratio of resin strength to the Lewis tooth stress at the tendon break load")
-    hex_key: float = Field(2.5, gt=0, le=6, allow_inf_nan=False,
-                           description="across-flats of the hex key that turns each worm, mm")
-    shaft_diameter: float = Field(3.0, gt=0, le=6, allow_inf_nan=False,
-                                  description="diameter of the ISO 2338 dowel pins the wheels and worms turn on, mm")
-    press_fit: float = Field(0.05, ge=0, le=0.3, allow_inf_nan=False,
-                             description="diametral interference of a pin pressed into a printed bore, mm")
-    running_fit: float = Field(0.2, ge=0, le=0.6, allow_inf_nan=False,
-                               description="diametral clearance of a printed part turning on a pin or in a bore, mm")
+    worm_pitch_diameter: Finite = Field(14.0, gt=0, le=40, description="d1: pitch diameter of the worm, mm")
+    pressure_angle_deg: Finite = Field(20.0, ge=10, le=30, description="axial pressure angle of the worm thread, deg")
+    face_width: Finite = Field(8.0, gt=0, le=30, description="face width of the wheel, mm")
+    worm_length: Finite = Field(24.0, gt=0, le=60, description="threaded length of the worm, mm")
+    backlash: Finite = Field(0.1, ge=0, le=0.5, description="added to the centre distance (d1 + d2)/2, mm")
+    friction_coefficient: Finite = Field(0.1, gt=0, le=1,
+                          description="μ of the worm/wheel material pair (self-locking needs lead angle < atan μ)")
+    spool_diameter: Finite = Field(10.0, gt=0, le=40,
+                          description="diameter of the spool core the tendon winds on, mm")
+    resin_strength: Finite = Field(35.0, gt=0, le=200, description="tensile strength of the printed resin, MPa")
+    safety_factor: Finite = Field(2.0, ge=1, le=10,
+                          description="required ratio of resin strength to the Lewis tooth stress at the tendon break load")
+    hex_key: Finite = Field(2.5, gt=0, le=6, description="across-flats of the hex key that turns each worm, mm")
+    shaft_diameter: Finite = Field(3.0, gt=0, le=6,
+                          description="diameter of the ISO 2338 dowel pins the wheels and worms turn on, mm")
+    press_fit: Finite = Field(0.05, ge=0, le=0.3,
+                          description="diametral interference of a pin pressed into a printed bore, mm")
+    running_fit: Finite = Field(0.2, ge=0, le=0.6,
+                          description="diametral clearance of a printed part turning on a pin or in a bore, mm")
 
 
 class CheckSettings(_Model):
