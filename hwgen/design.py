@@ -131,10 +131,20 @@ def _rest_axes(design: Design, path: TendonPath) -> np.ndarray:
     return s / np.linalg.norm(s, axis=1, keepdims=True)
 
 
-def _worst_angles(design: Design, path: TendonPath, axes: np.ndarray) -> np.ndarray:
+Sweep = tuple[np.ndarray, np.ndarray]   # a tendon's (into, out_of) directions per disk over the sweep
+
+
+def _sweeps(design: Design, paths: list[TendonPath]) -> dict[str, Sweep]:
+    """Each tendon's segment directions at every disk over the bending sweep; they do not
+    depend on any eyelet axis, so they are computed once per plan."""
+    kappa = _sweep(design)
+    return {p.name: kin.segment_directions_local(design.stations, p.points, kappa) for p in paths}
+
+
+def _worst_angles(sweep: Sweep, axes: np.ndarray) -> np.ndarray:
     """(N,) largest angle between the tendon and the given axes over the sweep, rad."""
-    into, out = kin.segment_directions_local(design.stations, path.points, _sweep(design))
-    worst = np.zeros(len(path.points))
+    into, out = sweep
+    worst = np.zeros(into.shape[1])
     for seg in (into, out):
         cos = np.abs(np.einsum("kni,ni->kn", seg, axes))
         ang = np.arccos(np.clip(cos, -1, 1))
@@ -143,12 +153,15 @@ def _worst_angles(design: Design, path: TendonPath, axes: np.ndarray) -> np.ndar
 
 
 def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, np.ndarray],
-               exits: dict[str, np.ndarray] | None = None) -> tuple[DiskSpec, list[Merge]]:
+               exits: dict[str, np.ndarray] | None = None,
+               sweeps: dict[str, Sweep] | None = None) -> tuple[DiskSpec, list[Merge]]:
     """Disk i with a hole per eyelet position, and its shared and overlapping eyelets.
 
     ``exits`` (tip disk only): each tendon's direction onward from the disk in its frame,
     toward the tensioner, which is fixed to the tip and so does not turn with bending.
+    ``sweeps``: the tendons' directions over the sweep, when the caller already has them.
     """
+    sweeps = sweeps if sweeps is not None else _sweeps(d, paths)
     n = len(d.stations)
     dk, proc = d.disks, d.process
     slot_w = d.backbone.height + 2 * dk.slot_clearance
@@ -169,7 +182,7 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
         own = [rest_axes[p.name][i] + exits.get(p.name, 0.0) for p in g]
         ax = np.sum([v / np.linalg.norm(v) for v in own], axis=0)
         ax /= np.linalg.norm(ax)
-        alpha = max(_worst_angles(d, p, np.tile(ax, (n, 1)))[i] for p in g)
+        alpha = max(_worst_angles(sweeps[p.name], np.tile(ax, (n, 1)))[i] for p in g)
         for p in g:
             if p.name in exits:
                 alpha = max(alpha, float(np.arccos(np.clip(abs(exits[p.name] @ ax), 0, 1))))
@@ -207,12 +220,13 @@ def plan(design: Design) -> Plan:
     d = design
     paths = tendon_paths(d)
     rest_axes = {p.name: _rest_axes(d, p) for p in paths}
+    sweeps = _sweeps(d, paths)
     disks, merges = [], []
     for i in range(len(d.stations)):
-        spec, m = _disk_spec(d, i, paths, rest_axes)
+        spec, m = _disk_spec(d, i, paths, rest_axes, sweeps=sweeps)
         disks.append(spec)
         merges += m
-    bb_holes, findings = _backbone_holes(d, paths, disks)
+    bb_holes, findings = _backbone_holes(d, paths, disks, sweeps)
     backbone = BackboneSpec(d.backbone.height, d.backbone.thickness, -d.backbone.extra_base,
                             d.backbone.length + d.backbone.extra_tip, tuple(bb_holes))
     first = Plan(d, paths, tuple(disks), backbone, tuple(merges), tuple(findings))
@@ -223,12 +237,12 @@ def plan(design: Design) -> Plan:
     except ValueError as e:
         return replace(first, tensioner_error=str(e))
     exits = {r.tendon: np.subtract(r.end, r.start) / r.length for r in lay.runs}
-    tip, tip_merges = _disk_spec(d, len(disks) - 1, paths, rest_axes, exits)
+    tip, tip_merges = _disk_spec(d, len(disks) - 1, paths, rest_axes, exits, sweeps)
     merges = [m for m in merges if m.station != tip.index] + tip_merges
     return replace(first, disks=(*disks[:-1], tip), merges=tuple(merges), tensioner=lay)
 
 
-def _strip_crossing_angle(design: Design, path: TendonPath, station: float) -> float:
+def _strip_crossing_angle(design: Design, path: TendonPath, station: float, sweep: Sweep) -> float:
     """Worst angle (rad) between the tendon and the strip's normal where it crosses, over the sweep.
 
     At a disk both segments count; between disks the chord is compared with the normal of the
@@ -238,7 +252,7 @@ def _strip_crossing_angle(design: Design, path: TendonPath, station: float) -> f
     """
     normal = np.array([0.0, 0.0, 1.0])
     if float(station).is_integer():
-        return float(_worst_angles(design, path, np.tile(normal, (len(path.points), 1)))[int(station)])
+        return float(_worst_angles(sweep, np.tile(normal, (len(path.points), 1)))[int(station)])
     kappa = _sweep(design)
     i = int(station)
     st = design.stations
@@ -250,7 +264,7 @@ def _strip_crossing_angle(design: Design, path: TendonPath, station: float) -> f
     return float(np.arccos(np.clip(cos, 0, 1)).max())
 
 
-def _backbone_holes(d: Design, paths: list[TendonPath], disks: list[DiskSpec]):
+def _backbone_holes(d: Design, paths: list[TendonPath], disks: list[DiskSpec], sweeps: dict[str, Sweep]):
     """Holes the strip needs where tendons cross its plane (z = 0) within its height,
     each sized for the steepest angle the tendon meets the strip at over the sweep."""
     half_h = d.backbone.height / 2
@@ -258,7 +272,7 @@ def _backbone_holes(d: Design, paths: list[TendonPath], disks: list[DiskSpec]):
     out, findings = [], []
 
     def strip_hole(p: TendonPath, station: float, x: float, y: float) -> BackboneHole:
-        beta = _strip_crossing_angle(d, p, station)
+        beta = _strip_crossing_angle(d, p, station, sweeps[p.name])
         dia = hole_diameter(d.tendon_material.diameter, d.backbone.thickness, beta,
                             d.process.hole_clearance, d.process.min_hole)
         return BackboneHole(p.name, float(station), float(x), float(y), float(dia))
