@@ -28,7 +28,7 @@ def timed(label: str, note: str = ""):
 
 def _cut_one_by_one(spec):
     """The slow way, for comparison: the same blank and tools, one boolean per tool."""
-    from hwgen.parts.disk import blank_and_tools
+    from hwgen.cad.disk import blank_and_tools
     body, tools = blank_and_tools(spec)
     for tool in tools:
         body = body.cut(tool)
@@ -37,16 +37,17 @@ def _cut_one_by_one(spec):
 
 def main(argv: list[str]) -> None:
     params_path = Path(argv[0]) if argv else Path("params/prototype.yaml")
-    with timed("import numpy, pydantic, yaml (schema, routing)"):
-        from hwgen import design, params
+    with timed("import numpy, pydantic, yaml (schema, model)"):
+        from hwgen import pipeline
+        from hwgen.model.plan import plan as make_plan
     with timed("import cadquery", "a command that builds no solid skips this"):
         import cadquery  # noqa: F401
     with timed("load + validate YAML"):
-        loaded = params.load(params_path)
+        loaded = pipeline.load(params_path)
     with timed("plan: eyelets sized over the sweep", "numpy, all tendons and stations"):
-        plan = design.plan(loaded.design)
-    from hwgen.export import write_step, write_stl
-    from hwgen.parts.disk import build_disk
+        plan = make_plan(loaded.design)
+    from hwgen.cad.disk import build_disk
+    from hwgen.cad.export import write_step, write_stl
     disks = []
     with timed(f"build {len(plan.disks)} disks", "one face extruded once + one cut"):
         for s in plan.disks:
@@ -61,10 +62,10 @@ def main(argv: list[str]) -> None:
         with timed(f"export {len(disks)} disks STEP"):
             for p in disks:
                 write_step(p.solid, Path(tmp) / f"{p.name}.step")
-        from hwgen.build import build
+        build = pipeline.build
         with timed("hwgen build, parts and files only", "no post-build steps"):
             build(loaded, Path(tmp) / "a", post_build=False)
-        with timed("hwgen build, everything", "with checks and renders where registered"):
+        with timed("hwgen build, everything", "with checks, bill of materials and pictures"):
             build(loaded, Path(tmp) / "b")
 
     t = Table(title=f"hwgen benchmark: {params_path}")

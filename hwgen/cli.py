@@ -1,4 +1,4 @@
-"""The `hwgen` command line: build, routing, schema.
+"""The `hwgen` command line: build, check, render, routing, schema.
 
 Exit codes: 0 success, 1 design findings that fail, 2 bad input or usage.
 """
@@ -13,7 +13,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from .params import InputError, load
+from .errors import DesignError, InputError
 
 EXIT_OK, EXIT_FINDINGS, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -38,16 +38,19 @@ def _bad_input(file, path: str, message: str) -> typer.Exit:
 
 
 def _load(path: Path):
+    from .pipeline import load
     try:
-        return load(path)
+        loaded = load(path)
     except InputError as e:
         raise _bad_input(e.file, e.path, e.message) from None
+    for w in loaded.warnings:
+        err.print(f"[yellow]warning:[/] {w}", highlight=False, soft_wrap=True)
+    return loaded
 
 
 @contextmanager
 def _design_errors(params: Path):
     """Parameters that pass the schema but make no buildable part are bad input too."""
-    from .design import DesignError
     try:
         yield
     except DesignError as e:
@@ -61,7 +64,7 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
     loaded = _load(params)
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from .build import build as run_build
+    from .pipeline import build as run_build
 
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                   console=err, disable=quiet, transient=True) as bar:
@@ -91,13 +94,13 @@ def routing(params: Path = PARAMS,
             as_json: bool = typer.Option(False, "--json", help="print JSON instead of tables")) -> None:
     """The eyelet table per station and tendon, merges, backbone crossings and table deviations."""
     loaded = _load(params)
-    from .design import plan as make_plan
-    from .routing import table_deviations
+    from .model.plan import plan as make_plan
+    from .model.routing import table_deviations
 
     plan = make_plan(loaded.design)
     devs = table_deviations(plan.paths)
     if as_json:
-        from .export import design_report
+        from .cad.manifest import design_report
         rep = design_report(plan)
         rep["deviations"] = [{"tendon": d.tendon, "station": d.station, "table": d.table,
                               "function": d.function, "distance_mm": d.distance} for d in devs]
@@ -151,14 +154,15 @@ def check(params: Path = PARAMS, out_dir: Path = OUT,
     Builds first only when the outputs are missing or made from other parameters; part files edited since the build are measured as they are. Exit 1 when a check fails.
     """
     loaded = _load(params)
-    from .checks.report import print_report, write_json, write_junit
-    from .checks.run import check_design
+    from .atomic import write_json
+    from .checks.report import print_report, write_junit
+    from .pipeline import check as check_design
 
     rep, folder = _on_outputs(params, f"checking {loaded.design.design}", quiet,
                               lambda: check_design(loaded, out_dir))
     print_report(rep, out, verbose=verbose)
     if report is not None:
-        write_json(rep, report)
+        write_json(report, rep)
     if junit is not None:
         write_junit(rep, junit)
     if not rep["ok"]:
@@ -173,7 +177,7 @@ def render(params: Path = PARAMS, out_dir: Path = OUT,
     Builds first only when the outputs are missing or made from other parameters. Needs no display or GPU; exit 1 when no offscreen OpenGL backend works (the message says what to install).
     """
     loaded = _load(params)
-    from .render import render_design
+    from .pipeline import render as render_design
 
     entry, folder = _on_outputs(params, f"drawing {loaded.design.design}", quiet,
                                 lambda: render_design(loaded, out_dir))

@@ -4,21 +4,23 @@ Units are millimetres and degrees throughout; every field says so in its descrip
 Coordinates are the paper's: the backbone runs along +y from the base disk at y = 0,
 x spans the backbone's height, z its thickness; positive curvature bends toward +z.
 
-Loading is two passes: pydantic checks each field's type and range, then
-:func:`_check_design` checks what spans fields (station counts, channels, names, eyelets
-inside the disk). Both report through :class:`InputError`, which names the file, the field
-path and what is wrong.
+Reading is two passes: pydantic checks each field's type and range, then
+:func:`_check_design` checks what spans fields (station counts, channels, names). Both report
+through :class:`InputError`, which names the file, the field path and what is wrong. What
+needs the model to decide (eyelets inside the disk, gears that can be made) is checked next,
+by :mod:`hwgen.model.feasibility`; :func:`hwgen.pipeline.load` runs both.
 """
 from __future__ import annotations
 
 import hashlib
-import math
 import re
 from pathlib import Path
 from typing import Annotated, Literal
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from .errors import InputError
 
 SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
 
@@ -27,14 +29,6 @@ NonNegLength = Annotated[float, Field(ge=0, allow_inf_nan=False)]
 Coord = Annotated[float, Field(allow_inf_nan=False)]
 Finite = Annotated[float, Field(allow_inf_nan=False)]   # a finite number; bounds given per field
 Name = Annotated[str, Field(min_length=1, max_length=64)]
-
-
-class InputError(Exception):
-    """Bad input: the file, the field path (``tendons[2].routing.table``) and what is wrong."""
-
-    def __init__(self, file: str | Path, path: str, message: str):
-        self.file, self.path, self.message = str(file), path, message
-        super().__init__(f"{file}: {path or '<document>'}: {message}")
 
 
 class _Model(BaseModel):
@@ -191,13 +185,18 @@ class CheckSettings(_Model):
 
 
 class Render(_Model):
-    """Pictures, drawing and bill of materials (`hwgen render`)."""
+    """Pictures and drawing (`hwgen render`)."""
 
     explode_mm: NonNegLength = Field(20.0, description="exploded views: gap added between neighbouring disks; "
                                                        "other parts move this far from their assembly, mm")
     bend_deg: Annotated[float, Field(ge=-360, le=360, allow_inf_nan=False)] = Field(
         90.0, description="bending angle θ = κL of the bent picture, deg")
     width_px: int = Field(1800, ge=400, le=8000, description="width of the PNG pictures, px")
+
+
+class Bom(_Model):
+    """The bill of materials: what is added to each tendon's rest length when it is cut."""
+
     tie_off_mm: NonNegLength = Field(60.0, description="tendon added at the base for the knot, mm")
     spool_mm: NonNegLength = Field(150.0, description="tendon added at the tip to reach and wrap the tensioner, mm")
 
@@ -211,7 +210,8 @@ class Design(_Model):
     tensioner: Tensioner
     tendons: tuple[Tendon, ...] = Field(min_length=1)
     check: CheckSettings = Field(default_factory=CheckSettings, description="validation sweep and tolerances")
-    render: Render = Field(default_factory=Render, description="pictures, drawing and bill of materials")
+    render: Render = Field(default_factory=Render, description="pictures and drawing")
+    bom: Bom = Field(default_factory=Bom, description="bill of materials: tendon cut allowances")
 
     @property
     def stations(self) -> tuple[float, ...]:
@@ -222,11 +222,12 @@ class Design(_Model):
 
 
 class LoadedDesign(_Model):
-    """A validated design and where it came from."""
+    """A validated design, where it came from, and what the reader warns about (deprecated keys)."""
 
     design: Design
     source: str
     sha256: str
+    warnings: tuple[str, ...] = ()
 
 
 def _path(loc) -> str:
@@ -257,8 +258,30 @@ def _construct_mapping(loader, node, deep=False):
 _UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
 
 
-def load(path: str | Path) -> LoadedDesign:
-    """Read, validate and check a design YAML; raise :class:`InputError` on any fault."""
+# Keys that moved: (old section, key) -> new section. Read from the old place for one release.
+MOVED_KEYS = {("render", "tie_off_mm"): "bom", ("render", "spool_mm"): "bom"}
+
+
+def _move_deprecated(data: dict, path: Path) -> list[str]:
+    """Move keys from their old section to their new one; a warning for each, an error if given twice."""
+    warnings = []
+    for (old, key), new in MOVED_KEYS.items():
+        section = data.get(old)
+        if not isinstance(section, dict) or key not in section:
+            continue
+        target = data.setdefault(new, {})
+        if not isinstance(target, dict):
+            continue          # the schema reports the malformed section
+        if key in target:
+            raise InputError(path, f"{old}.{key}", f"given here and as {new}.{key}; keep only {new}.{key}")
+        target[key] = section.pop(key)
+        warnings.append(f"{path}: {old}.{key} is deprecated, move it to {new}.{key} "
+                        f"(read from {old}: for this release only)")
+    return warnings
+
+
+def read(path: str | Path) -> LoadedDesign:
+    """Read a design YAML and check it against the schema; raise :class:`InputError` on any fault."""
     path = Path(path)
     try:
         raw = path.read_bytes()
@@ -275,6 +298,7 @@ def load(path: str | Path) -> LoadedDesign:
         raise InputError(path, "", f"YAML syntax: {where}{problem}") from None
     if not isinstance(data, dict):
         raise InputError(path, "", "the document must be a mapping of sections (design, backbone, disks, ...)")
+    warnings = _move_deprecated(data, path)
     try:
         design = Design.model_validate(data)
     except ValidationError as e:
@@ -288,7 +312,8 @@ def load(path: str | Path) -> LoadedDesign:
         extra = f" (and {len(e.errors()) - 1} more)" if len(e.errors()) > 1 else ""
         raise InputError(path, _path(loc), msg + extra) from None
     _check_design(design, path)
-    return LoadedDesign(design=design, source=str(path), sha256=hashlib.sha256(raw).hexdigest())
+    return LoadedDesign(design=design, source=str(path), sha256=hashlib.sha256(raw).hexdigest(),
+                        warnings=tuple(warnings))
 
 
 def _check_design(d: Design, file: Path) -> None:
@@ -327,21 +352,8 @@ def _check_design(d: Design, file: Path) -> None:
     if d.tensioner.actuating_channel not in channels:
         raise InputError(file, "tensioner.actuating_channel",
                          f"{d.tensioner.actuating_channel!r} is not one of the channels {list(channels)}")
-    from .gears import worm_pair  # local: gears is numpy only but keep the import graph one-way
-    ts = d.tensioner
-    for field_name, msg in worm_pair(ts).problems(ts.friction_coefficient, d.process.min_wall):
-        raise InputError(file, f"tensioner.{field_name}", msg)
-    if ts.spool_diameter < ts.shaft_diameter + ts.running_fit + 2 * d.process.min_wall:
-        raise InputError(file, "tensioner.spool_diameter",
-                         f"{ts.spool_diameter:g} mm leaves less than {d.process.min_wall:g} mm of wall around "
-                         f"the Ø{ts.shaft_diameter:g} mm pin's bore")
-    if ts.hex_key / math.cos(math.pi / 6) + 2 * d.process.min_wall >= ts.worm_pitch_diameter - 2.5 * ts.module:
-        raise InputError(file, "tensioner.hex_key",
-                         f"a {ts.hex_key:g} mm hex socket does not fit in the worm's core "
-                         f"({ts.worm_pitch_diameter - 2.5 * ts.module:g} mm) with {d.process.min_wall:g} mm walls")
 
     names: dict[str, str] = {}
-    r_out = d.disks.outer_diameter / 2
     for i, t in enumerate(d.tendons):
         where = f"tendons[{i}]"
         own = [(t.name, f"{where}.name")]
@@ -359,15 +371,6 @@ def _check_design(d: Design, file: Path) -> None:
         if t.routing.table is not None and len(t.routing.table) != n:
             raise InputError(file, f"{where}.routing.table",
                              f"has {len(t.routing.table)} rows, there are {n} stations")
-        # eyelet positions as the geometry will use them (table first, else the function)
-        from .routing import sample_function  # local: routing imports this module
-        pts = t.routing.table if t.routing.table is not None else sample_function(
-            t.routing.function, d.stations, d.backbone.length)
-        for j, (x, z) in enumerate(pts):
-            if math.hypot(x, z) >= r_out:
-                p = f"{where}.routing.table[{j}]" if t.routing.table is not None else f"{where}.routing.function"
-                raise InputError(file, p, f"eyelet at station {j} (x={x:g}, z={z:g}) lies outside "
-                                          f"the disk (radius {r_out:g} mm)")
 
 
 def json_schema() -> dict:

@@ -12,8 +12,7 @@ PARAMS = ROOT / "params"
 @pytest.fixture(scope="session")
 def built(tmp_path_factory):
     """build(name) -> output folder of params/<name>.yaml, built once per session."""
-    from hwgen.build import build
-    from hwgen.params import load
+    from hwgen.pipeline import build, load
 
     cache: dict[str, Path] = {}
     root = tmp_path_factory.mktemp("out")

@@ -50,8 +50,8 @@ CASES = {
 @pytest.fixture(scope="module")
 def previous_output(tmp_path_factory):
     """An out folder holding an earlier build; bad input must leave it byte for byte."""
-    from hwgen.build import build
-    from hwgen.params import load
+    from hwgen.pipeline import build
+    from hwgen.pipeline import load
     out = tmp_path_factory.mktemp("out")
     build(load(PARAMS / "prototype.yaml"), out, post_build=False)
     return out

@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hwgen import bom
-from hwgen import kinematics as kin
-from hwgen.params import load
+from hwgen.outputs import bom
+from hwgen.model import kinematics as kin
+from hwgen.pipeline import load
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -60,7 +60,7 @@ def test_tendon_cut_lengths_follow_the_validator(proto):
     rest = {t["name"]: t["rest_length_mm"] for t in report["tendons"]}
     tendons = {r["part"].removeprefix("tendon "): r for r in rows if r["family"] == "tendon"}
     assert set(tendons) == {t["name"] for t in m["design_report"]["tendons"]}
-    allowance = d.render.tie_off_mm + d.render.spool_mm
+    allowance = d.bom.tie_off_mm + d.bom.spool_mm
     for name, r in tendons.items():
         assert float(r["rest_length_mm"]) == pytest.approx(rest[name], abs=0.005)
         assert float(r["cut_length_mm"]) == pytest.approx(rest[name] + allowance, abs=0.06)
@@ -93,7 +93,7 @@ def test_rest_lengths_come_from_the_report_when_there_is_one(proto, tmp_path):
     rows, source = bom.bom_rows(tmp_path, m, d)
     assert source.startswith("report.json")
     cut = [float(r["cut_length_mm"]) for r in rows if r["family"] == "tendon"]
-    allowance = d.render.tie_off_mm + d.render.spool_mm
+    allowance = d.bom.tie_off_mm + d.bom.spool_mm
     assert cut == pytest.approx([100.0 + i + allowance for i in range(len(cut))])
 
 
@@ -101,7 +101,7 @@ def test_allowances_are_parameters(proto, tmp_path):
     folder, _, rows0, d = proto
     m = _copy(folder, tmp_path)
     shutil.copy(folder / "report.json", tmp_path)
-    d2 = d.model_copy(update={"render": d.render.model_copy(update={"tie_off_mm": 10.0, "spool_mm": 5.0})})
+    d2 = d.model_copy(update={"bom": d.bom.model_copy(update={"tie_off_mm": 10.0, "spool_mm": 5.0})})
     rows, _ = bom.bom_rows(tmp_path, m, d2)
     before = {r["part"]: float(r["rest_length_mm"]) for r in rows0 if r["family"] == "tendon"}
     for r in rows:

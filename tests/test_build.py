@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from hwgen.checks.measure import disk_mid_section, load_mesh, section_loops
-from hwgen.params import load
-from hwgen.routing import tendon_paths
+from hwgen.pipeline import load
+from hwgen.model.routing import tendon_paths
 
 from .conftest import PARAMS
 
@@ -148,7 +148,7 @@ def test_backbone_template_and_strip_have_every_crossing(built):
 
 
 def test_failed_build_leaves_previous_outputs(tmp_path, monkeypatch):
-    from hwgen import build as build_mod
+    from hwgen import pipeline as build_mod
     loaded = load(PARAMS / "prototype.yaml")
     first = build_mod.build(loaded, tmp_path, post_build=False).folder
     before = {p.relative_to(tmp_path): p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
@@ -156,7 +156,7 @@ def test_failed_build_leaves_previous_outputs(tmp_path, monkeypatch):
     def boom(plan, folder, manifest):
         raise RuntimeError("simulated failure after the parts were written")
 
-    monkeypatch.setattr(build_mod, "POST_BUILD", [("boom", boom)])
+    monkeypatch.setattr(build_mod, "AFTER_FILES", [("boom", boom)])
     with pytest.raises(RuntimeError):
         build_mod.build(loaded, tmp_path)
     after = {p.relative_to(tmp_path): p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}

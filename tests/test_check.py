@@ -13,14 +13,14 @@ import numpy as np
 import pytest
 import yaml
 
-from hwgen import assembly
-from hwgen.build import build
+from hwgen.cad import families as assembly
+from hwgen.pipeline import build
 from hwgen.checks.clearances import segment_distance
-from hwgen.build import stale_reason
+from hwgen.pipeline import stale_reason
 from hwgen.checks.run import run_checks
-from hwgen.design import plan as make_plan
-from hwgen.export import sha256
-from hwgen.params import load
+from hwgen.model.plan import plan as make_plan
+from hwgen.cad.manifest import sha256
+from hwgen.pipeline import load
 
 from .conftest import PARAMS
 
@@ -128,8 +128,8 @@ def test_staleness_is_inputs_not_outputs(built, tmp_path):
 
 def test_moved_eyelet_in_exported_disk_is_caught(built, tmp_path):
     """A fault the YAML cannot show: disk_05's C2 eyelet drilled 0.05 mm off, its STL replaced."""
-    from hwgen.export import write_stl
-    from hwgen.parts.disk import build_disk
+    from hwgen.cad.export import write_stl
+    from hwgen.cad.disk import build_disk
 
     root, folder = _copy(built, tmp_path)
     plan = make_plan(load(PARAMS / "prototype.yaml").design)
@@ -165,8 +165,8 @@ def test_moved_eyelet_in_exported_disk_is_caught(built, tmp_path):
 def test_hole_too_small_for_tendon_angle(built, tmp_path):
     """disk_01's C2 eyelet (sized Ø1.15 for 16° of tendon angle) made Ø0.85: above the process
     minimum, too small for the angle."""
-    from hwgen.export import write_stl
-    from hwgen.parts.disk import build_disk
+    from hwgen.cad.export import write_stl
+    from hwgen.cad.disk import build_disk
 
     _, folder = _copy(built, tmp_path)
     plan = make_plan(load(PARAMS / "prototype.yaml").design)
@@ -208,8 +208,8 @@ def test_overlapping_parts_named_with_volume(built, tmp_path):
 def test_crossing_without_a_hole(built, tmp_path):
     import ezdxf
 
-    from hwgen.export import write_stl
-    from hwgen.parts.backbone import build_backbone
+    from hwgen.cad.export import write_stl
+    from hwgen.cad.backbone import build_backbone
 
     _, folder = _copy(built, tmp_path)
     dxf = folder / "backbone_template.dxf"
@@ -240,8 +240,8 @@ def test_crossing_without_a_hole(built, tmp_path):
 def test_strip_holes_checked_against_crossing_angle(built, tmp_path):
     """The strip is 0.59 mm thick and C2 crosses it at up to 57° to its normal: the shipped
     strip's holes are sized for that; a square Ø0.8 hole (the disk's eyelet size) is an error."""
-    from hwgen.export import write_stl
-    from hwgen.parts.backbone import build_backbone
+    from hwgen.cad.export import write_stl
+    from hwgen.cad.backbone import build_backbone
 
     rep = json.loads((built("prototype") / "report.json").read_text())
     ang = {(c["where"]["tendon"], c["where"]["station"]): c for c in rep["checks"] if c["id"] == "backbone.hole_angle"}
@@ -356,7 +356,7 @@ def test_segment_distance_against_sampling():
 
 
 def test_loop_gap_is_exact():
-    from hwgen.checks.lengths import loop_gap, points_to_polyline
+    from hwgen.checks.measure import loop_gap, points_to_polyline
 
     rng = np.random.default_rng(1)
     for _ in range(200):
@@ -376,15 +376,15 @@ def test_loop_gap_is_exact():
 def test_tip_eyelets_checked_against_the_exit_to_the_tensioner(built, tmp_path):
     """The line turns at the tip eyelet toward its spool; a tip disk sized for the incoming
     segment alone (as the builder once did) pinches the actuating pair there."""
-    from hwgen.design import _disk_spec, _rest_axes
-    from hwgen.export import write_stl
-    from hwgen.parts.disk import build_disk
+    from hwgen.model.plan import _disk_spec, _rest_axes
+    from hwgen.cad.export import write_stl
+    from hwgen.cad.disk import build_disk
 
     d = load(PARAMS / "prototype.yaml").design
     plan = make_plan(d)
     tip = plan.disks[-1]
     a1 = next(h for h in tip.holes if h.tendons == ("A1",))
-    exit_deg = next(r.exit_angle_deg for r in plan.tensioner.runs if r.tendon == "A1")
+    exit_deg = next(r.exit_angle_deg for r in plan.tensioner_layout.runs if r.tendon == "A1")
     assert exit_deg > 5 and a1.worst_angle_deg > 0.4 * exit_deg   # the exit sets the axis and size
 
     rest = {p.name: _rest_axes(d, p) for p in plan.paths}

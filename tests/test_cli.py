@@ -46,3 +46,23 @@ def test_schema_is_json_schema_matching_the_yaml_keys():
     doc = yaml.safe_load((PARAMS / "prototype.yaml").read_text())
     assert set(doc) <= set(schema["properties"])
     assert "mm" in schema["$defs"]["Backbone"]["properties"]["length"]["description"]
+
+
+def test_bom_allowances_under_render_are_read_with_a_deprecation_warning(tmp_path):
+    """Tendon allowances moved from render: to bom:; the old place is read for one release."""
+    from hwgen.pipeline import load
+    doc = yaml.safe_load((PARAMS / "prototype.yaml").read_text())
+    doc["render"].update(doc.pop("bom"))
+    doc["render"]["tie_off_mm"] = 42.0
+    old = tmp_path / "old.yaml"
+    old.write_text(yaml.safe_dump(doc))
+    loaded = load(old)
+    assert loaded.design.bom.tie_off_mm == 42.0
+    assert any("render.tie_off_mm is deprecated" in w and "bom.tie_off_mm" in w for w in loaded.warnings)
+    r = _run("routing", str(old))
+    assert r.returncode == 0 and "render.tie_off_mm is deprecated" in r.stderr
+    doc["bom"] = {"tie_off_mm": 10}
+    both = tmp_path / "both.yaml"
+    both.write_text(yaml.safe_dump(doc))
+    r = _run("routing", str(both))
+    assert r.returncode == 2 and "render.tie_off_mm:" in r.stderr and "keep only bom.tie_off_mm" in r.stderr

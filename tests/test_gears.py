@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 import yaml
 
-from hwgen.gears import WormPair, engagement_length
-from hwgen.params import InputError, load
+from hwgen.model.gearing import WormPair, engagement_length
+from hwgen.errors import InputError
+from hwgen.pipeline import load
 
 from .conftest import PARAMS
 
@@ -128,13 +129,13 @@ def _mesh_case(params: dict, mu: float) -> dict:
     import manifold3d as m3d
     import trimesh
 
-    from hwgen.gears import WORM_TO_MESH, GearDesignError, WormPair
+    from hwgen.model.gearing import WORM_TO_MESH, GearDesignError, WormPair
     t0 = time.time()
     pair = WormPair(**params)
     problems = pair.problems(mu, MIN_WALL)
     if problems:
         return {"status": "rejected", "message": "; ".join(f"{f}: {m}" for f, m in problems)}
-    from hwgen.parts.tensioner import gear_solid, worm_solid
+    from hwgen.cad.tensioner_parts import gear_solid, worm_solid
     core = 2 * pair.rf1
     hex_key = min(2.5, round((core - 2 * MIN_WALL) * math.cos(math.pi / 6) - 0.2, 1))
     try:

@@ -6,10 +6,10 @@ import json
 import numpy as np
 import pytest
 
-from hwgen import kinematics as kin
+from hwgen.model import kinematics as kin
 from hwgen.checks.lengths import sweep_angles
-from hwgen.params import load
-from hwgen.routing import tendon_paths
+from hwgen.pipeline import load
+from hwgen.model.routing import tendon_paths
 
 from .conftest import PARAMS
 

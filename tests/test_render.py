@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from hwgen import render
-from hwgen.params import load
+from hwgen import pipeline
+from hwgen.outputs import pictures, scene
+from hwgen.pipeline import load
 
 ROOT = Path(__file__).resolve().parents[1]
 PNGS = ("exploded.png", "assembled.png", "bent.png")
@@ -92,9 +93,9 @@ def test_family_colours_are_distinct(proto):
     cols = list(m["render"]["palette"].values())
     for i, a in enumerate(cols):
         for b in cols[i + 1:]:
-            assert not render.confusable(a, b), (a, b)
-    assert render.confusable((0.75, 0.76, 0.78), (0.27, 0.27, 0.28)) is False   # light and dark grey differ
-    assert render.confusable((0.75, 0.76, 0.78), (0.55, 0.58, 0.52))            # two mid greys do not
+            assert not scene.confusable(a, b), (a, b)
+    assert scene.confusable((0.75, 0.76, 0.78), (0.27, 0.27, 0.28)) is False   # light and dark grey differ
+    assert scene.confusable((0.75, 0.76, 0.78), (0.55, 0.58, 0.52))            # two mid greys do not
 
 
 def test_bent_picture_shows_every_tendon(proto):
@@ -116,7 +117,7 @@ def test_bent_differs_from_straight(proto, tmp_path):
         shutil.copy(folder / name, tmp_path / name)
     shutil.copytree(folder / "stl", tmp_path / "stl")
     s = m["render"]["settings"]
-    straight = render.render_pictures(tmp_path, m, render.Settings(s["width_px"], s["explode_mm"], 0.0))
+    straight = pictures.render_pictures(tmp_path, m, pictures.Settings(s["width_px"], s["explode_mm"], 0.0))
     a = _foreground(tmp_path / "bent.png")
     b = _foreground(folder / "bent.png")
     iou = (a & b).sum() / (a | b).sum()
@@ -128,12 +129,12 @@ def test_bent_differs_from_straight(proto, tmp_path):
 def test_bend_points_follow_eq1():
     st = np.linspace(0, 270, 13)
     kappa = np.pi / 2 / 270
-    tip = render.bend_points(np.array([[0.0, 270.0, 0.0]]), st, kappa)[0]
+    tip = scene.bend_points(np.array([[0.0, 270.0, 0.0]]), st, kappa)[0]
     r = 1 / kappa
     assert tip == pytest.approx([0.0, r, r], abs=1e-9)        # a quarter circle toward +z
-    below = render.bend_points(np.array([[5.0, -20.0, 1.0]]), st, kappa)[0]
+    below = scene.bend_points(np.array([[5.0, -20.0, 1.0]]), st, kappa)[0]
     assert below == pytest.approx([5.0, -20.0, 1.0])          # the clamped end stays put
-    beyond = render.bend_points(np.array([[0.0, 290.0, 0.0]]), st, kappa)[0]
+    beyond = scene.bend_points(np.array([[0.0, 290.0, 0.0]]), st, kappa)[0]
     assert beyond == pytest.approx([0.0, r, r + 20.0], abs=1e-9)   # straight on along the tip tangent
 
 
@@ -165,7 +166,7 @@ def test_svg_has_a_balloon_and_a_row_per_family(proto):
 
 def test_hidden_lines_are_removed():
     """A segment passing behind a nearer surface is cut where it is covered."""
-    from hwgen.drawing import visible_runs
+    from hwgen.outputs.drawing import visible_runs
     W, H = 100, 20
     zbuf = np.ones((H, W))
     zbuf[:, 40:60] = 0.2                         # a wall in front, columns 40..59
@@ -183,7 +184,7 @@ def test_new_families_are_drawn_without_code_changes(proto, tmp_path):
     """Parts of an unknown role (a tensioner) get their own colour, balloon and table row."""
     import trimesh
 
-    from hwgen import bom
+    from hwgen.outputs import bom
     folder, m = proto
     shutil.copytree(folder / "stl", tmp_path / "stl")
     m = json.loads(json.dumps(m))
@@ -199,10 +200,10 @@ def test_new_families_are_drawn_without_code_changes(proto, tmp_path):
                                      "step": {"path": f"step/{name}.step", "sha256": ""}}})
     design = load(ROOT / "params" / "prototype.yaml").design
     table = bom.family_table(m, design)
-    res = render.render_pictures(tmp_path, m, render.Settings(1600, 20.0, 90.0), table)
+    res = pictures.render_pictures(tmp_path, m, pictures.Settings(1600, 20.0, 90.0), table)
     assert set(res["palette"]) == {p["role"] for p in m["parts"]} and "worm" in res["palette"]
     for role, c in res["palette"].items():      # the disk's manifest colour, yet a colour of its own
-        assert role == "worm" or not render.confusable(res["palette"]["worm"], c)
+        assert role == "worm" or not scene.confusable(res["palette"]["worm"], c)
     f = fractions(_image(tmp_path / "exploded.png"), res["palette"])
     assert f["worm"] > 1e-3, f
     assert res["svg"]["balloons"] == res["svg"]["rows"] == len(table) == len(res["palette"])
@@ -210,8 +211,8 @@ def test_new_families_are_drawn_without_code_changes(proto, tmp_path):
 
 def test_no_backend_still_builds(tmp_path, monkeypatch):
     """With rendering forced off, the build succeeds, writes the BOM and says what to install."""
-    from hwgen.build import build
-    monkeypatch.setenv(render.BACKEND_ENV, "none")
+    from hwgen.pipeline import build
+    monkeypatch.setenv(pictures.BACKEND_ENV, "none")
     res = build(load(ROOT / "params" / "prototype.yaml"), tmp_path)
     entry = res.manifest["render"]
     assert entry["status"] == "unavailable"
@@ -231,13 +232,13 @@ def test_a_failing_renderer_is_reported(proto, tmp_path, monkeypatch, child, sta
     fake = tmp_path / "python"
     fake.write_text(child)
     fake.chmod(0o755)
-    monkeypatch.setattr(render.sys, "executable", str(fake))
+    monkeypatch.setattr(pictures.sys, "executable", str(fake))
     out = tmp_path / "out"
     shutil.copytree(folder / "stl", out / "stl")
     (out / "bent.png").write_bytes(b"an old picture")
     m = json.loads(json.dumps(m))
-    from hwgen.design import plan
-    render.step(plan(load(ROOT / "params" / "prototype.yaml").design), out, m)
+    from hwgen.model.plan import plan
+    pipeline.draw(plan(load(ROOT / "params" / "prototype.yaml").design), out, m)
     assert m["render"]["status"] == status
     for w in words:
         assert w in m["render"]["message"]
@@ -255,7 +256,7 @@ def test_hwgen_render_command(proto, tmp_path, monkeypatch):
     res = CliRunner().invoke(app, ["render", params, "--out", str(tmp_path), "-q"])
     assert res.exit_code == 0, res.output
     assert "bent.png (1800 × 1800 px)" in res.output and "built" not in res.output
-    monkeypatch.setenv(render.BACKEND_ENV, "none")
+    monkeypatch.setenv(pictures.BACKEND_ENV, "none")
     res = CliRunner().invoke(app, ["render", params, "--out", str(tmp_path), "-q"])
     assert res.exit_code == 1
     assert "vtk-osmesa" in res.output

@@ -5,9 +5,10 @@ import numpy as np
 import pytest
 import yaml
 
-from hwgen.design import plan
-from hwgen.params import InputError, load
-from hwgen.routing import tendon_paths
+from hwgen.model.plan import plan
+from hwgen.errors import InputError
+from hwgen.pipeline import load
+from hwgen.model.routing import tendon_paths
 
 from .conftest import PARAMS
 

@@ -7,13 +7,13 @@ import math
 import numpy as np
 import pytest
 
-from hwgen.checks.gears import (INTERFERENCE_TOL_MM3, GAP_TOL_MM, axis, gear_checks, manifold, mesh_measure,
+from hwgen.checks.gear_mesh import (INTERFERENCE_TOL_MM3, GAP_TOL_MM, axis, gear_checks, manifold, mesh_measure,
                                 tendon_checks, toward)
 from hwgen.checks.measure import load_mesh
-from hwgen.design import plan
-from hwgen.gears import worm_pair
-from hwgen.params import load
-from hwgen.tensioner import layout
+from hwgen.model.plan import plan
+from hwgen.model.gearing import worm_pair
+from hwgen.pipeline import load
+from hwgen.model.tensioner_layout import layout
 
 from .conftest import PARAMS
 
@@ -98,7 +98,7 @@ def test_worm_has_a_thread_and_wheel_has_teeth(proto):
     assert inside(np.array([[pair.rf1 - 0.05, z_mid]]))[0]
 
     wheel_q = _by_role(man, "tensioner_wheel")["C1"]
-    lay = layout(p)
+    lay = layout(p.design, p.paths, p.disks[-1])
     unit = lay.unit("C1")
     z_file = (lay.wheel_flip(unit) @ [0, 0, unit.z_wheel_mid - unit.z_part[0], 1])[2]
     sec = manifold(folder, wheel_q, np.eye(4)).slice(z_file).to_polygons()
@@ -284,13 +284,13 @@ def test_layout_adapts_to_other_gears(tmp_path, change):
     tendons' planes and the tendons' turn at the tip within its limit (numpy only)."""
     import yaml
 
-    from hwgen.tensioner import MAX_EXIT_DEG, WORM_CLEAR
+    from hwgen.model.tensioner_layout import MAX_EXIT_DEG, WORM_CLEAR
     data = yaml.safe_load((PARAMS / "prototype.yaml").read_text())
     data["tensioner"].update(change)
     f = tmp_path / "v.yaml"
     f.write_text(yaml.safe_dump(data))
     p = plan(load(f).design)
-    lay = layout(p)
+    lay = layout(p.design, p.paths, p.disks[-1])
     pair = lay.pair
     assert pair.center_distance == pytest.approx(lay.units[0].worm_y - lay.units[0].center[1]
                                                  if lay.units[0].side > 0 else

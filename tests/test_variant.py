@@ -6,10 +6,10 @@ import json
 import numpy as np
 import yaml
 
-from hwgen.build import build
+from hwgen.pipeline import build
 from hwgen.checks.measure import disk_mid_section
-from hwgen.params import load
-from hwgen.routing import tendon_paths
+from hwgen.pipeline import load
+from hwgen.model.routing import tendon_paths
 
 from .conftest import PARAMS
 

@@ -1,1 +1,1 @@
-"""Checks read the exported files back; they never look at the builders' internals."""
+"""Checks read the exported files back and measure them; they never look at the builders' internals."""

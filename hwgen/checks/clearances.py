@@ -14,10 +14,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import kinematics as kin
-from ..export import STL_TOLERANCE_MM
+from ..cad.export import STL_TOLERANCE_MM
+from ..model import kinematics as kin
+from ..model.crossings import crossing_angles, strip_crossings
 from .base import Check
-from .lengths import EyeletMap, inside, loop_gap, num, points_to_polyline
+from .eyelets import EyeletMap
+from .measure import inside, loop_gap, num, points_to_polyline
 
 SAG_MM = STL_TOLERANCE_MM      # chordal deviation of the STL: section polygons sit this far inside holes
 
@@ -237,48 +239,10 @@ def dxf_holes(path: Path) -> list[tuple[float, float, float]]:
 
 def crossings(emap: EyeletMap, half_height: float) -> list[tuple[str, float, float, float]]:
     """Where each tendon meets the backbone plane within the strip, straight robot: (tendon, station, x, y)."""
-    out = []
-    ys = emap.stations_y
     in_slot = {(t, e.station) for e in emap.eyelets if e.status == "in_slot" for t in e.tendons}
-    for name, xz in emap.positions.items():
-        x, z = xz[:, 0], xz[:, 1]
-        for i in range(len(ys)):
-            if (name, i) in in_slot:
-                out.append((name, float(i), float(x[i]), float(ys[i])))
-        for i in range(len(ys) - 1):
-            if (name, i) in in_slot or (name, i + 1) in in_slot:
-                continue
-            if z[i] * z[i + 1] < 0:
-                f = z[i] / (z[i] - z[i + 1])
-                xc = x[i] + f * (x[i + 1] - x[i])
-                if abs(xc) < half_height:
-                    out.append((name, i + f, float(xc), float(ys[i] + f * (ys[i + 1] - ys[i]))))
-    return out
-
-
-def crossing_angles(emap: EyeletMap, name: str, st: float, angles_deg: np.ndarray, length: float) -> np.ndarray:
-    """(K,) angle of the tendon to the strip's normal where it crosses, for each bending angle, rad.
-
-    At a disk the directions into and out of the eyelet are both taken; between disks the
-    chord is compared with the strip's normal at that arc length.
-    """
-    kappa = kin.kappas_for_angles(angles_deg, length)
-    xz = emap.positions[name]
-    z = np.array([0.0, 0.0, 1.0])
-    if float(st).is_integer():
-        into, outof = kin.segment_directions_local(emap.stations_y, xz, kappa)
-        i = int(st)
-        c = np.fmin(np.abs(np.nan_to_num(into[:, i] @ z, nan=1.0)), np.abs(np.nan_to_num(outof[:, i] @ z, nan=1.0)))
-    else:
-        i = int(st)
-        P = kin.points_in_space(emap.stations_y, xz, kappa)
-        seg = P[:, i + 1] - P[:, i]
-        seg /= np.linalg.norm(seg, axis=1, keepdims=True)
-        y_c = emap.stations_y[i] + (st - i) * (emap.stations_y[i + 1] - emap.stations_y[i])
-        R, _ = kin.frames([y_c], kappa)
-        n = R[:, 0] @ z
-        c = np.abs(np.einsum("ki,ki->k", seg, n))
-    return np.arccos(np.clip(c, 0, 1))
+    return [(name, st, x, y) for name, xz in emap.positions.items()
+            for st, x, y in strip_crossings(emap.stations_y, xz, half_height,
+                                            {i for t, i in in_slot if t == name})]
 
 
 def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendon_d: float, tol: float,
@@ -312,7 +276,8 @@ def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendo
         measured = float(min(best_dxf, stl_fit)) if np.isfinite(min(best_dxf, stl_fit)) else None
         out.append(Check("backbone.crossing", "error", not missing, msg, measured, 0.0, where))
         if dia and strip_t is not None and angles_deg is not None:
-            beta = crossing_angles(emap, name, st, angles_deg, length)
+            beta = crossing_angles(emap.stations_y, emap.positions[name], st,
+                                   kin.kappas_for_angles(angles_deg, length))
             k = int(np.argmax(beta))
             b = float(beta[k])
             need = tendon_d / np.cos(b) + strip_t * np.tan(b)

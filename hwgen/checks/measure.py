@@ -73,7 +73,8 @@ def chain_loops(segments: np.ndarray) -> list[np.ndarray]:
     return loops
 
 
-def _area_centroid(p: np.ndarray) -> tuple[float, tuple[float, float]]:
+def area_centroid(p: np.ndarray) -> tuple[float, tuple[float, float]]:
+    """Unsigned area and centroid of a closed polygon (n, 2)."""
     x, y = p[:, 0], p[:, 1]
     xn, yn = np.roll(x, -1), np.roll(y, -1)
     cross = x * yn - xn * y
@@ -97,7 +98,7 @@ def section_loops(mesh, placement: np.ndarray, origin, normal, axes=(0, 2)) -> l
     robot = h[:, :3].reshape(-1, 2, 3)
     out = []
     for loop in chain_loops(robot[:, :, list(axes)]):
-        area, c = _area_centroid(loop)
+        area, c = area_centroid(loop)
         out.append(Loop(loop, area, c))
     return sorted(out, key=lambda lp: -lp.area)
 
@@ -120,6 +121,83 @@ def disk_mid_section(stl_path: str | Path, placement) -> DiskSection:
     loops = section_loops(mesh, placement, [0, 0, mid], [0, 0, 1])
     y_mid = float((np.asarray(placement) @ [0, 0, mid, 1])[1])
     return DiskSection(loops[0], loops[1:], float(zmax - zmin), y_mid)
+
+
+# ---------------------------------------------------------------- plane geometry
+
+def num(v: float, digits: int = 3) -> str:
+    """A coordinate for a message: fixed decimals, never "-0.000"."""
+    t = f"{v:.{digits}f}"
+    return t[1:] if t.startswith("-") and float(t) == 0 else t
+
+
+def inside(poly: np.ndarray, pt) -> bool:
+    """Point in polygon (even-odd rule) for a closed (n, 2) polyline."""
+    x, y = float(pt[0]), float(pt[1])
+    px, py = poly[:, 0], poly[:, 1]
+    qx, qy = np.roll(px, -1), np.roll(py, -1)
+    crosses = (py > y) != (qy > y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xi = px + (y - py) * (qx - px) / (qy - py)
+    return bool(np.count_nonzero(crosses & (x < xi)) % 2)
+
+
+def _point_segment_distance(pts: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(n,) distance from each point to the nearest of the segments a[i]-b[i]."""
+    ab = b - a
+    ll = np.einsum("ij,ij->i", ab, ab)
+    ll = np.where(ll == 0, 1.0, ll)
+    ap = pts[:, None, :] - a[None, :, :]
+    t = np.clip(np.einsum("nmj,mj->nm", ap, ab) / ll, 0.0, 1.0)
+    d = ap - t[..., None] * ab[None]
+    return np.sqrt(np.einsum("nmj,nmj->nm", d, d)).min(axis=1)
+
+
+def points_to_polyline(pts: np.ndarray, poly: np.ndarray) -> np.ndarray:
+    """Distance from each point (n, 2) to a closed polyline (m, 2): (n,)."""
+    return _point_segment_distance(pts, poly, np.roll(poly, -1, axis=0))
+
+
+def _one_side(pts: np.ndarray, poly: np.ndarray, bound: float) -> float:
+    """Closest distance from the vertices ``pts`` to the closed polyline ``poly``, knowing it is
+    at most ``bound``: only points and segments within reach of each other are compared."""
+    lo, hi = poly.min(axis=0) - bound, poly.max(axis=0) + bound
+    P = pts[np.all((pts >= lo) & (pts <= hi), axis=1)]
+    if len(P) == 0:
+        return float("inf")
+    a, b = poly, np.roll(poly, -1, axis=0)
+    reach = bound + float(np.sqrt(((b - a) ** 2).sum(axis=1)).max())
+    plo, phi = P.min(axis=0) - reach, P.max(axis=0) + reach
+    keep = np.all((a >= plo) & (a <= phi), axis=1)
+    if not keep.any():
+        return float("inf")
+    return float(_point_segment_distance(P, a[keep], b[keep]).min())
+
+
+def loop_gap(a: np.ndarray, b: np.ndarray) -> float:
+    """Closest distance between two closed polylines (material between two holes' edges).
+
+    Exact: the closest pair of two polylines that do not cross always has a vertex of one of
+    them at one end, so both vertex sets are measured against the other polyline. A pair of
+    vertices gives an upper bound first, which prunes everything out of reach.
+    """
+    k = int(np.argmin(((a - b.mean(axis=0)) ** 2).sum(axis=1)))
+    j = int(np.argmin(((b - a[k]) ** 2).sum(axis=1)))
+    bound = float(np.hypot(*(a[k] - b[j])))
+    return min(bound, _one_side(a, b, bound), _one_side(b, a, bound))
+
+
+# ---------------------------------------------------------------- solids
+
+def to_manifold(mesh, placement=None):
+    """A trimesh mesh (file coordinates) as a manifold3d solid, in robot coordinates under ``placement``."""
+    import manifold3d as m3d
+    v = np.asarray(mesh.vertices, dtype=np.float64)
+    if placement is not None:
+        P = np.asarray(placement, dtype=float)
+        v = v @ P[:3, :3].T + P[:3, 3]
+    return m3d.Manifold(m3d.Mesh(vert_properties=v.astype(np.float32),
+                                 tri_verts=np.asarray(mesh.faces, dtype=np.uint32)))
 
 
 def read_manifest(folder: str | Path) -> dict:

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from .base import Check
-from .measure import load_mesh
+from .measure import load_mesh, to_manifold
 
 NOT_PRINTED = {"backbone"}     # roles cut from stock rather than printed: no build-volume check
 VOLUME_REL_TOL = 0.01          # STL volume versus the solid's volume in the manifest
@@ -43,15 +43,6 @@ def load_parts(folder: Path, manifest: dict) -> tuple[list[LoadedPart], list[Che
     return parts, checks
 
 
-def _manifold(mesh, placement: np.ndarray | None = None):
-    import manifold3d as m3d
-    v = np.asarray(mesh.vertices, dtype=np.float64)
-    if placement is not None:
-        v = v @ placement[:3, :3].T + placement[:3, 3]
-    return m3d.Manifold(m3d.Mesh(vert_properties=v.astype(np.float32),
-                                 tri_verts=np.asarray(mesh.faces, dtype=np.uint32)))
-
-
 def mesh_checks(parts: list[LoadedPart]) -> list[Check]:
     """Watertight, consistently wound, positive volume, accepted by manifold3d, volume as built."""
     import manifold3d as m3d
@@ -65,7 +56,7 @@ def mesh_checks(parts: list[LoadedPart]) -> list[Check]:
             faults.append("inconsistent winding")
         if m.is_watertight and m.volume <= 0:
             faults.append("inside out (negative volume)")
-        status = _manifold(m).status()
+        status = to_manifold(m).status()
         if status != m3d.Error.NoError:
             faults.append(f"not a manifold ({status.name})")
         vol = float(m.volume) if m.is_watertight else None
@@ -99,7 +90,7 @@ def interference_checks(parts: list[LoadedPart], tol_mm3: float) -> list[Check]:
         tested += 1
         for p in (a, b):
             if p.name not in cache:
-                cache[p.name] = _manifold(p.mesh, p.placement)
+                cache[p.name] = to_manifold(p.mesh, p.placement)
         vol = float((cache[a.name] ^ cache[b.name]).volume())
         ok = vol <= tol_mm3
         where = {"parts": [a.name, b.name]}

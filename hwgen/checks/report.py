@@ -2,28 +2,10 @@
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-
-def _atomic_write(path: Path, text: str) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def write_json(report: dict, path: Path) -> None:
-    _atomic_write(path, json.dumps(report, indent=2) + "\n")
+from .. import atomic
 
 
 def place(check: dict) -> str:
@@ -66,7 +48,7 @@ def write_junit(report: dict, path: Path) -> None:
             out = ET.SubElement(case, "system-out")
             out.text = ("" if c["passed"] else f"{c['severity'].upper()}: ") + c["message"]
     ET.indent(suites)
-    _atomic_write(path, '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(suites, encoding="unicode") + "\n")
+    atomic.write_text(path, '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(suites, encoding="unicode") + "\n")
 
 
 def _fmt(v) -> str:
@@ -100,7 +82,7 @@ def write_summary(report: dict, path: Path) -> None:
     if warns:
         lines += ["", "## Warnings", ""] + [f"- `{c['id']}` {c['message']}" for c in warns]
     lines += ["", "Plot: `lengths.png`. Every check: `report.json`.", ""]
-    _atomic_write(path, "\n".join(lines))
+    atomic.write_text(path, "\n".join(lines))
 
 
 def print_report(report: dict, console, verbose: bool = False) -> None:

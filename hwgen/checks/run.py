@@ -1,28 +1,26 @@
 """Run every check on a built design folder and gather one report.
 
 ``run_checks`` measures the files listed in the manifest (whatever they hold now) and compares
-them with the design intent recorded there. ``check_design`` is what `hwgen check` runs: it
-builds only when the outputs are missing or were made from other parameters or another
-hwgen version; a part file edited after the build is measured, never rebuilt over.
+them with the design intent recorded there. Whether the folder must be rebuilt first is the
+pipeline's business (:func:`hwgen.pipeline.check`), not this module's.
 """
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
 from .. import __version__
-from .. import kinematics as kin
-from ..export import sha256
-from ..routing import table_deviations
+from ..cad.manifest import sha256
+from ..model import kinematics as kin
+from ..model.routing import table_deviations
 from .base import Check
 from .clearances import backbone_checks, hole_checks, tendon_pair_checks, wall_checks
-from .lengths import (backbone_section, length_checks, locate_eyelets, measure_disk, pair_take_up,
-                      sweep_angles, tendon_lengths)
+from .eyelets import backbone_section, locate_eyelets, measure_disk
+from .gear_mesh import gear_checks
+from .lengths import length_checks, pair_take_up, sweep_angles, tendon_lengths
 from .parts import build_volume_checks, interference_checks, load_parts, mesh_checks
 
-REPORT, PLOT, SUMMARY = "report.json", "lengths.png", "summary.md"
 TABLE_MATCH_MM = 0.1   # Table II gives one decimal: a table within this of its function samples it
 
 
@@ -83,14 +81,44 @@ def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     d = plan.design
     s = d.check
     rep_in = manifest["design_report"]
-    tol = s.position_tol_mm
     checks: list[Check] = _file_checks(folder, manifest)
     parts, c = load_parts(folder, manifest)
     checks += c
+    disks, c = _measure_disks(folder, manifest, {p.name: p.mesh for p in parts}, s.position_tol_mm)
+    checks += c
+    bb_outline, bb_holes, strip_t, c = _measure_strip(folder, manifest)
+    checks += c
+    emap, c = locate_eyelets(disks, rep_in, bb_holes, s.position_tol_mm)
+    checks += c
 
-    disks = []
-    ys = rep_in["stations_mm"]
-    meshes = {p.name: p.mesh for p in parts}
+    angles = sweep_angles(s.max_angle_deg, s.step_deg)
+    L = d.backbone.length
+    tls = tendon_lengths(emap, rep_in, angles, L)
+    devs, fdelta, c = _routing_checks(plan, emap.stations_y, angles)
+    checks += c
+    checks += length_checks(tls, emap, devs, fdelta)
+    pair = pair_take_up(tls, d.tensioner.actuating_channel)
+    if pair:
+        checks.append(_take_up_check(pair))
+
+    proc, td = d.process, d.tendon_material.diameter
+    checks += wall_checks(emap, rep_in, proc.min_wall)
+    checks += hole_checks(emap, proc.min_hole, td, angles, L, tip_exits(manifest))
+    checks += tendon_pair_checks(emap, rep_in, td, angles, L)
+    checks += backbone_checks(emap, folder / manifest.get("files", {}).get("backbone_template", {}).get(
+        "path", "backbone_template.dxf"), bb_outline, bb_holes, td, s.position_tol_mm, rep_in.get("findings", []),
+        strip_t, angles, L)
+    checks += mesh_checks(parts)
+    checks += interference_checks(parts, s.interference_tol_mm3)
+    checks += build_volume_checks(parts, proc.build_volume)
+    checks += gear_checks(folder, manifest, plan)
+    return _report(manifest["design"], checks, angles, s.step_deg, tls, pair, emap)
+
+
+def _measure_disks(folder: Path, manifest: dict, meshes: dict, tol: float):
+    """Every disk's STL sectioned (through its placement), and where its mid-plane lies."""
+    ys = manifest["design_report"]["stations_mm"]
+    disks, checks = [], []
     for p in manifest["parts"]:
         if p.get("role") != "disk":
             continue
@@ -108,31 +136,34 @@ def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
         checks.append(Check("disk.station", "error", dy <= tol,
                             f"{dk.part}: mid-plane at y={dk.y_mid:.4f} mm, station {dk.station} is at "
                             f"y={ys[dk.station]:g} mm", dy, tol, {"part": dk.part, "station": dk.station}))
+    return disks, checks
 
-    bb_outline, bb_holes, strip_t = None, None, None
+
+def _measure_strip(folder: Path, manifest: dict):
+    """The strip's outline, holes and thickness from its STL (None where it cannot be read)."""
     bb = next((p for p in manifest["parts"] if p.get("role") == "backbone"), None)
-    if bb is not None and (folder / bb["files"]["stl"]["path"]).exists():
-        try:
-            bb_outline, bb_holes, strip_t = backbone_section(folder / bb["files"]["stl"]["path"], bb["placement"])
-        except Exception as e:
-            checks.append(Check("backbone.section", "error", False, f"{bb['name']}: cannot be measured ({e})",
-                                None, None, {"part": bb["name"]}))
+    if bb is None or not (folder / bb["files"]["stl"]["path"]).exists():
+        return None, None, None, []
+    try:
+        return (*backbone_section(folder / bb["files"]["stl"]["path"], bb["placement"]), [])
+    except Exception as e:
+        return None, None, None, [Check("backbone.section", "error", False, f"{bb['name']}: cannot be measured "
+                                        f"({e})", None, None, {"part": bb["name"]})]
 
-    emap, c = locate_eyelets(disks, rep_in, bb_holes, tol)
-    checks += c
 
-    angles = sweep_angles(s.max_angle_deg, s.step_deg)
-    L = d.backbone.length
-    tls = tendon_lengths(emap, rep_in, angles, L)
+def _routing_checks(plan, stations_y: np.ndarray, angles: np.ndarray):
+    """Where a tendon gives a table and a function: how far they part, and the length change the
+    function's own eyelets would have. Returns (deviations, function deltas, checks)."""
     devs: dict[str, list] = {}
     for dv in table_deviations(plan.paths):
         devs.setdefault(dv.tendon, []).append((dv.station, dv.distance))
     fdelta = {}
-    kappa = kin.kappas_for_angles(angles, L)
+    kappa = kin.kappas_for_angles(angles, plan.design.backbone.length)
     for p in plan.paths:
         if p.function_points is not None:
-            Lf = kin.tendon_lengths(emap.stations_y, p.function_points, kappa)
+            Lf = kin.tendon_lengths(stations_y, p.function_points, kappa)
             fdelta[p.name] = float(np.abs(Lf - Lf[angles == 0][0]).max())
+    checks = []
     for name, dl in devs.items():
         big = max(x for _, x in dl)
         ok = big <= TABLE_MATCH_MM
@@ -142,41 +173,25 @@ def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
                             f"{name}: eyelet table departs from the eq. (3) function it names by up to {big:.2f} mm "
                             f"(stations {at}); the geometry follows the table",
                             big, TABLE_MATCH_MM, {"tendon": name, "stations": at}))
-    checks += length_checks(tls, emap, devs, fdelta)
-    pair = pair_take_up(tls, d.tensioner.actuating_channel)
-    if pair:
-        checks.append(Check("tendon.take_up", "info", True,
-                            f"antagonistic pair {' and '.join(pair['tendons'])} (channel {pair['channel']}): one pays "
-                            f"out less than the other hauls in, {abs(pair['take_up_mm']):.3f} mm of "
-                            f"{'slack to take up' if pair['take_up_mm'] >= 0 else 'extra length to supply'} "
-                            f"at {pair['at_angle_deg']:+g}°", pair["take_up_mm"], None,
-                            {"channel": pair["channel"], "tendons": pair["tendons"]}))
+    return devs, fdelta, checks
 
-    proc, td = d.process, d.tendon_material.diameter
-    checks += wall_checks(emap, rep_in, proc.min_wall)
-    checks += hole_checks(emap, proc.min_hole, td, angles, L, tip_exits(manifest))
-    checks += tendon_pair_checks(emap, rep_in, td, angles, L)
-    checks += backbone_checks(emap, folder / manifest.get("files", {}).get("backbone_template", {}).get(
-        "path", "backbone_template.dxf"), bb_outline, bb_holes, td, tol, rep_in.get("findings", []),
-        strip_t, angles, L)
-    checks += mesh_checks(parts)
-    checks += interference_checks(parts, s.interference_tol_mm3)
-    checks += build_volume_checks(parts, proc.build_volume)
-    try:
-        from .gears import gear_checks
-    except ImportError as e:   # not written yet; a fault inside the module still surfaces
-        if getattr(e, "name", None) not in ("hwgen.checks.gears", None):
-            raise
-        gear_checks = None
-    if gear_checks is not None:
-        checks += list(gear_checks(folder, manifest, plan))
 
+def _take_up_check(pair: dict) -> Check:
+    return Check("tendon.take_up", "info", True,
+                 f"antagonistic pair {' and '.join(pair['tendons'])} (channel {pair['channel']}): one pays "
+                 f"out less than the other hauls in, {abs(pair['take_up_mm']):.3f} mm of "
+                 f"{'slack to take up' if pair['take_up_mm'] >= 0 else 'extra length to supply'} "
+                 f"at {pair['at_angle_deg']:+g}°", pair["take_up_mm"], None,
+                 {"channel": pair["channel"], "tendons": pair["tendons"]})
+
+
+def _report(design: str, checks: list[Check], angles, step_deg: float, tls, pair, emap) -> dict:
     ok = not any(c.severity == "error" and not bool(c.passed) for c in checks)
     return _plain({
-        "design": manifest["design"],
+        "design": design,
         "ok": ok,
         "hwgen_version": __version__,
-        "sweep": {"max_angle_deg": float(angles[-1]), "step_deg": s.step_deg, "angles_deg": angles.tolist()},
+        "sweep": {"max_angle_deg": float(angles[-1]), "step_deg": step_deg, "angles_deg": angles.tolist()},
         "checks": [c.to_json() for c in checks],
         "tendons": [{
             "name": t.name, "channel": t.channel, "source": "geometry",
@@ -199,15 +214,6 @@ def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     })
 
 
-def write_outputs(report: dict, folder: Path) -> None:
-    """report.json, lengths.png and summary.md into the design folder."""
-    from .plot import plot_lengths
-    from .report import write_json, write_summary
-    write_json(report, folder / REPORT)
-    plot_lengths(report, folder / PLOT)
-    write_summary(report, folder / SUMMARY)
-
-
 def tip_exits(manifest: dict) -> dict[str, np.ndarray]:
     """Each tendon's direction from its tip eyelet toward its spool, from the runs the tensioner
     parts record. The tensioner is fixed to the tip disk, so in the tip frame it never turns."""
@@ -217,26 +223,3 @@ def tip_exits(manifest: dict) -> dict[str, np.ndarray]:
             v = np.subtract(r["end"], r["start"])
             out[r["tendon"]] = v / np.linalg.norm(v)
     return out
-
-
-def post_build(plan, folder: Path, manifest: dict) -> None:
-    """The build's check step: measure the fresh files, record the checks, write the report files."""
-    report = run_checks(folder, manifest, plan)
-    manifest["checks"] = report["checks"]
-    manifest["checks_ok"] = report["ok"]
-    write_outputs(report, folder)
-
-
-def check_design(loaded, out_root: Path, progress=None) -> tuple[dict, Path, str | None]:
-    """Build if needed, then check. Returns (report, folder, why it was rebuilt or None)."""
-    from ..design import plan as make_plan
-    from .measure import read_manifest
-
-    from ..build import build, stale_reason
-
-    folder = Path(out_root) / loaded.design.design
-    why = stale_reason(folder, loaded)
-    if why is not None:
-        build(loaded, Path(out_root), progress)
-        return json.loads((folder / REPORT).read_text()), folder, why
-    return run_checks(folder, read_manifest(folder), make_plan(loaded.design)), folder, None

@@ -13,7 +13,8 @@ from xml.sax.saxutils import escape
 
 import numpy as np
 
-from .render import ISOMETRIC, Posed, Renderer, ScenePart, pose_rigid
+from .scene import Posed, ScenePart, pose_rigid
+from .view import ISOMETRIC, Renderer
 
 DEPTH_WIDTH_PX = 3200        # depth buffer width: ~0.2 mm per pixel for the prototype's exploded view
 SAMPLE_PX = 0.8              # edges are tested every this many pixels
@@ -23,6 +24,7 @@ LINE_WIDTH = 0.55
 OUTLINE_WIDTH = 0.9
 BALLOON_R = 13.0
 BALLOON_GAP = 40.0           # balloons sit this far outside the drawing
+PAGE_MARGIN = 30.0
 ROW_H = 22.0
 CHAR_W = 6.8                 # generous mean width of a 12-unit sans-serif character, for table columns
 FONT = "DejaVu Sans, Arial, Helvetica, sans-serif"
@@ -135,28 +137,48 @@ def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: d
                        table: list[dict], path: Path, title: str) -> dict:
     """Draw the exploded assembly as visible lines with one balloon per family and a parts table."""
     view = ISOMETRIC
-    _, up, d = view.axes()
+    _, _, d = view.axes()
     posed: list[Posed] = [pose_rigid(p, placements[p.name], d) for p in parts]
     ren, W, H = renderer.draw(posed, colours, view, None, edges=False, shading=False, margin=0.02,
                               aspect_range=(0.3, 2.0), width=DEPTH_WIDTH_PX)
-    zbuf = renderer.depth(W, H)[::-1]            # bottom-up rows, as display coordinates
-    zmax = _max3(zbuf)
+    zmax = _max3(renderer.depth(W, H)[::-1])     # bottom-up rows, as display coordinates
     project, tol = _projector(ren, W, H)
-
     scale = PAGE_WIDTH / W
-    margin = 30.0
 
     def to_page(p: np.ndarray) -> np.ndarray:
-        return np.column_stack([margin + p[:, 0] * scale, margin + 40 + (H - p[:, 1]) * scale])
+        return np.column_stack([PAGE_MARGIN + p[:, 0] * scale, PAGE_MARGIN + 40 + (H - p[:, 1]) * scale])
 
+    groups, visible_pts, n_runs = _visible_lines(posed, placements, d, project, zmax, tol, to_page)
+    balloons, page_pts = _balloons(table, visible_pts, to_page)
+    parts_table, (x1, y1) = _parts_table(table, page_pts)
+    xmax, ymax = page_pts.max(axis=0)
+    width = max(xmax, x1) + PAGE_MARGIN
+    height = max(ymax, y1) + PAGE_MARGIN
+    svg = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0f}" height="{height:.0f}" '
+           f'viewBox="0 0 {width:.1f} {height:.1f}" font-family="{FONT}">',
+           f'<title>{escape(title)}</title>',
+           '<rect width="100%" height="100%" fill="#fff"/>',
+           f'<text x="{PAGE_MARGIN}" y="{PAGE_MARGIN + 10}" font-size="18" font-weight="bold">{escape(title)}</text>',
+           f'<text x="{PAGE_MARGIN}" y="{PAGE_MARGIN + 30}" font-size="11" fill="#444">Hidden lines removed; parallel '
+           f'projection, the view of exploded.png; balloons number the part families of the table.</text>',
+           '<g class="drawing" fill="none" stroke="#000" stroke-linecap="round" stroke-linejoin="round">',
+           *groups, "</g>",
+           '<g class="balloons" stroke="#000">', *balloons, "</g>",
+           *parts_table, "</svg>"]
+    Path(path).write_text("\n".join(svg) + "\n", encoding="utf-8")
+    return {"balloons": len(balloons), "rows": len(table), "runs": n_runs,
+            "depth_px": [W, H], "bytes": Path(path).stat().st_size}
+
+
+def _visible_lines(posed: list[Posed], placements: dict, d: np.ndarray, project, zmax, tol, to_page):
+    """Each part's visible feature and silhouette edges as SVG paths; the visible points per
+    family and part (for the balloons) and how many runs were drawn."""
     groups, visible_pts, n_runs = [], {}, 0
     for ps in posed:
         p = ps.part
         R = placements[p.name][:3, :3]
-        feat = p.feature_edges()
-        sil = p.silhouette_edges(R, d)
         body = []
-        for pairs, width in ((feat, LINE_WIDTH), (sil, OUTLINE_WIDTH)):
+        for pairs, width in ((p.feature_edges(), LINE_WIDTH), (p.silhouette_edges(R, d), OUTLINE_WIDTH)):
             runs, pts = visible_runs(ps.vertices[pairs], project, zmax, tol)
             n_runs += len(runs)
             if len(runs):
@@ -165,18 +187,22 @@ def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: d
             visible_pts.setdefault(p.role, {}).setdefault(p.name, []).append(pts)
         groups.append(f'<g class="part" data-part="{escape(p.name)}" data-family="{escape(p.role)}">'
                       + "".join(body) + "</g>")
+    return groups, visible_pts, n_runs
 
-    # ---- balloons: one per family, on the empty side of the drawing, leaders to a visible edge
+
+def _balloons(table: list[dict], visible_pts: dict, to_page) -> tuple[list[str], np.ndarray]:
+    """One balloon per family on the empty side of the drawing, its leader to a visible edge.
+    Returns the SVG groups and every page point the drawing and balloons cover."""
     allv = np.vstack([np.vstack(v) for fam in visible_pts.values() for v in fam.values() if len(np.vstack(v))])
     page_pts = to_page(allv)
     centre = page_pts.mean(axis=0)
-    u, _, vt = np.linalg.svd(page_pts - centre, full_matrices=False)
+    _, _, vt = np.linalg.svd(page_pts - centre, full_matrices=False)
     axis = vt[0] if vt[0][0] >= 0 else -vt[0]
     normal = np.array([axis[1], -axis[0]])          # points up the page (y down) when the axis runs right
     if normal[1] > 0:
         normal = -normal
     reach = ((page_pts - centre) @ normal).max() + BALLOON_GAP
-    anchors, balloons = {}, []
+    anchors, placed = {}, []
     for row in table:
         pts = _anchor_member(visible_pts.get(row["role"], {}), to_page, axis)
         if pts is None:
@@ -185,18 +211,17 @@ def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: d
         along_m = (pts - np.median(pts, axis=0)) @ axis
         anchor = pts[np.argmax((pts - centre) @ normal - 0.5 * np.abs(along_m))]
         anchors[row["item"]] = anchor
-        along = (anchor - centre) @ axis
-        balloons.append([row, along])
-    balloons.sort(key=lambda b: b[1])
-    for i in range(1, len(balloons)):                # keep balloons apart along the axis
-        balloons[i][1] = max(balloons[i][1], balloons[i - 1][1] + 2.6 * BALLOON_R)
-    parts_svg = []
-    for row, along in balloons:
+        placed.append([row, (anchor - centre) @ axis])
+    placed.sort(key=lambda b: b[1])
+    for i in range(1, len(placed)):                # keep balloons apart along the axis
+        placed[i][1] = max(placed[i][1], placed[i - 1][1] + 2.6 * BALLOON_R)
+    out = []
+    for row, along in placed:
         c = centre + axis * along + normal * reach
         a = anchors[row["item"]]
         v = a - c
         edge = c + v / max(np.linalg.norm(v), 1e-9) * BALLOON_R
-        parts_svg.append(
+        out.append(
             f'<g class="balloon" data-item="{row["item"]}" data-family="{escape(row["role"])}">'
             f'<line x1="{edge[0]:.1f}" y1="{edge[1]:.1f}" x2="{a[0]:.1f}" y2="{a[1]:.1f}" stroke-width="0.6"/>'
             f'<circle cx="{a[0]:.1f}" cy="{a[1]:.1f}" r="1.8" fill="#000"/>'
@@ -204,8 +229,12 @@ def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: d
             f'<text x="{c[0]:.1f}" y="{c[1] + 5:.1f}" text-anchor="middle" font-size="14" stroke="none" '
             f'fill="#000">{row["item"]}</text></g>')
         page_pts = np.vstack([page_pts, c + BALLOON_R, c - BALLOON_R])
+    return out, page_pts
 
-    # ---- parts table: in the empty lower-right corner if it fits, else below the drawing
+
+def _parts_table(table: list[dict], page_pts: np.ndarray) -> tuple[list[str], tuple[float, float]]:
+    """The parts table: in the empty lower-right corner if it fits, else below the drawing.
+    Returns the SVG and the table's lower-right corner."""
     body = [[str(row["item"]), row["label"], str(row["qty"]), row["kind"], row["material"],
              _name_range(row["parts"])] for row in table]
     heads = ["Item", "Part family", "Qty", "Kind", "Material", "Parts"]
@@ -214,13 +243,12 @@ def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: d
     th = ROW_H * (len(table) + 1)
     xmax, ymax = page_pts.max(axis=0)
     x0, y0 = xmax - tw, ymax - th
-    inside = ((page_pts[:, 0] > x0 - 10) & (page_pts[:, 1] > y0 - 10)).any()
-    if inside:
+    if ((page_pts[:, 0] > x0 - 10) & (page_pts[:, 1] > y0 - 10)).any():
         y0 = ymax + 30
     t = [f'<g class="parts-table" transform="translate({x0:.1f},{y0:.1f})" font-size="12" stroke="none" '
-         f'fill="#000">']
+         f'fill="#000">',
+         f'<rect x="0" y="0" width="{tw}" height="{th}" fill="none" stroke="#000" stroke-width="0.8"/>']
     x = 0.0
-    t.append(f'<rect x="0" y="0" width="{tw}" height="{th}" fill="none" stroke="#000" stroke-width="0.8"/>')
     for name, w in cols:
         t.append(f'<text x="{x + 5:.1f}" y="{ROW_H - 7:.1f}" font-weight="bold">{name}</text>')
         x += w
@@ -238,22 +266,4 @@ def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: d
         x += w
         t.append(f'<line x1="{x}" y1="0" x2="{x}" y2="{th}" stroke="#000" stroke-width="0.4"/>')
     t.append("</g>")
-
-    width = max(xmax, x0 + tw) + margin
-    height = max(ymax, y0 + th) + margin
-    svg = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0f}" height="{height:.0f}" '
-           f'viewBox="0 0 {width:.1f} {height:.1f}" font-family="{FONT}">',
-           f'<title>{escape(title)}</title>',
-           '<rect width="100%" height="100%" fill="#fff"/>',
-           f'<text x="{margin}" y="{margin + 10}" font-size="18" font-weight="bold">{escape(title)}</text>',
-           f'<text x="{margin}" y="{margin + 30}" font-size="11" fill="#444">Hidden lines removed; parallel '
-           f'projection, the view of exploded.png; balloons number the part families of the table.</text>',
-           '<g class="drawing" fill="none" stroke="#000" stroke-linecap="round" stroke-linejoin="round">',
-           *groups, "</g>",
-           '<g class="balloons" stroke="#000">', *parts_svg, "</g>",
-           *t, "</svg>"]
-    Path(path).write_text("\n".join(svg) + "\n", encoding="utf-8")
-    return {"balloons": len(parts_svg), "rows": len(table), "runs": n_runs,
-            "depth_px": [W, H], "bytes": Path(path).stat().st_size}
-
-
+    return t, (x0 + tw, y0 + th)

@@ -7,7 +7,7 @@ import math
 import cadquery as cq
 import numpy as np
 
-from ..design import DiskSpec, Hole
+from ..model.specs import DiskSpec, Hole
 from . import DISK_ROTATION, Part, disk_placement
 
 COLOR = (0.93, 0.86, 0.62, 1.0)     # resin yellow

@@ -3,32 +3,32 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 
-from .design import Plan
-from .parts import Part
+from ..model.plan import Plan
+from . import Part
 
 
 def _disks(plan: Plan) -> Iterator[Part]:
-    from .parts.disk import build_disk
+    from .disk import build_disk
     for spec in plan.disks:
         yield build_disk(spec)
 
 
 def _backbone(plan: Plan) -> Iterator[Part]:
-    from .parts.backbone import build_backbone
+    from .backbone import build_backbone
     yield build_backbone(plan.backbone)
 
 
 def _tensioner(plan: Plan) -> Iterator[Part]:
-    from .parts.tensioner import build_tensioner
+    from .tensioner_parts import build_tensioner
     yield from build_tensioner(plan)
 
 
 def _tensioner_count(plan: Plan) -> int:
-    lay = plan.require_tensioner()
+    lay = plan.require_tensioner_layout()
     return sum(3 + len(u.clamps) for u in lay.units) + 1
 
 
-# (family, how many parts it yields, builder)
+# (family, how many parts it yields, builder); the builders import CadQuery only when they run
 FAMILIES: list[tuple[str, Callable[[Plan], int], Callable[[Plan], Iterator[Part]]]] = [
     ("disks", lambda p: len(p.disks), _disks),
     ("backbone", lambda p: 1, _backbone),

@@ -1,7 +1,7 @@
 """Tensioner solids: worm, wheel with spool, tendon clamp and housing.
 
-The numbers come from :mod:`hwgen.gears` (tooth and thread forms) and
-:mod:`hwgen.tensioner` (where everything sits); this module only turns them into
+The numbers come from :mod:`hwgen.model.gearing` (tooth and thread forms) and
+:mod:`hwgen.model.tensioner_layout` (where everything sits); this module only turns them into
 CadQuery solids. Identical geometry is built once: one worm and one clamp for every
 channel, one wheel per distinct spool layout (the three single-tendon channels share
 theirs).
@@ -26,12 +26,12 @@ from collections.abc import Iterator
 import cadquery as cq
 import numpy as np
 
-from ..design import Plan
-from ..gears import GearDesignError, WormPair
-from ..tensioner import (ANCHOR_HOLE, BOSS, CLAMP_INSERT_BORE, CLAMP_INSERT_DEPTH, CLAMP_PLATE, CLAMP_SCREW,
+from ..model.gearing import GearDesignError, WormPair
+from ..model.plan import Plan
+from ..model.tensioner_layout import (ANCHOR_HOLE, BOSS, CLAMP_INSERT_BORE, CLAMP_INSERT_DEPTH, CLAMP_PLATE, CLAMP_SCREW,
                          COLLAR, COLLAR_STEP, GAP, M3_CLEARANCE, M3_INSERT, M3_INSERT_DEPTH, POST,
                          SET_SCREW_INSERT, SHELF, STRIP_SLOT_CLEARANCE, WORM_CAP, TensionerLayout, Unit)
-from . import DISK_ROTATION, Part, placement
+from . import DISK_ROTATION, Part, location, placement
 
 WORM_COLOR = (0.75, 0.76, 0.78, 1.0)
 WHEEL_COLOR = (0.30, 0.55, 0.85, 1.0)
@@ -143,7 +143,6 @@ def wheel_solid(lay: TensionerLayout, unit: Unit, gear: cq.Solid, pin_bore: floa
                                                      f[0] - z_lo - TOOL)))
     solid = _one(body.cut(*tools))
     if unit.gear_on_top:
-        from ..export import location
         solid = _one(solid.moved(location(lay.wheel_flip(unit))))
     return solid
 
@@ -161,7 +160,7 @@ def cap_solid(lay: TensionerLayout, screws_file: list[tuple[float, float]]) -> c
     """Square flange (file Z from 0, the face outside the spine) with a spigot that locates
     in the spine hole and ends at the worm's collar; bored for the hex journal and two M3
     screws. Shares the worm's file frame."""
-    ts = lay.tensioner
+    ts = lay.params
     h = lay.cap_half
     flange = cq.Solid.makeBox(2 * h, 2 * h, WORM_CAP, cq.Vector(-h, -h, 0))
     spigot = cq.Solid.makeCylinder((lay.spine_hole - ts.running_fit) / 2, lay.cap_spigot,
@@ -202,7 +201,7 @@ def housing_solid(lay: TensionerLayout, plan: Plan) -> cq.Solid:
     """The housing in robot coordinates: base plate on the tip disk, strip clamp, two
     spines with the worms' hex journal bores, and per unit an upper shelf with the pin
     boss, a lower bar and the far worm post."""
-    ts = lay.tensioner
+    ts = lay.params
     pin_press = ts.shaft_diameter - ts.press_fit
     bx0, bx1, by0, by1, bz0, bz1 = lay.base
     sp0, sp1 = lay.spine
@@ -267,9 +266,8 @@ def housing_placement(lay: TensionerLayout) -> np.ndarray:
 
 
 def build_tensioner(plan: Plan) -> Iterator[Part]:
-    from ..export import location
-    lay = plan.require_tensioner()
-    ts = lay.tensioner
+    lay = plan.require_tensioner_layout()
+    ts = lay.params
     pair = lay.pair
     problems = pair.problems(ts.friction_coefficient, plan.design.process.min_wall)
     if problems:

@@ -1,13 +1,14 @@
-"""Bill of materials: bom.csv and bom.md from the manifest (and the checks' report.json).
+"""Bill of materials: bom.csv and bom.md from the manifest and the checks' report.json.
 
 Printed parts are the manifest's parts, one row per file, grouped by family (the part's
 ``role``). Purchased parts:
 
 * the backbone strip (any part of a purchased family, or with ``"purchased": true`` in its
   manifest entry): its cut size from the file's bounding box, its holes from the drill template;
-* every tendon, cut to its rest length plus the tie-off and spool allowances of ``render:``;
-  the rest length comes from the validator's ``report.json`` when the folder has one (measured
-  from the geometry), otherwise from eq. (2) at zero curvature on the design report's eyelets;
+* every tendon, cut to its rest length plus the tie-off and spool allowances of ``bom:``;
+  the rest length is the one the checks measured from the geometry (``report.json``, written
+  by the stage before this one); a folder without a report (built without its checks) gets
+  eq. (2) at zero curvature on the design report's eyelets, and says so;
 * screws and nuts for the tip-mount bolt pattern, sized from the clearance holes;
 * hardware a part lists in its manifest entry as ``"hardware": [{"item", "qty", "size",
   "material", "notes"}]``, summed over parts by item and size. An entry marked
@@ -22,10 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
-from . import kinematics as kin
+from ..cad.manifest import sha256
+from ..model import kinematics as kin
 
 PURCHASED_ROLES = {"backbone"}     # families that are bought and cut, not printed
-REPORT = "report.json"             # written by the checks step, read here when present
+REPORT = "report.json"             # written by the checks stage, before this one
 
 # ISO 273 "normal" clearance holes: hole diameter -> metric thread it clears.
 ISO273_NORMAL = {2.4: "M2", 2.9: "M2.5", 3.4: "M3", 4.5: "M4", 5.5: "M5", 6.6: "M6", 9.0: "M8"}
@@ -122,7 +124,7 @@ def bom_rows(folder: Path, manifest: dict, design) -> tuple[list[dict], str]:
             size=_size(folder, e), volume_mm3=f"{e['volume_mm3']:.1f}", file=e["files"]["step"]["path"], notes=notes)
 
     lengths, source = rest_lengths(folder, manifest)
-    r = design.render
+    r = design.bom
     allowance = r.tie_off_mm + r.spool_mm
     tm = design.tendon_material
     for t in manifest["design_report"]["tendons"]:
@@ -241,7 +243,7 @@ def _markdown(manifest: dict, design, rows: list[dict], source: str) -> str:
     for r in bought:
         L.append(f"| {r['item']} | {r['part']} | {r['qty']} | {_md_cell(r['material'])} | {r['size']} | "
                  f"{_md_cell(r['notes'])} |")
-    r_ = design.render
+    r_ = design.bom
     L += ["", f"### Tendons: {design.tendon_material.name}, Ø{design.tendon_material.diameter:g} mm", "",
           f"Cut length = rest length + {r_.tie_off_mm:g} mm tie-off (knot at the base disk) + "
           f"{r_.spool_mm:g} mm spool (to reach and wrap the tensioner). Rest lengths: {source}.", "",
@@ -264,7 +266,6 @@ def _markdown(manifest: dict, design, rows: list[dict], source: str) -> str:
 
 def write_bom(folder: Path, manifest: dict, design) -> list[dict]:
     """bom.csv and bom.md into the folder; records them and the rest-length source in the manifest."""
-    from .export import sha256
     folder = Path(folder)
     rows, source = bom_rows(folder, manifest, design)
     (folder / "bom.csv").write_text(_csv(rows), encoding="utf-8")

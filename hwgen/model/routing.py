@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .params import Design, RoutingFunction
+from ..params import Design, RoutingFunction
 
 DEFAULT_BUDGET_MM = 0.2  # the paper's claim for the stiffening tendons (Sect. IV-A)
 

@@ -15,8 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..model.gearing import worm_pair
 from .base import Check
-from .measure import load_mesh
+from .measure import load_mesh, to_manifold
 
 INTERFERENCE_TOL_MM3 = 0.01   # worm ∩ wheel at the nominal mesh counts as zero below this
 GAP_TOL_MM = 0.02             # STL chordal tolerance is 0.01 mm on each part
@@ -29,12 +30,8 @@ TENDON_SEGMENTS = 16          # facets of the tendon's cylinder
 
 def manifold(folder: Path, entry: dict, placement: np.ndarray | None = None):
     """The part's STL as a manifold3d solid in robot coordinates (or under ``placement``)."""
-    import manifold3d as m3d
     mesh = load_mesh(Path(folder) / entry["files"]["stl"]["path"])
-    m = np.asarray(entry["placement"] if placement is None else placement, dtype=float)
-    v = np.asarray(mesh.vertices, dtype=np.float64) @ m[:3, :3].T + m[:3, 3]
-    return m3d.Manifold(m3d.Mesh(vert_properties=v.astype(np.float32),
-                                 tri_verts=np.asarray(mesh.faces, dtype=np.uint32)))
+    return to_manifold(mesh, entry["placement"] if placement is None else placement)
 
 
 def axis(entry: dict) -> tuple[np.ndarray, np.ndarray]:
@@ -90,7 +87,6 @@ def _pairs(manifest: dict) -> dict[str, dict[str, dict]]:
 
 
 def gear_checks(folder: Path, manifest: dict, plan) -> list[Check]:
-    from ..gears import worm_pair
     folder = Path(folder)
     d = plan.design
     ts = d.tensioner

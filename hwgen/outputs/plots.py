@@ -2,11 +2,11 @@
 top, the budgeted (stiffening) tendons zoomed below with their budgets drawn in."""
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
+
+from ..atomic import atomic_path
 
 
 def plot_lengths(report: dict, path: Path) -> None:
@@ -44,15 +44,8 @@ def plot_lengths(report: dict, path: Path) -> None:
         ax.grid(True, alpha=0.3)
     axes[-1, 0].set_xlabel("constant-curvature bending angle (deg)")
     fig.tight_layout()
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".png", dir=path.parent)
-    os.close(fd)
     try:
-        fig.savefig(tmp, dpi=110)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=110, format="png")
     finally:
         plt.close(fig)

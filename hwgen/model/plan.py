@@ -9,83 +9,16 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..errors import DesignError
+from ..params import Design
 from . import kinematics as kin
-from .params import Design
+from .crossings import crossing_angles, in_strip_plane, strip_crossings
 from .routing import TendonPath, tendon_paths
-
-class DesignError(Exception):
-    """Parameters that each pass their checks but together make no buildable part.
-
-    ``path`` names the section of the YAML to change; the CLI reports it like bad input.
-    """
-
-    def __init__(self, path: str, message: str):
-        self.path, self.message = path, message
-        super().__init__(f"{path}: {message}")
-
+from .specs import BackboneHole, BackboneSpec, DiskSpec, Hole, Merge
+from .tensioner_layout import TensionerLayout, layout
 
 SAME_POSITION_MM = 1e-6  # eyelets closer than this share one hole
 SWEEP_STEP_DEG = 1.0     # resolution of the bending sweep used to size eyelets
-
-
-@dataclass(frozen=True)
-class Hole:
-    """An eyelet hole: centre (x, z) on the disk mid-plane, axis in disk coordinates (x, y, z)."""
-
-    x: float
-    z: float
-    axis: tuple[float, float, float]
-    diameter: float
-    tendons: tuple[str, ...]
-    worst_angle_deg: float   # largest tendon angle to the axis over the sweep
-    in_slot: bool            # the centre lies inside the backbone slot: the strip needs a hole here
-
-
-@dataclass(frozen=True)
-class DiskSpec:
-    """One tendon-support disk, ready to build."""
-
-    index: int
-    y: float
-    role: str                # "base", "inner" or "tip"
-    thickness: float
-    outer_diameter: float
-    slot_width: float        # along x
-    slot_height: float       # along z
-    holes: tuple[Hole, ...]
-    edge_size: float         # chamfer at hole rims, 0 for none
-    knot_pockets: tuple[tuple[float, float, float, float], ...] = ()  # (x, z, diameter, depth), base side
-    mount_holes: tuple[tuple[float, float, float], ...] = ()          # (x, z, diameter), through
-
-    @property
-    def name(self) -> str:
-        return f"disk_{self.index:02d}"
-
-
-@dataclass(frozen=True)
-class BackboneHole:
-    tendon: str
-    station: float           # disk index, or a fraction between two disks
-    x: float
-    y: float
-    diameter: float
-
-
-@dataclass(frozen=True)
-class BackboneSpec:
-    height: float
-    thickness: float
-    y_start: float           # robot y of the strip's base end (negative: clamping length)
-    y_end: float
-    holes: tuple[BackboneHole, ...]
-    name: str = "backbone"
-
-
-@dataclass(frozen=True)
-class Merge:
-    station: int
-    tendons: tuple[str, ...]
-    kind: str                # "shared": same position, one hole; "overlap": holes intersect
 
 
 @dataclass(frozen=True)
@@ -96,14 +29,14 @@ class Plan:
     backbone: BackboneSpec
     merges: tuple[Merge, ...]
     findings: tuple[str, ...] = field(default=())
-    tensioner: object | None = None          # hwgen.tensioner.TensionerLayout, when one can be laid out
-    tensioner_error: str | None = None       # why not, otherwise
+    tensioner_layout: TensionerLayout | None = None   # where the worm drives go, when they can be laid out
+    tensioner_error: str | None = None                # why not, otherwise
 
-    def require_tensioner(self):
+    def require_tensioner_layout(self) -> TensionerLayout:
         """The tensioner layout, or a DesignError saying why this design has none."""
-        if self.tensioner is None:
+        if self.tensioner_layout is None:
             raise DesignError("tensioner", self.tensioner_error or "no tensioner layout")
-        return self.tensioner
+        return self.tensioner_layout
 
     @property
     def stations(self) -> tuple[float, ...]:
@@ -226,71 +159,34 @@ def plan(design: Design) -> Plan:
         spec, m = _disk_spec(d, i, paths, rest_axes, sweeps=sweeps)
         disks.append(spec)
         merges += m
-    bb_holes, findings = _backbone_holes(d, paths, disks, sweeps)
+    bb_holes, findings = _backbone_holes(d, paths, disks)
     backbone = BackboneSpec(d.backbone.height, d.backbone.thickness, -d.backbone.extra_base,
                             d.backbone.length + d.backbone.extra_tip, tuple(bb_holes))
     first = Plan(d, paths, tuple(disks), backbone, tuple(merges), tuple(findings))
-
-    from .tensioner import layout  # numpy only; it reads the Plan defined here
     try:
-        lay = layout(first)
+        lay = layout(d, paths, disks[-1])
     except ValueError as e:
         return replace(first, tensioner_error=str(e))
     exits = {r.tendon: np.subtract(r.end, r.start) / r.length for r in lay.runs}
     tip, tip_merges = _disk_spec(d, len(disks) - 1, paths, rest_axes, exits, sweeps)
     merges = [m for m in merges if m.station != tip.index] + tip_merges
-    return replace(first, disks=(*disks[:-1], tip), merges=tuple(merges), tensioner=lay)
+    return replace(first, disks=(*disks[:-1], tip), merges=tuple(merges), tensioner_layout=lay)
 
 
-def _strip_crossing_angle(design: Design, path: TendonPath, station: float, sweep: Sweep) -> float:
-    """Worst angle (rad) between the tendon and the strip's normal where it crosses, over the sweep.
-
-    At a disk both segments count; between disks the chord is compared with the normal of the
-    bent strip at that arc length. The strip is thin, but the line crosses it steeply (C1 at the
-    prototype's middle disk meets it at about 75° to its normal), so this sets the hole, not the
-    disk's eyelet.
-    """
-    normal = np.array([0.0, 0.0, 1.0])
-    if float(station).is_integer():
-        return float(_worst_angles(sweep, np.tile(normal, (len(path.points), 1)))[int(station)])
-    kappa = _sweep(design)
-    i = int(station)
-    st = design.stations
-    P = kin.points_in_space(st, path.points, kappa)
-    seg = P[:, i + 1] - P[:, i]
-    seg /= np.linalg.norm(seg, axis=1, keepdims=True)
-    R, _ = kin.frames([st[i] + (station - i) * (st[i + 1] - st[i])], kappa)
-    cos = np.abs(np.einsum("ki,ki->k", seg, R[:, 0] @ normal))
-    return float(np.arccos(np.clip(cos, 0, 1)).max())
-
-
-def _backbone_holes(d: Design, paths: list[TendonPath], disks: list[DiskSpec], sweeps: dict[str, Sweep]):
+def _backbone_holes(d: Design, paths: list[TendonPath], disks: list[DiskSpec]):
     """Holes the strip needs where tendons cross its plane (z = 0) within its height,
     each sized for the steepest angle the tendon meets the strip at over the sweep."""
     half_h = d.backbone.height / 2
-    st = np.asarray(d.stations)
+    kappa = _sweep(d)
     out, findings = [], []
-
-    def strip_hole(p: TendonPath, station: float, x: float, y: float) -> BackboneHole:
-        beta = _strip_crossing_angle(d, p, station, sweeps[p.name])
-        dia = hole_diameter(d.tendon_material.diameter, d.backbone.thickness, beta,
-                            d.process.hole_clearance, d.process.min_hole)
-        return BackboneHole(p.name, float(station), float(x), float(y), float(dia))
-
     for p in paths:
-        x, z = p.points[:, 0], p.points[:, 1]
-        for i in range(len(st)):
-            hole = next((h for h in disks[i].holes if p.name in h.tendons), None)
-            if hole is not None and hole.in_slot:
-                out.append(strip_hole(p, i, x[i], st[i]))
-        for i in range(len(st) - 1):
-            z0, z1 = z[i], z[i + 1]
-            if z0 == 0 and z1 == 0 and (abs(x[i]) < half_h or abs(x[i + 1]) < half_h):
-                findings.append(f"{p.name}: runs in the backbone plane between stations {i} and {i + 1}")
-                continue
-            if z0 * z1 < 0:  # crosses strictly between the disks
-                f = z0 / (z0 - z1)
-                xc = x[i] + f * (x[i + 1] - x[i])
-                if abs(xc) < half_h:
-                    out.append(strip_hole(p, i + f, xc, st[i] + f * (st[i + 1] - st[i])))
+        in_slot = {i for i, disk in enumerate(disks)
+                   if any(p.name in h.tendons and h.in_slot for h in disk.holes)}
+        for station, x, y in strip_crossings(d.stations, p.points, half_h, in_slot):
+            beta = float(crossing_angles(d.stations, p.points, station, kappa).max())
+            dia = hole_diameter(d.tendon_material.diameter, d.backbone.thickness, beta,
+                                d.process.hole_clearance, d.process.min_hole)
+            out.append(BackboneHole(p.name, float(station), float(x), float(y), float(dia)))
+        findings += [f"{p.name}: runs in the backbone plane between stations {i} and {i + 1}"
+                     for i in in_strip_plane(p.points, half_h)]
     return out, findings

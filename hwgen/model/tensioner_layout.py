@@ -31,8 +31,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .design import Plan
-from .gears import WORM_TO_MESH, WormPair, worm_pair
+from ..params import Design, Tensioner
+from .gearing import WORM_TO_MESH, WormPair, worm_pair
+from .routing import TendonPath
+from .specs import DiskSpec
 
 # Spool and wheel part (mm)
 WIND_WIDTH = 3.0         # axial length of one tendon's winding zone
@@ -151,7 +153,7 @@ class TensionerLayout:
     base: tuple[float, float, float, float, float, float]          # x0, x1, y0, y1, z0, z1
     mount_holes: tuple[tuple[float, float, float], ...]            # (x, z, bore) on the base plate
     tendon_holes: tuple[tuple[float, float, float], ...]           # (x, z, diameter) through the base plate
-    tensioner: object                                              # the params section
+    params: Tensioner                                              # the YAML's tensioner section
 
     def unit(self, channel: str) -> Unit:
         return next(u for u in self.units if u.channel == channel)
@@ -270,226 +272,315 @@ def _tangent_point(p: np.ndarray, c: np.ndarray, r: float, side: int) -> np.ndar
     return best
 
 
-def layout(plan: Plan) -> TensionerLayout:
-    d = plan.design
-    ts = d.tensioner
-    pair = worm_pair(ts)
-    tip = plan.disks[-1]
-    y_face = tip.y + tip.thickness / 2
-    tendon_d = d.tendon_material.diameter
-    r_s = ts.spool_diameter / 2
-    r_w = r_s + tendon_d / 2
-    r_f = r_s + FLANGE_HEIGHT
-    pin_r = ts.shaft_diameter / 2
-    hub_r = max(pin_r + ts.running_fit / 2 + HUB_WALL, r_s)
-    if r_s < pin_r + ts.running_fit / 2 + d.process.min_wall:
-        raise ValueError(f"tensioner.spool_diameter {ts.spool_diameter:g} mm leaves no wall around "
-                         f"the Ø{ts.shaft_diameter:g} mm pin")
-    a = pair.center_distance
-    b = pair.face_width
-    spine_hole = 2 * pair.ra1 + 1.0                 # the worm and its collar pass through
-    cap_screw = spine_hole / 2 + M3_INSERT / 2 + CAP_WALL
-    cap_half = cap_screw + M3_CLEARANCE / 2 + CAP_WALL
-    strip_half_x = d.backbone.height / 2
-    strip_half_z = d.backbone.thickness / 2
-    y_end = d.backbone.length + d.backbone.extra_tip
+def spool_wall_problem(ts: Tensioner, min_wall: float) -> str | None:
+    """Why the spool drum leaves too little wall around its pin's bore, or None."""
+    if ts.spool_diameter < ts.shaft_diameter + ts.running_fit + 2 * min_wall:
+        return (f"{ts.spool_diameter:g} mm leaves less than {min_wall:g} mm of wall around "
+                f"the Ø{ts.shaft_diameter:g} mm pin's bore")
+    return None
 
-    # eyelets at the tip, per channel
-    eyelets: dict[str, list[tuple[str, float, float]]] = {c: [] for c in ts.channels}
-    for p in plan.paths:
+
+@dataclass(frozen=True)
+class _Sizes:
+    """Dimensions every unit shares, derived once from the parameters (mm)."""
+
+    pair: WormPair
+    y_face: float            # the tip disk's outer face
+    tendon_d: float
+    r_s: float               # spool core radius
+    r_w: float               # winding radius: the tendon's centre on the drum
+    r_f: float               # flange radius
+    hub_r: float
+    spine_hole: float        # the worm and its collar pass through
+    cap_screw: float
+    cap_half: float
+    strip_half_x: float
+    strip_half_z: float
+    y_end: float             # the strip's tip end
+
+    @staticmethod
+    def of(d: Design, tip: DiskSpec) -> _Sizes:
+        ts = d.tensioner
+        pair = worm_pair(ts)
+        r_s = ts.spool_diameter / 2
+        problem = spool_wall_problem(ts, d.process.min_wall)
+        if problem:
+            raise ValueError(f"tensioner.spool_diameter {problem}")
+        spine_hole = 2 * pair.ra1 + 1.0
+        cap_screw = spine_hole / 2 + M3_INSERT / 2 + CAP_WALL
+        return _Sizes(pair, tip.y + tip.thickness / 2, d.tendon_material.diameter, r_s,
+                      r_s + d.tendon_material.diameter / 2, r_s + FLANGE_HEIGHT,
+                      max(ts.shaft_diameter / 2 + ts.running_fit / 2 + HUB_WALL, r_s),
+                      spine_hole, cap_screw, cap_screw + M3_CLEARANCE / 2 + CAP_WALL,
+                      d.backbone.height / 2, d.backbone.thickness / 2,
+                      d.backbone.length + d.backbone.extra_tip)
+
+
+@dataclass(frozen=True)
+class _Stack:
+    """One unit's parts along z (robot z, mm), before it is placed in x and y."""
+
+    zones: tuple[tuple[float, float], ...]
+    flanges: tuple[tuple[float, float], ...]
+    caps: tuple[tuple[float, float], ...]
+    gear: tuple[float, float]
+    clamps: tuple[tuple[float, float], ...]
+    z_part: tuple[float, float]
+    z_wheel: float
+    upper: tuple[float, float]
+    lower: tuple[float, float]
+    pins: tuple[float, float]
+
+    @property
+    def z_span(self) -> tuple[float, float]:
+        return self.lower[0], self.upper[1]
+
+
+def _tip_eyelets(paths: list[TendonPath], channels) -> dict[str, list[tuple[str, float, float]]]:
+    """(tendon, x, z) of every tendon at the tip disk, per channel; refuses what one drum cannot wind."""
+    eyelets: dict[str, list[tuple[str, float, float]]] = {c: [] for c in channels}
+    for p in paths:
         x, z = (float(v) for v in p.points[-1])
         eyelets[p.channel].append((p.name, x, z))
-    for c, ts_ in eyelets.items():
-        if not ts_:
+    for c, here in eyelets.items():
+        if not here:
             raise ValueError(f"tensioner channel {c!r} has no tendon")
-        xs = {round(x, 6) for _, x, _ in ts_}
+        xs = {round(x, 6) for _, x, _ in here}
         if len(xs) > 1:
             raise ValueError(f"channel {c!r}: its tendons leave the tip at different x {sorted(xs)}; a drum "
                              f"winds tendons lying in planes z = const that share one tangent line")
-    for c, ts_ in eyelets.items():
-        zs = sorted(z for _, _, z in ts_)
+    for c, here in eyelets.items():
+        zs = sorted(z for _, _, z in here)
         for z0, z1 in zip(zs, zs[1:]):
             if z1 - z0 < WIND_WIDTH + 2 * FLANGE:
                 raise ValueError(f"channel {c!r}: tendons at z = {z0:g} and {z1:g} are too close to wind "
                                  f"side by side ({WIND_WIDTH + 2 * FLANGE:g} mm needed)")
+    return eyelets
 
-    # z stack of each unit
-    stacks = {}
-    for c in ts.channels:
-        zs = [z for _, _, z in eyelets[c]]
-        zones, flanges, caps, gear, clamps, z_part, span = _wheel_stack(zs, b, pair.ra1)
-        zw = (gear[0] + gear[1]) / 2
-        hi = max(span[1], zw + pair.ra1)
-        lo = span[0]
-        upper = (hi + GAP, hi + GAP + SHELF)
-        lower = (lo - GAP - SHELF, lo - GAP)
-        pins = (_pin_length(z_part[0] - GAP - lower[0]), _pin_length(upper[1] - (z_part[1] + GAP)))
-        stacks[c] = (zones, flanges, caps, gear, clamps, z_part, zw, upper, lower, pins, (lower[0], upper[1]))
 
-    clamp_y1 = y_end + 2.0
-    clamp_block = (-strip_half_x - STRIP_CLAMP_X, strip_half_x + STRIP_CLAMP_X, y_face + BASE, clamp_y1,
-                   STRIP_CLAMP_Z[0], STRIP_CLAMP_Z[1])
+def _unit_stack(zs: list[float], pair: WormPair) -> _Stack:
+    """The z stack of one unit: wheel part, shelf above, bar below, and the dowels between."""
+    b = pair.face_width
+    zones, flanges, caps, gear, clamps, z_part, span = _wheel_stack(zs, b, pair.ra1)
+    zw = (gear[0] + gear[1]) / 2
+    hi = max(span[1], zw + pair.ra1)
+    lo = span[0]
+    upper = (hi + GAP, hi + GAP + SHELF)
+    lower = (lo - GAP - SHELF, lo - GAP)
+    pins = (_pin_length(z_part[0] - GAP - lower[0]), _pin_length(upper[1] - (z_part[1] + GAP)))
+    return _Stack(zones, flanges, caps, gear, clamps, z_part, zw, upper, lower, pins)
 
-    def hits_clamp(c):
-        z0, z1 = stacks[c][-1]
-        return z0 < clamp_block[5] + GAP and z1 > clamp_block[4] - GAP
-    order = [c for c in ts.channels if not hits_clamp(c)] + [c for c in ts.channels if hits_clamp(c)]
 
-    def solve(lift: float):
-        # two columns, right (+x) and left (-x), alternating in build order; a left unit is a
-        # right unit turned 180° about z (same parts, worm on the wheel's -y side)
-        side = {c: (1 if i % 2 == 0 else -1) for i, c in enumerate(order)}
-        wheel_reach = max(pair.ra2, r_f, BOSS) + UNIT_GAP / 2
-        worm_reach = a + max(cap_half, POST / 2) + UNIT_GAP / 2
-        centers_y: dict[str, float] = {}
-        y_next = {1: y_face + BASE + GAP + lift, -1: y_face + BASE + GAP + lift}
-        for c in order:
-            s = side[c]
-            below, above = (wheel_reach, worm_reach) if s > 0 else (worm_reach, wheel_reach)
-            floor = clamp_y1 + GAP if hits_clamp(c) else y_next[s]
-            yc = max(y_next[s], floor) + below
-            centers_y[c] = yc
-            y_next[s] = yc + above
+def _strip_clamp(sz: _Sizes) -> tuple[float, float, float, float, float, float]:
+    """The block that clamps the strip's tip end: x0, x1, y0, y1, z0, z1."""
+    return (-sz.strip_half_x - STRIP_CLAMP_X, sz.strip_half_x + STRIP_CLAMP_X, sz.y_face + BASE, sz.y_end + 2.0,
+            STRIP_CLAMP_Z[0], STRIP_CLAMP_Z[1])
 
-        # worm along x: file Z (its axis) runs from the spine inward; thread centred on the wheel
-        L = pair.worm_length
 
-        def build(x_u: float):
-            n = round(-L / (2 * pair.pitch))
-            x_thread = x_u - n * pair.pitch                  # |x| of the thread's spine-side end
-            # the worm goes in from outside through a hole in the spine that its collar passes;
-            # a bearing cap (spigot in that hole, flange screwed to the spine) carries the
-            # hex journal and holds the worm against the far post
-            spine_in = max(x_thread + COLLAR, x_u + pair.ra2 + GAP) + GAP
-            spine = (spine_in, spine_in + SPINE)
-            x_cap = spine[1] + WORM_CAP                      # |x| of the cap's and the worm's outer face
-            hex_journal = x_cap - x_thread                   # worm file Z from the outer end to the thread
-            ty = -hex_journal + n * pair.pitch               # a thread space on the wheel's tooth at mesh y = 0
-            wf = np.eye(4)
-            wf[:3, :3] = WORM_TO_MESH
-            wf[:3, 3] = [a, ty, 0.0]
-            x_outer = x_u - ty                               # |x| of worm file Z = 0 (= x_cap)
-            x_far = x_outer - (hex_journal + L)
-            post = (x_far - AXIAL_PLAY / 2 - POST, x_far - AXIAL_PLAY / 2)
-            units = []
-            for c in order:
-                zones, flanges, caps, gear, clamps, z_part, zw, upper, lower, pins, _ = stacks[c]
-                s = side[c]
-                units.append(Unit(c, tuple(n_ for n_, _, _ in eyelets[c]), s, (s * x_u, centers_y[c]), z_part,
-                                  zones, flanges, caps, gear, clamps, centers_y[c] + s * a, zw, upper, lower,
-                                  (pins[0], pins[1])))
-            runs = []
-            for u in units:
-                for name, x, z in eyelets[u.channel]:
-                    p0 = np.array([x, y_face])
-                    t = _tangent_point(p0, np.array(u.center), r_w, u.side)
-                    ang = math.degrees(math.atan2(abs(t[0] - x), t[1] - y_face))
-                    runs.append(TendonRun(name, u.channel, (x, y_face, z), (float(t[0]), float(t[1]), z), ang))
-            return spine, hex_journal, wf, (x_far, x_outer), post, tuple(units), tuple(runs)
+def _place_units(order: list[str], stacks: dict[str, _Stack], clamp, sz: _Sizes, lift: float):
+    """Columns and wheel-axis heights y: units alternate right (+x) and left, stacked along +y;
+    a unit whose z span meets the strip clamp goes beyond it. Returns (side, centre y) per channel."""
+    pair = sz.pair
+    side = {c: (1 if i % 2 == 0 else -1) for i, c in enumerate(order)}
+    wheel_reach = max(pair.ra2, sz.r_f, BOSS) + UNIT_GAP / 2
+    worm_reach = pair.center_distance + max(sz.cap_half, POST / 2) + UNIT_GAP / 2
+    centers_y: dict[str, float] = {}
+    y_next = {1: sz.y_face + BASE + GAP + lift, -1: sz.y_face + BASE + GAP + lift}
+    for c in order:
+        s = side[c]
+        below, above = (wheel_reach, worm_reach) if s > 0 else (worm_reach, wheel_reach)
+        floor = clamp[3] + GAP if _meets_clamp(stacks[c], clamp) else y_next[s]
+        yc = max(y_next[s], floor) + below
+        centers_y[c] = yc
+        y_next[s] = yc + above
+    return side, centers_y
 
-        def clearance(spine, post, worm_x, units, runs) -> tuple[float, str]:
-            worst, what = math.inf, ""
-            need_z = tendon_d / 2 + TENDON_MARGIN
-            for r in runs:
-                p0, p1 = np.array(r.start[:2]), np.array(r.end[:2])
-                z = r.start[2]
-                shapes = []
-                for u in units:
-                    cx, cy = u.center
-                    s = u.side
-                    own = u.channel == r.channel
 
-                    def zin(z0, z1):
-                        return z0 - need_z < z < z1 + need_z
+def _meets_clamp(stack: _Stack, clamp) -> bool:
+    z0, z1 = stack.z_span
+    return z0 < clamp[5] + GAP and z1 > clamp[4] - GAP
 
-                    def rect(x0, x1, y0, y1):
-                        xs = sorted((s * x0, s * x1))
-                        return (xs[0], xs[1], min(y0, y1), max(y0, y1))
-                    if not own:
-                        if zin(*u.z_part):
-                            shapes.append((f"{u.channel} spool", "circle", (cx, cy, max(r_f, hub_r))))
-                        if zin(*u.z_gear):
-                            shapes.append((f"{u.channel} wheel", "circle", (cx, cy, pair.ra2)))
-                        for cap in u.caps:
-                            if zin(*cap):
-                                shapes.append((f"{u.channel} cap", "circle", (cx, cy, pair.rf2)))
-                    reach = CLAMP_PLATE[2] + CLAMP_HEAD
-                    for zc, sz in u.clamps:
-                        if zin(min(zc, zc + sz * reach), max(zc, zc + sz * reach)):
-                            shapes.append((f"{u.channel} clamp", "circle", (cx, cy, pair.rf2)))
-                    if zin(u.worm_z - pair.ra1, u.worm_z + pair.ra1):
-                        shapes.append((f"{u.channel} worm", "rect", rect(worm_x[0], worm_x[1], u.worm_y - pair.ra1,
-                                                                         u.worm_y + pair.ra1)))
-                    if zin(u.worm_z - POST / 2, u.upper_shelf[1]):
-                        shapes.append((f"{u.channel} post", "rect", rect(post[0], post[1], u.worm_y - POST / 2,
-                                                                         u.worm_y + POST / 2)))
-                    if zin(*u.upper_shelf):
-                        shapes.append((f"{u.channel} shelf", "rect", rect(post[0], spine[1], cy - s * BOSS,
-                                                                          u.worm_y + s * POST / 2)))
-                        shapes.append((f"{u.channel} boss", "circle", (cx, cy, BOSS)))
-                    if zin(u.z_part[1], u.upper_shelf[0]):
-                        shapes.append((f"{u.channel} boss", "circle", (cx, cy, BOSS)))
-                    if zin(u.lower_bar[1], u.z_part[0]):
-                        shapes.append((f"{u.channel} boss", "circle", (cx, cy, BOSS)))
-                    if zin(*u.lower_bar):
-                        shapes.append((f"{u.channel} bar", "rect",
-                                       rect(abs(cx) - BOSS, spine[1], cy - BOSS, cy + BOSS)))
-                for s in (1, -1):
-                    xs = sorted((s * spine[0], s * spine[1] * 10))
-                    shapes.append(("spine", "rect", (xs[0], xs[1], y_face, math.inf)))
-                cb = clamp_block
-                if cb[4] - need_z < z < cb[5] + need_z:
-                    shapes.append(("strip clamp", "rect", (cb[0], cb[1], cb[2], cb[3])))
-                for name, kind, g in shapes:
-                    if kind == "circle":
-                        dist = _seg_point_dist(p0, p1, np.array(g[:2])) - g[2]
-                    else:
-                        dist = _seg_rect_dist(p0, p1, *g)
-                    if dist < worst:
-                        worst, what = dist, f"tendon {r.tendon} passes {name} at {dist:.2f} mm"
-            return worst, what
 
-        x_min = max(abs(x) for v in eyelets.values() for _, x, _ in v) + r_w + TENDON_MARGIN
-        x_u = x_min
-        last = ""
-        while x_u < x_min + X_SEARCH:
-            spine, hex_journal, wf, worm_x, post, units, runs = build(x_u)
-            worst, last = clearance(spine, post, worm_x, units, runs)
-            # the far posts stay on their own side of x = 0, clear of the other column
-            if worst >= tendon_d + TENDON_MARGIN and post[0] >= UNIT_GAP / 2:
-                break
-            x_u += X_STEP
-        else:
-            raise ValueError(f"no tensioner layout keeps every tendon clear: {last}")
-        return x_u, spine, hex_journal, wf, worm_x, post, units, runs
+@dataclass(frozen=True)
+class _Frame:
+    """The units placed at one wheel-axis |x| (x_u), with the worms, spines and posts that follow."""
 
-    # Lift the stack off the tip until no tendon turns by more than MAX_EXIT_DEG at its tip eyelet.
+    spine: tuple[float, float]
+    hex_journal: float
+    worm_file_to_mesh: np.ndarray
+    worm_x: tuple[float, float]
+    post: tuple[float, float]
+    units: tuple[Unit, ...]
+    runs: tuple[TendonRun, ...]
+
+
+def _frame(x_u: float, order, side, centers_y, stacks, eyelets, sz: _Sizes) -> _Frame:
+    """Everything at wheel-axis |x| = x_u. The worm runs along x from the spine inward, its
+    thread centred on the wheel; it goes in from outside through a hole in the spine that its
+    collar passes, and a bearing cap (spigot in that hole, flange screwed to the spine)
+    carries the hex journal and holds the worm against the far post."""
+    pair = sz.pair
+    a = pair.center_distance
+    L = pair.worm_length
+    n = round(-L / (2 * pair.pitch))
+    x_thread = x_u - n * pair.pitch                  # |x| of the thread's spine-side end
+    spine_in = max(x_thread + COLLAR, x_u + pair.ra2 + GAP) + GAP
+    spine = (spine_in, spine_in + SPINE)
+    x_cap = spine[1] + WORM_CAP                      # |x| of the cap's and the worm's outer face
+    hex_journal = x_cap - x_thread                   # worm file Z from the outer end to the thread
+    ty = -hex_journal + n * pair.pitch               # a thread space on the wheel's tooth at mesh y = 0
+    wf = np.eye(4)
+    wf[:3, :3] = WORM_TO_MESH
+    wf[:3, 3] = [a, ty, 0.0]
+    x_outer = x_u - ty                               # |x| of worm file Z = 0 (= x_cap)
+    x_far = x_outer - (hex_journal + L)
+    post = (x_far - AXIAL_PLAY / 2 - POST, x_far - AXIAL_PLAY / 2)
+    units = []
+    for c in order:
+        st, s = stacks[c], side[c]
+        units.append(Unit(c, tuple(n_ for n_, _, _ in eyelets[c]), s, (s * x_u, centers_y[c]), st.z_part,
+                          st.zones, st.flanges, st.caps, st.gear, st.clamps, centers_y[c] + s * a, st.z_wheel,
+                          st.upper, st.lower, st.pins))
+    runs = []
+    for u in units:
+        for name, x, z in eyelets[u.channel]:
+            p0 = np.array([x, sz.y_face])
+            t = _tangent_point(p0, np.array(u.center), sz.r_w, u.side)
+            ang = math.degrees(math.atan2(abs(t[0] - x), t[1] - sz.y_face))
+            runs.append(TendonRun(name, u.channel, (x, sz.y_face, z), (float(t[0]), float(t[1]), z), ang))
+    return _Frame(spine, hex_journal, wf, (x_far, x_outer), post, tuple(units), tuple(runs))
+
+
+def _zin(z: float, need: float, z0: float, z1: float) -> bool:
+    return z0 - need < z < z1 + need
+
+
+def _obstacles(run: TendonRun, fr: _Frame, clamp, sz: _Sizes) -> list[tuple[str, str, tuple]]:
+    """Every part outline in the tendon's plane z: (name, "circle" (x, y, r) | "rect" (x0, x1, y0, y1))."""
+    pair = sz.pair
+    z = run.start[2]
+    need = sz.tendon_d / 2 + TENDON_MARGIN
+    shapes = []
+    for u in fr.units:
+        cx, cy = u.center
+        s = u.side
+
+        def zin(z0, z1):
+            return _zin(z, need, z0, z1)
+
+        def rect(x0, x1, y0, y1):
+            xs = sorted((s * x0, s * x1))
+            return (xs[0], xs[1], min(y0, y1), max(y0, y1))
+        if u.channel != run.channel:
+            if zin(*u.z_part):
+                shapes.append((f"{u.channel} spool", "circle", (cx, cy, max(sz.r_f, sz.hub_r))))
+            if zin(*u.z_gear):
+                shapes.append((f"{u.channel} wheel", "circle", (cx, cy, pair.ra2)))
+            for cap in u.caps:
+                if zin(*cap):
+                    shapes.append((f"{u.channel} cap", "circle", (cx, cy, pair.rf2)))
+        reach = CLAMP_PLATE[2] + CLAMP_HEAD
+        for zc, sg in u.clamps:
+            if zin(min(zc, zc + sg * reach), max(zc, zc + sg * reach)):
+                shapes.append((f"{u.channel} clamp", "circle", (cx, cy, pair.rf2)))
+        if zin(u.worm_z - pair.ra1, u.worm_z + pair.ra1):
+            shapes.append((f"{u.channel} worm", "rect", rect(fr.worm_x[0], fr.worm_x[1], u.worm_y - pair.ra1,
+                                                             u.worm_y + pair.ra1)))
+        if zin(u.worm_z - POST / 2, u.upper_shelf[1]):
+            shapes.append((f"{u.channel} post", "rect", rect(fr.post[0], fr.post[1], u.worm_y - POST / 2,
+                                                             u.worm_y + POST / 2)))
+        if zin(*u.upper_shelf):
+            shapes.append((f"{u.channel} shelf", "rect", rect(fr.post[0], fr.spine[1], cy - s * BOSS,
+                                                              u.worm_y + s * POST / 2)))
+            shapes.append((f"{u.channel} boss", "circle", (cx, cy, BOSS)))
+        if zin(u.z_part[1], u.upper_shelf[0]):
+            shapes.append((f"{u.channel} boss", "circle", (cx, cy, BOSS)))
+        if zin(u.lower_bar[1], u.z_part[0]):
+            shapes.append((f"{u.channel} boss", "circle", (cx, cy, BOSS)))
+        if zin(*u.lower_bar):
+            shapes.append((f"{u.channel} bar", "rect", rect(abs(cx) - BOSS, fr.spine[1], cy - BOSS, cy + BOSS)))
+    for s in (1, -1):
+        xs = sorted((s * fr.spine[0], s * fr.spine[1] * 10))
+        shapes.append(("spine", "rect", (xs[0], xs[1], sz.y_face, math.inf)))
+    if _zin(z, need, clamp[4], clamp[5]):
+        shapes.append(("strip clamp", "rect", tuple(clamp[:4])))
+    return shapes
+
+
+def _clearance(fr: _Frame, clamp, sz: _Sizes) -> tuple[float, str]:
+    """The smallest distance from any tendon's free span to a part it must not touch, and which."""
+    worst, what = math.inf, ""
+    for r in fr.runs:
+        p0, p1 = np.array(r.start[:2]), np.array(r.end[:2])
+        for name, kind, g in _obstacles(r, fr, clamp, sz):
+            if kind == "circle":
+                dist = _seg_point_dist(p0, p1, np.array(g[:2])) - g[2]
+            else:
+                dist = _seg_rect_dist(p0, p1, *g)
+            if dist < worst:
+                worst, what = dist, f"tendon {r.tendon} passes {name} at {dist:.2f} mm"
+    return worst, what
+
+
+def _widen(order, side, centers_y, stacks, eyelets, clamp, sz: _Sizes) -> tuple[float, _Frame]:
+    """The smallest wheel-axis |x| at which every tendon clears every other part by the margin."""
+    x_min = max(abs(x) for v in eyelets.values() for _, x, _ in v) + sz.r_w + TENDON_MARGIN
+    x_u = x_min
+    last = ""
+    while x_u < x_min + X_SEARCH:
+        fr = _frame(x_u, order, side, centers_y, stacks, eyelets, sz)
+        worst, last = _clearance(fr, clamp, sz)
+        # the far posts stay on their own side of x = 0, clear of the other column
+        if worst >= sz.tendon_d + TENDON_MARGIN and fr.post[0] >= UNIT_GAP / 2:
+            return x_u, fr
+        x_u += X_STEP
+    raise ValueError(f"no tensioner layout keeps every tendon clear: {last}")
+
+
+def _lift_until_exits_fit(order, stacks, eyelets, clamp, sz: _Sizes) -> tuple[float, _Frame]:
+    """Lift the stack off the tip until no tendon turns by more than MAX_EXIT_DEG at its tip eyelet."""
     lift = 0.0
     for _ in range(30):
-        x_u, spine, hex_journal, wf, worm_x, post, units, runs = solve(lift)
+        side, centers_y = _place_units(order, stacks, clamp, sz, lift)
+        x_u, fr = _widen(order, side, centers_y, stacks, eyelets, clamp, sz)
         need = max((abs(r.end[0] - r.start[0]) / math.tan(math.radians(MAX_EXIT_DEG)) - (r.end[1] - r.start[1])
-                    for r in runs), default=0.0)
+                    for r in fr.runs), default=0.0)
         if need <= 1e-6:
-            break
+            return x_u, fr
         lift += need + X_STEP
-    else:
-        raise ValueError(f'no tensioner layout turns every tendon by less than {MAX_EXIT_DEG}° at the tip')
+    raise ValueError(f"no tensioner layout turns every tendon by less than {MAX_EXIT_DEG}° at the tip")
 
-    # base plate under everything, holes for the tendons and the tip disk's screws
-    z_all = [v for u in units for v in (u.lower_bar[0], u.upper_shelf[1])]
+
+def _base_plate(fr: _Frame, tip: DiskSpec, sz: _Sizes):
+    """The plate on the tip disk under everything; its tendon passages and the tip disk's screw inserts."""
+    z_all = [v for u in fr.units for v in (u.lower_bar[0], u.upper_shelf[1])]
     r_tip = tip.outer_diameter / 2
-    base = (-spine[1], spine[1], y_face, y_face + BASE,
+    base = (-fr.spine[1], fr.spine[1], sz.y_face, sz.y_face + BASE,
             min(min(z_all), -r_tip), max(max(z_all), r_tip))
     holes: dict[tuple[float, float], float] = {}
-    for r in runs:
+    for r in fr.runs:
         drift = BASE * math.tan(math.radians(r.exit_angle_deg))
         key = (round(r.start[0], 6), round(r.start[2], 6))
         holes[key] = max(holes.get(key, 0.0), TENDON_HOLE + 2 * drift)
     tendon_holes = tuple((x, z, dia) for (x, z), dia in holes.items())
     mount = tuple((x, z, MOUNT_INSERT) for x, z, _ in tip.mount_holes)
-    return TensionerLayout(pair, y_face, x_u, spine, post, worm_x, wf, hex_journal,
-                           spine_hole,
-                           spine[1] - (worm_x[1] - hex_journal + COLLAR + AXIAL_PLAY / 2),
-                           cap_half, cap_screw, _pin_length(POST), units, runs, r_s, r_w, r_f,
-                           hub_r, (strip_half_x, strip_half_z, y_face, y_end), clamp_block, base, mount,
+    return base, tendon_holes, mount
+
+
+def layout(design: Design, paths: list[TendonPath], tip: DiskSpec) -> TensionerLayout:
+    """Where every part of the tensioner goes, on the tip disk ``tip``; ValueError when nothing fits."""
+    ts = design.tensioner
+    sz = _Sizes.of(design, tip)
+    eyelets = _tip_eyelets(paths, ts.channels)
+    stacks = {c: _unit_stack([z for _, _, z in eyelets[c]], sz.pair) for c in ts.channels}
+    clamp = _strip_clamp(sz)
+    order = ([c for c in ts.channels if not _meets_clamp(stacks[c], clamp)]
+             + [c for c in ts.channels if _meets_clamp(stacks[c], clamp)])
+    x_u, fr = _lift_until_exits_fit(order, stacks, eyelets, clamp, sz)
+    base, tendon_holes, mount = _base_plate(fr, tip, sz)
+    cap_spigot = fr.spine[1] - (fr.worm_x[1] - fr.hex_journal + COLLAR + AXIAL_PLAY / 2)
+    return TensionerLayout(sz.pair, sz.y_face, x_u, fr.spine, fr.post, fr.worm_x, fr.worm_file_to_mesh,
+                           fr.hex_journal, sz.spine_hole, cap_spigot, sz.cap_half, sz.cap_screw, _pin_length(POST),
+                           fr.units, fr.runs, sz.r_s, sz.r_w, sz.r_f, sz.hub_r,
+                           (sz.strip_half_x, sz.strip_half_z, sz.y_face, sz.y_end), clamp, base, mount,
                            tendon_holes, ts)

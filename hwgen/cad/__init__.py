@@ -1,4 +1,4 @@
-"""Part builders: frozen specs from :mod:`hwgen.design` in, CadQuery solids out.
+"""CAD: frozen specs from :mod:`hwgen.model` in, CadQuery solids and their files out.
 
 Every builder returns a :class:`Part`: the solid in its print orientation (largest flat
 face on the XY plane, resting on Z = 0) and the placement that maps it to robot coordinates.
@@ -36,3 +36,12 @@ DISK_ROTATION = np.array([[1.0, 0.0, 0.0],
 
 def disk_placement(y_mid: float, thickness: float) -> np.ndarray:
     return placement(DISK_ROTATION, [0.0, y_mid - thickness / 2, 0.0])
+
+
+def location(matrix: np.ndarray):
+    """cq.Location from a 4x4 rigid transform (CadQuery is imported only when a solid is moved)."""
+    import cadquery as cq
+    from OCP.gp import gp_Trsf
+    t = gp_Trsf()
+    t.SetValues(*(float(matrix[r, c]) for r in range(3) for c in range(4)))
+    return cq.Location(t)

@@ -1,0 +1,51 @@
+"""The manifest: per part its files and their sha256, volume, box and placement, and the design
+report the checks compare the files against. Plain JSON; no CAD kernel."""
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+from ..model.plan import Plan
+from . import Part
+
+
+def sha256(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def design_report(plan: Plan) -> dict:
+    """The design intent the checks compare against, as plain JSON."""
+    return {
+        "stations_mm": list(plan.stations),
+        "tendons": [{"name": p.name, "channel": p.channel, "source": p.source, "budget_mm": p.budget_mm,
+                     "eyelets_xz_mm": p.points.tolist()} for p in plan.paths],
+        "disks": [{"index": d.index, "y_mm": d.y, "role": d.role, "thickness_mm": d.thickness,
+                   "outer_diameter_mm": d.outer_diameter, "slot_mm": [d.slot_width, d.slot_height],
+                   "holes": [{"x": h.x, "z": h.z, "axis": list(h.axis), "diameter_mm": h.diameter,
+                              "tendons": list(h.tendons), "worst_angle_deg": h.worst_angle_deg,
+                              "in_slot": h.in_slot} for h in d.holes],
+                   "mount_holes": [list(m) for m in d.mount_holes],
+                   "knot_pockets": [list(k) for k in d.knot_pockets]} for d in plan.disks],
+        "merges": [{"station": m.station, "tendons": list(m.tendons), "kind": m.kind} for m in plan.merges],
+        "backbone_holes": [{"tendon": h.tendon, "station": h.station, "x_mm": h.x, "y_mm": h.y,
+                            "diameter_mm": h.diameter} for h in plan.backbone.holes],
+        "findings": list(plan.findings),
+    }
+
+
+def part_entry(part: Part, files: dict[str, Path], root: Path) -> dict:
+    bb = part.solid.BoundingBox()
+    entry = {
+        "name": part.name,
+        "role": part.role,
+        "files": {kind: {"path": str(p.relative_to(root)), "sha256": sha256(p)} for kind, p in files.items()},
+        "volume_mm3": part.solid.Volume(),
+        "bbox_mm": {"min": [bb.xmin, bb.ymin, bb.zmin], "max": [bb.xmax, bb.ymax, bb.zmax]},
+        "placement": part.placement.tolist(),
+        "color": list(part.color),
+    }
+    if part.station is not None:
+        entry["station"] = part.station
+    entry.update(part.meta)
+    return entry
+

@@ -1,0 +1,210 @@
+"""Offscreen pictures of a built design: exploded, assembled and bent (VTK, no display, no GPU).
+
+The pictures are drawn in a child process (``python -m hwgen.outputs.pictures``): an OpenGL
+driver that is missing or crashes then costs the pictures, never the build. :func:`draw` asks
+the child for the pictures and the SVG drawing; if no backend works it records a message
+saying what to install and carries on.
+
+Views (parallel projection, robot coordinates: y along the backbone, bending toward +z):
+
+* exploded: disks spread along y by ``render.explode_mm`` per gap, the strip pulled out
+  toward the base, the tensioner lifted clear of the tip disk and its parts moved out of
+  the housing along their own offsets (see :func:`hwgen.outputs.scene.exploded_placements`);
+* assembled: every part where the manifest places it, tendons drawn through their eyelets;
+* bent: the constant-curvature pose of eq. (1) at ``render.bend_deg``: disks moved rigidly
+  to their frames T_i, the strip bent point by point, each tendon a tube through its eyelets.
+"""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..cad.manifest import sha256
+from ..model import kinematics as kin
+from .bom import family_label
+from .drawing import write_exploded_svg
+from .scene import (Posed, exploded_placements, family_colours, load_parts, pose_bent, pose_rigid,
+                    tendon_colours, tendon_polylines)
+from .view import BACKEND_ENV, BENT, ISOMETRIC, TEXT_COLOUR, Renderer, RenderUnavailable, View
+
+CHILD_TIMEOUT_S = 300
+INSTALL_HINT = (
+    "Offscreen pictures need an OpenGL backend for VTK without a display: Mesa's EGL with the "
+    "llvmpipe software rasteriser (Debian/Ubuntu: apt-get install libegl1 libgl1-mesa-dri; "
+    "Fedora: dnf install mesa-libEGL mesa-dri-drivers), or VTK's OSMesa build "
+    "(pip install --extra-index-url https://wheels.vtk.org vtk-osmesa). "
+    "The parts, checks and bill of materials were written without the pictures.")
+LABEL_GAP_MM = 6.0          # disk numbers sit this far above the disk's top on screen
+OUTPUTS = ("exploded.png", "assembled.png", "bent.png", "exploded.svg")
+EXIT_NO_BACKEND = 3      # the child's exit code for RenderUnavailable
+
+
+class RenderFailed(RuntimeError):
+    """The renderer ran but stopped on an error of its own (a bad file, a bug): not a backend problem."""
+
+
+@dataclass(frozen=True)
+class Settings:
+    width_px: int
+    explode_mm: float
+    bend_deg: float
+
+
+def _legend(names_colours, title: str):
+    """Title, then one coloured swatch and a dark label per entry: (text, rgb, (fx, fy), size, swatch)."""
+    texts = [(title, TEXT_COLOUR, (0.015, 0.955), 30, None)]
+    for i, (name, rgb) in enumerate(names_colours):
+        texts.append((name, TEXT_COLOUR, (0.015, 0.91 - 0.035 * i), 24, rgb))
+    return texts
+
+
+def station_labels(posed: list[Posed], view: View) -> list[tuple[str, np.ndarray]]:
+    """Disk numbers (the station index) just above each disk on the screen."""
+    right, up, d = view.axes()
+    out = []
+    for ps in posed:
+        if ps.part.station is None:
+            continue
+        top = ps.vertices[np.argmax(ps.vertices @ up)]
+        out.append((str(ps.part.station), top + up * LABEL_GAP_MM))
+    return out
+
+
+def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table: list[dict] | None = None,
+                    renderer: Renderer | None = None) -> dict:
+    """exploded.png, assembled.png, bent.png (and exploded.svg when a parts table is given)."""
+    folder = Path(folder)
+    timings = {}
+    t0 = time.perf_counter()
+    r = renderer or Renderer(settings.width_px)
+    parts = load_parts(folder, manifest)
+    report = manifest["design_report"]
+    st = np.asarray(report["stations_mm"], dtype=float)
+    colours = family_colours(manifest)
+    tcol = tendon_colours(report)
+    timings["load_s"] = time.perf_counter() - t0
+    fam_legend = [(f"{family_label(role)} ({sum(p.role == role for p in parts)})", colours[role]) for role in colours]
+    images = {}
+
+    t = time.perf_counter()
+    d = np.asarray(ISOMETRIC.toward_camera, float)
+    d /= np.linalg.norm(d)
+    ex = exploded_placements(parts, st, settings.explode_mm, ISOMETRIC.toward_camera)
+    posed = [pose_rigid(p, ex[p.name], d) for p in parts]
+    _, W, H = r.draw(posed, colours, ISOMETRIC, folder / "exploded.png", labels=station_labels(posed, ISOMETRIC),
+                     texts=_legend(fam_legend, f"{manifest['design']}: exploded, "
+                                               f"{settings.explode_mm:g} mm between disks"))
+    images["exploded.png"] = {"width": W, "height": H}
+    timings["exploded_s"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    posed = [pose_rigid(p, p.placement, d) for p in parts]
+    straight = {n: (pts, tcol[n]) for n, pts in tendon_polylines(report, 0.0).items()}
+    _, W, H = r.draw(posed, colours, ISOMETRIC, folder / "assembled.png", tubes=straight,
+                     texts=_legend(fam_legend + [(n, tcol[n]) for n in straight], f"{manifest['design']}: assembled"))
+    images["assembled.png"] = {"width": W, "height": H}
+    timings["assembled_s"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    kappa = float(kin.kappas_for_angles([settings.bend_deg], st[-1] - st[0])[0])
+    b = np.asarray(BENT.toward_camera, float)
+    b /= np.linalg.norm(b)
+    posed = [pose_bent(p, st, kappa, b) for p in parts]
+    bent = {n: (pts, tcol[n]) for n, pts in tendon_polylines(report, kappa).items()}
+    _, W, H = r.draw(posed, colours, BENT, folder / "bent.png", tubes=bent, aspect_range=(0.6, 1.0),
+                     texts=_legend([(n, tcol[n]) for n in bent],
+                                   f"{manifest['design']}: bent {settings.bend_deg:g}° (constant curvature, eq. 1)"))
+    images["bent.png"] = {"width": W, "height": H}
+    timings["bent_s"] = time.perf_counter() - t
+
+    result = {"backend": r.backend, "images": images, "timings_s": timings,
+              "palette": {k: list(v) for k, v in colours.items()},
+              "tendon_colours": {k: list(v) for k, v in tcol.items()},
+              "explode_mm": settings.explode_mm, "bend_deg": settings.bend_deg}
+    if svg_table is not None:
+        t = time.perf_counter()
+        result["svg"] = write_exploded_svg(r, parts, ex, colours, svg_table, folder / "exploded.svg",
+                                           title=f"{manifest['design']}: exploded assembly")
+        timings["svg_s"] = time.perf_counter() - t
+    return result
+
+
+# --------------------------------------------------------------------------- in a child process
+
+def run_child(folder: Path, manifest: dict, settings: Settings, svg_table: list[dict] | None) -> dict:
+    """Draw the pictures in a fresh Python process; raise RenderUnavailable if it cannot."""
+    if os.environ.get(BACKEND_ENV, "").lower() == "none":
+        raise RenderUnavailable(f"{BACKEND_ENV}=none: offscreen rendering switched off")
+    job = json.dumps({"folder": str(folder), "manifest": manifest, "settings": settings.__dict__,
+                      "svg_table": svg_table})
+    attempts = [dict(os.environ)]
+    attempts[0].pop("DISPLAY", None)            # offscreen: EGL first, never a stale X display
+    if os.environ.get("DISPLAY"):
+        attempts.append(dict(os.environ))       # then the display's own OpenGL, if there is one
+    errors, backend = [], True
+    for env in attempts:
+        try:
+            proc = subprocess.run([sys.executable, "-m", "hwgen.outputs.pictures"], input=job, capture_output=True,
+                                  text=True, env=env, timeout=CHILD_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            errors.append(f"the renderer did not finish in {CHILD_TIMEOUT_S} s")
+            continue
+        lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
+        if proc.returncode == 0 and lines:
+            return json.loads(lines[-1])
+        tail = (proc.stderr.strip().splitlines() or [""])[-1][:300]
+        if proc.returncode < 0:          # killed by a signal: the OpenGL driver crashed
+            errors.append(f"the renderer crashed (signal {-proc.returncode}) {tail}".strip())
+        else:
+            errors.append(tail or f"the renderer stopped with exit code {proc.returncode}")
+            backend = proc.returncode == EXIT_NO_BACKEND
+    raise (RenderUnavailable if backend else RenderFailed)("; ".join(errors))
+
+
+def _child_main() -> int:
+    job = json.loads(sys.stdin.read())
+    try:
+        result = render_pictures(Path(job["folder"]), job["manifest"], Settings(**job["settings"]),
+                                 job.get("svg_table"))
+    except RenderUnavailable as e:
+        print(f"RenderUnavailable: {e}", file=sys.stderr)
+        return EXIT_NO_BACKEND
+    print(json.dumps(result))
+    return 0
+
+
+def draw(folder: Path, manifest: dict, design, svg_table: list[dict]) -> None:
+    """The pictures and the drawing (``svg_table``: the parts table of the bill of materials);
+    a missing or crashing backend is recorded in ``manifest["render"]``, never raised."""
+    folder = Path(folder)
+    settings = Settings(design.render.width_px, design.render.explode_mm, design.render.bend_deg)
+    entry: dict = {"settings": settings.__dict__}
+    for name in OUTPUTS:                 # never leave pictures of an earlier design beside this one
+        (folder / name).unlink(missing_ok=True)
+    t = time.perf_counter()
+    try:
+        result = run_child(folder, manifest, settings, svg_table)
+    except RenderUnavailable as e:
+        entry |= {"status": "unavailable", "message": f"pictures not drawn: {e}. {INSTALL_HINT}"}
+    except RenderFailed as e:
+        entry |= {"status": "failed", "message": f"pictures not drawn, the renderer stopped: {e}"}
+    else:
+        files = {}
+        for name, size in result.pop("images").items():
+            files[name] = {"path": name, "sha256": sha256(folder / name)} | size
+        if (folder / "exploded.svg").exists():
+            files["exploded.svg"] = {"path": "exploded.svg", "sha256": sha256(folder / "exploded.svg")}
+        entry |= {"status": "ok", "files": files} | result
+    entry["seconds"] = round(time.perf_counter() - t, 2)
+    manifest["render"] = entry
+
+
+if __name__ == "__main__":
+    sys.exit(_child_main())

@@ -1,0 +1,122 @@
+"""The package shows the pipeline: no import cycles between hwgen modules (function-level
+imports count), and every stage imports only the stages before it."""
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PKG = Path(__file__).resolve().parents[1] / "hwgen"
+
+# The stages in the order data flows; a module may import its own stage and those before it.
+STAGES = ["errors", "atomic", "params", "model", "cad", "checks", "outputs", "pipeline", "cli", "bench"]
+NO_CAD_KERNEL = ("params", "model")          # plain data and numpy: never CadQuery or OCP
+
+
+def _modules() -> dict[str, Path]:
+    mods = {}
+    for f in PKG.rglob("*.py"):
+        rel = f.relative_to(PKG.parent).with_suffix("")
+        parts = rel.parts[:-1] if rel.name == "__init__" else rel.parts
+        mods[".".join(parts)] = f
+    return mods
+
+
+def _imports(mods: dict[str, Path]) -> dict[str, set[str]]:
+    """module -> the hwgen modules it imports, wherever the import statement stands."""
+    graph: dict[str, set[str]] = {m: set() for m in mods}
+    for m, f in mods.items():
+        pkg = m if f.name == "__init__.py" else m.rpartition(".")[0]
+        for node in ast.walk(ast.parse(f.read_text())):
+            if isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = pkg.split(".")[: len(pkg.split(".")) - (node.level - 1)]
+                    target = ".".join(base + ([node.module] if node.module else []))
+                else:
+                    target = node.module or ""
+                candidates = [target] + [f"{target}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Import):
+                candidates = [a.name for a in node.names]
+            else:
+                continue
+            for c in candidates:
+                while c and c not in mods:
+                    c = c.rpartition(".")[0]
+                if c and c != m and not m.startswith(c + ".") and c != "hwgen":
+                    graph[m].add(c)
+    return graph
+
+
+def _external(f: Path) -> set[str]:
+    out = set()
+    for node in ast.walk(ast.parse(f.read_text())):
+        if isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            out.add(node.module.split(".")[0])
+        elif isinstance(node, ast.Import):
+            out |= {a.name.split(".")[0] for a in node.names}
+    return out
+
+
+def _stage(module: str) -> str:
+    return module.split(".")[1] if "." in module else "hwgen"
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Every strongly connected group of more than one module (Tarjan)."""
+    index, low, stack, on, out, counter = {}, {}, [], set(), [], [0]
+
+    def visit(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on.add(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            group = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                group.append(w)
+                if w == v:
+                    break
+            if len(group) > 1:
+                out.append(sorted(group))
+
+    for v in graph:
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_no_import_cycles():
+    assert _cycles(_imports(_modules())) == []
+
+
+def test_cycle_finder_finds_a_cycle():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+
+
+def test_every_module_belongs_to_a_stage():
+    unknown = sorted(m for m in _modules() if m != "hwgen" and _stage(m) not in STAGES)
+    assert unknown == []
+
+
+def test_stages_import_only_earlier_stages():
+    graph = _imports(_modules())
+    wrong = sorted(f"{m} imports {t}" for m, ts in graph.items() for t in ts
+                   if m != "hwgen" and STAGES.index(_stage(t)) > STAGES.index(_stage(m)))
+    assert wrong == []
+
+
+@pytest.mark.parametrize("stage", NO_CAD_KERNEL)
+def test_model_and_params_need_no_cad_kernel(stage):
+    mods = {m: f for m, f in _modules().items() if _stage(m) == stage}
+    assert mods
+    for m, f in mods.items():
+        assert not _external(f) & {"cadquery", "OCP", "vtk", "vtkmodules"}, m
