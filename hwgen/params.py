@@ -43,6 +43,8 @@ class Backbone(_Model):
     thickness: Length = Field(description="t: strip thickness along z, mm")
     extra_base: NonNegLength = Field(0.0, description="strip length below the base disk for clamping, mm")
     extra_tip: NonNegLength = Field(0.0, description="strip length beyond the tip disk for the tensioner clamp, mm")
+    density_g_cm3: Annotated[float, Field(gt=0.3, le=3.0, allow_inf_nan=False)] = Field(
+        1.40, description="density of the strip's laminate, g/cm³")
 
 
 class Eyelets(_Model):
@@ -139,6 +141,14 @@ class TendonMaterial(_Model):
 
 class Process(_Model):
     name: str = Field(description="printer and material")
+    technology: Literal["SLA", "FDM"] = Field(
+        description="SLA (resin: brittle, no heat-set inserts) or FDM (thermoplastic: heat-set inserts work)")
+    material: str = Field(description="printed material, a row of hwgen/data/materials.csv (its density with "
+                                      "its reason): standard_resin, tough_resin, PLA, PETG")
+    density_g_cm3: Annotated[float, Field(gt=0.3, le=3.0, allow_inf_nan=False)] | None = Field(
+        None, description="overrides the material's density from the table, g/cm³")
+    fill_fraction: Annotated[float, Field(gt=0, le=1, allow_inf_nan=False)] = Field(
+        1.0, description="share of a part's volume that is material (1 for SLA; an FDM part's effective fill)")
     min_wall: Length = Field(description="thinnest wall that prints reliably, mm")
     min_hole: Length = Field(description="smallest through hole that prints open, mm")
     hole_clearance: NonNegLength = Field(description="added to a hole's diameter over what passes through it, mm")

@@ -27,6 +27,7 @@ from .checks.measure import read_manifest
 from .checks.report import write_summary
 from .checks.run import run_checks
 from .model import feasibility
+from .model.materials import printed_density
 from .model.plan import Plan, plan as make_plan
 from .outputs import bom, pictures
 from .outputs.plots import plot_lengths
@@ -115,11 +116,12 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
     (folder / "stl").mkdir()
     (folder / "step").mkdir()
     parts, entries = [], []
+    density, _ = printed_density(plan.design.process)
     for part in build_parts(plan):
         files = {"stl": folder / "stl" / f"{part.name}.stl", "step": folder / "step" / f"{part.name}.step"}
         export.write_stl(part.solid, files["stl"])
         export.write_step(part.solid, files["step"])
-        entries.append(part_entry(part, files, folder))
+        entries.append(part_entry(part, files, folder, plan.design.process.material, density))
         parts.append(part)
         if progress:
             progress(part.name, len(parts), total)

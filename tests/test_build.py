@@ -162,3 +162,23 @@ def test_failed_build_leaves_previous_outputs(tmp_path, monkeypatch):
     after = {p.relative_to(tmp_path): p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
     assert after == before
     assert sorted(p.name for p in tmp_path.iterdir()) == [first.name]
+
+
+def test_masses_are_volume_times_density(built):
+    """Every part's mass is its volume times its material's density; the report sums the STLs."""
+    folder = built("prototype")
+    m = json.loads((folder / "manifest.json").read_text())
+    d = load(PARAMS / "prototype.yaml").design
+    for p in m["parts"]:
+        rho = d.backbone.density_g_cm3 if p["role"] == "backbone" else 1.15   # standard_resin in materials.csv
+        assert p["density_g_cm3"] == pytest.approx(rho), p["name"]
+        assert p["mass_g"] == pytest.approx(p["volume_mm3"] / 1000 * rho, rel=1e-9), p["name"]
+        mesh = load_mesh(folder / p["files"]["stl"]["path"])
+        com = np.asarray(p["placement"])[:3, :3] @ mesh.center_mass + np.asarray(p["placement"])[:3, 3]
+        assert np.allclose(com, p["center_of_mass_mm"], atol=0.05), p["name"]
+    mass = json.loads((folder / "report.json").read_text())["mass"]
+    free = [p for p in m["parts"] if p["role"].startswith("tensioner")]
+    assert sorted(mass["free_end"]["parts"]) == sorted(p["name"] for p in free)
+    assert mass["free_end"]["mass_g"] == pytest.approx(sum(p["mass_g"] for p in free), rel=0.01)
+    assert mass["total"]["mass_g"] == pytest.approx(sum(p["mass_g"] for p in m["parts"]), rel=0.01)
+    assert mass["free_end"]["center_of_mass_mm"][1] > d.backbone.length

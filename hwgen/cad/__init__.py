@@ -19,6 +19,8 @@ class Part:
     color: tuple[float, float, float, float]
     station: int | None = None
     meta: dict = field(default_factory=dict)   # extra manifest fields (channel, ...)
+    material: str | None = None     # None: printed in the process's material; else what it is cut from
+    density_g_cm3: float | None = None   # of that material (None: the process's)
 
 
 def placement(rotation, translation) -> np.ndarray:

@@ -18,4 +18,5 @@ def build_backbone(spec: BackboneSpec) -> Part:
         sk = sk.push([(x, y - spec.y_start)]).circle(dia / 2, mode="s")
     solid = cq.Workplane("XY").placeSketch(sk.reset().clean()).extrude(spec.thickness).val()
     return Part(spec.name, "backbone", solid,
-                placement(np.eye(3), [0.0, spec.y_start, -spec.thickness / 2]), COLOR)
+                placement(np.eye(3), [0.0, spec.y_start, -spec.thickness / 2]), COLOR,
+                material=f"carbon-fibre/epoxy laminate, {spec.thickness:g} mm", density_g_cm3=spec.density_g_cm3)

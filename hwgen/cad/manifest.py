@@ -33,13 +33,24 @@ def design_report(plan: Plan) -> dict:
     }
 
 
-def part_entry(part: Part, files: dict[str, Path], root: Path) -> dict:
+def part_entry(part: Part, files: dict[str, Path], root: Path, material: str, density_g_cm3: float) -> dict:
+    """The manifest entry of one part; ``material`` and ``density_g_cm3`` are the printed material's,
+    used unless the part names its own. Mass and centre of mass come from the solid."""
     bb = part.solid.BoundingBox()
+    if part.density_g_cm3 is not None:
+        material, density_g_cm3 = part.material, part.density_g_cm3
+    volume = part.solid.Volume()
+    com = part.solid.Center()
+    com_robot = part.placement @ [com.x, com.y, com.z, 1.0]
     entry = {
         "name": part.name,
         "role": part.role,
         "files": {kind: {"path": str(p.relative_to(root)), "sha256": sha256(p)} for kind, p in files.items()},
-        "volume_mm3": part.solid.Volume(),
+        "volume_mm3": volume,
+        "material": material,
+        "density_g_cm3": density_g_cm3,
+        "mass_g": volume / 1000 * density_g_cm3,
+        "center_of_mass_mm": [float(v) for v in com_robot[:3]],
         "bbox_mm": {"min": [bb.xmin, bb.ymin, bb.zmin], "max": [bb.xmax, bb.ymax, bb.zmax]},
         "placement": part.placement.tolist(),
         "color": list(part.color),

@@ -118,3 +118,34 @@ def build_volume_checks(parts: list[LoadedPart], build_volume) -> list[Check]:
                f"{p.name}: {size} mm does not fit the build volume {bx:g} × {by:g} × {bz:g} mm")
         out.append(Check("part.build_volume", "error", fits, msg, float(max(ext)), float(max(build_volume)), where))
     return out
+
+
+def mass_summary(parts: list[LoadedPart], manifest: dict) -> tuple[dict, list[Check]]:
+    """Mass and centre of mass of the robot and of everything beyond the tip disk, from the
+    STLs (volume and centroid of each closed mesh) and each part's density in the manifest
+    (design data: the files do not say what they are printed in)."""
+    entries = {p["name"]: p for p in manifest["parts"]}
+    tip_y = max(manifest["design_report"]["stations_mm"])
+    rows = []
+    for p in parts:
+        e = entries.get(p.name, {})
+        if not p.mesh.is_watertight or "density_g_cm3" not in e:
+            continue
+        com = p.placement[:3, :3] @ p.mesh.center_mass + p.placement[:3, 3]
+        rows.append((p.name, p.role, float(p.mesh.volume), float(p.mesh.volume) / 1000 * e["density_g_cm3"], com))
+
+    def group(sel) -> dict:
+        m = sum(r[3] for r in sel)
+        c = sum(r[3] * r[4] for r in sel) / m if m else np.zeros(3)
+        return {"parts": [r[0] for r in sel], "volume_cm3": sum(r[2] for r in sel) / 1000, "mass_g": m,
+                "center_of_mass_mm": [float(v) for v in c]}
+    free_end = group([r for r in rows if r[1] not in ("disk", "backbone") and r[4][1] > tip_y])
+    out = {"total": group(rows), "free_end": free_end, "tip_station_y_mm": tip_y}
+    beyond = free_end["center_of_mass_mm"][1] - tip_y
+    check = Check("mass.free_end", "info", True,
+                  f"beyond the tip disk: {len(free_end['parts'])} parts, {free_end['volume_cm3']:.1f} cm³, "
+                  f"{free_end['mass_g']:.1f} g, centre of mass {beyond:.1f} mm beyond the tip station "
+                  f"(volumes and centroids from the STLs, densities from the manifest); whole robot "
+                  f"{out['total']['mass_g']:.1f} g", free_end["mass_g"], None,
+                  {"parts": free_end["parts"], "beyond_tip_mm": beyond})
+    return out, [check]

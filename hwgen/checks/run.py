@@ -19,7 +19,7 @@ from .clearances import backbone_checks, hole_checks, tendon_pair_checks, wall_c
 from .eyelets import backbone_section, locate_eyelets, measure_disk
 from .gear_mesh import gear_checks
 from .lengths import length_checks, pair_take_up, sweep_angles, tendon_lengths
-from .parts import build_volume_checks, interference_checks, load_parts, mesh_checks
+from .parts import build_volume_checks, interference_checks, load_parts, mass_summary, mesh_checks
 
 TABLE_MATCH_MM = 0.1   # Table II gives one decimal: a table within this of its function samples it
 
@@ -111,8 +111,12 @@ def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     checks += mesh_checks(parts)
     checks += interference_checks(parts, s.interference_tol_mm3)
     checks += build_volume_checks(parts, proc.build_volume)
+    mass, c = mass_summary(parts, manifest)
+    checks += c
     checks += gear_checks(folder, manifest, plan)
-    return _report(manifest["design"], checks, angles, s.step_deg, tls, pair, emap)
+    report = _report(manifest["design"], checks, angles, s.step_deg, tls, pair, emap)
+    report["mass"] = _plain(mass)
+    return report
 
 
 def _measure_disks(folder: Path, manifest: dict, meshes: dict, tol: float):

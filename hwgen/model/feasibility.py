@@ -10,6 +10,7 @@ import numpy as np
 from ..errors import InputError
 from ..params import Design
 from .gearing import worm_pair
+from .materials import material_problem
 from .routing import sample_function
 from .tensioner_layout import spool_wall_problem
 
@@ -17,6 +18,9 @@ from .tensioner_layout import spool_wall_problem
 def problems(d: Design) -> list[tuple[str, str]]:
     """(field path, what is wrong) for every reason this design cannot be built, in YAML order."""
     out = []
+    material = material_problem(d.process)
+    if material:
+        out.append(("process.material", material))
     ts = d.tensioner
     out += [(f"tensioner.{f}", m) for f, m in worm_pair(ts).problems(ts.friction_coefficient, d.process.min_wall)]
     wall = spool_wall_problem(ts, d.process.min_wall)

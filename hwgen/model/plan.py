@@ -161,7 +161,7 @@ def plan(design: Design) -> Plan:
         merges += m
     bb_holes, findings = _backbone_holes(d, paths, disks)
     backbone = BackboneSpec(d.backbone.height, d.backbone.thickness, -d.backbone.extra_base,
-                            d.backbone.length + d.backbone.extra_tip, tuple(bb_holes))
+                            d.backbone.length + d.backbone.extra_tip, tuple(bb_holes), d.backbone.density_g_cm3)
     first = Plan(d, paths, tuple(disks), backbone, tuple(merges), tuple(findings))
     try:
         lay = layout(d, paths, disks[-1])

@@ -59,6 +59,7 @@ class BackboneSpec:
     y_start: float           # robot y of the strip's base end (negative: clamping length)
     y_end: float
     holes: tuple[BackboneHole, ...]
+    density_g_cm3: float     # of the laminate
     name: str = "backbone"
 
     def merged_holes(self) -> list[tuple[float, float, float, tuple[str, ...]]]:

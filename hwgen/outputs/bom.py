@@ -39,7 +39,7 @@ TIP_SCREW = "socket head cap screw ISO 4762"   # fastens the tensioner (or a fix
 FAMILY_LABELS = {"disk": "tendon-support disk", "backbone": "backbone strip"}   # others: the role, spaced
 
 
-COLUMNS = ["item", "category", "part", "family", "qty", "material", "size", "volume_mm3",
+COLUMNS = ["item", "category", "part", "family", "qty", "material", "size", "volume_mm3", "mass_g",
            "rest_length_mm", "allowance_mm", "cut_length_mm", "file", "notes"]
 
 
@@ -104,8 +104,8 @@ def bom_rows(folder: Path, manifest: dict, design) -> tuple[list[dict], str]:
         if is_purchased(e):
             continue
         add(category="printed", part=e["name"], family=e["role"], qty=1,
-            material=e.get("material", design.process.name), size=_size(folder, e),
-            volume_mm3=f"{e['volume_mm3']:.1f}", file=e["files"]["stl"]["path"],
+            material=design.process.name, size=_size(folder, e),
+            volume_mm3=f"{e['volume_mm3']:.1f}", mass_g=f"{e['mass_g']:.2f}", file=e["files"]["stl"]["path"],
             notes=_printed_note(e))
 
     template = manifest.get("files", {}).get("backbone_template", {}).get("path", "backbone_template.dxf")
@@ -121,7 +121,8 @@ def bom_rows(folder: Path, manifest: dict, design) -> tuple[list[dict], str]:
         else:
             material = e.get("material", "")
         add(category="purchased", part=e["name"], family=e["role"], qty=1, material=material,
-            size=_size(folder, e), volume_mm3=f"{e['volume_mm3']:.1f}", file=e["files"]["step"]["path"], notes=notes)
+            size=_size(folder, e), volume_mm3=f"{e['volume_mm3']:.1f}", mass_g=f"{e['mass_g']:.2f}",
+            file=e["files"]["step"]["path"], notes=notes)
 
     lengths, source = rest_lengths(folder, manifest)
     r = design.bom
@@ -195,8 +196,7 @@ def family_table(manifest: dict, design, rows: list[dict] | None = None) -> list
         if any(f["role"] == e["role"] for f in out):
             continue
         members = [p for p in manifest["parts"] if p["role"] == e["role"]]
-        material = e.get("material") or (f"carbon-fibre laminate, {design.backbone.thickness:g} mm"
-                                          if e["role"] == "backbone" else design.process.name)
+        material = e.get("material", "") if is_purchased(e) else design.process.name
         out.append({"item": len(out) + 1, "role": e["role"], "label": family_label(e["role"]),
                     "qty": len(members), "material": material,
                     "kind": "purchased" if is_purchased(e) else "printed",
@@ -222,20 +222,22 @@ def _markdown(manifest: dict, design, rows: list[dict], source: str) -> str:
     for r in printed:
         fam.setdefault(r["family"], []).append(r)
     total = sum(float(r["volume_mm3"]) for r in printed)
+    mass = sum(float(r["mass_g"]) for r in printed)
     L = [f"# Bill of materials: {manifest['design']}", "",
          f"From `{manifest.get('params_file', '')}` (sha256 {manifest.get('params_sha256', '')[:12]}), "
          f"hwgen {manifest.get('hwgen_version', '')}.", "",
          "## Printed parts", "",
          f"Material: {design.process.name}. Total part volume {total / 1000:.1f} cm³ "
-         f"(≈ {total / 1000:.0f} ml of resin before supports and waste).", "",
-         "| family | qty | volume, cm³ |", "|---|---:|---:|"]
+         f"(≈ {total / 1000:.0f} ml of material before supports and waste), {mass:.1f} g.", "",
+         "| family | qty | volume, cm³ | mass, g |", "|---|---:|---:|---:|"]
     for role, rs in fam.items():
-        L.append(f"| {family_label(role)} | {len(rs)} | {sum(float(r['volume_mm3']) for r in rs) / 1000:.2f} |")
-    L += ["", "| # | part | family | qty | size | volume, mm³ | file | notes |",
-          "|---:|---|---|---:|---|---:|---|---|"]
+        L.append(f"| {family_label(role)} | {len(rs)} | {sum(float(r['volume_mm3']) for r in rs) / 1000:.2f} | "
+                 f"{sum(float(r['mass_g']) for r in rs):.1f} |")
+    L += ["", "| # | part | family | qty | size | volume, mm³ | mass, g | file | notes |",
+          "|---:|---|---|---:|---|---:|---:|---|---|"]
     for r in printed:
         L.append(f"| {r['item']} | {r['part']} | {r['family']} | {r['qty']} | {r['size']} | {r['volume_mm3']} | "
-                 f"`{r['file']}` | {_md_cell(r['notes'])} |")
+                 f"{r['mass_g']} | `{r['file']}` | {_md_cell(r['notes'])} |")
     bought = [r for r in rows if r["category"] == "purchased" and r["family"] not in ("tendon", "hardware")]
     tendons = [r for r in rows if r["family"] == "tendon"]
     hardware = [r for r in rows if r["family"] == "hardware"]

@@ -1,0 +1,48 @@
+"""Printed materials and their densities, from the table shipped with hwgen (data/materials.csv)."""
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from functools import cache
+from importlib import resources
+
+from ..params import Process
+
+
+@dataclass(frozen=True)
+class Material:
+    name: str
+    technology: str          # "SLA" or "FDM"
+    density_g_cm3: float
+    reason: str
+
+
+@cache
+def table() -> dict[str, Material]:
+    """Every material of data/materials.csv by name."""
+    text = resources.files("hwgen").joinpath("data/materials.csv").read_text(encoding="utf-8")
+    return {r["material"]: Material(r["material"], r["technology"], float(r["density_g_cm3"]), r["reason"])
+            for r in csv.DictReader(text.splitlines())}
+
+
+def material_problem(process: Process) -> str | None:
+    """Why the process's material is not one hwgen knows for its technology, or None."""
+    known = table()
+    m = known.get(process.material)
+    if m is None:
+        return f"unknown material {process.material!r}; hwgen knows {', '.join(sorted(known))}"
+    if m.technology != process.technology:
+        return f"{m.name} is a {m.technology} material, process.technology is {process.technology}"
+    return None
+
+
+def printed_density(process: Process) -> tuple[float, str]:
+    """The density of a printed part (g/cm³, fill included) and where it comes from."""
+    if process.density_g_cm3 is not None:
+        rho, why = process.density_g_cm3, "process.density_g_cm3"
+    else:
+        m = table()[process.material]
+        rho, why = m.density_g_cm3, f"{m.name}: {m.reason}"
+    if process.fill_fraction < 1:
+        why += f"; × fill fraction {process.fill_fraction:g}"
+    return rho * process.fill_fraction, why
