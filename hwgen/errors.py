@@ -1,7 +1,14 @@
-"""The two kinds of bad input every stage can raise; the CLI reports both the same way (exit 2)."""
+"""The two kinds of bad input every stage can raise; the CLI reports both the same way (exit 2).
+
+Messages may quote what the user wrote; :func:`echo` is how they do it: control characters
+escaped, and cut to a few dozen characters, so a 50 MB value makes a one-line message.
+"""
 from __future__ import annotations
 
+import reprlib
 from pathlib import Path
+
+ECHO_CHARS = 40          # the most of one user-given value a message quotes
 
 
 class InputError(Exception):
@@ -21,3 +28,25 @@ class DesignError(Exception):
     def __init__(self, path: str, message: str):
         self.path, self.message = path, message
         super().__init__(f"{path}: {message}")
+
+
+def printable(text: str) -> str:
+    """``text`` with every control character (newline, escape, ...) written as a Python escape."""
+    return "".join(c if c.isprintable() or c == " " else repr(c)[1:-1] for c in str(text))
+
+
+_REPR = reprlib.Repr()
+_REPR.maxlevel, _REPR.maxlist, _REPR.maxtuple, _REPR.maxdict = 2, 4, 4, 4
+_REPR.maxstring = _REPR.maxother = _REPR.maxlong = ECHO_CHARS
+
+
+def clip(text: str, limit: int = ECHO_CHARS) -> str:
+    """``text`` made printable and cut to ``limit`` characters (an ellipsis marks the cut)."""
+    text = printable(text[: limit + 1] if len(text) > 4 * limit else text)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def echo(value, limit: int = ECHO_CHARS) -> str:
+    """A user-given value as a message quotes it: its repr, printable, at most ``limit`` characters
+    (a huge list or string is never turned into text whole)."""
+    return clip(_REPR.repr(value), limit)

@@ -15,24 +15,45 @@ from __future__ import annotations
 import hashlib
 import re
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, Literal, get_args
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from .errors import InputError
+from . import yamlfile
+from .errors import InputError, clip, echo
 
 SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
+MAX_MM = 10_000.0        # no length or coordinate of a design is beyond 10 m
+MAX_TENDONS = 64
+MAX_CHANNELS = 16
 
-Length = Annotated[float, Field(gt=0, allow_inf_nan=False)]
-NonNegLength = Annotated[float, Field(ge=0, allow_inf_nan=False)]
-Coord = Annotated[float, Field(allow_inf_nan=False)]
+Length = Annotated[float, Field(gt=0, le=MAX_MM, allow_inf_nan=False)]
+NonNegLength = Annotated[float, Field(ge=0, le=MAX_MM, allow_inf_nan=False)]
+Coord = Annotated[float, Field(ge=-MAX_MM, le=MAX_MM, allow_inf_nan=False)]
 Finite = Annotated[float, Field(allow_inf_nan=False)]   # a finite number; bounds given per field
 Name = Annotated[str, Field(min_length=1, max_length=64)]
+Angle = Annotated[float, Field(gt=0, le=360, allow_inf_nan=False)]   # a bending sweep ±deg
+
+
+def _has_bool(value) -> bool:
+    if isinstance(value, bool):
+        return True
+    return isinstance(value, (list, tuple)) and any(_has_bool(v) for v in value)
 
 
 class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_bool_for_numbers(cls, value, info):
+        """YAML reads true/false/yes/no/on/off as booleans, and pydantic would take them as 1 and 0."""
+        if _has_bool(value) and bool not in (cls.model_fields[info.field_name].annotation,
+                                             *get_args(cls.model_fields[info.field_name].annotation)):
+            raise ValueError("true/false is not a number or a name (YAML reads yes, no, on, off, true and "
+                             "false as booleans; quote a name that is one of them)")
+        return value
 
 
 class Backbone(_Model):
@@ -54,7 +75,7 @@ class Eyelets(_Model):
         "bisector", description="hole axis: bisector of the tendon's straight segments, or normal to the disk")
     edge: Literal["chamfer", "none"] = Field("chamfer", description="edge break at both hole ends")
     edge_size: NonNegLength = Field(0.2, description="chamfer leg at the hole rim, mm")
-    sweep_deg: Length = Field(90.0, description="bending sweep ±deg over which the worst tendon angle is taken")
+    sweep_deg: Angle = Field(90.0, description="bending sweep ±deg over which the worst tendon angle is taken")
 
 
 class TieOff(_Model):
@@ -104,9 +125,11 @@ class RoutingFunction(_Model):
 
     kind: Literal["straight", "cosine", "helix"]
     a: Coord = Field(0.0, description="amplitude a, mm")
-    k: Coord = Field(1.0, description="number of half waves over L (the k in kπs/L)")
+    k: Annotated[float, Field(ge=-1000, le=1000, allow_inf_nan=False)] = Field(
+        1.0, description="number of half waves over L (the k in kπs/L)")
     axis: Literal["x", "z"] = Field("z", description="cosine only: the coordinate that varies")
-    phase_deg: Coord = Field(0.0, description="phase φ added to kπs/L, deg")
+    phase_deg: Annotated[float, Field(ge=-3600, le=3600, allow_inf_nan=False)] = Field(
+        0.0, description="phase φ added to kπs/L, deg")
     x0: Coord = Field(0.0, description="constant offset in x, mm")
     z0: Coord = Field(0.0, description="constant offset in z, mm")
 
@@ -188,8 +211,11 @@ class Tensioner(_Model):
 class CheckSettings(_Model):
     """How `hwgen check` sweeps the bending angle and what it tolerates."""
 
-    max_angle_deg: Length = Field(90.0, description="tendon lengths are swept from -max to +max bending, deg")
-    step_deg: Length = Field(1.0, description="step of the bending sweep, deg")
+    max_angle_deg: Angle | None = Field(
+        None, description="tendon lengths are swept from -max to +max bending, deg (default: the eyelets' "
+                          "disks.eyelets.sweep_deg; never more, or the eyelets fail the angle check by design)")
+    step_deg: Annotated[float, Field(ge=0.1, le=90, allow_inf_nan=False)] = Field(
+        1.0, description="step of the bending sweep, deg")
     position_tol_mm: Length = Field(0.01, description="largest eyelet offset from design intent, mm")
     interference_tol_mm3: Length = Field(0.01, description="largest intersection volume of two parts, mm³")
 
@@ -218,7 +244,7 @@ class Design(_Model):
     tendon_material: TendonMaterial
     process: Process
     tensioner: Tensioner
-    tendons: tuple[Tendon, ...] = Field(min_length=1)
+    tendons: tuple[Tendon, ...] = Field(min_length=1, max_length=MAX_TENDONS)
     check: CheckSettings = Field(default_factory=CheckSettings, description="validation sweep and tolerances")
     render: Render = Field(default_factory=Render, description="pictures and drawing")
     bom: Bom = Field(default_factory=Bom, description="bill of materials: tendon cut allowances")
@@ -229,6 +255,13 @@ class Design(_Model):
         if d.stations is not None:
             return tuple(d.stations)
         return tuple(i * d.spacing for i in range(d.count))
+
+    @property
+    def check_angle_deg(self) -> float:
+        """±deg of `hwgen check`'s bending sweep: check.max_angle_deg, else the eyelets' sweep."""
+        if self.check.max_angle_deg is not None:
+            return self.check.max_angle_deg
+        return self.disks.eyelets.sweep_deg
 
 
 class LoadedDesign(_Model):
@@ -243,29 +276,8 @@ class LoadedDesign(_Model):
 def _path(loc) -> str:
     out = ""
     for part in loc:
-        if isinstance(part, int):
-            out += f"[{part}]"
-        else:
-            out += ("." if out else "") + str(part)
+        out = yamlfile.join(out, part if isinstance(part, int) else clip(str(part)))
     return out
-
-
-class _UniqueKeyLoader(yaml.SafeLoader):
-    """SafeLoader that refuses a key given twice in one mapping."""
-
-
-def _construct_mapping(loader, node, deep=False):
-    seen = set()
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=deep)
-        if key in seen:
-            raise yaml.constructor.ConstructorError(
-                None, None, f"duplicate key {key!r}", key_node.start_mark)
-        seen.add(key)
-    return yaml.SafeLoader.construct_mapping(loader, node, deep)
-
-
-_UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
 
 
 # Keys that moved: (old section, key) -> new section. Read from the old place for one release.
@@ -293,19 +305,20 @@ def _move_deprecated(data: dict, path: Path) -> list[str]:
 def read(path: str | Path) -> LoadedDesign:
     """Read a design YAML and check it against the schema; raise :class:`InputError` on any fault."""
     path = Path(path)
+    raw = _read_bytes(path)
     try:
-        raw = path.read_bytes()
-    except OSError as e:
-        raise InputError(path, "", f"cannot read the file ({e.strerror})") from None
-    try:
-        data = yaml.load(raw.decode("utf-8"), Loader=_UniqueKeyLoader)
+        data = yamlfile.load(raw.decode("utf-8"))
     except UnicodeDecodeError:
         raise InputError(path, "", "not UTF-8 text") from None
+    except yamlfile.YamlFault as e:
+        raise InputError(path, e.path, e.message) from None
     except yaml.YAMLError as e:
         mark = getattr(e, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
         problem = getattr(e, "problem", None) or str(e)
-        raise InputError(path, "", f"YAML syntax: {where}{problem}") from None
+        raise InputError(path, "", f"YAML syntax: {where}{clip(problem, 120)}") from None
+    except ValueError as e:      # a scalar Python cannot convert (a date such as 2024-02-30)
+        raise InputError(path, "", f"a value YAML cannot read: {clip(str(e), 80)}") from None
     if not isinstance(data, dict):
         raise InputError(path, "", "the document must be a mapping of sections (design, backbone, disks, ...)")
     warnings = _move_deprecated(data, path)
@@ -314,22 +327,35 @@ def read(path: str | Path) -> LoadedDesign:
     except ValidationError as e:
         err = e.errors()[0]
         loc = [p for p in err["loc"] if not (isinstance(p, str) and p.startswith("function-"))]
-        msg = err["msg"]
+        msg = err["msg"].removeprefix("Value error, ")
         if err["type"] == "extra_forbidden":
             msg = "unknown key"
-        elif "input" in err and err["type"] not in ("missing",):
-            msg += f" (got {err['input']!r})"
-        extra = f" (and {len(e.errors()) - 1} more)" if len(e.errors()) > 1 else ""
+        elif "input" in err and err["type"] not in ("missing", "value_error"):
+            msg += f" (got {echo(err['input'])})"
+        extra = f" (and {e.error_count() - 1} more)" if e.error_count() > 1 else ""
         raise InputError(path, _path(loc), msg + extra) from None
     _check_design(design, path)
     return LoadedDesign(design=design, source=str(path), sha256=hashlib.sha256(raw).hexdigest(),
                         warnings=tuple(warnings))
 
 
+def _read_bytes(path: Path) -> bytes:
+    """The file's bytes, at most :data:`hwgen.yamlfile.MAX_BYTES` of them (a device such as
+    /dev/zero, or a 50 MB file, is refused after reading that much, not read to the end)."""
+    try:
+        with open(path, "rb") as f:
+            raw = f.read(yamlfile.MAX_BYTES + 1)
+    except OSError as e:
+        raise InputError(path, "", f"cannot read the file ({e.strerror or e})") from None
+    if len(raw) > yamlfile.MAX_BYTES:
+        raise InputError(path, "", f"larger than {yamlfile.MAX_BYTES >> 20} MiB; a design file is a few kB")
+    return raw
+
+
 def _check_design(d: Design, file: Path) -> None:
     """Checks that span fields; each raises InputError with the field path."""
     if not SAFE_NAME.match(d.design):
-        raise InputError(file, "design", f"{d.design!r} is not a safe file name (letters, digits, _ and -)")
+        raise InputError(file, "design", f"{echo(d.design)} is not a safe file name (letters, digits, _ and -)")
     n = d.disks.count
     if d.disks.stations is not None:
         st = d.disks.stations
@@ -352,16 +378,24 @@ def _check_design(d: Design, file: Path) -> None:
         raise InputError(file, "disks.eyelets.edge_size", "must be less than half the disk thickness")
     if d.disks.tie_off.pocket_depth >= d.disks.end_thickness / 2:
         raise InputError(file, "disks.tie_off.pocket_depth", "must be less than half the end disk thickness")
+    sweep, checked = d.disks.eyelets.sweep_deg, d.check.max_angle_deg
+    if checked is not None and checked > sweep:
+        raise InputError(file, "check.max_angle_deg",
+                         f"±{checked:g}° is beyond the ±{sweep:g}° the eyelets are sized for "
+                         f"(disks.eyelets.sweep_deg): they would fail the angle check by design; "
+                         f"raise the sweep or leave check.max_angle_deg out")
 
     channels = d.tensioner.channels
+    if len(channels) > MAX_CHANNELS:
+        raise InputError(file, "tensioner.channels", f"{len(channels)} channels; at most {MAX_CHANNELS}")
     for i, c in enumerate(channels):
         if not SAFE_NAME.match(c):
-            raise InputError(file, f"tensioner.channels[{i}]", f"{c!r} is not a safe file name")
+            raise InputError(file, f"tensioner.channels[{i}]", f"{echo(c)} is not a safe file name")
         if c in channels[:i]:
-            raise InputError(file, f"tensioner.channels[{i}]", f"duplicate channel {c!r}")
+            raise InputError(file, f"tensioner.channels[{i}]", f"duplicate channel {echo(c)}")
     if d.tensioner.actuating_channel not in channels:
         raise InputError(file, "tensioner.actuating_channel",
-                         f"{d.tensioner.actuating_channel!r} is not one of the channels {list(channels)}")
+                         f"{echo(d.tensioner.actuating_channel)} is not one of the channels {echo(list(channels), 80)}")
 
     names: dict[str, str] = {}
     for i, t in enumerate(d.tendons):
@@ -371,13 +405,13 @@ def _check_design(d: Design, file: Path) -> None:
             own.append((t.routing.mirror_name or f"{t.name}_m", f"{where}.routing.mirror_name"))
         for name, p in own:
             if not SAFE_NAME.match(name):
-                raise InputError(file, p, f"{name!r} is not a safe file name (letters, digits, _ and -)")
+                raise InputError(file, p, f"{echo(name)} is not a safe file name (letters, digits, _ and -)")
             if name in names:
-                raise InputError(file, p, f"duplicate tendon name {name!r} (also at {names[name]})")
+                raise InputError(file, p, f"duplicate tendon name {echo(name)} (also at {names[name]})")
             names[name] = p
         if t.channel not in channels:
             raise InputError(file, f"{where}.channel",
-                             f"unknown channel {t.channel!r}; tensioner.channels are {list(channels)}")
+                             f"unknown channel {echo(t.channel)}; tensioner.channels are {echo(list(channels), 80)}")
         if t.routing.table is not None and len(t.routing.table) != n:
             raise InputError(file, f"{where}.routing.table",
                              f"has {len(t.routing.table)} rows, there are {n} stations")

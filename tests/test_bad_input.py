@@ -21,7 +21,7 @@ def _edit(text: str, old: str, new: str) -> str:
 
 CASES = {
     "yaml-syntax": (_edit(PROTO, "  height: 60 ", "  height: [60 "), "<document>", "YAML syntax"),
-    "duplicate-key": (_edit(PROTO, "  height: 60 ", "  height: 60\n  height: 61 "), "<document>", "duplicate key"),
+    "duplicate-key": (_edit(PROTO, "  height: 60 ", "  height: 60\n  height: 61 "), "backbone.height", "duplicate key"),
     "unknown-key": (_edit(PROTO, "  slot_clearance: 0.2 ", "  slot_clearance: 0.2\n  colour: red "),
                     "disks.colour", "unknown key"),
     "wrong-type": (_edit(PROTO, "  height: 60 ", "  height: sixty "), "backbone.height", "valid number"),

@@ -10,8 +10,8 @@ import pytest
 PKG = Path(__file__).resolve().parents[1] / "hwgen"
 
 # The stages in the order data flows; a module may import its own stage and those before it.
-STAGES = ["errors", "atomic", "params", "model", "cad", "checks", "outputs", "pipeline", "cli", "bench"]
-NO_CAD_KERNEL = ("params", "model")          # plain data and numpy: never CadQuery or OCP
+STAGES = ["errors", "atomic", "yamlfile", "params", "model", "cad", "checks", "outputs", "pipeline", "cli", "bench"]
+NO_CAD_KERNEL = ("yamlfile", "params", "model")         # plain data and numpy: never CadQuery or OCP
 
 
 def _modules() -> dict[str, Path]:

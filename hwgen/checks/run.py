@@ -91,7 +91,7 @@ def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     emap, c = locate_eyelets(disks, rep_in, bb_holes, s.position_tol_mm)
     checks += c
 
-    angles = sweep_angles(s.max_angle_deg, s.step_deg)
+    angles = sweep_angles(d.check_angle_deg, s.step_deg)
     L = d.backbone.length
     tls = tendon_lengths(emap, rep_in, angles, L)
     devs, fdelta, c = _routing_checks(plan, emap.stations_y, angles)
