@@ -269,7 +269,16 @@ def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendo
                 dia.append(lp.equivalent_diameter + 2 * SAG_MM)
         in_stl = stl_fit >= -tol
         missing = [w for w, ok in (("backbone_template.dxf", in_dxf), ("the backbone STL", in_stl)) if not ok]
-        if missing:
+        # no hole loop around the crossing, and the crossing outside the strip's outline: the
+        # hole was cut, but it runs into the strip's edge and made a notch of it
+        notched = (not in_stl and bb_outline is not None and abs(x) < half_h
+                   and not inside(bb_outline.points, (x, y)))
+        if notched:
+            reach = abs(x) + (dia[0] / 2 if dia else r_t)
+            msg = (f"{place}, so near the strip's edge that its hole (reaching |x| = {reach:.2f} mm, the edge is at "
+                   f"{half_h:.2f} mm) breaks through it: the strip is notched there, not drilled"
+                   + (" (and backbone_template.dxf has no hole it passes)" if not in_dxf else ""))
+        elif missing:
             msg = f"{place} but {' and '.join(missing)} {'has' if len(missing) == 1 else 'have'} no hole it passes"
         else:
             msg = f"{place} through a hole in the template and the strip"

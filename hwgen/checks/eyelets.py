@@ -19,7 +19,8 @@ import numpy as np
 from .base import Check
 from .measure import Loop, area_centroid, chain_loops, inside, load_mesh, num, section_loops
 
-OFF_PLANE_FRACTION = 1 / 8   # the axis cuts sit this fraction of the thickness either side of the mid-plane
+OFF_PLANE_FRACTION = 1 / 8   # the axis cuts sit this fraction of the thickness either side of the mid-plane,
+CLEAR_FRACTION = 1 / 2       # or this fraction of the way from the mid-plane to a recess floor, if nearer
 NEAR_FACTOR = 3.0            # an unmatched hole within this many design diameters is "moved", not "missing"
 
 
@@ -54,14 +55,23 @@ def _robot_y(placement: np.ndarray, z_file: float) -> float:
     return float((placement @ [0.0, 0.0, z_file, 1.0])[1])
 
 
-def measure_disk(stl: Path, placement, part: str, station: int, mesh=None) -> DiskSections:
-    """Cut one disk file (or its already loaded ``mesh``) and find its outline, slot and holes."""
+def measure_disk(stl: Path, placement, part: str, station: int, mesh=None, recess: float = 0.0) -> DiskSections:
+    """Cut one disk file (or its already loaded ``mesh``) and find its outline, slot and holes.
+
+    ``recess``: the depth of the deepest recess in either face (the base disk's knot pockets,
+    from the design report). The axis cuts stay clear of it: a cut on a pocket's floor, or
+    through the pocket, finds the pocket's outline instead of the bore's and tilts the axis.
+    """
     mesh = load_mesh(stl) if mesh is None else mesh
     P = np.asarray(placement, dtype=float)
     zmin, zmax = (float(v) for v in mesh.bounds[:, 2])
     T = zmax - zmin
     mid = (zmin + zmax) / 2
     h = T * OFF_PLANE_FRACTION
+    if recess > 0:
+        h = min(h, CLEAR_FRACTION * (T / 2 - recess))
+    if h <= 0:
+        raise ValueError(f"{part}: a {recess:g} mm recess reaches the mid-plane of a {T:g} mm disk")
     sections = []
     for off in (0.0, -h, h):
         loops = section_loops(mesh, P, [0.0, 0.0, mid + off], [0.0, 0.0, 1.0])

@@ -122,6 +122,8 @@ def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
 def _measure_disks(folder: Path, manifest: dict, meshes: dict, tol: float):
     """Every disk's STL sectioned (through its placement), and where its mid-plane lies."""
     ys = manifest["design_report"]["stations_mm"]
+    recess = {d["index"]: max((k[3] for k in d.get("knot_pockets", [])), default=0.0)
+              for d in manifest["design_report"]["disks"]}
     disks, checks = [], []
     for p in manifest["parts"]:
         if p.get("role") != "disk":
@@ -130,7 +132,8 @@ def _measure_disks(folder: Path, manifest: dict, meshes: dict, tol: float):
         if not stl.exists():
             continue
         try:
-            dk = measure_disk(stl, p["placement"], p["name"], int(p["station"]), meshes.get(p["name"]))
+            dk = measure_disk(stl, p["placement"], p["name"], int(p["station"]), meshes.get(p["name"]),
+                              recess.get(int(p["station"]), 0.0))
         except Exception as e:
             checks.append(Check("disk.section", "error", False, f"{p['name']}: cannot be measured ({e})",
                                 None, None, {"part": p["name"]}))
