@@ -1,5 +1,9 @@
 """Parameters that pass the schema but describe no buildable robot: found before anything is
-built, each with the field path to change (the CLI reports them as bad input, exit 2)."""
+built, each with the field path to change (the CLI reports them as bad input, exit 2).
+
+:func:`check` runs on the parameters alone; :func:`check_plan` on the plan, for what only the
+sized holes tell (a tendon that crosses the strip or a disk so obliquely that no hole fits).
+"""
 from __future__ import annotations
 
 import math
@@ -7,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import DesignError, InputError
 from ..params import Design
 from .gearing import worm_pair
 from .materials import material_problem
@@ -21,6 +25,7 @@ def problems(d: Design) -> list[tuple[str, str]]:
     material = material_problem(d.process)
     if material:
         out.append(("process.material", material))
+    out += _slot_problems(d) + _tendon_size_problems(d) + _mount_problems(d)
     ts = d.tensioner
     out += [(f"tensioner.{f}", m) for f, m in worm_pair(ts).problems(ts.friction_coefficient, d.process.min_wall)]
     wall = spool_wall_problem(ts, d.process.min_wall)
@@ -37,18 +42,122 @@ def problems(d: Design) -> list[tuple[str, str]]:
 def _eyelets_outside(d: Design) -> list[tuple[str, str]]:
     """Eyelets (as the geometry will use them: table first, else the function) beyond the disk's rim."""
     r_out = d.disks.outer_diameter / 2
+    hole = _smallest_hole(d)
     out = []
     for i, t in enumerate(d.tendons):
         table = t.routing.table
         pts = np.asarray(table, dtype=float) if table is not None else sample_function(
             t.routing.function, d.stations, d.backbone.length)
         for j, (x, z) in enumerate(pts):
+            p = f"tendons[{i}].routing.table[{j}]" if table is not None else f"tendons[{i}].routing.function"
             if math.hypot(x, z) >= r_out:
-                p = f"tendons[{i}].routing.table[{j}]" if table is not None else f"tendons[{i}].routing.function"
                 out.append((p, f"eyelet at station {j} (x={x:g}, z={z:g}) lies outside the disk "
                                f"(radius {r_out:g} mm)"))
                 break
+            if math.hypot(x, z) + hole / 2 >= r_out:
+                out.append((p, f"eyelet at station {j} (x={x:g}, z={z:g}) needs a hole of at least Ø{hole:g} mm "
+                               f"for the Ø{d.tendon_material.diameter:g} mm tendon, which breaks through the rim "
+                               f"(radius {r_out:g} mm)"))
+                break
     return out
+
+
+MAX_MOUNT_HOLES = 32
+
+
+def _slot_problems(d: Design) -> list[tuple[str, str]]:
+    """The strip's slot (strip plus clearance) must leave a wall all round inside the disk."""
+    dk, wall = d.disks, d.process.min_wall
+    w, h = d.backbone.height + 2 * dk.slot_clearance, d.backbone.thickness + 2 * dk.slot_clearance
+    r = dk.outer_diameter / 2
+    if math.hypot(w / 2, h / 2) + wall <= r:
+        return []
+    field = "backbone.thickness" if w / 2 + wall < r else "disks.outer_diameter"
+    return [(field, f"the backbone slot ({w:g} × {h:g} mm: the strip and disks.slot_clearance) reaches past "
+                    f"the rim of the Ø{dk.outer_diameter:g} mm disk, or leaves less than "
+                    f"process.min_wall = {wall:g} mm of it")]
+
+
+def _smallest_hole(d: Design) -> float:
+    """The diameter of an eyelet the tendon passes straight: the plan only makes them larger."""
+    return max(d.process.min_hole, d.tendon_material.diameter + d.process.hole_clearance)
+
+
+def _tendon_size_problems(d: Design) -> list[tuple[str, str]]:
+    """A tendon whose straight eyelet, with walls, does not fit between the slot and the rim."""
+    dk = d.disks
+    room = dk.outer_diameter / 2 - (d.backbone.thickness / 2 + dk.slot_clearance)
+    hole = _smallest_hole(d)
+    if hole + 2 * d.process.min_wall <= room:
+        return []
+    return [("tendon_material.diameter",
+             f"a Ø{d.tendon_material.diameter:g} mm tendon needs eyelets of at least Ø{hole:g} mm "
+             f"(with process.hole_clearance); with {d.process.min_wall:g} mm walls they do not fit between the "
+             f"backbone slot and the rim of a Ø{dk.outer_diameter:g} mm disk")]
+
+
+def _mount_problems(d: Design) -> list[tuple[str, str]]:
+    """The tip disk's bolt holes must lie inside the disk and clear of the backbone slot."""
+    dk, tm = d.disks, d.disks.tip_mount
+    if len(tm.positions) > MAX_MOUNT_HOLES:
+        return [("disks.tip_mount.positions", f"{len(tm.positions)} holes; at most {MAX_MOUNT_HOLES}")]
+    r_out = dk.outer_diameter / 2
+    half_w = d.backbone.height / 2 + dk.slot_clearance
+    half_h = d.backbone.thickness / 2 + dk.slot_clearance
+    r = tm.hole_diameter / 2
+    for i, (x, z) in enumerate(tm.positions):
+        where = f"disks.tip_mount.positions[{i}]"
+        if math.hypot(x, z) + r >= r_out:
+            return [(where, f"a Ø{tm.hole_diameter:g} mm hole at (x={x:g}, z={z:g}) breaks through the rim of "
+                            f"the Ø{dk.outer_diameter:g} mm tip disk")]
+        if math.hypot(max(abs(x) - half_w, 0.0), max(abs(z) - half_h, 0.0)) < r:
+            return [(where, f"a Ø{tm.hole_diameter:g} mm hole at (x={x:g}, z={z:g}) cuts into the backbone slot")]
+    return []
+
+
+def tendon_field(d: Design, name: str) -> str:
+    """The YAML field that places tendon ``name`` (its table if it has one, else its function);
+    a mirrored tendon is placed by the tendon it mirrors."""
+    for i, t in enumerate(d.tendons):
+        mirror = {t.routing.mirror_name or f"{t.name}_m"} if t.routing.mirror else set()
+        if name in {t.name} | mirror:
+            return f"tendons[{i}].routing.{'table' if t.routing.table is not None else 'function'}"
+    return "tendons"
+
+
+def plan_problems(plan) -> list[tuple[str, str]]:
+    """(field path, what is wrong) for holes the plan sized but no part can take: an eyelet
+    that breaks through its disk's rim, a strip hole as wide as the strip. Both come from a
+    tendon that meets the disk or the strip almost edge-on (its hole grows as 1/cos α)."""
+    d = plan.design
+    out = []
+    for disk in plan.disks:
+        r_out = disk.outer_diameter / 2
+        for h in disk.holes:
+            if not math.isfinite(h.diameter) or math.hypot(h.x, h.z) + h.diameter / 2 >= r_out:
+                dia = f"Ø{h.diameter:.3g} mm" if math.isfinite(h.diameter) else "endless"
+                out.append((tendon_field(d, h.tendons[0]),
+                            f"{'+'.join(h.tendons)} at station {disk.index} meets the disk at up to "
+                            f"{h.worst_angle_deg:.0f}° to its eyelet's axis over the ±{d.disks.eyelets.sweep_deg:g}° "
+                            f"sweep: the eyelet must be {dia} and breaks through the rim of the "
+                            f"Ø{disk.outer_diameter:g} mm disk"))
+                return out
+    height = plan.backbone.height
+    for h in plan.backbone.holes:
+        if not math.isfinite(h.diameter) or h.diameter >= height:
+            dia = f"a Ø{h.diameter:.3g} mm" if math.isfinite(h.diameter) else "an endless"
+            out.append((tendon_field(d, h.tendon),
+                        f"{h.tendon} crosses the backbone at station {h.station:g} so obliquely that the strip "
+                        f"would need {dia} hole, wider than the {height:g} mm strip: route it across the "
+                        f"strip more squarely, or not through the strip"))
+            return out
+    return out
+
+
+def check_plan(plan) -> None:
+    """Raise :class:`DesignError` for the first of :func:`plan_problems`."""
+    for path, message in plan_problems(plan):
+        raise DesignError(path, message)
 
 
 def check(d: Design, file: str | Path) -> None:
