@@ -1,10 +1,22 @@
-"""Which parts a design has, in build order. Each family turns the plan into Parts."""
+"""Which parts a design has, in build order. Each family turns the plan into Parts.
+
+The CAD kernel can fail on parameters that passed every earlier check (a boolean that leaves
+nothing, a sweep that does not close). :func:`build_parts` and :func:`kernel_errors` turn any
+such failure, and any solid that comes out empty or null, into a
+:class:`hwgen.errors.DesignError` that names the part, the YAML section it comes from and the
+parameters that made it, so the user reads what to change instead of a traceback.
+"""
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
 
+from ..errors import DesignError, InputError, clip
 from ..model.plan import Plan
 from . import Part
+
+MIN_VOLUME_MM3 = 1e-6       # a solid with less than this is an empty result, not a part
 
 
 def _disks(plan: Plan) -> Iterator[Part]:
@@ -28,18 +40,102 @@ def _tensioner_count(plan: Plan) -> int:
     return sum(3 + len(u.clamps) for u in lay.units) + 1
 
 
-# (family, how many parts it yields, builder); the builders import CadQuery only when they run
-FAMILIES: list[tuple[str, Callable[[Plan], int], Callable[[Plan], Iterator[Part]]]] = [
-    ("disks", lambda p: len(p.disks), _disks),
-    ("backbone", lambda p: 1, _backbone),
-    ("tensioner", _tensioner_count, _tensioner),
+def _disk_made_from(plan: Plan, index: int) -> tuple[str, str]:
+    spec = plan.disks[min(index, len(plan.disks) - 1)]
+    holes = [h.diameter for h in spec.holes]
+    sizes = f", {len(holes)} eyelet(s) Ø{min(holes):.3g}–{max(holes):.3g} mm" if holes else ""
+    return spec.name, (f"{spec.role} disk at y = {spec.y:g} mm: thickness {spec.thickness:g} mm, "
+                       f"Ø{spec.outer_diameter:g} mm, slot {spec.slot_width:g} × {spec.slot_height:g} mm{sizes}"
+                       f"{f', {len(spec.knot_pockets)} knot pocket(s)' if spec.knot_pockets else ''}"
+                       f"{f', {len(spec.mount_holes)} mount hole(s)' if spec.mount_holes else ''}")
+
+
+def _backbone_made_from(plan: Plan, index: int) -> tuple[str, str]:
+    b = plan.backbone
+    holes = [h[2] for h in b.merged_holes()]
+    sizes = f", {len(holes)} hole(s) up to Ø{max(holes):.3g} mm" if holes else ""
+    return b.name, f"strip {b.height:g} × {b.thickness:g} mm, {b.y_end - b.y_start:g} mm long{sizes}"
+
+
+def _tensioner_made_from(plan: Plan, index: int) -> tuple[str, str]:
+    t = plan.design.tensioner
+    return (f"tensioner part {index + 1}", f"module {t.module:g} mm, {t.worm_starts} start(s), {t.wheel_teeth} teeth, "
+            f"worm Ø{t.worm_pitch_diameter:g} × {t.worm_length:g} mm, face width {t.face_width:g} mm, "
+            f"spool Ø{t.spool_diameter:g} mm, {len(t.channels)} channel(s)")
+
+
+@dataclass(frozen=True)
+class Family:
+    name: str
+    section: str                                          # the YAML section its parts come from
+    count: Callable[[Plan], int]                          # how many parts it yields
+    build: Callable[[Plan], Iterator[Part]]               # the builder; imports CadQuery only when run
+    made_from: Callable[[Plan, int], tuple[str, str]]     # (part name, its parameters) of the index-th part
+
+
+FAMILIES: list[Family] = [
+    Family("disks", "disks", lambda p: len(p.disks), _disks, _disk_made_from),
+    Family("backbone", "backbone", lambda p: 1, _backbone, _backbone_made_from),
+    Family("tensioner", "tensioner", _tensioner_count, _tensioner, _tensioner_made_from),
 ]
 
 
 def part_count(plan: Plan) -> int:
-    return sum(count(plan) for _, count, _ in FAMILIES)
+    return sum(f.count(plan) for f in FAMILIES)
+
+
+def _failure(family: Family, plan: Plan, index: int, what: str, part_name: str | None = None) -> DesignError:
+    name, params = family.made_from(plan, index)
+    return DesignError(family.section, f"the CAD kernel could not make {part_name or name} ({params}): "
+                                       f"{clip(what, 160)}; change these parameters")
+
+
+def _sound(part: Part) -> None:
+    """Raise ValueError for a solid the kernel returned but that is no part: null or empty."""
+    solid = part.solid
+    if solid is None or getattr(solid, "wrapped", None) is None or solid.wrapped.IsNull():
+        raise ValueError("it came out null")
+    volume = solid.Volume()
+    if not volume > MIN_VOLUME_MM3:
+        raise ValueError(f"it came out empty ({volume:.3g} mm³)")
 
 
 def build_parts(plan: Plan) -> Iterator[Part]:
-    for _, _, build in FAMILIES:
-        yield from build(plan)
+    """Every part of the design, family by family; a failure of the kernel is a DesignError."""
+    for family in FAMILIES:
+        parts = family.build(plan)
+        index = 0
+        while True:
+            try:
+                part = next(parts)
+                _sound(part)
+            except StopIteration:
+                break
+            except (DesignError, InputError):
+                raise
+            except Exception as e:     # OCCT's Standard_Failure, CadQuery's ValueError, ...
+                raise _failure(family, plan, index, f"{type(e).__name__}: {e}") from None
+            index += 1
+            yield part
+
+
+@contextmanager
+def kernel_errors(plan: Plan, part: Part | None, doing: str) -> Iterator[None]:
+    """Writing a part's files (or the assembly, ``part`` None): a kernel failure is a DesignError."""
+    try:
+        yield
+    except (DesignError, InputError, OSError):
+        raise
+    except Exception as e:
+        if part is None:
+            raise DesignError("", f"the CAD kernel could not {doing}: {clip(f'{type(e).__name__}: {e}', 160)}") \
+                from None
+        family = next((f for f in FAMILIES if f.name == _family_of(part)), FAMILIES[0])
+        raise DesignError(family.section, f"the CAD kernel could not {doing} {part.name}: "
+                                          f"{clip(f'{type(e).__name__}: {e}', 160)}") from None
+
+
+def _family_of(part: Part) -> str:
+    if part.role == "disk":
+        return "disks"
+    return "backbone" if part.role == "backbone" else "tensioner"
