@@ -3,25 +3,31 @@
     read (params) → feasibility (model) → plan (model) → parts (cad) → files and manifest (cad)
     → checks (report.json, summary.md) → plots (lengths.png) → bill of materials → pictures
 
-Every build writes into a fresh temporary folder beside the target; only when every file is
-complete does it replace ``out/<design>/``. A failure at any point leaves the old outputs
-exactly as they were. ``hwgen check`` and ``hwgen render`` run their stages on the outputs as
-they are, and build first only when the outputs are missing or made from other parameters.
+Every build writes into a fresh staging folder beside the target; only when every file is
+complete is it swapped in for ``out/<design>/`` in one step (:func:`hwgen.atomic.new_folder`).
+A failure or a kill at any point leaves the old outputs exactly as they were; two builds at
+once both finish, and the last to finish is what the folder holds. ``hwgen check`` reads the
+outputs as they are; ``hwgen render`` draws into a copy of them and swaps it in the same way;
+both build first only when the outputs are missing or made from other parameters.
+
+An output root that cannot be written (not a folder, no permission, a full disk) is bad input
+naming ``--out`` (:class:`hwgen.errors.InputError`), like any other.
 """
 from __future__ import annotations
 
+import errno
 import json
 import os
-import shutil
-import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
 from . import __version__, params
-from .atomic import write_json
+from .atomic import new_folder, snapshot, write_json
 from .cad import export
-from .cad.families import build_parts, part_count
+from .cad.families import build_parts, kernel_errors, part_count
+from .errors import InputError
 from .cad.manifest import design_report, part_entry, sha256
 from .checks.measure import read_manifest
 from .checks.report import write_summary
@@ -43,6 +49,39 @@ def load(path: str | Path) -> params.LoadedDesign:
     loaded = params.read(path)
     feasibility.check(loaded.design, path)
     return loaded
+
+
+def design_plan(loaded: params.LoadedDesign) -> Plan:
+    """The plan of a loaded design, with everything it needs to be built (the tensioner's layout,
+    strip holes the strip can take); raises :class:`hwgen.errors.DesignError` naming the field.
+    Every command starts from it, so they all refuse the same designs the same way."""
+    plan = make_plan(loaded.design)
+    plan.require_tensioner_layout()
+    feasibility.check_plan(plan)
+    return plan
+
+
+WRITE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EPERM, errno.EIO, errno.EFBIG}
+
+
+def _related(path, root: Path) -> bool:
+    p = Path(os.path.abspath(path))
+    return p == root or root in p.parents or p in root.parents
+
+
+@contextmanager
+def output_errors(out_root: Path) -> Iterator[None]:
+    """An OS error writing under ``out_root`` (or making it) is bad input naming ``--out``."""
+    try:
+        yield
+    except OSError as e:
+        root = Path(os.path.abspath(out_root))
+        if not (_related(e.filename, root) if e.filename else e.errno in WRITE_ERRNOS):
+            raise
+        if isinstance(e, (FileExistsError, NotADirectoryError)) and not root.is_dir():
+            what = "is a file, not a folder" if root.exists() else "lies below a file, not a folder"
+            raise InputError(out_root, "--out", what) from None
+        raise InputError(out_root, "--out", f"cannot write the outputs here ({e.strerror or e})") from None
 
 
 # ---------------------------------------------------------------- stages after the files
@@ -88,28 +127,25 @@ class BuildResult:
     folder: Path
     manifest: dict
     plan: Plan
+    report: dict | None = None        # the checks' report, when they ran
 
 
 def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, int, int], None] | None = None,
           post_build: bool = True) -> BuildResult:
     """Build every part and file of the design into ``out_root/<design>/``, then (``post_build``)
     run the stages after the files. ``progress(part_name, done, total)`` follows each part."""
-    plan = make_plan(loaded.design)
-    total = part_count(plan)  # raises DesignError for a part family that cannot be made, before any write
-    out_root.mkdir(parents=True, exist_ok=True)
+    plan = design_plan(loaded)
+    total = part_count(plan)
+    out_root = Path(out_root)
     target = out_root / loaded.design.design
-    tmp = Path(tempfile.mkdtemp(prefix=f".{loaded.design.design}.", suffix=".tmp", dir=out_root))
-    try:
+    with output_errors(out_root), new_folder(target) as tmp:
         manifest = _write_files(loaded, plan, tmp, total, progress)
+        done = {}
         if post_build:
-            for _name, stage in AFTER_FILES:
-                stage(plan, tmp, manifest)
+            for name, stage in AFTER_FILES:
+                done[name] = stage(plan, tmp, manifest)
         write_json(tmp / "manifest.json", manifest)
-        _publish(tmp, target)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    return BuildResult(target, manifest, plan)
+    return BuildResult(target, manifest, plan, done.get("checks"))
 
 
 def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: int, progress) -> dict:
@@ -119,13 +155,15 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
     density, _ = printed_density(plan.design.process)
     for part in build_parts(plan):
         files = {"stl": folder / "stl" / f"{part.name}.stl", "step": folder / "step" / f"{part.name}.step"}
-        export.write_stl(part.solid, files["stl"])
-        export.write_step(part.solid, files["step"])
-        entries.append(part_entry(part, files, folder, plan.design.process.material, density))
+        with kernel_errors(plan, part, "write the files of"):
+            export.write_stl(part.solid, files["stl"])
+            export.write_step(part.solid, files["step"], part.name)
+            entries.append(part_entry(part, files, folder, plan.design.process.material, density))
         parts.append(part)
         if progress:
             progress(part.name, len(parts), total)
-    export.write_assembly(parts, loaded.design.design, folder / "assembly.step")
+    with kernel_errors(plan, None, "write assembly.step"):
+        export.write_assembly(parts, loaded.design.design, folder / "assembly.step")
     export.write_backbone_dxf(plan.backbone, plan.stations, folder / "backbone_template.dxf")
     return {
         "design": loaded.design.design,
@@ -140,24 +178,6 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
         "parts": entries,
         "design_report": design_report(plan),
     }
-
-
-def _publish(tmp: Path, target: Path) -> None:
-    """Swap the finished folder in: rename the old one aside, rename the new one in, drop the old."""
-    os.chmod(tmp, 0o755)
-    old = None
-    if target.exists():
-        old = target.with_name(f".{target.name}.old-{os.getpid()}")
-        shutil.rmtree(old, ignore_errors=True)
-        os.rename(target, old)
-    try:
-        os.rename(tmp, target)
-    except BaseException:
-        if old is not None:
-            os.rename(old, target)
-        raise
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
 
 
 # ---------------------------------------------------------------- on existing outputs
@@ -188,11 +208,12 @@ def stale_reason(folder: Path, loaded) -> str | None:
 def check(loaded: params.LoadedDesign, out_root: Path, progress=None) -> tuple[dict, Path, str | None]:
     """`hwgen check`: build if needed, then measure. Returns (report, folder, why it was rebuilt or None)."""
     folder = Path(out_root) / loaded.design.design
-    why = stale_reason(folder, loaded)
-    if why is not None:
-        build(loaded, Path(out_root), progress)
-        return json.loads((folder / REPORT).read_text()), folder, why
-    return run_checks(folder, read_manifest(folder), make_plan(loaded.design)), folder, None
+    plan = design_plan(loaded)
+    with output_errors(Path(out_root)), snapshot(folder) as view:
+        why = stale_reason(view, loaded)
+        if why is None:
+            return run_checks(view, read_manifest(view), plan), folder, None
+    return build(loaded, Path(out_root), progress).report, folder, why
 
 
 def render(loaded: params.LoadedDesign, out_root: Path) -> tuple[dict, Path, str | None]:
@@ -203,11 +224,13 @@ def render(loaded: params.LoadedDesign, out_root: Path) -> tuple[dict, Path, str
     folder, why it was rebuilt or None).
     """
     folder = Path(out_root) / loaded.design.design
+    plan = design_plan(loaded)
     why = stale_reason(folder, loaded)
     if why is not None:
         result = build(loaded, Path(out_root))
         return result.manifest.get("render", {}), folder, why
-    manifest = read_manifest(folder)
-    draw(make_plan(loaded.design), folder, manifest)
-    write_json(folder / "manifest.json", manifest)
+    with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
+        manifest = read_manifest(tmp)
+        draw(plan, tmp, manifest)
+        write_json(tmp / "manifest.json", manifest)
     return manifest["render"], folder, None
