@@ -1,27 +1,55 @@
 """The `hwgen` command line: build, check, render, routing, schema.
 
-Exit codes: 0 success, 1 design findings that fail, 2 bad input or usage.
+Exit codes: 0 success, 1 design findings that fail, 2 bad input or usage, 3 a bug in hwgen.
+
+Every command reports through one error path (:func:`_errors`): bad input, parameters that
+make no part (including any failure of the CAD kernel), and an output folder that cannot be
+written all print one line ``error: FILE: FIELD: what is wrong`` and exit 2; anything else is
+a bug and says so in one line (``HWGEN_DEBUG=1`` shows the traceback). Nothing the user wrote
+is ever read as rich markup or emoji codes: the consoles have both switched off, and styled
+words are :class:`rich.text.Text` spans.
 """
 from __future__ import annotations
 
+import functools
 import json
+import os
+import signal
 import sys
+import warnings
 from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 import typer
 from rich.console import Console
 from rich.table import Table
+from rich.text import Text
 
-from .errors import DesignError, InputError
+from .errors import DesignError, InputError, clip, printable
 
-EXIT_OK, EXIT_FINDINGS, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_OK, EXIT_FINDINGS, EXIT_BAD_INPUT, EXIT_BUG = 0, 1, 2, 3
+DEBUG_ENV = "HWGEN_DEBUG"          # "1": let an unexpected exception through with its traceback
+MESSAGE_CHARS = 400                # the longest error message printed
+FIELD_CHARS = 100
 
-app = typer.Typer(add_completion=False, no_args_is_help=True,
+app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   help="Print files, checks and pictures for tendon-driven continuum robots.")
-# piped output (CI logs, files) gets a page wide enough that tables do not wrap
-out = Console(width=None if sys.stdout.isatty() else 160)
-err = Console(stderr=True, width=None if sys.stderr.isatty() else 160)
+
+
+def _console(stderr: bool) -> Console:
+    stream = sys.stderr if stderr else sys.stdout
+    # piped output (CI logs, files) gets a page wide enough that tables do not wrap
+    return Console(stderr=stderr, width=None if stream.isatty() else 160, markup=False, emoji=False,
+                   highlight=False)
+
+
+out = _console(False)
+err = _console(True)
+
+
+def say(label: str, style: str, message: str, console: Console | None = None) -> None:
+    """One line: a styled label and a plain message (never parsed as markup)."""
+    (console or err).print(Text.assemble((label, style), " ", printable(message)), soft_wrap=True)
 
 
 def _mm(v: float) -> str:
@@ -31,33 +59,78 @@ PARAMS = typer.Argument(..., help="design parameter YAML", show_default=False)
 OUT = typer.Option(Path("out"), "--out", help="output root; the design goes to OUT/<design>/")
 
 
+def _file_label(file) -> str:
+    """The file as the user named it; a very long path keeps its end, where the name is."""
+    text = printable(str(file))
+    return text if len(text) <= 200 else "…" + text[-199:]
+
+
 def _bad_input(file, path: str, message: str) -> typer.Exit:
-    err.print(f"[bold red]error:[/] {file}: [bold]{path or '<document>'}[/]: {message}",
-              highlight=False, soft_wrap=True)
+    field = clip(path, FIELD_CHARS) if path else "<document>"
+    say("error:", "bold red", f"{_file_label(file)}: {field}: {clip(message, MESSAGE_CHARS)}")
     return typer.Exit(EXIT_BAD_INPUT)
+
+
+@contextmanager
+def _errors(params: Path | None):
+    """The one error path of every command (see the module's docstring)."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")       # numpy and library warnings are not for the user
+            yield
+    except (typer.Exit, typer.Abort):
+        raise
+    except InputError as e:
+        raise _bad_input(e.file, e.path, e.message) from None
+    except DesignError as e:
+        raise _bad_input(params if params is not None else "", e.path, e.message) from None
+    except KeyboardInterrupt:
+        say("interrupted:", "yellow", "the outputs are as they were before this command")
+        raise typer.Exit(130) from None
+    except BrokenPipeError:
+        # the reader of our output went away (| head): stop quietly, as a SIGPIPE would
+        try:
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        except (OSError, ValueError):
+            pass
+        raise typer.Exit(141) from None
+    except Exception as e:
+        if os.environ.get(DEBUG_ENV) == "1":
+            raise
+        what = "ran out of memory" if isinstance(e, MemoryError) else f"{type(e).__name__}: {e}"
+        say("error:", "bold red", f"internal error in hwgen ({clip(what, 200)}); this is a bug, please report it "
+                                  f"with the parameter file ({DEBUG_ENV}=1 shows the traceback)")
+        raise typer.Exit(EXIT_BUG) from None
+
+
+def _command(fn):
+    """A command whose every failure goes through :func:`_errors`."""
+    @functools.wraps(fn)
+    def run(*args, **kwargs):
+        with _errors(kwargs.get("params")):
+            return fn(*args, **kwargs)
+    return app.command()(run)
 
 
 def _load(path: Path):
     from .pipeline import load
-    try:
-        loaded = load(path)
-    except InputError as e:
-        raise _bad_input(e.file, e.path, e.message) from None
+    loaded = load(path)
     for w in loaded.warnings:
-        err.print(f"[yellow]warning:[/] {w}", highlight=False, soft_wrap=True)
+        say("warning:", "yellow", w)
     return loaded
 
 
-@contextmanager
-def _design_errors(params: Path):
-    """Parameters that pass the schema but make no buildable part are bad input too."""
+def _write_side_file(path: Path, option: str, write) -> None:
+    """--report and --junit: a file that cannot be written is bad input naming the option."""
     try:
-        yield
-    except DesignError as e:
-        raise _bad_input(params, e.path, e.message) from None
+        write()
+    except OSError as e:
+        below_a_file = any(p.exists() and not p.is_dir() for p in Path(path).parents)
+        why = "it lies below a file, not a folder" if below_a_file else e.strerror or str(e)
+        raise InputError(path, option, f"cannot write it ({why})") from None
 
 
-@app.command()
+@_command
 def build(params: Path = PARAMS, out_dir: Path = OUT,
           quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar")) -> None:
     """Build every part (STL, STEP), assembly.step, the backbone DXF and manifest.json."""
@@ -66,38 +139,36 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
 
     from .pipeline import build as run_build
 
-    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                  console=err, disable=quiet, transient=True) as bar:
+    with Progress(TextColumn("{task.description}", markup=False), BarColumn(), MofNCompleteColumn(),
+                  TimeElapsedColumn(), console=err, disable=quiet, transient=True) as bar:
         task = bar.add_task(f"building {loaded.design.design}", total=None)
 
         def progress(name: str, done: int, total: int) -> None:
             bar.update(task, total=total, completed=done, description=f"built {name}")
 
-        with _design_errors(params):
-            result = run_build(loaded, out_dir, progress)
+        result = run_build(loaded, out_dir, progress)
     n = len(result.manifest["parts"])
-    out.print(f"{loaded.design.design}: {n} parts written to {result.folder}", highlight=False)
+    out.print(f"{loaded.design.design}: {n} parts written to {printable(result.folder)}")
     failed = [c for c in result.manifest.get("checks", []) if not c.get("passed", True)
               and c.get("severity") == "error"]
-    if result.plan.findings:
-        for f in result.plan.findings:
-            err.print(f"[yellow]finding:[/] {f}", highlight=False)
+    for f in result.plan.findings:
+        say("finding:", "yellow", f)
     if result.manifest.get("render", {}).get("status") in ("unavailable", "failed"):
-        err.print(f"[yellow]warning:[/] {result.manifest['render']['message']}", highlight=False)
+        say("warning:", "yellow", result.manifest["render"]["message"])
     if failed:
-        err.print(f"[red]{len(failed)} check(s) failed[/]; see {result.folder}")
+        say(f"{len(failed)} check(s) failed;", "red", f"see {result.folder}")
         raise typer.Exit(EXIT_FINDINGS)
 
 
-@app.command()
+@_command
 def routing(params: Path = PARAMS,
             as_json: bool = typer.Option(False, "--json", help="print JSON instead of tables")) -> None:
     """The eyelet table per station and tendon, merges, backbone crossings and table deviations."""
     loaded = _load(params)
-    from .model.plan import plan as make_plan
     from .model.routing import table_deviations
+    from .pipeline import design_plan
 
-    plan = make_plan(loaded.design)
+    plan = design_plan(loaded)
     devs = table_deviations(plan.paths)
     if as_json:
         from .cad.manifest import design_report
@@ -120,18 +191,15 @@ def routing(params: Path = PARAMS,
                       f"{h.diameter:.3f}", f"{h.worst_angle_deg:.1f}", " ".join(note))
     out.print(t)
     if plan.merges:
-        out.print("[bold]merged eyelets[/]")
+        out.print(Text("merged eyelets", style="bold"))
         for m in plan.merges:
-            out.print(f"  station {m.station}: {', '.join(m.tendons)} ({m.kind})", highlight=False)
+            out.print(f"  station {m.station}: {', '.join(m.tendons)} ({m.kind})")
     if plan.backbone.holes:
-        out.print("[bold]backbone holes[/] (tendon crosses the strip)")
+        out.print(Text.assemble(("backbone holes", "bold"), " (tendon crosses the strip)"))
         for h in plan.backbone.holes:
-            out.print(f"  {h.tendon} at station {h.station:g}: x={_mm(h.x)} y={_mm(h.y)} Ø{h.diameter:.3f}",
-                      highlight=False)
+            out.print(f"  {h.tendon} at station {h.station:g}: x={_mm(h.x)} y={_mm(h.y)} Ø{h.diameter:.3f}")
     for f in plan.findings:
-        out.print(f"[yellow]finding:[/] {f}", highlight=False)
-    if plan.tensioner_error:
-        out.print(f"[red]tensioner:[/] cannot be laid out: {plan.tensioner_error}", highlight=False)
+        say("finding:", "yellow", f, out)
     if devs:
         dt = Table(title="table versus function (mm)")
         for col in ("tendon", "i", "table x", "table z", "fn x", "fn z", "deviation"):
@@ -143,7 +211,7 @@ def routing(params: Path = PARAMS,
         out.print(dt)
 
 
-@app.command()
+@_command
 def check(params: Path = PARAMS, out_dir: Path = OUT,
           report: Path = typer.Option(None, "--report", help="also write the JSON report here"),
           junit: Path = typer.Option(None, "--junit", help="also write JUnit XML here (one test case per check)"),
@@ -158,18 +226,17 @@ def check(params: Path = PARAMS, out_dir: Path = OUT,
     from .checks.report import print_report, write_junit
     from .pipeline import check as check_design
 
-    rep, folder = _on_outputs(params, f"checking {loaded.design.design}", quiet,
-                              lambda: check_design(loaded, out_dir))
+    rep, folder = _on_outputs(f"checking {loaded.design.design}", quiet, lambda: check_design(loaded, out_dir))
     print_report(rep, out, verbose=verbose)
     if report is not None:
-        write_json(report, rep)
+        _write_side_file(report, "--report", lambda: write_json(report, rep))
     if junit is not None:
-        write_junit(rep, junit)
+        _write_side_file(junit, "--junit", lambda: write_junit(rep, junit))
     if not rep["ok"]:
         raise typer.Exit(EXIT_FINDINGS)
 
 
-@app.command()
+@_command
 def render(params: Path = PARAMS, out_dir: Path = OUT,
            quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner")) -> None:
     """Pictures (exploded, assembled, bent PNG), the exploded SVG drawing and the bill of materials.
@@ -179,37 +246,42 @@ def render(params: Path = PARAMS, out_dir: Path = OUT,
     loaded = _load(params)
     from .pipeline import render as render_design
 
-    entry, folder = _on_outputs(params, f"drawing {loaded.design.design}", quiet,
-                                lambda: render_design(loaded, out_dir))
-    out.print(f"{loaded.design.design}: bom.csv, bom.md written to {folder}", highlight=False)
+    entry, folder = _on_outputs(f"drawing {loaded.design.design}", quiet, lambda: render_design(loaded, out_dir))
+    out.print(f"{loaded.design.design}: bom.csv, bom.md written to {printable(folder)}")
     if entry.get("status") != "ok":
-        err.print(f"[yellow]warning:[/] {entry.get('message', 'pictures not drawn')}", highlight=False)
+        say("warning:", "yellow", entry.get("message", "pictures not drawn"))
         raise typer.Exit(EXIT_FINDINGS)
     for name, f in entry["files"].items():
         size = f" ({f['width']} × {f['height']} px)" if "width" in f else ""
-        out.print(f"  {folder / name}{size}", highlight=False)
+        out.print(f"  {printable(folder / name)}{size}")
 
 
-def _on_outputs(params: Path, doing: str, quiet: bool, run):
+def _on_outputs(doing: str, quiet: bool, run):
     """Run a step on a design's outputs (it builds them first when they are missing or stale):
-    a spinner while it works, design errors reported as bad input, and a word when it rebuilt.
-    ``run()`` returns (result, folder, why it rebuilt or None)."""
-    with err.status(doing, spinner="dots") if not quiet else nullcontext(), _design_errors(params):
+    a spinner while it works, and a word when it rebuilt. ``run()`` returns (result, folder,
+    why it rebuilt or None)."""
+    with err.status(Text(doing), spinner="dots") if not quiet else nullcontext():
         result, folder, rebuilt = run()
     if rebuilt:
-        err.print(f"built {folder} first ({rebuilt})", highlight=False)
+        err.print(f"built {printable(folder)} first ({rebuilt})")
     return result, folder
 
 
-@app.command()
+@_command
 def schema() -> None:
     """Print the JSON Schema of the parameter YAML (for editors)."""
     from .params import json_schema
     sys.stdout.write(json.dumps(json_schema(), indent=2) + "\n")
 
 
+def _terminate(signum, frame):
+    """SIGTERM ends a command like Ctrl-C: the temporary folder of a build is removed on the way out."""
+    raise KeyboardInterrupt
+
+
 def main() -> None:
     # standalone mode: typer.Exit(code) exits with that code, usage errors exit 2
+    signal.signal(signal.SIGTERM, _terminate)
     app()
 
 

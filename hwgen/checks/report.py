@@ -86,8 +86,11 @@ def write_summary(report: dict, path: Path) -> None:
 
 
 def print_report(report: dict, console, verbose: bool = False) -> None:
-    """Rich tables: tendons, then the findings (failures and warnings; every check if verbose)."""
+    """Rich tables: tendons, then the findings (failures and warnings; every check if verbose).
+
+    Styles are given as Text spans, never as markup, so nothing in a message is read as markup."""
     from rich.table import Table
+    from rich.text import Text
 
     t = Table(title=f"{report['design']}: tendon lengths from the geometry (±{report['sweep']['max_angle_deg']:g}°)")
     for col in ("tendon", "channel", "rest mm", "Δ+max mm", "Δ−max mm", "max |Δ| mm", "budget mm", ""):
@@ -96,7 +99,7 @@ def print_report(report: dict, console, verbose: bool = False) -> None:
         t.add_row(r["name"], r["channel"], f"{r['rest_length_mm']:.3f}", f"{r['delta_at_max_mm']:+.4f}",
                   f"{r['delta_at_min_mm']:+.4f}", f"{r['max_abs_delta_mm']:.4f}",
                   "–" if r["budget_mm"] is None else f"{r['budget_mm']:g}",
-                  "[green]pass[/]" if r["passed"] else "[bold red]FAIL[/]")
+                  Text("pass", style="green") if r["passed"] else Text("FAIL", style="bold red"))
     console.print(t)
     shown = [c for c in report["checks"] if verbose or not c["passed"] or c["id"] == "tendon.take_up"]
     ft = Table(title="findings" if not verbose else "checks")
@@ -105,11 +108,11 @@ def print_report(report: dict, console, verbose: bool = False) -> None:
     style = {"pass": "green", "FAIL": "bold red", "warning": "yellow", "info": "cyan"}
     for c in shown:
         s = status(c) if not (c["passed"] and c["severity"] == "info") else "info"
-        ft.add_row(f"[{style.get(s, '')}]{s}[/]", c["id"], place(c), _fmt(c["measured"]), _fmt(c["limit"]),
-                   c["message"])
+        ft.add_row(Text(s, style=style.get(s, "")), c["id"], Text(place(c)), _fmt(c["measured"]), _fmt(c["limit"]),
+                   Text(c["message"]))
     console.print(ft)
     n_fail = sum(1 for c in report["checks"] if not c["passed"] and c["severity"] == "error")
     n_warn = sum(1 for c in report["checks"] if not c["passed"] and c["severity"] == "warning")
-    verdict = "[bold green]PASS[/]" if report["ok"] else "[bold red]FAIL[/]"
-    console.print(f"{report['design']}: {verdict}: {len(report['checks'])} checks, {n_fail} failed, "
-                  f"{n_warn} warning(s)", highlight=False)
+    verdict = Text("PASS", style="bold green") if report["ok"] else Text("FAIL", style="bold red")
+    console.print(Text.assemble(f"{report['design']}: ", verdict, f": {len(report['checks'])} checks, {n_fail} failed, "
+                                f"{n_warn} warning(s)"))

@@ -1,0 +1,468 @@
+"""Hostile and careless input, as a new user would try it: every case ends in exit 2 with one
+short line naming the file, the field path and what is wrong, no traceback, no Python warning,
+and an output folder exactly as it was.
+
+Cases run in-process through the CLI (typer's runner), so the corpus stays cheap; a few run as
+real processes to show the console script behaves the same. None of them builds a solid: bad
+input is refused before the CAD kernel is imported.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+import yaml
+
+from .conftest import PARAMS
+
+PROTO = (PARAMS / "prototype.yaml").read_text()
+TABLE2 = (PARAMS / "paper-table2.yaml").read_text()
+MAX_LINE = 600          # one short message, however large the input
+
+
+def edit(text: str, old: str, new: str) -> str:
+    assert old in text, old
+    return text.replace(old, new, 1)
+
+
+def tree_edit(text: str, change) -> str:
+    """The document parsed, changed by ``change(doc)`` and dumped again."""
+    doc = yaml.safe_load(text)
+    change(doc)
+    return yaml.safe_dump(doc, sort_keys=False, allow_unicode=True)
+
+
+def setter(path: str, value):
+    """change(doc) that sets a dotted path (``disks.eyelets.sweep_deg``, ``tendons.0.name``)."""
+    def change(doc):
+        *head, last = path.split(".")
+        node = doc
+        for k in head:
+            node = node[int(k)] if isinstance(node, list) else node.setdefault(k, {})
+        node[int(last) if isinstance(node, list) else last] = value
+    return change
+
+
+@dataclass
+class Case:
+    text: str | bytes
+    field: str                   # the field path the message must name ("<document>" for the whole file)
+    words: tuple[str, ...]       # what the message must say
+    name: str = "design.yaml"    # the file's name
+    kind: str = ""
+
+
+def bomb(levels: int = 9, width: int = 9) -> str:
+    lines = ['l0: &l0 ["lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol", "lol"]']
+    for i in range(1, levels):
+        lines.append(f"l{i}: &l{i} [" + ", ".join([f"*l{i - 1}"] * width) + "]")
+    return "\n".join(lines) + "\n"
+
+
+def nested(depth: int, open_: str = "[", close: str = "]") -> str:
+    return open_ * depth + close * depth
+
+
+CASES: dict[str, Case] = {}
+
+
+def add(kind: str, name: str, case: Case) -> None:
+    case.kind = kind
+    CASES[f"{kind}-{name}"] = case
+
+
+# ---------------------------------------------------------------- YAML the loader must bound
+for depth in (40, 5_000, 10_000):
+    add("yaml", f"deep-list-{depth}", Case(PROTO + f"\nextra: {nested(depth)}\n", "extra", ("nested deeper",)))
+add("yaml", "deep-mapping", Case(PROTO + "\nextra: " + "{a: " * 200 + "1" + "}" * 200 + "\n", "extra",
+                                  ("nested deeper",)))
+add("yaml", "deep-block-mapping", Case(PROTO + "\nextra:\n" + "".join("  " * i + "a:\n" for i in range(1, 60))
+                                       + "  " * 60 + "b: 1\n", "extra", ("nested deeper",)))
+add("yaml", "deep-in-a-field", Case(edit(PROTO, "  height: 60 ", f"  height: {nested(3_000)} "),
+                                    "backbone.height", ("nested deeper",)))
+add("yaml", "list-as-key", Case(PROTO + "\n? [a, b]\n: 1\n", "<document>", ("list used as a key",)))
+add("yaml", "mapping-as-key", Case(PROTO + "\n? {a: 1}\n: 1\n", "<document>", ("mapping used as a key",)))
+add("yaml", "list-as-key-in-section", Case(edit(PROTO, "  slot_clearance: 0.2 ", "  slot_clearance: 0.2\n  [x]: 1 "),
+                                           "disks", ("list used as a key",)))
+add("yaml", "integer-5001-digits", Case(edit(PROTO, "  height: 60 ", "  height: " + "9" * 5001 + " "),
+                                        "backbone.height", ("5,001 characters",)))
+add("yaml", "float-4000-digits", Case(edit(PROTO, "  height: 60 ", "  height: 0." + "3" * 4000 + " "),
+                                      "backbone.height", ("characters",)))
+add("yaml", "long-string", Case(edit(PROTO, "  name: SLA resin, Anycubic Photon M3", "  name: " + "x" * 2000),
+                                "process.name", ("2,000 characters",)))
+add("yaml", "long-key", Case(PROTO + "\n? " + "k" * 5000 + "\n: 1\n", "kkkkkkkk", ("5,000 characters",)))
+add("yaml", "long-simple-key", Case(PROTO + "\n" + "k" * 5000 + ": 1\n", "<document>", ("YAML syntax",)))
+add("yaml", "alias-bomb-design", Case(bomb() + edit(PROTO, "design: prototype", "design: *l8"), "l5",
+                                      ("expands to more than",)))
+add("yaml", "alias-bomb-table", Case(bomb(5) + edit(PROTO, "      function: {kind: straight, z0: 30}",
+                                                    "      table: [*l4, *l4, *l4, *l4]"),
+                                     "tendons[0].routing.table", ("expands to more than",)))
+add("yaml", "alias-bomb-nested-only", Case(
+    edit(PROTO, "bom:", "bom:\n  x: &a [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]\n  y: &b [*a, *a, *a, *a, *a, *a, *a, *a, *a, *a]\n"
+                        "  z: &c [*b, *b, *b, *b, *b, *b, *b, *b, *b, *b]\n  w: &d [*c, *c, *c, *c, *c, *c, *c, *c, *c, *c]\n"
+                        "  v: &e [*d, *d, *d, *d, *d, *d, *d, *d, *d, *d]\n  u: [*e, *e, *e]\n"),
+    "bom.u", ("expands to more than",)))
+add("yaml", "quadratic-blowup", Case(PROTO + "\nbig: &big [" + ", ".join(["0"] * 1000) + "]\nmany: ["
+                                     + ", ".join(["*big"] * 400) + "]\n", "many", ("expands to more than",)))
+add("yaml", "merge-key-bomb", Case(bomb(5) + "m: &m {a: *l4}\n" + PROTO.replace("bom:", "bom:\n  <<: *m", 1)
+                                   + "\nmore: [" + ", ".join(["*m"] * 50) + "]\n", "more", ("expands to more than",)))
+add("yaml", "recursive-list", Case("a: &a [1, *a]\n" + PROTO, "a[1]", ("refers to the list or mapping",)))
+add("yaml", "recursive-mapping", Case("a: &a {b: *a}\n" + PROTO, "a.b", ("refers to the list or mapping",)))
+add("yaml", "undefined-alias", Case(edit(PROTO, "  height: 60 ", "  height: *nothing "), "<document>",
+                                    ("YAML syntax", "undefined alias")))
+add("yaml", "two-documents", Case(PROTO + "\n---\ndesign: other\n", "<document>", ("YAML syntax", "single document")))
+add("yaml", "empty-file", Case("", "<document>", ("must be a mapping",)))
+add("yaml", "only-comments", Case("# nothing here\n# at all\n", "<document>", ("must be a mapping",)))
+add("yaml", "null-document", Case("~\n", "<document>", ("must be a mapping",)))
+add("yaml", "scalar-document", Case("hello\n", "<document>", ("must be a mapping",)))
+add("yaml", "list-document", Case("- a\n- b\n", "<document>", ("must be a mapping",)))
+add("yaml", "too-large", Case(PROTO + ("#" + "x" * 1023 + "\n") * 1100, "<document>", ("larger than 1 MiB",)))
+add("yaml", "latin-1", Case(PROTO.replace("Ø", "").encode() + "\nnote: caf\xe9\n".encode("latin-1"), "<document>",
+                            ("not UTF-8",)))
+add("yaml", "utf-16", Case(PROTO.encode("utf-16"), "<document>", ("not UTF-8",)))
+add("yaml", "binary-garbage", Case(bytes(range(256)) * 8, "<document>", ("not UTF-8",)))
+add("yaml", "nul-byte", Case(edit(PROTO, "  height: 60 ", "  height: 6\x000 "), "<document>",
+                             ("YAML syntax", "special characters")))
+add("yaml", "tab-indent", Case(edit(PROTO, "  height: 60 ", "\theight: 60 "), "<document>", ("YAML syntax",)))
+add("yaml", "python-tag", Case(edit(PROTO, "  height: 60 ", "  height: !!python/object/apply:os.system ['true'] "),
+                               "<document>", ("YAML syntax", "python/object")))
+add("yaml", "custom-tag", Case(edit(PROTO, "  height: 60 ", "  height: !mm 60 "), "<document>", ("YAML syntax",)))
+add("yaml", "binary-tag", Case(edit(PROTO, "  height: 60 ", "  height: !!binary aGVsbG8= "), "backbone.height",
+                               ("valid number",)))
+add("yaml", "set-tag", Case(edit(PROTO, "  count: 13 ", "  count: !!set {13: null} "), "disks.count",
+                            ("valid integer",)))
+add("yaml", "date-for-number", Case(edit(PROTO, "  length: 270 ", "  length: 2024-01-01 "), "backbone.length",
+                                    ("valid number",)))
+add("yaml", "impossible-date", Case(edit(PROTO, "  length: 270 ", "  length: 2024-02-30 "), "<document>",
+                                    ("YAML cannot read",)))
+add("yaml", "duplicate-top-key", Case(PROTO + "\ndesign: again\n", "design", ("duplicate key",)))
+add("yaml", "duplicate-nested-key", Case(edit(PROTO, "    edge: chamfer", "    edge: chamfer\n    edge: none"),
+                                         "disks.eyelets.edge", ("duplicate key",)))
+add("yaml", "integer-key", Case(PROTO + "\n1: one\n", "[1]", ("Keys should be strings",)))
+add("yaml", "null-key", Case(PROTO + "\n~: one\n", "None", ("Keys should be strings",)))
+
+# ---------------------------------------------------------------- text that must never be markup
+add("echo", "markup-key", Case(edit(PROTO, "  slot_clearance: 0.2 ", "  slot_clearance: 0.2\n  '[/x]': 1 "),
+                               "disks.[/x]", ("unknown key",)))
+add("echo", "markup-open-key", Case(edit(PROTO, "  slot_clearance: 0.2 ", "  slot_clearance: 0.2\n  '[bold red]': 1 "),
+                                    "disks.[bold red]", ("unknown key",)))
+add("echo", "markup-design-name", Case(edit(PROTO, "design: prototype", "design: '[/x]'"), "design",
+                                       ("'[/x]'", "safe file name")))
+add("echo", "markup-file-name", Case(edit(PROTO, "  height: 60 ", "  height: sixty "), "backbone.height",
+                                     ("valid number",), name="design[v2].yaml"))
+add("echo", "markup-open-file-name", Case("- x\n", "<document>", ("mapping",), name="[bold]x.yaml"))
+add("echo", "emoji-file-name", Case("- x\n", "<document>", ("mapping",), name=":smile:.yaml"))
+add("echo", "emoji-value", Case(edit(PROTO, "  height: 60 ", "  height: ':thumbs_up:' "), "backbone.height",
+                                (":thumbs_up:",)))
+add("echo", "escape-sequence-key", Case(edit(PROTO, "  slot_clearance: 0.2 ", '  slot_clearance: 0.2\n  "\\e[2J\\e[31m": 1 '),
+                                        "disks.\\x1b[2J", ("unknown key",)))
+add("echo", "newline-key", Case(edit(PROTO, "  slot_clearance: 0.2 ", '  slot_clearance: 0.2\n  "a\\nb": 1 '),
+                                "disks.a\\nb", ("unknown key",)))
+add("echo", "bidi-override-value", Case(edit(PROTO, "design: prototype", 'design: "abc\\u202edef"'), "design",
+                                        ("\\u202e", "safe file name")))
+add("echo", "huge-list-value", Case(edit(PROTO, "  height: 60 ", "  height: [" + ", ".join(["1"] * 50_000) + "] "),
+                                    "backbone.height", ("valid number",)))
+add("echo", "huge-string-value", Case(edit(PROTO, "  height: 60 ", "  height: '" + "y" * 999 + "' "),
+                                      "backbone.height", ("valid number",)))
+add("echo", "huge-mapping-value", Case(edit(PROTO, "  height: 60 ", "  height: {" + ", ".join(f"k{i}: {i}" for i in range(5000))
+                                            + "} "), "backbone.height", ("valid number",)))
+add("echo", "many-unknown-keys", Case(PROTO + "".join(f"\nextra{i}: {i}" for i in range(2000)) + "\n", "extra0",
+                                      ("unknown key", "more")))
+add("echo", "channel-list-echo", Case(edit(PROTO, "    channel: H", "    channel: " + "Z" * 64),
+                                      "tendons[3].channel", ("unknown channel",)))
+
+# ---------------------------------------------------------------- values: types and sane bounds
+BOOL_FIELDS = [("disks.thickness", True), ("disks.count", True), ("disks.spacing", "on"),
+               ("backbone.height", "yes"), ("tendon_material.diameter", False),
+               ("disks.tip_mount.positions", [[True, 14], [22, 14]]), ("process.build_volume", [1, True, 1]),
+               ("render.width_px", True), ("tensioner.worm_starts", True), ("tensioner.module", "off"),
+               ("tendons.1.routing.function.k", False), ("tendons.0.routing.function.z0", "yes")]
+for path, value in BOOL_FIELDS:
+    v = value if not isinstance(value, str) else value
+    text = tree_edit(PROTO, setter(path, v))
+    if isinstance(value, str):          # dumped quoted by safe_dump: put the bare word back
+        text = text.replace(f"'{value}'", value)
+    field = path.replace(".0.", "[0].").replace(".1.", "[1].")
+    add("value", f"bool-{path}", Case(text, field, ("true/false",)))
+add("value", "bool-channel-name", Case(edit(PROTO, "channels: [A, C1, C2, H]", "channels: [A, C1, C2, NO]"),
+                                       "tensioner.channels", ("true/false", "quote")))
+for path, value, words in [
+    ("disks.eyelets.sweep_deg", 1e9, ("less than or equal to 360",)),
+    ("disks.eyelets.sweep_deg", 0, ("greater than 0",)),
+    ("disks.eyelets.sweep_deg", -5, ("greater than 0",)),
+    ("disks.eyelets.sweep_deg", ".inf", ("finite",)),
+    ("check.step_deg", 1e-9, ("greater than or equal to 0.1",)),
+    ("check.step_deg", 0, ("greater than or equal to 0.1",)),
+    ("check.max_angle_deg", 1e9, ("less than or equal to 360",)),
+    ("check.max_angle_deg", 120, ("beyond the ±90°", "disks.eyelets.sweep_deg")),
+    ("tendons.1.routing.function.k", 1e308, ("less than or equal to 1000",)),
+    ("tendons.1.routing.function.k", -1e308, ("greater than or equal to -1000",)),
+    ("tendons.1.routing.function.phase_deg", 1e308, ("less than or equal to 3600",)),
+    ("tendons.1.routing.function.a", 1e308, ("less than or equal to 10000",)),
+    ("tendons.0.routing.function.z0", -1e300, ("greater than or equal to -10000",)),
+    ("tendons.0.routing.function.z0", ".nan", ("finite",)),
+    ("backbone.length", 1e308, ("less than or equal to 10000",)),
+    ("backbone.length", ".inf", ("finite",)),
+    ("backbone.height", 1e-300, ()),
+    ("disks.count", 10 ** 6, ("less than or equal to 200",)),
+    ("disks.count", -1, ("greater than or equal to 2",)),
+    ("disks.count", 1.5, ("valid integer",)),
+    ("render.width_px", 10 ** 9, ("less than or equal to 8000",)),
+    ("process.build_volume", [1e308, 1, 1], ("less than or equal to 10000",)),
+    ("tendon_material.diameter", 50, ("Ø50 mm tendon", "do not fit")),
+    ("tendon_material.diameter", 30, ("breaks through the rim",)),
+    ("disks.tip_mount.positions", [[-100, 14], [100, 14]], ("breaks through the rim",)),
+    ("disks.tip_mount.positions", [[0, 0]], ("cuts into the backbone slot",)),
+    ("disks.tip_mount.positions", [[1, 1]] * 40, ("at most 32",)),
+    ("backbone.thickness", 100, ("backbone slot", "reaches past the rim")),
+    ("backbone.thickness", 0, ("greater than 0",)),
+    ("disks.outer_diameter", 50, ("does not enclose the backbone slot",)),
+    ("disks.stations", list(range(13)), ("must run from 0 to backbone.length",)),
+    ("tensioner.channels", [f"c{i}" for i in range(17)], ("17 channels",)),
+]:
+    v = value
+    text = tree_edit(PROTO, setter(path, v))
+    if isinstance(value, str):
+        text = text.replace(f"'{value}'", value)
+    if path == "disks.stations":
+        text = text.replace("  spacing: 22.5\n", "")
+    field = path.replace(".0.", "[0].").replace(".1.", "[1].")
+    if path == "backbone.height":       # valid as a number; no strip is that thin to drill
+        field, words = "tendons[1].routing.function", ("wider than the 1e-300 mm strip",)
+    if path == "tendon_material.diameter" and value == 30:
+        field = "tendons[0].routing.function"
+    if path == "disks.tip_mount.positions" and value == [[-100, 14], [100, 14]]:
+        field = "disks.tip_mount.positions[0]"
+    if path == "disks.tip_mount.positions" and value == [[0, 0]]:
+        field = "disks.tip_mount.positions[0]"
+    if path == "tensioner.channels":
+        text = text.replace("tensioner:\n", "tensioner:\n", 1)
+    add("value", f"{path}={str(value)[:12]}", Case(text, field, words))
+add("value", "sixty-five-tendons", Case(tree_edit(PROTO, lambda d: d["tendons"].extend(
+    [{"name": f"T{i}", "channel": "A", "routing": {"function": {"kind": "straight", "z0": 5}}} for i in range(61)])),
+    "tendons", ("at most 64",)))
+add("value", "sweep-60-check-90", Case(tree_edit(PROTO, lambda d: (setter("disks.eyelets.sweep_deg", 60)(d),
+                                                                   setter("check.max_angle_deg", 90)(d))),
+                                       "check.max_angle_deg", ("±60°",)))
+STRIP_TABLE = "\n".join(f"        - [10, {z}]" for z in (5, 3, 1, 0, 0, 0, 0, 0, 0, 0, -1, -3, -5))
+add("value", "tendon-routed-in-the-strip", Case(edit(PROTO, "      function: {kind: helix, a: 25, k: 3}",
+                                                     "      table:\n" + STRIP_TABLE),
+                                                "tendons[3].routing.table", ("wider than the 60 mm strip",)))
+add("value", "channel-without-tendon", Case(edit(PROTO, "channels: [A, C1, C2, H]", "channels: [A, C1, C2, H, X]"),
+                                            "tensioner", ("'X' has no tendon",)))
+
+
+def _tree(folder: Path) -> dict:
+    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+@pytest.fixture
+def previous_output(tmp_path):
+    """An output root holding an earlier build's files (stand-ins: bad input never reads them)."""
+    out = tmp_path / "out"
+    (out / "prototype" / "stl").mkdir(parents=True)
+    (out / "prototype" / "manifest.json").write_text('{"design": "prototype"}\n')
+    (out / "prototype" / "stl" / "disk_00.stl").write_bytes(b"solid earlier build\n")
+    return out
+
+
+def run_cli(*args: str, env: dict | None = None):
+    """The CLI in this process: (exit code, stdout, stderr, an exception that escaped or None)."""
+    from typer.testing import CliRunner
+
+    from hwgen.cli import app
+    r = CliRunner().invoke(app, list(args), env=env)
+    escaped = r.exception if r.exception is not None and not isinstance(r.exception, SystemExit) else None
+    return r.exit_code, r.stdout, r.stderr, escaped
+
+
+def assert_one_clear_line(code, stdout, stderr, escaped, case: Case, file: Path):
+    assert escaped is None, f"{type(escaped).__name__}: {escaped}"
+    assert code == 2, (code, stderr[-800:], stdout[-300:])
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1, stderr[:2000]
+    line = lines[0]
+    assert len(line) <= MAX_LINE, len(line)
+    assert "Traceback" not in stderr and "Warning" not in stderr
+    assert "\x1b" not in stderr
+    assert line.startswith("error: "), line
+    assert case.name in line, line                                  # the file, as named
+    field = line.split(": ", 3)[2] if case.field != "<document>" else "<document>"
+    assert case.field in field or (case.field == "<document>" and ": <document>: " in line), (case.field, line)
+    for w in case.words:
+        assert w in line, (w, line)
+
+
+def _write(tmp_path: Path, case: Case) -> Path:
+    f = tmp_path / case.name
+    if isinstance(case.text, bytes):
+        f.write_bytes(case.text)
+    else:
+        f.write_text(case.text, encoding="utf-8")
+    return f
+
+
+@pytest.mark.timeout(120)
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_hostile_input_is_one_clear_line_and_writes_nothing(case, tmp_path, previous_output):
+    c = CASES[case]
+    f = _write(tmp_path, c)
+    before = _tree(previous_output)
+    entries = sorted(p.name for p in previous_output.iterdir())
+    assert_one_clear_line(*run_cli("build", str(f), "--out", str(previous_output), "-q"), c, f)
+    assert _tree(previous_output) == before
+    assert sorted(p.name for p in previous_output.iterdir()) == entries
+
+
+def test_the_corpus_covers_every_kind():
+    kinds: dict[str, int] = {}
+    for c in CASES.values():
+        kinds[c.kind] = kinds.get(c.kind, 0) + 1
+    assert kinds["yaml"] >= 40 and kinds["echo"] >= 15 and kinds["value"] >= 40, kinds
+
+
+# every command reports bad input the same way
+SAME_FOR_ALL = ["yaml-list-as-key", "echo-markup-key", "value-bool-disks.thickness", "value-channel-without-tendon",
+                "value-tendon-routed-in-the-strip", "yaml-alias-bomb-design", "value-sweep-60-check-90",
+                "value-tendon_material.diameter=50"]
+
+
+@pytest.mark.parametrize("case", SAME_FOR_ALL)
+def test_every_command_reports_bad_input_the_same_way(case, tmp_path, previous_output):
+    c = CASES[case]
+    f = _write(tmp_path, c)
+    before = _tree(previous_output)
+    lines = set()
+    for cmd in (["build", "-q"], ["check", "-q"], ["render", "-q"], ["routing"], ["routing", "--json"]):
+        extra = ["--out", str(previous_output)] if cmd[0] in ("build", "check", "render") else []
+        code, out, err, escaped = run_cli(cmd[0], str(f), *cmd[1:], *extra)
+        assert_one_clear_line(code, out, err, escaped, c, f)
+        lines.add(err.strip())
+    assert len(lines) == 1, lines
+    assert _tree(previous_output) == before
+
+
+# ---------------------------------------------------------------- the output folder and side files
+
+def test_out_that_cannot_be_written_is_bad_input(tmp_path):
+    params = str(PARAMS / "prototype.yaml")
+    a_file = tmp_path / "a_file"
+    a_file.write_text("not a folder\n")
+    for out, words in ((a_file, "is a file, not a folder"), (a_file / "below", "lies below a file"),
+                       (Path("/proc/hwgen-test"), "cannot write the outputs here")):
+        for cmd in ("build", "check", "render"):
+            code, stdout, stderr, escaped = run_cli(cmd, params, "--out", str(out), "-q")
+            assert escaped is None and code == 2, (cmd, out, stderr)
+            assert stderr.strip() == f"error: {out}: --out: {stderr.split(': --out: ')[1].strip()}"
+            assert words in stderr and len(stderr.strip().splitlines()) == 1, stderr
+    assert a_file.read_text() == "not a folder\n"
+
+
+def test_out_without_permission_is_bad_input(tmp_path, monkeypatch):
+    """Tests run as root, who may write anywhere: the refusal is simulated where the folder is made."""
+    import tempfile
+
+    def refuse(*a, **k):
+        raise PermissionError(13, "Permission denied", str(tmp_path / "out"))
+    monkeypatch.setattr(tempfile, "mkdtemp", refuse)
+    code, _, stderr, escaped = run_cli("build", str(PARAMS / "prototype.yaml"), "--out", str(tmp_path / "out"), "-q")
+    assert escaped is None and code == 2
+    assert stderr.strip() == f"error: {tmp_path / 'out'}: --out: cannot write the outputs here (Permission denied)"
+
+
+def test_report_and_junit_that_cannot_be_written(built, tmp_path):
+    """--report and --junit name their option; the checks ran (on a built design) and are not lost."""
+    out = built("prototype").parent
+    params = str(PARAMS / "prototype.yaml")
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
+    for opt in ("--report", "--junit"):
+        code, stdout, stderr, escaped = run_cli("check", params, "--out", str(out), "-q", opt, str(a_file / "r.json"))
+        assert escaped is None and code == 2, stderr
+        assert f"error: {a_file / 'r.json'}: {opt}: cannot write it" in stderr
+        assert "PASS" in stdout          # the report was printed before the file failed
+
+
+# ---------------------------------------------------------------- the CAD kernel
+
+def test_a_kernel_failure_names_the_part_and_its_parameters(tmp_path, monkeypatch):
+    """OCCT raising inside a part builder becomes a design error: exit 2, the part, its parameters."""
+    from OCP.Standard import Standard_Failure
+
+    import hwgen.cad.disk as disk
+
+    def fail(spec):
+        if spec.index == 4:
+            raise Standard_Failure("BRep_API: command not done")
+        return real(spec)
+    real = disk.build_disk
+    monkeypatch.setattr(disk, "build_disk", fail)
+    out = tmp_path / "out"
+    code, _, stderr, escaped = run_cli("build", str(PARAMS / "prototype.yaml"), "--out", str(out), "-q")
+    assert escaped is None and code == 2, stderr
+    line = stderr.strip()
+    assert line.startswith("error: ") and "prototype.yaml: disks: the CAD kernel could not make disk_04" in line
+    assert "inner disk at y = 90 mm: thickness 3 mm, Ø72 mm, slot 60.4 × 0.99 mm" in line
+    assert "BRep_API: command not done" in line and len(line.splitlines()) == 1
+    assert not (out / "prototype").exists() and not list(out.glob(".prototype.*"))
+
+
+def test_an_empty_solid_is_a_kernel_failure(tmp_path, monkeypatch):
+    """A builder that returns a solid with no volume is refused before any file is written."""
+    import cadquery as cq
+
+    import hwgen.cad.backbone as backbone
+    from hwgen.cad import Part
+
+    real = backbone.build_backbone
+
+    def empty(spec):
+        p = real(spec)
+        return Part(p.name, p.role, cq.Solid(cq.Solid.makeBox(1, 1, 1).wrapped.EmptyCopied()), p.placement, p.color)
+    monkeypatch.setattr(backbone, "build_backbone", empty)
+    code, _, stderr, escaped = run_cli("build", str(PARAMS / "prototype.yaml"), "--out", str(tmp_path / "o"), "-q")
+    assert escaped is None and code == 2, stderr
+    assert "backbone: the CAD kernel could not make backbone (strip 60 × 0.59 mm, 310 mm long" in stderr
+    assert "came out empty" in stderr
+    assert not (tmp_path / "o" / "prototype").exists()
+
+
+def test_an_unexpected_exception_is_one_line_and_exit_3(tmp_path, monkeypatch):
+    import hwgen.model.plan as plan
+    monkeypatch.setattr(plan, "_backbone_holes", lambda *a: 1 / 0)
+    code, _, stderr, escaped = run_cli("routing", str(PARAMS / "prototype.yaml"))
+    assert escaped is None and code == 3
+    assert stderr.strip().startswith("error: internal error in hwgen (ZeroDivisionError: division by zero)")
+    assert "HWGEN_DEBUG=1" in stderr and len(stderr.strip().splitlines()) == 1
+
+
+# ---------------------------------------------------------------- as real processes
+
+REAL = ["yaml-deep-list-10000", "yaml-alias-bomb-design", "echo-markup-file-name", "echo-markup-key",
+        "value-tendons.1.routing.function.k=1e+308", "yaml-too-large"]
+
+
+@pytest.mark.timeout(300)
+def test_the_console_script_keeps_the_promise(tmp_path, previous_output):
+    before = _tree(previous_output)
+    for case in REAL:
+        c = CASES[case]
+        f = _write(tmp_path, c)
+        r = subprocess.run([sys.executable, "-m", "hwgen.cli", "build", str(f), "--out", str(previous_output), "-q"],
+                           capture_output=True, text=True, timeout=60,
+                           env={k: v for k, v in os.environ.items() if k != "HWGEN_DEBUG"})
+        assert_one_clear_line(r.returncode, r.stdout, r.stderr, None, c, f)
+    assert _tree(previous_output) == before
+
+
+def test_a_file_that_never_ends_is_refused(tmp_path):
+    code, _, stderr, escaped = run_cli("routing", "/dev/zero")
+    assert escaped is None and code == 2 and "error: /dev/zero: <document>: larger than 1 MiB" in stderr
+    code, _, stderr, escaped = run_cli("routing", str(tmp_path))
+    assert escaped is None and code == 2 and "cannot read the file (Is a directory)" in stderr
