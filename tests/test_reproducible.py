@@ -1,0 +1,116 @@
+"""Rebuilds are byte-identical, and the output folder is always one whole build: killed builds
+leave the previous outputs and their leftovers go with the next build; two builds at once both
+finish. These run the real command line on the prototype."""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from hwgen import atomic
+
+from .conftest import PARAMS
+
+PROTO = str(PARAMS / "prototype.yaml")
+
+
+def _tree(folder: Path) -> dict[str, str]:
+    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _env(**extra) -> dict:
+    env = {k: v for k, v in os.environ.items() if k not in ("SOURCE_DATE_EPOCH", "HWGEN_DEBUG")}
+    env.update(extra)
+    return env
+
+
+def _build(out: Path, **env) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "hwgen.cli", "build", PROTO, "--out", str(out), "-q"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=_env(**env))
+
+
+def _whole(folder: Path) -> str:
+    """Check that the folder is one build: every file its manifest lists, with that sha256, and
+    nothing else. Returns the manifest's own sha256 (which build it is)."""
+    m = json.loads((folder / "manifest.json").read_text())
+    listed = {f["path"]: f["sha256"] for p in m["parts"] for f in p["files"].values()}
+    listed |= {f["path"]: f["sha256"] for f in m["files"].values()}
+    listed |= {f["path"]: f["sha256"] for f in m.get("render", {}).get("files", {}).values()}
+    tree = _tree(folder)
+    for path, sha in listed.items():
+        assert tree.get(path) == sha, path
+    extra = set(tree) - set(listed) - {"manifest.json", "report.json", "summary.md", "lengths.png"}
+    assert not extra, extra
+    return tree["manifest.json"]
+
+
+@pytest.mark.timeout(600)
+def test_a_rebuild_is_byte_identical(built, tmp_path):
+    """The session's build (this process, after other builds) against a fresh process with
+    another string-hash seed: every file, STEP, STL, DXF, PNG, SVG, JSON, CSV, has the same bytes."""
+    first = built("prototype")
+    r = subprocess.run([sys.executable, "-m", "hwgen.cli", "build", PROTO, "--out", str(tmp_path), "-q"],
+                       capture_output=True, text=True, env=_env(PYTHONHASHSEED="4"), timeout=580)
+    assert r.returncode == 0, r.stderr
+    a, b = _tree(first), _tree(tmp_path / "prototype")
+    assert sorted(a) == sorted(b)
+    differ = sorted(k for k in a if a[k] != b[k])
+    assert differ == [], differ
+    assert len(a) >= 70
+    head = (first / "step" / "disk_00.step").read_text()[:400]
+    assert "1970-01-01T00:00:00" in head and "FILE_NAME('disk_00'" in head
+
+
+@pytest.mark.timeout(900)
+def test_killed_and_concurrent_builds_keep_one_whole_build(built, tmp_path):
+    out = tmp_path / "out"
+    target = out / "prototype"
+    shutil.copytree(built("prototype"), target)
+    before = _tree(target)
+    first = _whole(target)
+
+    # SIGKILL while the parts are being written: the previous outputs stay, a leftover is there
+    a = _build(out, HWGEN_RENDER_BACKEND="none")
+    deadline = time.time() + 300
+    while time.time() < deadline and not any(len(list(p.glob("stl/*.stl"))) >= 3 for p in out.glob(".prototype.*.tmp")):
+        time.sleep(0.05)
+    a.send_signal(signal.SIGKILL)
+    a.wait(30)
+    assert _tree(target) == before
+    left = [p for p in out.glob(".prototype.*.tmp")]
+    assert left, "the kill came too late to leave anything"
+
+    # SIGTERM cleans up on its way out
+    t = _build(out, HWGEN_RENDER_BACKEND="none")
+    while time.time() < deadline and not any(len(list(p.glob("stl/*.stl"))) >= 1
+                                             for p in out.glob(".prototype.*.tmp") if p not in left):
+        time.sleep(0.05)
+    t.send_signal(signal.SIGTERM)
+    _, err = t.communicate(timeout=60)
+    assert t.returncode == 130 and "interrupted" in err and "Traceback" not in err, err
+    assert _tree(target) == before
+
+    # two builds at once: both finish, and whenever one looks, the folder is one whole build
+    runs = [_build(out, HWGEN_RENDER_BACKEND="none") for _ in range(2)]
+    seen = set()
+    while any(r.poll() is None for r in runs):
+        with atomic.snapshot(target) as view:
+            seen.add(_whole(view))
+        time.sleep(0.2)
+    for r in runs:
+        _, err = r.communicate()
+        assert r.returncode == 0, err
+    last = _whole(target)
+    assert first in seen and last != first            # the first builds' outputs, then a new build's
+    assert sorted(p.name for p in out.iterdir()) == ["prototype"]   # the killed build's leftovers are gone
+    m = json.loads((target / "manifest.json").read_text())
+    assert m["render"]["status"] == "unavailable"
