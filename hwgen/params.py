@@ -316,7 +316,9 @@ def read(path: str | Path) -> LoadedDesign:
         mark = getattr(e, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
         problem = getattr(e, "problem", None) or str(e)
-        raise InputError(path, "", f"YAML syntax: {where}{clip(problem, 120)}") from None
+        context = getattr(e, "context", None)
+        problem += f" ({context})" if context else ""
+        raise InputError(path, "", f"YAML syntax: {where}{clip(problem, 160)}") from None
     except ValueError as e:      # a scalar Python cannot convert (a date such as 2024-02-30)
         raise InputError(path, "", f"a value YAML cannot read: {clip(str(e), 80)}") from None
     if not isinstance(data, dict):
