@@ -52,12 +52,13 @@ def load(path: str | Path) -> params.LoadedDesign:
 
 
 def design_plan(loaded: params.LoadedDesign) -> Plan:
-    """The plan of a loaded design, with everything it needs to be built (the tensioner's layout,
-    strip holes the strip can take); raises :class:`hwgen.errors.DesignError` naming the field.
+    """The plan of a loaded design, with everything its part families need to be built (holes
+    the disks and the strip can take, the tensioner's layout); raises
+    :class:`hwgen.errors.DesignError` naming the field.
     Every command starts from it, so they all refuse the same designs the same way."""
     plan = make_plan(loaded.design)
-    plan.require_tensioner_layout()
     feasibility.check_plan(plan)
+    part_count(plan)       # every part family can be made from it (the tensioner needs its layout)
     return plan
 
 

@@ -329,8 +329,8 @@ def test_the_corpus_covers_every_kind():
 
 # every command reports bad input the same way
 SAME_FOR_ALL = ["yaml-list-as-key", "echo-markup-key", "value-bool-disks.thickness", "value-channel-without-tendon",
-                "value-tendon-routed-in-the-strip", "yaml-alias-bomb-design", "value-sweep-60-check-90",
-                "value-tendon_material.diameter=50"]
+                "yaml-alias-bomb-design", "value-sweep-60-check-90", "value-tendon_material.diameter=50",
+                "value-tendon_material.diameter=30"]
 
 
 @pytest.mark.parametrize("case", SAME_FOR_ALL)
@@ -378,15 +378,24 @@ def test_out_without_permission_is_bad_input(tmp_path, monkeypatch):
 
 def test_report_and_junit_that_cannot_be_written(built, tmp_path):
     """--report and --junit name their option; the checks ran (on a built design) and are not lost."""
+    import json
+
+    from hwgen.checks.report import write_junit
+    from hwgen.cli import _errors, _write_side_file
+
     out = built("prototype").parent
-    params = str(PARAMS / "prototype.yaml")
     a_file = tmp_path / "a_file"
     a_file.write_text("x")
-    for opt in ("--report", "--junit"):
-        code, stdout, stderr, escaped = run_cli("check", params, "--out", str(out), "-q", opt, str(a_file / "r.json"))
-        assert escaped is None and code == 2, stderr
-        assert f"error: {a_file / 'r.json'}: {opt}: cannot write it" in stderr
-        assert "PASS" in stdout          # the report was printed before the file failed
+    code, stdout, stderr, escaped = run_cli("check", str(PARAMS / "prototype.yaml"), "--out", str(out), "-q",
+                                            "--report", str(a_file / "r.json"))
+    assert escaped is None and code == 2, stderr
+    assert stderr.strip() == f"error: {a_file / 'r.json'}: --report: cannot write it (it lies below a file, not a folder)"
+    assert "PASS" in stdout          # the report was printed before the file failed
+    rep = json.loads((out / "prototype" / "report.json").read_text())
+    with pytest.raises(Exception) as e:
+        with _errors(None):
+            _write_side_file(tmp_path, "--junit", lambda: write_junit(rep, tmp_path))
+    assert getattr(e.value, "exit_code", None) == 2
 
 
 # ---------------------------------------------------------------- the CAD kernel
@@ -417,18 +426,18 @@ def test_an_empty_solid_is_a_kernel_failure(tmp_path, monkeypatch):
     """A builder that returns a solid with no volume is refused before any file is written."""
     import cadquery as cq
 
-    import hwgen.cad.backbone as backbone
+    import hwgen.cad.disk as disk
     from hwgen.cad import Part
 
-    real = backbone.build_backbone
+    real = disk.build_disk
 
     def empty(spec):
         p = real(spec)
         return Part(p.name, p.role, cq.Solid(cq.Solid.makeBox(1, 1, 1).wrapped.EmptyCopied()), p.placement, p.color)
-    monkeypatch.setattr(backbone, "build_backbone", empty)
+    monkeypatch.setattr(disk, "build_disk", empty)
     code, _, stderr, escaped = run_cli("build", str(PARAMS / "prototype.yaml"), "--out", str(tmp_path / "o"), "-q")
     assert escaped is None and code == 2, stderr
-    assert "backbone: the CAD kernel could not make backbone (strip 60 × 0.59 mm, 310 mm long" in stderr
+    assert "disks: the CAD kernel could not make disk_00 (base disk at y = 0 mm: thickness 6 mm" in stderr
     assert "came out empty" in stderr
     assert not (tmp_path / "o" / "prototype").exists()
 

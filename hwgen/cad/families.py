@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from typing import NamedTuple
 
 from ..errors import DesignError, InputError, clip
 from ..model.plan import Plan
@@ -64,8 +64,7 @@ def _tensioner_made_from(plan: Plan, index: int) -> tuple[str, str]:
             f"spool Ø{t.spool_diameter:g} mm, {len(t.channels)} channel(s)")
 
 
-@dataclass(frozen=True)
-class Family:
+class Family(NamedTuple):
     name: str
     section: str                                          # the YAML section its parts come from
     count: Callable[[Plan], int]                          # how many parts it yields

@@ -1,0 +1,121 @@
+"""Checks that failed right designs (found by a seeded run of random reasonable robots), and the
+byte-stable STEP colour block, each on the smallest piece that shows it."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from .conftest import PARAMS
+
+PROTO = (PARAMS / "prototype.yaml").read_text()
+
+
+def _load(tmp_path, text):
+    from hwgen.pipeline import load
+    f = tmp_path / "design.yaml"
+    f.write_text(text)
+    return load(f)
+
+
+def test_base_disk_axes_are_measured_clear_of_the_knot_pockets(tmp_path):
+    """end_thickness 4 with 1.5 mm pockets put the lower axis cut on the pocket floor: the base
+    disk's shared C1+C2+H eyelet came out 8° off its axis and failed eyelet.tendon_angle."""
+    from hwgen.cad.disk import build_disk
+    from hwgen.cad.export import write_stl
+    from hwgen.checks.eyelets import measure_disk
+    from hwgen.pipeline import design_plan
+
+    plan = design_plan(_load(tmp_path, PROTO.replace("  end_thickness: 6.0 ", "  end_thickness: 4 ")))
+    spec = plan.disks[0]
+    part = build_disk(spec)
+    stl = tmp_path / "base.stl"
+    write_stl(part.solid, stl)
+    depth = max(k[3] for k in spec.knot_pockets)
+
+    def worst_axis_error(recess):
+        m = measure_disk(stl, part.placement, part.name, 0, recess=recess)
+        errs = []
+        for h in spec.holes:
+            mh = min(m.holes, key=lambda q: np.hypot(*(q.centre - [h.x, h.z])))
+            errs.append(np.degrees(np.arccos(min(1.0, abs(float(np.dot(mh.axis, h.axis)))))))
+        return max(errs)
+    assert worst_axis_error(depth) < 0.1
+    assert worst_axis_error(0.0) > 2          # the cut the check used to make
+
+
+def test_the_check_sweeps_what_the_eyelets_are_sized_for(tmp_path):
+    d = _load(tmp_path, PROTO.replace("    sweep_deg: 90 ", "    sweep_deg: 60 ")).design
+    assert d.check_angle_deg == 60
+    d = _load(tmp_path, PROTO.replace("    sweep_deg: 90 ", "    sweep_deg: 60 ") + "\ncheck: {max_angle_deg: 45}\n").design
+    assert d.check_angle_deg == 45
+
+
+def test_a_strip_hole_through_the_edge_is_called_a_notch(tmp_path):
+    """A crossing 0.4 mm inside the 60 mm strip's edge: its Ø1.4 hole opens the edge. The STL has
+    no hole loop there, only a notch in the outline; the message says so."""
+    import ezdxf
+
+    from hwgen.checks.clearances import backbone_checks
+    from hwgen.checks.eyelets import EyeletMap
+    from hwgen.checks.measure import Loop, area_centroid
+
+    x, y, r = 29.6, 5.0, 0.7
+    arc = [(30 - r * np.sin(a), y - r * np.cos(a)) for a in np.linspace(0, np.pi, 25)]
+    outline = np.array([(-30, -5), (30, -5), (30, y - r), *arc[1:-1], (30, y + r), (30, 20), (-30, 20)], float)
+    loop = Loop(outline, *area_centroid(outline))
+    dxf = tmp_path / "t.dxf"
+    doc = ezdxf.new("R2010")
+    doc.layers.add("HOLES")
+    doc.modelspace().add_circle((x, y), r, dxfattribs={"layer": "HOLES"})
+    doc.saveas(dxf)
+    emap = EyeletMap(stations_y=np.array([0.0, 10.0]), eyelets=[], positions={"T": np.array([[x, 1.0], [x, -1.0]])},
+                     unmeasured={}, via_backbone={}, disks=[])
+    checks = backbone_checks(emap, dxf, loop, [], 0.15, 0.01, [], 0.59, np.array([0.0]), 10.0)
+    crossing = next(c for c in checks if c.id == "backbone.crossing")
+    assert not crossing.passed
+    assert "T crosses the backbone between stations 0 and 1" in crossing.message
+    assert "breaks through it: the strip is notched there, not drilled" in crossing.message
+    assert "no hole it passes" not in crossing.message
+
+
+STEP = """ISO-10303-21;
+HEADER;
+FILE_NAME('x','1970-01-01T00:00:00',(''),(''),'','','');
+ENDSEC;
+DATA;
+#1 = PRODUCT('a','a','',(#2));
+#2 = SHAPE_REPRESENTATION('',(#1),#1);
+#3 = SHAPE_REPRESENTATION('',(#1),#1);
+{block}
+ENDSEC;
+END-ISO-10303-21;
+"""
+
+
+def _group(first: int, rep: int, colour: str | int) -> list[str]:
+    own = isinstance(colour, str)
+    lines = [f"#{first} = MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION('',(\n    #{first + 1}),#{rep});",
+             f"#{first + 1} = STYLED_ITEM('color',(#{first + 2}),#{rep});",
+             f"#{first + 2} = FILL_AREA_STYLE_COLOUR('',#{first + 3 if own else colour});"]
+    if own:
+        lines.append(f"#{first + 3} = COLOUR_RGB('',{colour});")
+    return lines
+
+
+@pytest.mark.parametrize("shared", [False, True])
+def test_the_step_colour_block_is_numbered_by_content(shared):
+    """OCCT writes the same styles in a different order each run; both orders come out the same."""
+    from hwgen.cad.export import canonical_styles
+
+    if shared:     # the second group reuses the first one's colour, wherever that was written
+        a = _group(4, 2, "1.,0.,0.") + _group(8, 3, 7)
+        b = _group(4, 3, "1.,0.,0.") + _group(8, 2, 7)
+    else:
+        a = _group(4, 2, "1.,0.,0.") + _group(8, 3, "0.,1.,0.")
+        b = _group(4, 3, "0.,1.,0.") + _group(8, 2, "1.,0.,0.")
+    one = canonical_styles(STEP.format(block="\n".join(a)).encode())
+    two = canonical_styles(STEP.format(block="\n".join(b)).encode())
+    assert one == two
+    assert canonical_styles(one) == one
+    assert one.count(b"MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION") == 2
+    assert b"#1 = PRODUCT('a','a','',(#2));" in one
