@@ -97,6 +97,8 @@ X_STEP = 0.5
 X_COARSE = 2.0
 X_SEARCH = 80.0
 MAX_LIFTS = 30
+EVERY_ORDER_UP_TO = 3     # channels up to which every order along y is tried; beyond, orders by geometry
+MAX_SOLVES = 32           # arrangements solved at most, in order of their lower bound (each takes ~0.2 s)
 
 
 @dataclass(frozen=True)
@@ -494,15 +496,32 @@ def _unit_stack(zs: list[float], pair: WormPair, gear_rule: str) -> _Stack:
 GEAR_RULES = ("toward-high", "toward-low", "away-high", "away-low")
 
 
-def _strip_clamp(sz: _Sizes, up: int) -> tuple[float, float, float, float, float, float]:
+CLAMP_MIN = 5.0           # strip beyond the base bars that is worth clamping, mm
+
+
+def _strip_clamp(sz: _Sizes, up: int) -> tuple[float, float, float, float, float, float] | None:
     """The block that clamps the strip's tip end, in the layout frame: x0, x1, y0, y1, z0, z1;
-    its set screws come from +z (``up`` = 1) or -z, the side where it is thick."""
+    its set screws come from +z (``up`` = 1) or -z, the side where it is thick. None when the
+    strip ends too soon beyond the tip disk to be clamped (``backbone.extra_tip``)."""
+    if sz.y_end - (sz.y_face + sz.base_t) < CLAMP_MIN:
+        return None
     z0, z1 = STRIP_CLAMP_Z if up > 0 else (-STRIP_CLAMP_Z[1], -STRIP_CLAMP_Z[0])
     return (-sz.strip_half_x - STRIP_CLAMP_X, sz.strip_half_x + STRIP_CLAMP_X, sz.y_face + sz.base_t,
             sz.y_end + 2.0, z0, z1)
 
 
+def _clamp_blockers(eyelets: Eyelets, clamp, sz: _Sizes) -> list[tuple[str, float, float]]:
+    """Tendons that leave the tip inside the strip clamp's outline (beside the strip, within its
+    thickness): they would have to pass through it, whatever the arrangement."""
+    if clamp is None:
+        return []
+    return [(n, x, z) for v in eyelets.values() for n, x, z in v
+            if abs(x) < clamp[1] + sz.need and clamp[4] - sz.need < z < clamp[5] + sz.need]
+
+
 def _meets_clamp(stack: _Stack, clamp) -> bool:
+    if clamp is None:
+        return False
     z0, z1 = stack.z_span
     return z0 < clamp[5] + GAP and z1 > clamp[4] - GAP
 
@@ -533,7 +552,7 @@ def _arrangements(turn: int, clamp_up: int, gear_rule: str, eyelets: Eyelets, st
     zmid = {c: sum(stacks[c].z_span) / 2 for c in names}
     xmean = {c: float(np.mean([x for _, x, _ in eyelets[c]])) for c in names}
     late = {c: _meets_clamp(stacks[c], clamp) for c in names}
-    if len(names) <= 4:
+    if len(names) <= EVERY_ORDER_UP_TO:
         orders = [tuple(p) for p in permutations(names)]
     else:
         keys = [lambda c: (late[c], zmid[c], c), lambda c: (late[c], -zmid[c], c),
@@ -683,7 +702,8 @@ def _obstacles(fr: _Frame, clamp, sz: _Sizes) -> _Obstacles:
     for s in (1, -1):
         xs = sorted((s * fr.spine[0], s * fr.spine[1] * 10))
         R.append(("spine", (xs[0], xs[1], sz.y_face, 1e9), -1e9, 1e9))
-    R.append(("strip clamp", tuple(clamp[:4]), clamp[4], clamp[5]))
+    if clamp is not None:
+        R.append(("strip clamp", tuple(clamp[:4]), clamp[4], clamp[5]))
     return _Obstacles(np.array([c[1] for c in C], float).reshape(-1, 3), np.array([c[2:4] for c in C], float).reshape(-1, 2),
                       [c[4] for c in C], np.array([c[5] for c in C], bool), [c[0] for c in C],
                       np.array([r[1] for r in R], float).reshape(-1, 4), np.array([r[2:4] for r in R], float).reshape(-1, 2),
@@ -831,9 +851,11 @@ def _housing(fr: _Frame, clamp, sz: _Sizes, mounts, fast: str, ts: Tensioner,
         sx = 1.0 if x >= 0 else -1.0
         members.append(Member(f"base bar ({x:g}, {z:g})", "box", (sx * (abs(x) - MOUNT_BAR / 2), sx * sp1, yb0, yb1,
                                                                  z - MOUNT_BAR / 2, z + MOUNT_BAR / 2)))
-    members.append(Member("strip clamp bar", "box", (-sp1, sp1, yb0, yb1, clamp[4], clamp[5])))
-    members.append(Member("strip clamp", "box", clamp))
-    base_z = [v for _, z in mounts for v in (z - MOUNT_BAR / 2, z + MOUNT_BAR / 2)] + [clamp[4], clamp[5]]
+    cz = (clamp[4], clamp[5]) if clamp is not None else STRIP_CLAMP_Z
+    members.append(Member("cross bar", "box", (-sp1, sp1, yb0, yb1, *cz)))     # joins the columns
+    if clamp is not None:
+        members.append(Member("strip clamp", "box", clamp))
+    base_z = [v for _, z in mounts for v in (z - MOUNT_BAR / 2, z + MOUNT_BAR / 2)] + list(cz)
     reach = max(pair.ra1, DRIVE_FLANGE[0] / 2, POST / 2)
     for s in (1, -1):
         col = sorted((u for u in fr.units if u.side == s), key=lambda u: u.center[1])
@@ -958,12 +980,10 @@ def tip_joint(fast: str, tip_thickness: float, base_t: float) -> Fastening:
     return joint(fast, "M3", tip_thickness, base_t)
 
 
-def _base_cuts(fr: _Frame, clamp, sz: _Sizes, mounts, fast: str, members, cuts) -> None:
-    """The strip's slot and set screws, the tip-disk screws and the tendons' passages."""
+def _set_screws(clamp, sz: _Sizes, fast: str, cuts) -> None:
+    """Two M3 set screws press the strip in its slot from the clamp's thick side: through a nut
+    that slides into a side slot from the block's end (resin), or an insert (thermoplastic)."""
     hx, hz = sz.strip_half_x, sz.strip_half_z
-    c = STRIP_SLOT_CLEARANCE
-    yb0, yb1 = sz.y_face, sz.y_face + sz.base_t
-    cuts.append(Member("strip slot", "box", (-hx - c, hx + c, yb0 - 1, sz.y_end + c, -hz - c, hz + c)))
     ym = (clamp[2] + clamp[3]) / 2
     up = 1.0 if clamp[5] > abs(clamp[4]) else -1.0          # the set screws come from the thick side
     face = clamp[5] if up > 0 else clamp[4]
@@ -981,6 +1001,11 @@ def _base_cuts(fr: _Frame, clamp, sz: _Sizes, mounts, fast: str, members, cuts) 
         else:
             bore, depth = INSERT["M3"]
             cuts.append(Member("set screw insert", "cyl", (bore / 2, x, ym, face - up * depth, x, ym, face + up)))
+
+
+def _tip_screws(sz: _Sizes, mounts, fast: str, cuts) -> None:
+    """The screws through the tip disk into the base bars: nuts in side slots, or inserts."""
+    yb0, yb1 = sz.y_face, sz.y_face + sz.base_t
     j = tip_joint(fast, sz.tip_t, sz.base_t)
     for x, z in mounts:
         if j.kind == "nut":
@@ -991,6 +1016,18 @@ def _base_cuts(fr: _Frame, clamp, sz: _Sizes, mounts, fast: str, members, cuts) 
                                                             *sorted((z - sgn * w / 2, z + sgn * MOUNT_BAR)))))
         else:
             cuts.append(Member("tip screw insert", "cyl", (j.hole / 2, x, yb0 - 1, z, x, yb0 + j.depth, z)))
+
+
+def _base_cuts(fr: _Frame, clamp, sz: _Sizes, mounts, fast: str, members, cuts) -> None:
+    """The strip's slot and set screws, the tip-disk screws and the tendons' passages."""
+    hx, hz = sz.strip_half_x, sz.strip_half_z
+    c = STRIP_SLOT_CLEARANCE
+    yb0, yb1 = sz.y_face, sz.y_face + sz.base_t
+    if sz.y_end + c > yb0 - 1:
+        cuts.append(Member("strip slot", "box", (-hx - c, hx + c, yb0 - 1, sz.y_end + c, -hz - c, hz + c)))
+    if clamp is not None:
+        _set_screws(clamp, sz, fast, cuts)
+    _tip_screws(sz, mounts, fast, cuts)
     holes: dict[tuple[float, float], float] = {}
     for r in fr.runs:
         drift = sz.base_t * math.tan(math.radians(r.exit_angle_deg))
@@ -1044,6 +1081,7 @@ def layout(design: Design, paths: list[TendonPath], tip: DiskSpec) -> TensionerL
     robot_eyelets = _tip_eyelets(paths, ts.channels)
     x_min = _x_floor(robot_eyelets, sz)
     candidates = []
+    blockers: list = []
     for turn in (1, -1):
         eyelets = _turned(robot_eyelets, turn)
         mounts = [(turn * x, turn * z) for x, z, _ in tip.mount_holes]
@@ -1057,10 +1095,15 @@ def layout(design: Design, paths: list[TendonPath], tip: DiskSpec) -> TensionerL
             clamp_sets: set = set()
             for up in (1, -1):
                 clamp = _strip_clamp(sz, up)
+                blocked = _clamp_blockers(eyelets, clamp, sz)
+                if blocked:                   # some tendon would run through the clamp on this side
+                    blockers.append(blocked[0])
+                    continue
                 # which units and tendons the clamp side can touch: the same for both sides, one is enough
-                touch = (tuple(sorted(c for c in stacks if _meets_clamp(stacks[c], clamp))),
-                         tuple(sorted(n for v in eyelets.values() for n, _, z in v
-                                      if clamp[4] - 2 * sz.need < z < clamp[5] + 2 * sz.need)))
+                touch = None if clamp is None else (
+                    tuple(sorted(c for c in stacks if _meets_clamp(stacks[c], clamp))),
+                    tuple(sorted(n for v in eyelets.values() for n, _, z in v
+                                 if clamp[4] - 2 * sz.need < z < clamp[5] + 2 * sz.need)))
                 if touch in clamp_sets:
                     continue
                 clamp_sets.add(touch)
@@ -1069,12 +1112,20 @@ def layout(design: Design, paths: list[TendonPath], tip: DiskSpec) -> TensionerL
                     members, _ = _housing(fr, clamp, sz, mounts, fast, ts, with_cuts=False)
                     candidates.append(_Candidate(_load(members, fr, sz, design.backbone.length), arr, eyelets,
                                                  stacks, clamp, mounts))
+    if not candidates:
+        n, x, z = blockers[0]
+        short = sz.y_face + sz.base_t + CLAMP_MIN - design.backbone.length
+        raise NoFit(f"tendon {n} leaves the tip at x = {x:g}, z = {z:g} mm, in the strip's plane, where the "
+                    f"block that clamps the strip's tip stands ({STRIP_CLAMP_Z[0]:g} to {STRIP_CLAMP_Z[1]:g} mm "
+                    f"from the strip plane, the thick side either way): move its tip "
+                    f"eyelet off the strip plane (its routing at the last station), or make backbone.extra_tip "
+                    f"less than {short:.0f} mm so the strip ends before any clamp")
     candidates.sort(key=lambda c: (c.bound, c.arrangement.key))
     best: _Best | None = None
     failures: list[_Failure] = []
     solved = 0
     for c in candidates:
-        if best is not None and c.bound >= best.load:
+        if best is not None and c.bound >= best.load or solved >= MAX_SOLVES:
             break
         solved += 1
         try:
