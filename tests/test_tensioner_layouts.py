@@ -3,11 +3,9 @@ channels are listed and whichever way up the robot is drawn; odd channel counts 
 winding tendons that leave the tip at different x build, with a housing in one piece."""
 from __future__ import annotations
 
-import copy
 import multiprocessing as mp
 import tempfile
 import traceback
-from pathlib import Path
 
 import numpy as np
 import pytest
