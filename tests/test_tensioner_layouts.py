@@ -157,3 +157,23 @@ def test_refusal_names_the_tendon_what_it_hits_and_what_to_change(tmp_path):
     doc["backbone"]["extra_tip"] = 2          # the strip ends inside the tip disk: nothing to clamp
     f.write_text(yaml.safe_dump(doc))
     assert plan(load(f).design).tensioner_layout is not None
+
+
+def test_opposite_winding_puts_the_pair_on_either_side_of_its_drum(tmp_path):
+    """winding: opposite: one tendon meets the drum on the side facing the strip, the other on the
+    far side, so turning the worm hauls one in as it pays the other out."""
+    from hwgen.model.plan import plan
+    from hwgen.pipeline import load
+    doc = _prototype()
+    doc["tensioner"]["winding"] = {"A": "opposite"}
+    f = tmp_path / "opposite.yaml"
+    f.write_text(yaml.safe_dump(doc))
+    lay = plan(load(f).design).tensioner_layout
+    unit = lay.unit("A")
+    centre = (lay.turn @ [unit.center[0], unit.center[1], 0, 1])[0]
+    runs = {r.tendon: r for r in lay.runs if r.channel == "A"}
+    assert sorted(r.sense for r in runs.values()) == [-1, 1]
+    sides = {n: np.sign(r.end[0] - centre) for n, r in runs.items()}
+    assert sides["A1"] == -sides["A2"]
+    same = plan(load(PARAMS / "prototype.yaml").design).tensioner_layout
+    assert {r.sense for r in same.runs} == {1}

@@ -161,9 +161,9 @@ def wheel_solid(lay: TensionerLayout, unit: Unit, gear: cq.Solid, pin_bore: floa
         zf = zc - z_lo
         j = clamp_joint(lay, unit, zc)
         if j.kind == "nut":
-            # through the body, and a trap from its far face up to the nut's near face
-            tools.append(_cyl(j.hole / 2, (*at, zf + s * TOOL), (*at, zf - s * (j.depth + TOOL))))
-            tools.append(_hex(NUT["M2"][0] + NUT_PLAY, (*at, zf - s * (j.depth + TOOL)), (*at, zf - s * j.nut_from),
+            # through the body, and a trap from its far face (where the nut goes in) to the nut's near face
+            tools.append(_cyl(j.hole / 2, (*at, zf + s * TOOL), (*at, zf - s * (j.body + TOOL))))
+            tools.append(_hex(NUT["M2"][0] + NUT_PLAY, (*at, zf - s * (j.body + TOOL)), (*at, zf - s * j.nut_from),
                               (math.cos(ang), math.sin(ang), 0.0)))
         else:
             tools.append(_cyl(j.hole / 2, (*at, zf + s * TOOL), (*at, zf - s * j.depth)))

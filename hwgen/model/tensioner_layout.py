@@ -272,6 +272,7 @@ class Fastening:
     hole: float              # clearance hole (nut) or insert bore (insert), mm
     nut_from: float          # nut: depth of the trap's near face; insert: 0
     depth: float             # nut: depth of the trap's far face; insert: the bore's depth
+    body: float              # the printed body's thickness along the screw
 
     @property
     def screw(self) -> str:
@@ -297,10 +298,10 @@ def joint(fast: str, thread: str, grip: float, body: float) -> Fastening:
         if far < h + 0.6:
             raise NoFit(f"a {thread} nut and its screw do not fit in {body:g} mm of resin")
         clear = M3_CLEARANCE if thread == "M3" else M2_CLEARANCE
-        return Fastening("nut", thread, screw, clear, far - h - NUT_PLAY / 2, far + NUT_PLAY / 2)
+        return Fastening("nut", thread, screw, clear, far - h - NUT_PLAY / 2, far + NUT_PLAY / 2, body)
     bore, length = INSERT[thread]
     depth = min(body, length + 0.5)
-    return Fastening("insert", thread, _screw_length(thread, grip + depth - 0.5), bore, 0.0, depth)
+    return Fastening("insert", thread, _screw_length(thread, grip + depth - 0.5), bore, 0.0, depth, body)
 
 
 class NoFit(ValueError):
