@@ -191,7 +191,9 @@ class Tensioner(_Model):
     pressure_angle_deg: Finite = Field(20.0, ge=10, le=30, description="axial pressure angle of the worm thread, deg")
     face_width: Finite = Field(8.0, gt=0, le=30, description="face width of the wheel, mm")
     worm_length: Finite = Field(24.0, gt=0, le=60, description="threaded length of the worm, mm")
-    backlash: Finite = Field(0.1, ge=0, le=0.5, description="added to the centre distance (d1 + d2)/2, mm")
+    center_offset: Finite = Field(0.1, ge=0, le=0.5,
+                                  description="added to the centre distance (d1 + d2)/2: the flanks' clearance "
+                                              "(backlash) follows from it, mm")
     friction_coefficient: Finite = Field(0.1, gt=0, le=1,
                           description="μ of the worm/wheel material pair (self-locking needs lead angle < atan μ)")
     spool_diameter: Finite = Field(10.0, gt=0, le=40,
@@ -206,6 +208,17 @@ class Tensioner(_Model):
                           description="diametral interference of a pin pressed into a printed bore, mm")
     running_fit: Finite = Field(0.2, ge=0, le=0.6,
                           description="diametral clearance of a printed part turning on a pin or in a bore, mm")
+    winding: dict[Name, Literal["same", "opposite"]] = Field(
+        default_factory=dict,
+        description="per channel with two or more tendons: 'same' winds them in one sense, so the worm "
+                    "pre-tensions them together; 'opposite' hauls one in as it pays the other out, so the "
+                    "worm bends the robot (default 'same')")
+    tendon_clearance: Finite = Field(0.5, ge=0, le=5,
+                                     description="least gap between a tendon's free span and any part it must "
+                                                 "not touch, beyond the tendon's own diameter, mm")
+    max_exit_deg: Finite = Field(20.0, gt=0, le=60,
+                                 description="largest turn a tendon may make at its tip eyelet toward its "
+                                             "spool, deg (the tip eyelet is sized for it)")
 
 
 class CheckSettings(_Model):
@@ -280,25 +293,26 @@ def _path(loc) -> str:
     return out
 
 
-# Keys that moved: (old section, key) -> new section. Read from the old place for one release.
-MOVED_KEYS = {("render", "tie_off_mm"): "bom", ("render", "spool_mm"): "bom"}
+# Keys that moved: (old section, key) -> (new section, key). Read from the old place for one release.
+MOVED_KEYS = {("render", "tie_off_mm"): ("bom", "tie_off_mm"), ("render", "spool_mm"): ("bom", "spool_mm"),
+              ("tensioner", "backlash"): ("tensioner", "center_offset")}
 
 
 def _move_deprecated(data: dict, path: Path) -> list[str]:
     """Move keys from their old section to their new one; a warning for each, an error if given twice."""
     warnings = []
-    for (old, key), new in MOVED_KEYS.items():
+    for (old, key), (new, new_key) in MOVED_KEYS.items():
         section = data.get(old)
         if not isinstance(section, dict) or key not in section:
             continue
         target = data.setdefault(new, {})
         if not isinstance(target, dict):
             continue          # the schema reports the malformed section
-        if key in target:
-            raise InputError(path, f"{old}.{key}", f"given here and as {new}.{key}; keep only {new}.{key}")
-        target[key] = section.pop(key)
-        warnings.append(f"{path}: {old}.{key} is deprecated, move it to {new}.{key} "
-                        f"(read from {old}: for this release only)")
+        if new_key in target:
+            raise InputError(path, f"{old}.{key}", f"given here and as {new}.{new_key}; keep only {new}.{new_key}")
+        target[new_key] = section.pop(key)
+        warnings.append(f"{path}: {old}.{key} is deprecated, write it as {new}.{new_key} "
+                        f"(read from {old}.{key}: for this release only)")
     return warnings
 
 
@@ -398,6 +412,10 @@ def _check_design(d: Design, file: Path) -> None:
     if d.tensioner.actuating_channel not in channels:
         raise InputError(file, "tensioner.actuating_channel",
                          f"{echo(d.tensioner.actuating_channel)} is not one of the channels {echo(list(channels), 80)}")
+    for c in d.tensioner.winding:
+        if c not in channels:
+            raise InputError(file, f"tensioner.winding.{clip(c)}",
+                             f"{echo(c)} is not one of the channels {echo(list(channels), 80)}")
 
     names: dict[str, str] = {}
     for i, t in enumerate(d.tendons):

@@ -130,12 +130,14 @@ def test_thread_from_clearance_hole():
 
 
 def test_tensioner_hardware_matches_its_parts(proto, tmp_path):
-    """Counts follow from which parts exist: a dowel per worm and two per wheel, two M3 screws
-    and inserts per worm cap, an M2 screw and insert per clamp, inserts for the tip screws."""
+    """Counts follow from which parts exist: a dowel per worm and two per wheel, an M2 screw and
+    its nut per clamp, the housing's screws into the tip disk with a nut each, two set screws
+    with their nuts. The prototype is printed in resin (SLA): nuts in traps, never heat-set
+    inserts, which crack brittle resin."""
     folder, m, rows, d = proto
     roles = [p["role"] for p in m["parts"]]
-    worms, wheels, caps, clamps = (roles.count(f"tensioner_{r}") for r in ("worm", "wheel", "cap", "clamp"))
-    assert worms == wheels == caps == len(d.tensioner.channels) and clamps >= wheels
+    worms, wheels, drives, clamps = (roles.count(f"tensioner_{r}") for r in ("worm", "wheel", "drive", "clamp"))
+    assert worms == wheels == drives == len(d.tensioner.channels) and clamps >= wheels
     hw: dict[tuple[str, str], int] = {}
     for r in rows:
         if r["family"] == "hardware":
@@ -144,19 +146,19 @@ def test_tensioner_hardware_matches_its_parts(proto, tmp_path):
     dowels = sum(q for (item, _), q in hw.items() if item.startswith("dowel pin"))
     assert dowels == worms + 2 * wheels
     n_tip = len(d.disks.tip_mount.positions)
-    # one line for every M3 × 10 cap screw: two per worm cap, and the tip disk's pattern
-    assert hw[(bom.TIP_SCREW, "M3 × 10")] == 2 * caps + n_tip
-    assert hw[("button head screw ISO 7380", "M2 × 6")] == clamps
-    assert hw[("heat-set insert", "M2 × 4")] == clamps
-    assert hw[("heat-set insert", "M3 × 5.7")] == 2 * caps + n_tip + 2      # caps, tip screws, strip set screws
-    assert not any("nut" in item for item, _ in hw)   # the housing's inserts take the tip screws
-    (size,) = [size for item, size in hw if item == bom.TIP_SCREW]
-    length = float(size.split("×")[1])    # through the tip disk, stopping inside the 5.7 mm insert
-    assert d.disks.end_thickness < length <= d.disks.end_thickness + 5.7 - 0.5
+    (tip_size,) = [size for item, size in hw if item == bom.TIP_SCREW]
+    assert hw[(bom.TIP_SCREW, tip_size)] == n_tip
+    length = float(tip_size.split("×")[1])     # through the tip disk, ending in the nut inside the base bar
+    assert d.disks.end_thickness < length <= d.disks.end_thickness + 5.0
+    m2 = [(item, size) for item, size in hw if item == "button head screw ISO 7380"]
+    assert sum(hw[k] for k in m2) == clamps and all(size.startswith("M2") for _, size in m2)
+    assert hw[("hex nut ISO 4032", "M2")] == clamps
+    assert hw[("hex nut ISO 4032", "M3")] == n_tip + 2                 # tip screws, strip set screws
+    assert not any("insert" in item for item, _ in hw)
 
-    # without the parts' lists, the tip screws need nuts
-    m2 = _copy(folder, tmp_path)
-    for p in m2["parts"]:
+    # without the parts' lists, the tip screws are listed from the bolt pattern, with nuts
+    m2_ = _copy(folder, tmp_path)
+    for p in m2_["parts"]:
         p.pop("hardware", None)
-    rows2, _ = bom.bom_rows(tmp_path, m2, d)
+    rows2, _ = bom.bom_rows(tmp_path, m2_, d)
     assert any("nut" in r["part"] for r in rows2 if r["family"] == "hardware")

@@ -395,3 +395,26 @@ def test_tip_eyelets_checked_against_the_exit_to_the_tensioner(built, tmp_path):
     assert {c["where"]["tendon"] for c in bad} >= {"A1", "A2"}
     msg = next(c["message"] for c in bad if c["where"]["tendon"] == "A1")
     assert msg.startswith(f"A1 is pinched in {tip.name}")
+
+
+def test_a_cup_in_the_print_orientation_is_caught():
+    """A block with a blind pocket opening upward (its floor toward the plate) holds resin when
+    printed bottom-up; the same pocket vented through its floor does not."""
+    import trimesh
+
+    from hwgen.checks.parts import LoadedPart
+    from hwgen.checks.printing import printing_checks
+    block = trimesh.creation.box((20, 20, 10), trimesh.transformations.translation_matrix((0, 0, 5)))
+    pocket = trimesh.creation.cylinder(3.0, 8.0, transform=trimesh.transformations.translation_matrix((0, 0, 7)))
+    vent = trimesh.creation.cylinder(0.8, 12.0, transform=trimesh.transformations.translation_matrix((0, 0, 5)))
+    cup = block.difference(pocket)
+    vented = cup.difference(vent)
+
+    def run(mesh, tech="SLA"):
+        return [c for c in printing_checks([LoadedPart("part", "disk", mesh, np.eye(4), None)], tech)
+                if c.id == "print.cup"]
+    (bad,) = run(cup)
+    assert not bad.passed and bad.measured == pytest.approx(np.pi * 9, rel=0.05) and "Z = 3." in bad.message
+    (ok,) = run(vented)
+    assert ok.passed
+    assert run(cup, "FDM") == []          # an FDM nozzle does not peel from a film

@@ -262,3 +262,15 @@ def test_hwgen_render_command(proto, tmp_path, monkeypatch):
     assert "vtk-osmesa" in res.output
     m = json.loads((tmp_path / folder.name / "manifest.json").read_text())
     assert m["render"]["status"] == "unavailable" and (tmp_path / folder.name / "bom.csv").exists()
+
+
+def test_bent_picture_says_whether_the_hardware_reaches_the_pose(proto):
+    """The prototype's drum winds A1 and A2 in the same sense: its picture says it is the model only;
+    a drum that winds them in opposite senses bends the robot."""
+    _, m = proto
+    assert m["render"]["bent_note"].startswith("model only") and "A1 and A2" in m["render"]["bent_note"]
+    m2 = json.loads(json.dumps(m))
+    for p in m2["parts"]:
+        if p["role"] == "tensioner_wheel" and p["channel"] == "A":
+            p["winding"] = "opposite"
+    assert pictures.reachable_note(m2).startswith("the worm of channel A bends the robot")

@@ -44,13 +44,13 @@ def test_one_worm_drive_per_channel(proto):
     # one clamp per tendon end: the actuating drum carries both A1 and A2
     assert sorted(q["channel"] for q in clamps) == sorted(t.channel for t in p.paths)
     assert len([q for q in man["parts"] if q["role"] == "tensioner_housing"]) == 1
-    assert set(_by_role(man, "tensioner_cap")) == channels
+    assert set(_by_role(man, "tensioner_drive")) == channels
     assert sorted(_by_role(man, "tensioner_wheel")["A"]["tendons"]) == ["A1", "A2"]
 
 
 def test_worm_and_wheel_files_are_closed_solids(proto):
     folder, man, _ = proto
-    for role in ("tensioner_worm", "tensioner_wheel", "tensioner_clamp", "tensioner_cap", "tensioner_housing"):
+    for role in ("tensioner_worm", "tensioner_wheel", "tensioner_clamp", "tensioner_drive", "tensioner_housing"):
         for q in (x for x in man["parts"] if x["role"] == role):
             mesh = load_mesh(folder / q["files"]["stl"]["path"])
             assert mesh.is_watertight and mesh.is_winding_consistent and mesh.is_volume, q["name"]
@@ -222,15 +222,17 @@ def test_tensioner_parts_fit_the_printer(proto):
 
 
 def test_worm_is_turned_from_outside(proto):
-    """A straight line along each worm's axis from its hex socket outward meets no part."""
+    """A straight line along each worm's axis from its drive shaft's hex socket outward meets no part."""
     folder, man, _ = proto
-    worms = _by_role(man, "tensioner_worm")
-    solids = [manifold(folder, q) for q in man["parts"] if q["role"] != "tensioner_worm"]
+    drives = _by_role(man, "tensioner_drive")
+    solids = [manifold(folder, q) for q in man["parts"] if q["role"] not in ("tensioner_worm", "tensioner_drive")]
     import manifold3d as m3d
-    for ch, q in worms.items():
+    for ch, q in drives.items():
         m = np.asarray(q["placement"])
-        p0 = m[:3, 3]                       # the hex end face centre (file origin)
-        out = -m[:3, 2]                     # file -Z leaves the worm at its hex end
+        worm = np.asarray(_by_role(man, "tensioner_worm")[ch]["placement"])
+        assert np.allclose(m[:3, 2], worm[:3, 2]) and np.linalg.norm(np.cross(m[:3, 3] - worm[:3, 3], m[:3, 2])) < 1e-9
+        p0 = m[:3, 3]                       # the socket's face centre (file origin)
+        out = -m[:3, 2]                     # file -Z leaves the shaft at its socket
         key_r = 1.2                         # a 2.5 mm key's inscribed radius
         x = np.cross(out, [0, 0, 1.0])
         x /= np.linalg.norm(x)
@@ -249,8 +251,9 @@ def test_turning_parts_clear_the_housing_at_every_angle(proto):
         worm = _by_role(man, "tensioner_worm")[ch]
         ph, pw = np.asarray(wheel["placement"]), np.asarray(worm["placement"])
         clamps = [q for q in man["parts"] if q["role"] == "tensioner_clamp" and q["channel"] == ch]
-        cap = manifold(folder, _by_role(man, "tensioner_cap")[ch])
-        assert cap.min_gap(housing, 0.3) < 1e-6 and (cap ^ housing).volume() < 1e-3   # seated, not sunk
+        drive = manifold(folder, _by_role(man, "tensioner_drive")[ch])
+        assert drive.min_gap(housing, 0.3) < 1e-6 and (drive ^ housing).volume() < 1e-3   # seated, not sunk
+        assert (drive ^ manifold(folder, worm)).volume() < 1e-3                           # in the worm's bore
         for a in np.linspace(0, 2 * math.pi, 6, endpoint=False):
             turn = ph @ _rz(a) @ np.linalg.inv(ph)          # about the wheel's axis, in robot space
             for q in [wheel] + clamps:
@@ -258,14 +261,16 @@ def test_turning_parts_clear_the_housing_at_every_angle(proto):
                 assert s.min_gap(housing, 0.3) >= 0.05, (ch, q["name"], a)
             w = manifold(folder, worm, pw @ _rz(a))
             assert w.min_gap(housing, 0.3) >= 0.05, (ch, a)
-            assert w.min_gap(cap, 0.3) >= 0.05, (ch, a)    # the hex journal turns in the cap's bore
+            d = manifold(folder, _by_role(man, "tensioner_drive")[ch], pw @ _rz(a) @ np.linalg.inv(pw)
+                         @ np.asarray(_by_role(man, "tensioner_drive")[ch]["placement"]))
+            assert (d ^ housing).volume() < 1e-3, (ch, a)    # the shaft turns in the spine's hole
 
 
 def test_hex_socket_for_the_key(proto):
     folder, man, p = proto
     key = p.design.tensioner.hex_key
-    worm_q = _by_role(man, "tensioner_worm")["A"]
-    polys = manifold(folder, worm_q, np.eye(4)).slice(2.0).to_polygons()
+    drive_q = _by_role(man, "tensioner_drive")["A"]
+    polys = manifold(folder, drive_q, np.eye(4)).slice(2.0).to_polygons()
     areas = sorted(abs(0.5 * np.sum(q[:, 0] * np.roll(q[:, 1], -1) - np.roll(q[:, 0], -1) * q[:, 1]))
                    for q in polys)
     hexagon = math.sqrt(3) / 2 * (key + 0.1) ** 2            # across flats: key + clearance
@@ -284,7 +289,7 @@ def test_layout_adapts_to_other_gears(tmp_path, change):
     tendons' planes and the tendons' turn at the tip within its limit (numpy only)."""
     import yaml
 
-    from hwgen.model.tensioner_layout import MAX_EXIT_DEG, WORM_CLEAR
+    from hwgen.model.tensioner_layout import WORM_CLEAR
     data = yaml.safe_load((PARAMS / "prototype.yaml").read_text())
     data["tensioner"].update(change)
     f = tmp_path / "v.yaml"
@@ -298,7 +303,7 @@ def test_layout_adapts_to_other_gears(tmp_path, change):
     for u in lay.units:
         zs = [t.points[-1][1] for t in p.paths if t.channel == u.channel]
         assert min(abs(u.worm_z - z) for z in zs) >= pair.ra1 + WORM_CLEAR - 1e-9
-    assert max(r.exit_angle_deg for r in lay.runs) <= MAX_EXIT_DEG + 1e-6
+    assert max(r.exit_angle_deg for r in lay.runs) <= p.design.tensioner.max_exit_deg + 1e-6
     # units in one column do not overlap along y
     for s in (1, -1):
         col = sorted((u for u in lay.units if u.side == s), key=lambda u: u.center[1])
@@ -309,12 +314,13 @@ def test_layout_adapts_to_other_gears(tmp_path, change):
 
 
 def test_tendon_clearance_check_sees_a_part_in_the_way(proto):
-    """Shift the housing 2 mm along x (in a copy of the manifest): the base plate's tendon
-    holes move off the tendons and the check must fail, naming the housing."""
+    """Shift the housing along z (in a copy of the manifest) until its strip-clamp bar lies
+    across a tendon's exit: the check must fail, naming the housing."""
     import copy
     folder, man, p = proto
     moved = copy.deepcopy(man)
     h = next(q for q in moved["parts"] if q["role"] == "tensioner_housing")
-    h["placement"][0][3] += 2.0
+    z_run = min((r["start"][2] for q in man["parts"] for r in q.get("tendon_runs", [])), key=abs)
+    h["placement"][2][3] += z_run - 2.0          # the bar spans z -1.5..6 about the strip
     failed = [c for c in tendon_checks(folder, moved, p) if c.id == "tensioner.tendon_clearance" and not c.passed]
     assert failed and all(c.where["part"] == "tensioner_housing" for c in failed)

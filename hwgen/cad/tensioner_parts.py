@@ -1,22 +1,22 @@
-"""Tensioner solids: worm, wheel with spool, tendon clamp and housing.
+"""Tensioner solids: worm, drive shaft, wheel with spool, tendon clamp and housing.
 
 The numbers come from :mod:`hwgen.model.gearing` (tooth and thread forms) and
 :mod:`hwgen.model.tensioner_layout` (where everything sits); this module only turns them into
-CadQuery solids. Identical geometry is built once: one worm and one clamp for every
-channel, one wheel per distinct spool layout (the three single-tendon channels share
-theirs).
+CadQuery solids. Identical geometry is built once: one worm, one drive shaft and one clamp for
+every channel, one wheel per distinct spool layout.
 
-Print orientations: worm and wheel stand on an end face with their axis along file Z;
-the clamp plate lies flat; the worm's bearing cap on its flange; the housing stands on
-its base plate (the face that bolts to the tip disk), file (X, Y, Z) = robot (x, -z, y - y_face).
+Print orientations (each part's file is in it; see the README): worm and drive shaft stand on
+an end face, axis along file Z, every bore open at both ends; the wheel stands on its gear's
+face; the clamp plate lies flat; the housing stands on its base bars (the face that bolts to
+the tip disk), file (X, Y, Z) = robot (x, -z, y - y_face), its windows' roofs at 45°.
 
-Assembly, as the geometry allows it: heat-set inserts into the housing (base plate, strip
-clamp, spine) and the wheels (clamp faces); housing onto the tip disk (4 × M3 from the
-disk's inner face) with the strip's tip in its slot, set screws down on the strip; each
-wheel between its shelf and bar, its two dowels pressed in from outside; each worm dowel
-pressed into its far post, the worm slid in through the spine onto it, the cap screwed
-over; tendons through the base plate holes, wound, led through the anchor hole and
-pinched under the clamp plate around its M2 screw.
+Assembly, as the geometry allows it: nuts into their traps (resin) or inserts melted in
+(thermoplastic); each worm dropped in between its far post and the spine, its dowel pressed
+through the post into the worm's far bore, the drive shaft pushed from outside through the
+spine into the worm's hex bore; each wheel between its shelf and bar, its two dowels pressed
+in from outside; housing onto the tip disk (M3 screws from the disk's inner face) with the
+strip's tip in its slot, set screws down on the strip; tendons wound, led through the anchor
+hole and pinched under the clamp plate by its M2 screw.
 """
 from __future__ import annotations
 
@@ -28,17 +28,20 @@ import numpy as np
 
 from ..model.gearing import GearDesignError, WormPair
 from ..model.plan import Plan
-from ..model.tensioner_layout import (ANCHOR_HOLE, BOSS, CLAMP_INSERT_BORE, CLAMP_INSERT_DEPTH, CLAMP_PLATE, CLAMP_SCREW,
-                         COLLAR, COLLAR_STEP, GAP, M3_CLEARANCE, M3_INSERT, M3_INSERT_DEPTH, POST,
-                         SET_SCREW_INSERT, SHELF, STRIP_SLOT_CLEARANCE, WORM_CAP, TensionerLayout, Unit)
+from ..model.tensioner_layout import (ANCHOR_HOLE, AXIAL_PLAY, CAP, CLAMP_PLATE, CLAMP_SCREW, DRIVE_FLANGE, DRIVE_HEX,
+                                      DRIVE_HEX_LENGTH, DRIVE_SHAFT, NUT, NUT_PLAY, PIN_ENGAGE, POST, WORM_END, Fastening,
+                                      TensionerLayout, Unit, joint, tip_joint)
 from . import DISK_ROTATION, Part, location, placement
 
 WORM_COLOR = (0.75, 0.76, 0.78, 1.0)
 WHEEL_COLOR = (0.30, 0.55, 0.85, 1.0)
 CLAMP_COLOR = (0.90, 0.45, 0.20, 1.0)
 HOUSING_COLOR = (0.55, 0.58, 0.52, 1.0)
+DRIVE_COLOR = (0.80, 0.40, 0.60, 1.0)
 ROOT_OVERLAP = 0.05      # thread root sunk into the worm core so the fuse has no seam, mm
-HEX_DEPTH = 6.0          # depth of the hex socket, mm (a 2.5 mm key engages fully at 5 mm)
+HEX_DEPTH = 5.0          # depth of the hex key's socket, mm (a 2.5 mm key engages fully at 5 mm)
+FAR_CHAMFER = 1.0        # 45° chamfer on the worm's far end, mm
+VENT = 1.2               # through every blind bore: resin drains and no cup forms while printing, mm
 HEX_CLEARANCE = 0.1      # across flats over the key, mm
 TOOL = 1.0               # cutting tools overrun faces by this much, mm
 CLAMP_ANGLE = 90.0       # where on the wheel face the clamp sits, deg from the tooth on +X
@@ -48,13 +51,16 @@ def _wire(points) -> cq.Wire:
     return cq.Wire.makePolygon([cq.Vector(*p) for p in points], close=True)
 
 
-# ---- worm -------------------------------------------------------------------------------
-def worm_solid(pair: WormPair, hex_journal: float, hex_key: float, pin_bore: float, pin_depth: float) -> cq.Solid:
-    """Worm along file Z: the hex journal from Z = 0, a thrust collar, the threaded length,
-    then the far end with a blind bore for the dowel it turns on. The thread is the
-    trapezoid axial profile swept along a helix (right hand), one sweep per start."""
+# ---- worm and its drive shaft -------------------------------------------------------------
+def worm_solid(pair: WormPair, near_end: float, hex_bore: float, pin_bore: float, pin_depth: float) -> cq.Solid:
+    """Worm along file Z: plain core from Z = 0 (the face that bears on the spine) to the
+    thread, the threaded length, a plain far end bored for the dowel it turns on. A hex bore
+    from Z = 0 takes the drive shaft; a small vent joins it to the dowel bore, so no blind
+    hole traps resin. The thread is the trapezoid axial profile swept along a helix (right
+    hand), one sweep per start."""
     L = pair.worm_length
-    z0 = hex_journal
+    z0 = near_end
+    length = near_end + L + WORM_END
     prof = pair.worm_axial_profile(ROOT_OVERLAP)
     start = z0 + pair.pitch / 2
     wire = _wire([(r, 0, start + dz) for r, dz in prof])
@@ -62,16 +68,32 @@ def worm_solid(pair: WormPair, hex_journal: float, hex_key: float, pin_bore: flo
     thread = cq.Solid.sweep(wire, [], helix, makeSolid=True, isFrenet=True)
     threads = [thread] + [thread.rotate(cq.Vector(), cq.Vector(0, 0, 1), 360.0 * j / pair.starts)
                           for j in range(1, pair.starts)]
-    core = cq.Solid.makeCylinder(pair.rf1, hex_journal + L, cq.Vector(0, 0, 0))
-    collar = cq.Solid.makeCylinder(pair.rf1 + COLLAR_STEP, COLLAR, cq.Vector(0, 0, hex_journal - COLLAR))
-    body = core.fuse(collar, *threads)
-    af = hex_key + HEX_CLEARANCE
-    r_hex = af / math.sqrt(3)
-    hexagon = _wire([(r_hex * math.cos(math.radians(60 * k)), r_hex * math.sin(math.radians(60 * k)), -TOOL)
-                     for k in range(6)])
-    socket = cq.Solid.extrudeLinear(cq.Face.makeFromWires(hexagon), cq.Vector(0, 0, HEX_DEPTH + TOOL))
-    bore = cq.Solid.makeCylinder(pin_bore / 2, pin_depth + TOOL, cq.Vector(0, 0, hex_journal + L - pin_depth))
-    return _one(body.cut(socket, bore))
+    # the far end is chamfered: it bears on the post, and the face that prints on the plate
+    # (Z = 0) stays the largest flat face
+    c = FAR_CHAMFER
+    core = cq.Solid.makeCylinder(pair.rf1, length - c, cq.Vector(0, 0, 0)).fuse(
+        cq.Solid.makeCone(pair.rf1, pair.rf1 - c, c, cq.Vector(0, 0, length - c)))
+    body = core.fuse(*threads)
+    socket = _hex(hex_bore, (0, 0, -TOOL), (0, 0, DRIVE_HEX_LENGTH + 0.5), (1, 0, 0))
+    bore = cq.Solid.makeCylinder(pin_bore / 2, pin_depth + TOOL, cq.Vector(0, 0, length - pin_depth))
+    vent = cq.Solid.makeCylinder(VENT / 2, length, cq.Vector(0, 0, 0))
+    return _one(body.cut(socket, bore, vent))
+
+
+def drive_solid(lay: TensionerLayout) -> cq.Solid:
+    """The drive shaft, file Z from its flange's outer face: the flange (it stops the shaft
+    against the spine) with the hex key's socket, the shaft that turns in the spine's hole,
+    and the hex end pressed into the worm."""
+    ts = lay.params
+    fd, ft = DRIVE_FLANGE
+    shaft_len = lay.spine[1] - lay.spine[0] + AXIAL_PLAY / 2
+    # pieces overlap 0.01 mm inside each other so they fuse into one solid, never past the worm's face
+    flange = cq.Solid.makeCylinder(fd / 2, ft, cq.Vector(0, 0, 0))
+    shaft = cq.Solid.makeCylinder(DRIVE_SHAFT / 2, shaft_len + 0.01, cq.Vector(0, 0, ft - 0.01))
+    hexa = _hex(DRIVE_HEX, (0, 0, ft + shaft_len - 0.01), (0, 0, ft + shaft_len + DRIVE_HEX_LENGTH), (1, 0, 0))
+    socket = _hex(ts.hex_key + HEX_CLEARANCE, (0, 0, -TOOL), (0, 0, HEX_DEPTH), (1, 0, 0))
+    vent = cq.Solid.makeCylinder(VENT / 2, ft + shaft_len + DRIVE_HEX_LENGTH + TOOL, cq.Vector(0, 0, 0))
+    return _one(flange.fuse(shaft, hexa).cut(socket, vent))
 
 
 # ---- wheel ------------------------------------------------------------------------------
@@ -104,14 +126,23 @@ def gear_solid(pair: WormPair) -> cq.Solid:
 
 
 def clamp_site(lay: TensionerLayout) -> float:
-    """Radius on the wheel face of the clamp's screw, mm: midway between flange and tooth root."""
-    return (lay.flange_radius + lay.pair.rf2) / 2
+    """Radius on the wheel face of the clamp's screw, mm: midway between flange and tooth root,
+    or nearer the flange if the nut trap would otherwise reach the root."""
+    e = (NUT["M2"][0] + NUT_PLAY) / math.sqrt(3)
+    return min((lay.flange_radius + lay.pair.rf2) / 2, lay.pair.rf2 - e - 1.0)
+
+
+def clamp_joint(lay: TensionerLayout, unit: Unit, zc: float) -> Fastening:
+    """The clamp's M2 screw: through the plate into the gear, or into the end cap it sits on."""
+    on_cap = any(c[0] - 1e-9 <= zc <= c[1] + 1e-9 for c in unit.caps)
+    return joint(lay.fastening, "M2", CLAMP_PLATE[2], CAP if on_cap else lay.pair.face_width)
 
 
 def wheel_solid(lay: TensionerLayout, unit: Unit, gear: cq.Solid, pin_bore: float) -> cq.Solid:
-    """Gear + spool drum + flanges (+ end cap), bored for the pins, the clamps' heat-set
-    inserts and the tendons' anchor holes. Built with Z = robot z - unit.z_part[0], then
-    turned over when the gear is on top so that its face rests on the plate."""
+    """Gear + spool drum + flanges (+ end cap), bored for the pins, the clamps' screws (a nut
+    trap from the far face, or an insert bore) and the tendons' anchor holes. Built with
+    Z = robot z - unit.z_part[0], then turned over when the gear is on top so that its face
+    rests on the plate."""
     z_lo = unit.z_part[0]
     pair = lay.pair
     height = unit.z_part[1] - z_lo
@@ -125,19 +156,24 @@ def wheel_solid(lay: TensionerLayout, unit: Unit, gear: cq.Solid, pin_bore: floa
     tools = [cq.Solid.makeCylinder(pin_bore / 2, height + 2 * TOOL, cq.Vector(0, 0, -TOOL))]
     rc = clamp_site(lay)
     ang = math.radians(CLAMP_ANGLE)
+    at = np.array([rc * math.cos(ang), rc * math.sin(ang)])
     for zc, s in unit.clamps:
         zf = zc - z_lo
-        # heat-set insert bore into the gear (or end cap) from the face the clamp sits on
-        z_from = zf - CLAMP_INSERT_DEPTH if s > 0 else zf - TOOL
-        tools.append(cq.Solid.makeCylinder(CLAMP_INSERT_BORE / 2, CLAMP_INSERT_DEPTH + TOOL,
-                                           cq.Vector(rc * math.cos(ang), rc * math.sin(ang), z_from)))
+        j = clamp_joint(lay, unit, zc)
+        if j.kind == "nut":
+            # through the body, and a trap from its far face (where the nut goes in) to the nut's near face
+            tools.append(_cyl(j.hole / 2, (*at, zf + s * TOOL), (*at, zf - s * (j.body + TOOL))))
+            tools.append(_hex(NUT["M2"][0] + NUT_PLAY, (*at, zf - s * (j.body + TOOL)), (*at, zf - s * j.nut_from),
+                              (math.cos(ang), math.sin(ang), 0.0)))
+        else:
+            tools.append(_cyl(j.hole / 2, (*at, zf + s * TOOL), (*at, zf - s * j.depth)))
+    tools += _lightening(lay, unit, height)
     # anchor holes: through the flange between each winding zone and its clamp face
     r_anchor = lay.spool_radius + ANCHOR_HOLE / 2 + 0.3
     for zc, s in unit.clamps:
         # on an end cap: through the cap; on the gear's face: through the flange nearest to it
-        slab = next((c for c in unit.caps if c[0] - 1e-9 <= zc <= c[1] + 1e-9), None) or \
+        f = next((c for c in unit.caps if c[0] - 1e-9 <= zc <= c[1] + 1e-9), None) or \
             min(unit.flanges, key=lambda f: abs((f[0] + f[1]) / 2 - zc))
-        f = slab
         tools.append(cq.Solid.makeCylinder(ANCHOR_HOLE / 2, f[1] - f[0] + 2 * TOOL,
                                            cq.Vector(r_anchor * math.cos(ang), r_anchor * math.sin(ang),
                                                      f[0] - z_lo - TOOL)))
@@ -147,42 +183,36 @@ def wheel_solid(lay: TensionerLayout, unit: Unit, gear: cq.Solid, pin_bore: floa
     return solid
 
 
+LIGHTENING_WALL = 1.2        # resin left around a lightening hole or inside a hollow drum, mm
+LIGHTENING_HOLE = 6.0        # Ø of the holes through the gear between its hub and its root, mm
+
+
+def _lightening(lay: TensionerLayout, unit: Unit, height: float) -> list[cq.Solid]:
+    """Material the wheel does not need: the drum core hollow between the dowels' ends (the
+    hollow opens into the pin bore at both ends, so resin drains), and holes through the gear
+    between hub and tooth root, away from the clamp's nut and the anchor hole."""
+    ts = lay.params
+    out = []
+    engaged = PIN_ENGAGE + 1.0
+    r_in = lay.hub_radius - LIGHTENING_WALL
+    if height > 2 * engaged + 2 and r_in > (ts.shaft_diameter + ts.running_fit) / 2 + 0.5:
+        out.append(cq.Solid.makeCylinder(r_in, height - 2 * engaged, cq.Vector(0, 0, engaged)))
+    r0 = lay.hub_radius + LIGHTENING_WALL + LIGHTENING_HOLE / 2
+    if r0 + LIGHTENING_HOLE / 2 + LIGHTENING_WALL <= lay.pair.rf2:
+        z0 = unit.z_gear[0] - unit.z_part[0]
+        for deg in (CLAMP_ANGLE + 90, CLAMP_ANGLE + 180, CLAMP_ANGLE + 270):      # the clamp is at CLAMP_ANGLE
+            a = math.radians(deg)
+            out.append(cq.Solid.makeCylinder(LIGHTENING_HOLE / 2, lay.pair.face_width + 2 * TOOL,
+                                              cq.Vector(r0 * math.cos(a), r0 * math.sin(a), z0 - TOOL)))
+    return out
+
+
 def clamp_solid() -> cq.Solid:
     """Clamp plate: the tendon, led out of the anchor hole, is pinched under it by an M2 screw."""
     x, y, t = CLAMP_PLATE
     plate = cq.Solid.makeBox(x, y, t, cq.Vector(-x / 2, -y / 2, 0))
     hole = cq.Solid.makeCylinder((CLAMP_SCREW + 0.4) / 2, t + 2 * TOOL, cq.Vector(0, 0, -TOOL))
     return _one(plate.cut(hole))
-
-
-# ---- worm bearing cap ----------------------------------------------------------------
-def cap_solid(lay: TensionerLayout, screws_file: list[tuple[float, float]]) -> cq.Solid:
-    """Square flange (file Z from 0, the face outside the spine) with a spigot that locates
-    in the spine hole and ends at the worm's collar; bored for the hex journal and two M3
-    screws. Shares the worm's file frame."""
-    ts = lay.params
-    h = lay.cap_half
-    flange = cq.Solid.makeBox(2 * h, 2 * h, WORM_CAP, cq.Vector(-h, -h, 0))
-    spigot = cq.Solid.makeCylinder((lay.spine_hole - ts.running_fit) / 2, lay.cap_spigot,
-                                   cq.Vector(0, 0, WORM_CAP))
-    body = flange.fuse(spigot)
-    length = WORM_CAP + lay.cap_spigot
-    tools = [cq.Solid.makeCylinder((2 * lay.pair.rf1 + ts.running_fit) / 2, length + 2 * TOOL,
-                                   cq.Vector(0, 0, -TOOL))]
-    for x, y in screws_file:
-        tools.append(cq.Solid.makeCylinder(M3_CLEARANCE / 2, WORM_CAP + 2 * TOOL, cq.Vector(x, y, -TOOL)))
-    return _one(body.cut(*tools))
-
-
-def cap_screws(lay: TensionerLayout, unit: Unit) -> tuple[tuple[float, float], ...]:
-    """(X, Y) of the cap's two screws in the worm's file frame (the same for every unit)."""
-    inv = np.linalg.inv(lay.worm_placement(unit))
-    s = unit.side
-    out = []
-    for dy in (-lay.cap_screw, lay.cap_screw):
-        p = inv @ [s * lay.worm_x[1], unit.worm_y + dy, unit.worm_z, 1.0]
-        out.append((round(float(p[0]), 6), round(float(p[1]), 6)))
-    return tuple(sorted(out))
 
 
 # ---- housing ----------------------------------------------------------------------------
@@ -197,60 +227,52 @@ def _cyl(r, p0, p1) -> cq.Solid:
     return cq.Solid.makeCylinder(r, float(np.linalg.norm(d)), cq.Vector(*p0), cq.Vector(*d))
 
 
-def housing_solid(lay: TensionerLayout, plan: Plan) -> cq.Solid:
-    """The housing in robot coordinates: base plate on the tip disk, strip clamp, two
-    spines with the worms' hex journal bores, and per unit an upper shelf with the pin
-    boss, a lower bar and the far worm post."""
-    ts = lay.params
-    pin_press = ts.shaft_diameter - ts.press_fit
-    bx0, bx1, by0, by1, bz0, bz1 = lay.base
-    sp0, sp1 = lay.spine
-    p0, p1 = lay.post
-    solids = [_box(bx0, bx1, by0, by1, bz0, bz1)]
-    cb = lay.clamp_block
-    solids.append(_box(*cb))
-    # each column's spine: one pad per unit over its y band and z span, stacked from the base
-    # plate (consecutive pads overlap by a shelf thickness so they fuse into one wall)
-    reach = max(lay.cap_half, POST / 2)
-    y_from = {1: by0, -1: by0}
-    for u in sorted(lay.units, key=lambda u: u.center[1]):
-        s = u.side
-        top = max(u.center[1] + lay.pair.ra2, u.worm_y + reach)
-        solids.append(_box(s * sp0, s * sp1, y_from[s], top, u.lower_bar[0], u.upper_shelf[1]))
-        y_from[s] = top - SHELF
-    cuts = []
-    for u in lay.units:
-        s = u.side
-        cx, cy = u.center
-        wy, wz = u.worm_y, u.worm_z
-        solids.append(_box(s * p0, s * sp1, cy - s * BOSS, wy + s * POST / 2, *u.upper_shelf))
-        solids.append(_cyl(BOSS, (cx, cy, u.z_part[1] + GAP), (cx, cy, u.upper_shelf[1])))
-        solids.append(_box(cx, s * sp1, cy - BOSS, cy + BOSS, *u.lower_bar))
-        solids.append(_cyl(BOSS, (cx, cy, u.lower_bar[0]), (cx, cy, u.z_part[0] - GAP)))
-        solids.append(_box(s * p0, s * p1, wy - POST / 2, wy + POST / 2, wz - POST / 2, u.upper_shelf[1]))
-        # dowel bores (press fit): wheel pins along z, worm pin along x through the post
-        cuts.append(_cyl(pin_press / 2, (cx, cy, u.z_part[1]), (cx, cy, u.upper_shelf[1] + TOOL)))
-        cuts.append(_cyl(pin_press / 2, (cx, cy, u.lower_bar[0] - TOOL), (cx, cy, u.z_part[0])))
-        cuts.append(_cyl(pin_press / 2, (s * (p0 - TOOL), wy, wz), (s * (p1 + TOOL), wy, wz)))
-        # the hole the worm enters by (the cap's spigot locates in it) and the cap's inserts
-        cuts.append(_cyl(lay.spine_hole / 2, (s * (sp0 - TOOL), wy, wz), (s * (sp1 + TOOL), wy, wz)))
-        for dy in (-lay.cap_screw, lay.cap_screw):
-            cuts.append(_cyl(M3_INSERT / 2, (s * (sp1 - M3_INSERT_DEPTH), wy + dy, wz),
-                             (s * (sp1 + TOOL), wy + dy, wz)))
-    # strip slot through the base plate into the clamp block, set-screw inserts from +z
-    hx, hz, _, y_end = lay.strip
-    c = STRIP_SLOT_CLEARANCE
-    cuts.append(_box(-hx - c, hx + c, by0 - TOOL, y_end + c, -hz - c, hz + c))
-    ym = (cb[2] + cb[3]) / 2
-    for x in (-hx / 2, hx / 2):
-        cuts.append(_cyl(SET_SCREW_INSERT / 2, (x, ym, 0.0), (x, ym, cb[5] + TOOL)))
-    # tendon passages and the tip disk's screw inserts through the base plate
-    for x, z, dia in lay.tendon_holes:
-        cuts.append(_cyl(dia / 2, (x, by0 - TOOL, z), (x, by1 + TOOL, z)))
-    for x, z, dia in lay.mount_holes:
-        cuts.append(_cyl(dia / 2, (x, by0 - TOOL, z), (x, by1 + TOOL, z)))
+def _hex(across_flats: float, p0, p1, flat_normal) -> cq.Solid:
+    """Hexagonal prism from p0 to p1, one pair of flats facing ``flat_normal`` (made square to the axis)."""
+    p0, p1 = np.asarray(p0, float), np.asarray(p1, float)
+    ax = (p1 - p0) / np.linalg.norm(p1 - p0)
+    n = np.asarray(flat_normal, float)
+    n = n - ax * (n @ ax)
+    if np.linalg.norm(n) < 1e-9:
+        n = np.cross(ax, [1.0, 0.0, 0.0] if abs(ax[0]) < 0.9 else [0.0, 1.0, 0.0])
+    n /= np.linalg.norm(n)
+    m = np.cross(ax, n)
+    r = across_flats / math.sqrt(3)                        # corner radius
+    corners = [p0 + r * (math.cos(a) * m + math.sin(a) * n) for a in np.radians(np.arange(0, 360, 60))]
+    face = cq.Face.makeFromWires(_wire(corners))
+    return cq.Solid.extrudeLinear(face, cq.Vector(*(p1 - p0)))
+
+
+def _prism(axis: int, lo: float, hi: float, outline) -> cq.Solid:
+    """An outline of (y, v) points (v = z for an x normal, x for a z normal) extruded from lo to hi."""
+    pts = np.asarray(outline, float).reshape(-1, 2)
+    if axis == 0:
+        corners = [(lo, y, v) for y, v in pts]
+        step = cq.Vector(hi - lo, 0, 0)
+    else:
+        corners = [(v, y, lo) for y, v in pts]
+        step = cq.Vector(0, 0, hi - lo)
+    return cq.Solid.extrudeLinear(cq.Face.makeFromWires(_wire(corners)), step)
+
+
+def member_solid(m) -> cq.Solid:
+    """A :class:`hwgen.model.tensioner_layout.Member` as a solid."""
+    d = m.dims
+    if m.kind == "box":
+        return _box(*d)
+    if m.kind == "cyl":
+        return _cyl(d[0], d[1:4], d[4:7])
+    if m.kind == "prism":
+        return _prism(int(d[0]), d[1], d[2], d[3:])
+    return _hex(d[0], d[1:4], d[4:7], d[7:10])
+
+
+def housing_solid(lay: TensionerLayout) -> cq.Solid:
+    """The housing in robot coordinates, from the layout's members (fused) and cuts (one cut)."""
+    solids = [member_solid(m) for m in lay.members]
     body = solids[0].fuse(*solids[1:]).clean()
-    return _one(body.cut(*cuts))
+    body = _one(body.cut(*(member_solid(m) for m in lay.cuts)))
+    return body.moved(location(lay.turn))
 
 
 def _one(shape) -> cq.Solid:
@@ -273,11 +295,13 @@ def build_tensioner(plan: Plan) -> Iterator[Part]:
     if problems:
         raise GearDesignError("; ".join(f"tensioner.{f}: {m}" for f, m in problems))
     running = ts.shaft_diameter + ts.running_fit
-    worm = worm_solid(pair, lay.hex_journal, ts.hex_key, running, lay.worm_pin - POST + 0.5)
+    # the drive's hex goes into the worm's line to line: the resin's own scatter (±0.05 mm) makes
+    # it snug; modelled without overlap so the parts' interference check stays meaningful
+    worm = worm_solid(pair, lay.worm_near_end, DRIVE_HEX, running, lay.worm_pin - POST + 0.5)
+    drive = drive_solid(lay)
     gear = gear_solid(pair)
     clamp = clamp_solid()
     wheels: dict[tuple, cq.Solid] = {}
-    caps: dict[tuple, cq.Solid] = {}
     for u in lay.units:
         key = tuple(np.round(np.array([*u.z_part, *u.z_gear, *np.ravel(u.zones), *np.ravel(u.clamps)])
                              - u.z_part[0], 6))
@@ -289,47 +313,54 @@ def build_tensioner(plan: Plan) -> Iterator[Part]:
                    meta={**meta, "mesh_with": f"tensioner_wheel_{u.channel}", "hex_key_mm": ts.hex_key,
                          "hardware": [_dowel(ts.shaft_diameter, lay.worm_pin, "pressed into the far post")],
                          **pair.summary()})
-        screws = cap_screws(lay, u)
-        if screws not in caps:
-            caps[screws] = cap_solid(lay, list(screws))
-        yield Part(f"tensioner_cap_{u.channel}", "tensioner_cap", caps[screws], wp, HOUSING_COLOR,
-                   meta={"channel": u.channel,
-                         "hardware": [_hw("socket head cap screw ISO 4762", "M3 × 10", 2, STEEL),
-                                      _hw("heat-set insert", "M3 × 5.7", 2, BRASS, "melted into the spine")]})
-        hp = lay.wheel_placement(u)
-        d = plan.design.tendon_material.diameter
-        # the run meets its own drum tangentially: the last stretch, where it is closer to the
-        # drum than 1.5 tendon diameters, is where it is meant to touch and is not checked
-        trim = math.sqrt((lay.winding_radius + 1.5 * d) ** 2 - lay.winding_radius ** 2)
-        runs = [{"tendon": r.tendon, "start": list(r.start), "end": list(r.end),
-                 "exit_angle_deg": r.exit_angle_deg, "own_part_trim_mm": trim}
-                for r in lay.runs if r.channel == u.channel]
-        yield Part(f"tensioner_wheel_{u.channel}", "tensioner_wheel", wheels[key], hp, WHEEL_COLOR,
-                   meta={**meta, "tendon_runs": runs, "winding_radius_mm": lay.winding_radius,
-                         "flange_radius_mm": lay.flange_radius, "spool_diameter_mm": 2 * lay.spool_radius,
-                         "winding_zones_z_mm": [list(z) for z in u.zones],
-                         "hardware": [_dowel(ts.shaft_diameter, n, "pressed into the housing") for n in u.pins]})
-        rc = clamp_site(lay)
-        ang = math.radians(CLAMP_ANGLE)
-        for k, (zc, s) in enumerate(u.clamps):
-            zf = zc - u.z_part[0]
-            t = placement(np.eye(3), [rc * math.cos(ang), rc * math.sin(ang),
-                                      zf if s > 0 else zf - CLAMP_PLATE[2]])
-            name = f"tensioner_clamp_{u.channel}" + (f"_{k + 1}" if len(u.clamps) > 1 else "")
-            yield Part(name, "tensioner_clamp", clamp, lay.stack_placement(u) @ t, CLAMP_COLOR,
-                       meta={**meta, "hardware": [
-                           _hw("button head screw ISO 7380", "M2 × 6", 1, STEEL),
-                           _hw("heat-set insert", "M2 × 4", 1, BRASS, "melted into the wheel face")]})
+        yield Part(f"tensioner_drive_{u.channel}", "tensioner_drive", drive, lay.drive_placement(u), DRIVE_COLOR,
+                   meta={"channel": u.channel, "hex_key_mm": ts.hex_key,
+                         "drives": f"tensioner_worm_{u.channel}"})
+        yield _wheel_part(lay, u, wheels[key], meta, plan.design.tendon_material.diameter)
+        yield from _clamp_parts(lay, u, clamp, meta)
     hp = housing_placement(lay)
-    robot_solid = housing_solid(lay, plan)
     inv = np.linalg.inv(hp)
-    yield Part("tensioner_housing", "tensioner_housing", robot_solid.moved(location(inv)), hp, HOUSING_COLOR,
-               meta={"channel": "all", "channels": [u.channel for u in lay.units],
+    n_tip = len(plan.disks[-1].mount_holes)
+    tip = tip_joint(lay.fastening, plan.disks[-1].thickness, lay.base_t)
+    set_screw = {"nut": _hw("hex nut ISO 4032", "M3", 2, STEEL, "for the strip's set screws, in a side slot"),
+                 "insert": _hw("heat-set insert", "M3 × 5.7", 2, BRASS, "for the strip's set screws, melted in")}
+    yield Part("tensioner_housing", "tensioner_housing", housing_solid(lay).moved(location(inv)), hp, HOUSING_COLOR,
+               meta={"channel": "all", "channels": [u.channel for u in lay.units], "layout_search": lay.search,
                      "hardware": [
-                         {**_hw("heat-set insert", "M3 × 5.7", len(lay.mount_holes), BRASS,
-                                "takes the tip-disk screws"), "tip_mount": True, "thread_depth_mm": 5.7},
+                         {**_hw("socket head cap screw ISO 4762", tip.screw, n_tip, STEEL,
+                                "through the tip disk into the housing"), "tip_mount": True},
+                         tip.held_by(n_tip, "takes the tip-disk screws, in a side slot"),
                          _hw("set screw ISO 4026", "M3 × 6", 2, STEEL, "clamps the strip's tip"),
-                         _hw("heat-set insert", "M3 × 5.7", 2, BRASS, "for the strip's set screws")]})
+                         set_screw[lay.fastening]]})
+
+
+def _wheel_part(lay: TensionerLayout, u: Unit, solid, meta: dict, tendon_d: float) -> Part:
+    ts = lay.params
+    # the run meets its own drum tangentially: the last stretch, where it is closer to the
+    # drum than 1.5 tendon diameters, is where it is meant to touch and is not checked
+    trim = math.sqrt((lay.winding_radius + 1.5 * tendon_d) ** 2 - lay.winding_radius ** 2)
+    runs = [{"tendon": r.tendon, "start": list(r.start), "end": list(r.end), "sense": r.sense,
+             "exit_angle_deg": r.exit_angle_deg, "own_part_trim_mm": trim}
+            for r in lay.runs if r.channel == u.channel]
+    return Part(f"tensioner_wheel_{u.channel}", "tensioner_wheel", solid, lay.wheel_placement(u), WHEEL_COLOR,
+                meta={**meta, "tendon_runs": runs, "winding_radius_mm": lay.winding_radius,
+                      "winding": ts.winding.get(u.channel, "same"),
+                      "flange_radius_mm": lay.flange_radius, "spool_diameter_mm": 2 * lay.spool_radius,
+                      "winding_zones_z_mm": [list(z) for z in u.zones],
+                      "hardware": [_dowel(ts.shaft_diameter, n, "pressed into the housing") for n in u.pins]})
+
+
+def _clamp_parts(lay: TensionerLayout, u: Unit, clamp, meta: dict) -> Iterator[Part]:
+    rc = clamp_site(lay)
+    ang = math.radians(CLAMP_ANGLE)
+    for k, (zc, s) in enumerate(u.clamps):
+        zf = zc - u.z_part[0]
+        t = placement(np.eye(3), [rc * math.cos(ang), rc * math.sin(ang), zf if s > 0 else zf - CLAMP_PLATE[2]])
+        j = clamp_joint(lay, u, zc)
+        name = f"tensioner_clamp_{u.channel}" + (f"_{k + 1}" if len(u.clamps) > 1 else "")
+        yield Part(name, "tensioner_clamp", clamp, lay.stack_placement(u) @ t, CLAMP_COLOR,
+                   meta={**meta, "hardware": [_hw("button head screw ISO 7380", j.screw, 1, STEEL),
+                                              j.held_by(1, "in the wheel")]})
 
 
 STEEL, BRASS = "steel", "brass"

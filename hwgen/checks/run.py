@@ -20,6 +20,7 @@ from .eyelets import backbone_section, locate_eyelets, measure_disk
 from .gear_mesh import gear_checks
 from .lengths import length_checks, pair_take_up, sweep_angles, tendon_lengths
 from .parts import build_volume_checks, interference_checks, load_parts, mass_summary, mesh_checks
+from .printing import printing_checks
 
 TABLE_MATCH_MM = 0.1   # Table II gives one decimal: a table within this of its function samples it
 
@@ -111,6 +112,7 @@ def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     checks += mesh_checks(parts)
     checks += interference_checks(parts, s.interference_tol_mm3)
     checks += build_volume_checks(parts, proc.build_volume)
+    checks += printing_checks(parts, proc.technology)
     mass, c = mass_summary(parts, manifest)
     checks += c
     checks += gear_checks(folder, manifest, plan)

@@ -334,4 +334,4 @@ def worm_pair(t) -> WormPair:
     """The pair described by a :class:`hwgen.params.Tensioner` section."""
     return WormPair(module=t.module, starts=t.worm_starts, teeth=t.wheel_teeth,
                     worm_pitch_diameter=t.worm_pitch_diameter, pressure_angle_deg=t.pressure_angle_deg,
-                    face_width=t.face_width, worm_length=t.worm_length, backlash=t.backlash)
+                    face_width=t.face_width, worm_length=t.worm_length, backlash=t.center_offset)

@@ -9,10 +9,10 @@ Printed parts are the manifest's parts, one row per file, grouped by family (the
   the rest length is the one the checks measured from the geometry (``report.json``, written
   by the stage before this one); a folder without a report (built without its checks) gets
   eq. (2) at zero curvature on the design report's eyelets, and says so;
-* screws and nuts for the tip-mount bolt pattern, sized from the clearance holes;
 * hardware a part lists in its manifest entry as ``"hardware": [{"item", "qty", "size",
-  "material", "notes"}]``, summed over parts by item and size. An entry marked
-  ``"tip_mount": true`` is what takes the tip disk's screws, so no nuts are listed for them.
+  "material", "notes"}]``, summed over parts by item and size. A part that fastens to the tip
+  disk lists those screws itself, marked ``"tip_mount": true``; without one, screws and nuts
+  for the tip disk's bolt pattern are listed from its clearance holes.
 """
 from __future__ import annotations
 
@@ -32,8 +32,6 @@ REPORT = "report.json"             # written by the checks stage, before this on
 # ISO 273 "normal" clearance holes: hole diameter -> metric thread it clears.
 ISO273_NORMAL = {2.4: "M2", 2.9: "M2.5", 3.4: "M3", 4.5: "M4", 5.5: "M5", 6.6: "M6", 9.0: "M8"}
 CLEARANCE_MATCH_MM = 0.35          # a hole within this of a table size takes that thread
-SCREW_LENGTHS = (6, 8, 10, 12, 14, 16, 20, 25, 30, 35, 40)   # ISO 4762 preferred lengths, mm
-SCREW_END_MM = 0.5                 # a screw stops this far short of the end of its thread
 TIP_SCREW = "socket head cap screw ISO 4762"   # fastens the tensioner (or a fixture) to the tip disk
 
 FAMILY_LABELS = {"disk": "tendon-support disk", "backbone": "backbone strip"}   # others: the role, spaced
@@ -152,28 +150,11 @@ def _printed_note(e: dict) -> str:
 
 
 def _fasteners(manifest: dict) -> list[tuple[str, int, str, str, str]]:
-    """Screws (and nuts) of the tip mount and the hardware the parts list, summed by (item, size)."""
-    tip = max(manifest["design_report"]["disks"], key=lambda d: d["index"], default=None)
-    mounts = tip.get("mount_holes", []) if tip else []
-    # a part that lists what takes the tip screws (the tensioner's inserts) makes nuts unneeded
-    takes = [h for e in manifest["parts"] for h in e.get("hardware", []) or [] if h.get("tip_mount")]
-    listed: list[tuple[dict, str]] = []          # (hardware line, who needs it)
-    if mounts:
-        dia = mounts[0][2]
-        thread = thread_for_hole(dia) or f"screw for Ø{dia:g} mm holes"
-        grip = tip["thickness_mm"]
-        depth = takes[0].get("thread_depth_mm") if takes else None
-        if depth:   # longest standard screw that stops short of the insert's far end
-            fits = [n for n in SCREW_LENGTHS if grip < n <= grip + depth - SCREW_END_MM]
-            size = f"{thread} × {max(fits)}" if fits else f"{thread} × ({grip:g} mm + up to {depth:g} mm)"
-        else:
-            size = f"{thread} × ({grip:g} mm + nut)"
-        listed.append(({"item": TIP_SCREW, "size": size, "qty": len(mounts), "material": "steel"},
-                       "the tip disk's bolt pattern"))
-        if not takes:
-            listed.append(({"item": "hex nut ISO 4032 or heat-set insert", "size": thread, "qty": len(mounts),
-                            "material": "steel / brass"}, "the tip disk's bolt pattern"))
-    listed += [(h, e["name"]) for e in manifest["parts"] for h in e.get("hardware", []) or []]
+    """The hardware the parts list, summed by (item, size); and, when no part says what takes
+    the tip disk's bolt pattern (``"tip_mount": true``), screws and nuts for it."""
+    listed: list[tuple[dict, str]] = [(h, e["name"]) for e in manifest["parts"] for h in e.get("hardware", []) or []]
+    if not any(h.get("tip_mount") for h, _ in listed):
+        listed = _tip_screws(manifest) + listed
     summed: dict[tuple[str, str], list] = {}
     for h, user in listed:
         key = (str(h.get("item", "hardware")), str(h.get("size", "")))
@@ -183,6 +164,21 @@ def _fasteners(manifest: dict) -> list[tuple[str, int, str, str, str]]:
         summed[key][2].add(user)
     return [(item, qty, size, material, "for " + _names(sorted(users)))
             for (item, size), (qty, material, users) in summed.items()]
+
+
+def _tip_screws(manifest: dict) -> list[tuple[dict, str]]:
+    """Screws through the tip disk's bolt pattern and a nut for each, sized from its holes."""
+    tip = max(manifest["design_report"]["disks"], key=lambda d: d["index"], default=None)
+    mounts = tip.get("mount_holes", []) if tip else []
+    if not mounts:
+        return []
+    dia = mounts[0][2]
+    thread = thread_for_hole(dia) or f"screw for Ø{dia:g} mm holes"
+    who = "the tip disk's bolt pattern"
+    return [({"item": TIP_SCREW, "size": f"{thread} × ({tip['thickness_mm']:g} mm + nut)", "qty": len(mounts),
+              "material": "steel"}, who),
+            ({"item": "hex nut ISO 4032 or heat-set insert", "size": thread, "qty": len(mounts),
+              "material": "steel / brass"}, who)]
 
 
 def _names(names: list[str]) -> str:

@@ -118,13 +118,14 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
     b /= np.linalg.norm(b)
     posed = [pose_bent(p, st, kappa, b) for p in parts]
     bent = {n: (pts, tcol[n]) for n, pts in tendon_polylines(report, kappa).items()}
-    _, W, H = r.draw(posed, colours, BENT, folder / "bent.png", tubes=bent, aspect_range=(0.6, 1.0),
-                     texts=_legend([(n, tcol[n]) for n in bent],
-                                   f"{manifest['design']}: bent {settings.bend_deg:g}° (constant curvature, eq. 1)"))
+    texts = _legend([(n, tcol[n]) for n in bent],
+                    f"{manifest['design']}: bent {settings.bend_deg:g}° (constant curvature, eq. 1)")
+    texts.append((reachable_note(manifest), TEXT_COLOUR, (0.015, 0.02), 22, None))
+    _, W, H = r.draw(posed, colours, BENT, folder / "bent.png", tubes=bent, aspect_range=(0.6, 1.0), texts=texts)
     images["bent.png"] = {"width": W, "height": H}
     timings["bent_s"] = time.perf_counter() - t
 
-    result = {"backend": r.backend, "images": images, "timings_s": timings,
+    result = {"backend": r.backend, "images": images, "timings_s": timings, "bent_note": reachable_note(manifest),
               "palette": {k: list(v) for k, v in colours.items()},
               "tendon_colours": {k: list(v) for k, v in tcol.items()},
               "explode_mm": settings.explode_mm, "bend_deg": settings.bend_deg}
@@ -134,6 +135,20 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
                                            title=f"{manifest['design']}: exploded assembly")
         timings["svg_s"] = time.perf_counter() - t
     return result
+
+
+def reachable_note(manifest: dict) -> str:
+    """Whether the hardware can hold the bent pose: only if some drum winds a pair of tendons in
+    opposite senses, so that turning its worm hauls one in as it pays the other out."""
+    drums = [p for p in manifest["parts"] if p.get("role") == "tensioner_wheel" and len(p.get("tendons", [])) > 1]
+    bending = [p for p in drums if p.get("winding") == "opposite"]
+    if bending:
+        return (f"the worm of channel {bending[0]['channel']} bends the robot: its drum winds "
+                f"{' and '.join(bending[0]['tendons'])} in opposite senses")
+    if drums:
+        return (f"model only: the tensioner pre-tensions {' and '.join(drums[0]['tendons'])} together "
+                f"(tensioner.winding: same); it cannot bend the robot")
+    return "model only: no drum of this tensioner winds a pair of tendons, so nothing bends the robot"
 
 
 # --------------------------------------------------------------------------- in a child process

@@ -1,0 +1,73 @@
+"""Printability of each part as it lies in its file (the print orientation): for resin printed
+bottom-up (SLA), no cavity may be closed below and open above. Such a cup holds resin against
+the vat's film at every layer, the peel pulls on it, and uncured resin is trapped inside; the
+remedy is a vent through its floor or another orientation. No part may hold a closed void
+either (it cannot drain). Measured by slicing the STL layer by layer."""
+from __future__ import annotations
+
+import numpy as np
+
+from .base import Check
+from .parts import NOT_PRINTED, LoadedPart
+from .measure import to_manifold
+
+LAYER_MM = 0.5               # slicing step: finer than any cavity worth reporting
+CUP_MIN_AREA_MM2 = 1.0       # a closed-below hole smaller than this (under Ø1.1 mm) holds too little to matter
+
+
+def _area(contour: np.ndarray) -> float:
+    x, y = contour[:, 0], contour[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
+def cups(mesh) -> list[tuple[float, float, tuple[float, float]]]:
+    """(height Z, area mm², centroid) of every cavity closed below, where it first appears."""
+    import manifold3d as m3d
+    solid = to_manifold(mesh)
+    z_top = float(mesh.bounds[1, 2])
+    found = []
+    below = None
+    for z in np.arange(LAYER_MM / 2, z_top, LAYER_MM):
+        section = solid.slice(float(z))
+        if below is not None:
+            for contour in section.to_polygons():
+                a = _area(contour)
+                if a >= 0 or -a < CUP_MIN_AREA_MM2:
+                    continue            # outer boundaries wind counter-clockwise, holes clockwise
+                hole = m3d.CrossSection([contour[::-1]])
+                # open below if any of it lies over a hole or outside the part one layer down
+                if (hole - below).area() < 1e-3 * hole.area():
+                    c = contour.mean(axis=0)
+                    if not any(abs(f[0] - z) < 2 * LAYER_MM and np.hypot(*(np.subtract(f[2], c))) < 0.5
+                               for f in found):
+                        found.append((float(z), float(-a), (float(c[0]), float(c[1]))))
+        below = section
+    return found
+
+
+def printing_checks(parts: list[LoadedPart], technology: str) -> list[Check]:
+    """One check per printed part: no closed void; and, for resin, no cup."""
+    out = []
+    for p in parts:
+        if p.role in NOT_PRINTED or not p.mesh.is_watertight:
+            continue
+        where = {"part": p.name}
+        shells = p.mesh.split(only_watertight=False)
+        voids = [s for s in shells if s.volume < 0]
+        if len(voids):
+            out.append(Check("print.void", "error", False, f"{p.name}: holds {len(voids)} closed void(s) that "
+                             f"cannot drain: give each a drain hole", float(len(voids)), 0.0, where))
+        if technology != "SLA":
+            continue
+        found = cups(p.mesh)
+        if found:
+            z, a, c = max(found, key=lambda f: f[1])
+            msg = (f"{p.name}: {len(found)} cavit{'y' if len(found) == 1 else 'ies'} closed below in its print "
+                   f"orientation, the largest {a:.1f} mm² at Z = {z:.1f} mm (file X, Y = {c[0]:.1f}, {c[1]:.1f}): "
+                   f"it holds resin against the vat's film; vent its floor or turn the part")
+            out.append(Check("print.cup", "error", False, msg, a, CUP_MIN_AREA_MM2, where))
+        else:
+            out.append(Check("print.cup", "error", True, f"{p.name}: no cavity closed below in its print orientation "
+                             f"(sliced every {LAYER_MM:g} mm; holes under {CUP_MIN_AREA_MM2:g} mm² ignored)",
+                             0.0, CUP_MIN_AREA_MM2, where))
+    return out

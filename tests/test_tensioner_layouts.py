@@ -1,0 +1,179 @@
+"""The tensioner for any robot: random robots lay out or are refused the same way however the
+channels are listed and whichever way up the robot is drawn; odd channel counts and a drum
+winding tendons that leave the tip at different x build, with a housing in one piece."""
+from __future__ import annotations
+
+import multiprocessing as mp
+import tempfile
+import traceback
+
+import numpy as np
+import pytest
+import yaml
+
+from .conftest import PARAMS
+from .robots import random_robot, reordered, turned_over
+
+STABILITY_ROBOTS = 24
+STABILITY_SEED = 20261121
+TIME_LIMIT_S = 90          # one robot's layout in its own process; today's slowest takes ~3 s
+
+
+def _verdict(doc: dict):
+    """Laid out, refused (with the message) or crashed (with the traceback): in a spawned worker."""
+    try:
+        from hwgen.errors import InputError
+        from hwgen.model.plan import plan
+        from hwgen.pipeline import load
+        with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
+            f.write(yaml.safe_dump(doc))
+        try:
+            design = load(f.name).design
+        except InputError as e:
+            return ("input", f"{e.path}: {e.message}")
+        p = plan(design)
+        return ("laid out", None) if p.tensioner_layout is not None else ("refused", p.tensioner_error)
+    except Exception:
+        return ("crash", traceback.format_exc())
+
+
+@pytest.fixture(scope="module")
+def stability_run():
+    rng = np.random.default_rng(STABILITY_SEED)
+    robots = [random_robot(rng, f"random{i:02d}") for i in range(STABILITY_ROBOTS)]
+    variants = [(i, kind, doc) for i, r in enumerate(robots)
+                for kind, doc in (("as drawn", r), ("reordered", reordered(r)), ("turned over", turned_over(r)))]
+    with mp.get_context("spawn").Pool(2) as pool:
+        jobs = [(i, kind, pool.apply_async(_verdict, (doc,))) for i, kind, doc in variants]
+        out: dict[int, dict[str, tuple]] = {}
+        for i, kind, job in jobs:
+            try:
+                out.setdefault(i, {})[kind] = job.get(timeout=TIME_LIMIT_S)
+            except mp.TimeoutError:
+                out.setdefault(i, {})[kind] = ("timed out", None)
+    return robots, out
+
+
+def test_random_robots_never_crash_or_hang(stability_run):
+    _, out = stability_run
+    bad = {(i, k): v for i, r in out.items() for k, v in r.items() if v[0] in ("crash", "timed out")}
+    assert not bad, bad
+
+
+def test_a_refusal_does_not_depend_on_channel_order_or_which_way_up(stability_run):
+    robots, out = stability_run
+    for i, r in out.items():
+        assert r["reordered"][0] == r["as drawn"][0] == r["turned over"][0], (i, robots[i]["tendons"], r)
+    laid = sum(r["as drawn"][0] == "laid out" for r in out.values())
+    assert laid >= 0.9 * len(out), {i: r["as drawn"] for i, r in out.items()}
+
+
+def _prototype(**changes) -> dict:
+    doc = yaml.safe_load((PARAMS / "prototype.yaml").read_text())
+    doc.update(changes)
+    return doc
+
+
+def _five_channels() -> dict:
+    doc = _prototype(design="five-channels")
+    doc["tendons"].append({"name": "X", "channel": "X", "routing": {
+        "function": {"kind": "cosine", "axis": "x", "a": 18, "k": 1, "z0": 12}}})
+    doc["tensioner"]["channels"] = ["A", "C1", "C2", "H", "X"]
+    return doc
+
+
+def _one_channel() -> dict:
+    doc = _prototype(design="one-channel")
+    doc["tendons"] = [t for t in doc["tendons"] if t["name"] == "C1"]
+    doc["tensioner"]["channels"] = ["C1"]
+    doc["tensioner"]["actuating_channel"] = "C1"
+    return doc
+
+
+def _two_x_on_one_channel() -> dict:
+    doc = _prototype(design="two-x")
+    doc["tendons"] = [
+        {"name": "P1", "channel": "P", "routing": {"function": {"kind": "straight", "x0": -12, "z0": 22}}},
+        {"name": "P2", "channel": "P", "routing": {"function": {"kind": "straight", "x0": 15, "z0": -24}}},
+        {"name": "C1", "channel": "C1", "routing": {"function": {"kind": "cosine", "a": 25, "k": 1}}}]
+    doc["tensioner"]["channels"] = ["P", "C1"]
+    doc["tensioner"]["actuating_channel"] = "P"
+    return doc
+
+
+@pytest.fixture(scope="module", params=["five channels", "one channel", "two x on one channel"])
+def odd_build(request, tmp_path_factory):
+    from hwgen.pipeline import build, load
+    doc = {"five channels": _five_channels, "one channel": _one_channel,
+           "two x on one channel": _two_x_on_one_channel}[request.param]()
+    root = tmp_path_factory.mktemp("odd")
+    src = root / f"{doc['design']}.yaml"
+    src.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return doc, build(load(src), root / "out", post_build=False)
+
+
+def test_odd_tensioners_build_with_a_housing_in_one_piece(odd_build):
+    from hwgen.checks.measure import load_mesh
+    doc, res = odd_build
+    parts = res.manifest["parts"]
+    channels = set(doc["tensioner"]["channels"])
+    assert {p["channel"] for p in parts if p["role"] == "tensioner_worm"} == channels
+    (housing,) = [p for p in parts if p["role"] == "tensioner_housing"]
+    mesh = load_mesh(res.folder / housing["files"]["stl"]["path"])
+    assert mesh.is_watertight and mesh.body_count == 1
+    runs = {r["tendon"]: r for p in parts for r in p.get("tendon_runs", [])}
+    assert set(runs) == {t.name for t in res.plan.paths}
+    for t in res.plan.paths:            # each tendon leaves the tip where its routing puts it
+        assert runs[t.name]["start"][0] == pytest.approx(t.points[-1][0])
+        assert runs[t.name]["start"][2] == pytest.approx(t.points[-1][1])
+
+
+def test_two_tendons_of_different_x_wind_on_one_drum_in_their_own_grooves(odd_build):
+    doc, res = odd_build
+    if doc["design"] != "two-x":
+        pytest.skip("the two-x robot only")
+    (wheel,) = [p for p in res.manifest["parts"] if p["role"] == "tensioner_wheel" and p["channel"] == "P"]
+    assert sorted(wheel["tendons"]) == ["P1", "P2"]
+    zones = wheel["winding_zones_z_mm"]
+    assert len(zones) == 2 and zones[0][1] < zones[1][0]      # two grooves, apart
+    ends = sorted(r["end"][2] for r in wheel["tendon_runs"])
+    assert ends == pytest.approx([-24, 22])
+
+
+def test_refusal_names_the_tendon_what_it_hits_and_what_to_change(tmp_path):
+    """A tendon that leaves the tip in the strip's plane, where the strip's tip is clamped."""
+    from hwgen.model.plan import plan
+    from hwgen.pipeline import load
+    doc = _prototype(design="in-the-clamp")
+    doc["tendons"].append({"name": "Z", "channel": "Z", "routing": {
+        "function": {"kind": "straight", "x0": 10, "z0": 0.5}}})
+    doc["tensioner"]["channels"].append("Z")
+    f = tmp_path / "z.yaml"
+    f.write_text(yaml.safe_dump(doc))
+    p = plan(load(f).design)
+    assert p.tensioner_layout is None
+    assert "tendon Z" in p.tensioner_error and "clamp" in p.tensioner_error
+    assert "backbone.extra_tip" in p.tensioner_error
+    doc["backbone"]["extra_tip"] = 2          # the strip ends inside the tip disk: nothing to clamp
+    f.write_text(yaml.safe_dump(doc))
+    assert plan(load(f).design).tensioner_layout is not None
+
+
+def test_opposite_winding_puts_the_pair_on_either_side_of_its_drum(tmp_path):
+    """winding: opposite: one tendon meets the drum on the side facing the strip, the other on the
+    far side, so turning the worm hauls one in as it pays the other out."""
+    from hwgen.model.plan import plan
+    from hwgen.pipeline import load
+    doc = _prototype()
+    doc["tensioner"]["winding"] = {"A": "opposite"}
+    f = tmp_path / "opposite.yaml"
+    f.write_text(yaml.safe_dump(doc))
+    lay = plan(load(f).design).tensioner_layout
+    unit = lay.unit("A")
+    centre = (lay.turn @ [unit.center[0], unit.center[1], 0, 1])[0]
+    runs = {r.tendon: r for r in lay.runs if r.channel == "A"}
+    assert sorted(r.sense for r in runs.values()) == [-1, 1]
+    sides = {n: np.sign(r.end[0] - centre) for n, r in runs.items()}
+    assert sides["A1"] == -sides["A2"]
+    same = plan(load(PARAMS / "prototype.yaml").design).tensioner_layout
+    assert {r.sense for r in same.runs} == {1}
