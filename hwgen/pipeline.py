@@ -192,17 +192,19 @@ def stale_reason(folder: Path, loaded) -> str | None:
         m = json.loads(mpath.read_text())
     except (OSError, ValueError):
         return "manifest.json is unreadable"
-    if m.get("params_sha256") != loaded.sha256:
-        return "built from other parameters"
-    if m.get("hwgen_version") != __version__:
-        return f"built by hwgen {m.get('hwgen_version')}, this is {__version__}"
-    for p in m.get("parts", []):
-        for f in p.get("files", {}).values():
-            if not (folder / f["path"]).exists():
-                return f"{f['path']} is missing"
-    for f in m.get("files", {}).values():
-        if not (folder / f["path"]).exists():
-            return f"{f['path']} is missing"
+    try:
+        if m.get("params_sha256") != loaded.sha256:
+            return "built from other parameters"
+        if m.get("hwgen_version") != __version__:
+            return f"built by hwgen {m.get('hwgen_version')}, this is {__version__}"
+        files = [f["path"] for p in m["parts"] for f in p["files"].values()]
+        files += [f["path"] for f in m["files"].values()]
+        m["design_report"]["disks"]
+    except (AttributeError, KeyError, TypeError):
+        return "manifest.json is not one hwgen wrote"
+    for path in files:
+        if not isinstance(path, str) or not (folder / path).is_file():
+            return f"{path} is missing"
     return None
 
 

@@ -475,3 +475,26 @@ def test_a_file_that_never_ends_is_refused(tmp_path):
     assert escaped is None and code == 2 and "error: /dev/zero: <document>: larger than 1 MiB" in stderr
     code, _, stderr, escaped = run_cli("routing", str(tmp_path))
     assert escaped is None and code == 2 and "cannot read the file (Is a directory)" in stderr
+
+
+def test_a_manifest_edited_into_nonsense_is_rebuilt_not_a_crash(built, tmp_path, monkeypatch):
+    """`hwgen check` trusts the files; a manifest that is not one hwgen wrote means the outputs
+    are stale (they are rebuilt), never a traceback."""
+    import json
+
+    from hwgen import pipeline
+    from hwgen.pipeline import load, stale_reason
+
+    loaded = load(PARAMS / "prototype.yaml")
+    folder = tmp_path / "prototype"
+    folder.mkdir()
+    good = json.loads((built("prototype") / "manifest.json").read_text())
+    for broken in ({**good, "parts": 5}, {**good, "files": None}, {**good, "parts": [{"files": {"stl": {}}}]},
+                   {**good, "design_report": []}, [1, 2], "text"):
+        (folder / "manifest.json").write_text(json.dumps(broken))
+        assert stale_reason(folder, loaded) is not None, broken
+    rebuilt = []
+    monkeypatch.setattr(pipeline, "build", lambda *a, **k: rebuilt.append(1) or
+                        type("R", (), {"report": {"ok": True, "checks": []}})())
+    rep, _, why = pipeline.check(loaded, tmp_path)
+    assert rebuilt and why == "manifest.json is not one hwgen wrote"
