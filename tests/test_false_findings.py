@@ -74,8 +74,38 @@ def test_a_strip_hole_through_the_edge_is_called_a_notch(tmp_path):
     crossing = next(c for c in checks if c.id == "backbone.crossing")
     assert not crossing.passed
     assert "T crosses the backbone between stations 0 and 1" in crossing.message
-    assert "breaks through it: the strip is notched there, not drilled" in crossing.message
+    assert ("so near the strip's edge that its Ø1.40 hole (reaching x = 30.30 mm, the edge is at x = 30.00 mm) "
+            "breaks through it: the strip is notched there, not drilled") in crossing.message
     assert "no hole it passes" not in crossing.message
+
+
+def test_a_strip_hole_through_the_end_is_called_a_notch_at_the_end(tmp_path):
+    """Found building random robots: a tendon crossing in the slot of the tip disk, 2 mm before
+    the strip ends, whose hole opens the strip's end, was said to open its edge."""
+    import ezdxf
+
+    from hwgen.checks.clearances import backbone_checks
+    from hwgen.checks.eyelets import Eyelet, EyeletMap
+    from hwgen.checks.measure import Loop, area_centroid
+
+    x, y, r = 11.0, 270.0, 2.5
+    top = np.degrees(np.arcsin(2 / r))          # where the circle meets the strip's end, y = 272
+    notch = [(x + r * np.cos(t), y + r * np.sin(t)) for t in np.radians(np.linspace(top, -180 - top, 61))]
+    outline = np.array([(-30, -20), (30, -20), (30, 272), *notch, (-30, 272)], float)
+    loop = Loop(outline, *area_centroid(outline))
+    dxf = tmp_path / "t.dxf"
+    doc = ezdxf.new("R2010")
+    doc.layers.add("HOLES")
+    doc.modelspace().add_circle((x, y), r, dxfattribs={"layer": "HOLES"})
+    doc.saveas(dxf)
+    e = Eyelet(1, "disk_01", ("T",), np.array([x, 0.0]), 1.0, True, status="in_slot")
+    emap = EyeletMap(stations_y=np.array([0.0, 270.0]), eyelets=[e],
+                     positions={"T": np.array([[x, 5.0], [x, 0.0]])}, unmeasured={}, via_backbone={}, disks=[])
+    checks = backbone_checks(emap, dxf, loop, [], 0.15, 0.01, [], 0.59, np.array([0.0]), 270.0)
+    crossing = next(c for c in checks if c.id == "backbone.crossing")
+    assert not crossing.passed
+    assert ("so near the strip's end that its Ø5.00 hole (reaching y = 272.50 mm, the strip ends at y = 272.00 mm) "
+            "breaks through it: the strip is notched there") in crossing.message
 
 
 STEP = """ISO-10303-21;

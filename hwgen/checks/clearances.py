@@ -245,6 +245,18 @@ def crossings(emap: EyeletMap, half_height: float) -> list[tuple[str, float, flo
                                             {i for t, i in in_slot if t == name})]
 
 
+def _breaks_through(x: float, y: float, r: float, outline) -> str:
+    """Where a strip hole of radius ``r`` at (x, y) opens the strip's outline: its side or its end."""
+    (x0, y0), (x1, y1) = outline.points.min(axis=0), outline.points.max(axis=0)
+    if y + r >= y1 or y - r <= y0:
+        end = y1 if y + r >= y1 else y0
+        return (f"so near the strip's end that its Ø{2 * r:.2f} hole (reaching y = {y + r if end == y1 else y - r:.2f} "
+                f"mm, the strip ends at y = {end:.2f} mm) breaks through it")
+    edge = x1 if x >= 0 else x0
+    return (f"so near the strip's edge that its Ø{2 * r:.2f} hole (reaching x = {x + r if x >= 0 else x - r:.2f} mm, "
+            f"the edge is at x = {edge:.2f} mm) breaks through it")
+
+
 def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendon_d: float, tol: float,
                     findings: list[str], strip_t: float | None = None, angles_deg: np.ndarray | None = None,
                     length: float | None = None) -> list[Check]:
@@ -274,10 +286,9 @@ def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendo
         notched = (not in_stl and bb_outline is not None and abs(x) < half_h
                    and not inside(bb_outline.points, (x, y)))
         if notched:
-            reach = abs(x) + (dia[0] / 2 if dia else r_t)
-            msg = (f"{place}, so near the strip's edge that its hole (reaching |x| = {reach:.2f} mm, the edge is at "
-                   f"{half_h:.2f} mm) breaks through it: the strip is notched there, not drilled"
-                   + (" (and backbone_template.dxf has no hole it passes)" if not in_dxf else ""))
+            msg = (f"{place}, {_breaks_through(x, y, dia[0] / 2 if dia else r_t, bb_outline)}: the strip is "
+                   f"notched there, not drilled" + (" (and backbone_template.dxf has no hole it passes)"
+                                                    if not in_dxf else ""))
         elif missing:
             msg = f"{place} but {' and '.join(missing)} {'has' if len(missing) == 1 else 'have'} no hole it passes"
         else:
