@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 
+from ..model.fixtures import jig_layout
 from ..model.plan import Plan
 from . import Part
 
@@ -23,6 +24,20 @@ def _tensioner(plan: Plan) -> Iterator[Part]:
     yield from build_tensioner(plan)
 
 
+def _mount(plan: Plan) -> Iterator[Part]:
+    from .fixtures import build_mount
+    yield from build_mount(plan)
+
+
+def _jig(plan: Plan) -> Iterator[Part]:
+    from .fixtures import build_jig
+    yield from build_jig(plan)
+
+
+def _jig_count(plan: Plan) -> int:
+    return len(jig_layout(plan.design).pieces)
+
+
 def _tensioner_count(plan: Plan) -> int:
     lay = plan.require_tensioner_layout()
     return sum(3 + len(u.clamps) for u in lay.units) + 1
@@ -33,6 +48,8 @@ FAMILIES: list[tuple[str, Callable[[Plan], int], Callable[[Plan], Iterator[Part]
     ("disks", lambda p: len(p.disks), _disks),
     ("backbone", lambda p: 1, _backbone),
     ("tensioner", _tensioner_count, _tensioner),
+    ("base mount", lambda p: 2, _mount),
+    ("jig", _jig_count, _jig),
 ]
 
 
