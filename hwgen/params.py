@@ -46,7 +46,7 @@ class Backbone(_Model):
     density_g_cm3: Annotated[float, Field(gt=0.3, le=3.0, allow_inf_nan=False)] = Field(
         1.40, description="density of the strip's laminate, g/cm³")
     modulus_gpa: Finite = Field(50.0, gt=1, le=400,
-                                description="E: the laminate's modulus in bending (the strip's flexible direction), GPa")
+                                description="E: the laminate's modulus in bending (thin direction), GPa")
     allowable_stress_mpa: Finite = Field(167.0, gt=0, le=3000,
                                          description="largest bending stress allowed in the strip, MPa")
 
@@ -70,7 +70,8 @@ class Hub(_Model):
     length: Length | None = Field(None, description="length along the backbone over which the slot holds the strip, "
                                                     "disk included, mm (default: from max_tilt_deg)")
     wall: Length = Field(1.2, description="wall of the hub around the slot, mm")
-    glue_port_diameter: Length = Field(1.5, description="hole through the hub's wall into the slot, for the adhesive, mm")
+    glue_port_diameter: Length = Field(1.5, description="hole through the hub's wall into the slot for the adhesive, "
+                                                        "mm")
 
 
 class Anchors(_Model):

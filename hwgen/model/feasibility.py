@@ -51,7 +51,8 @@ def _hub_problems(d: Design) -> list[tuple[str, str]]:
     for i in range(n):
         role = "base" if i == 0 else "tip" if i == n - 1 else "inner"
         side, ext = hub_side(role), hub_extension(d, thick[i])
-        reach.append((st[i] - thick[i] / 2 - (ext if side < 0 else 0.0), st[i] + thick[i] / 2 + (ext if side > 0 else 0.0)))
+        reach.append((st[i] - thick[i] / 2 - (ext if side < 0 else 0.0),
+                      st[i] + thick[i] / 2 + (ext if side > 0 else 0.0)))
     field = "disks.hub.length" if d.disks.hub.length is not None else "disks.hub.max_tilt_deg"
     for i in range(n - 1):
         gap = reach[i + 1][0] - reach[i][1]
