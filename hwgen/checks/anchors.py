@@ -20,7 +20,7 @@ from .base import Check
 from .eyelets import DiskSections
 from .measure import area_centroid, chain_loops, inside, inside_many, loop_gap, points_to_polyline, section_robot
 
-PLANE_STEP_MM = 0.05        # depth between cuts
+PLANE_STEP_MM = 0.1         # depth between cuts
 INSCRIBED_STEPS = 40        # grid across a loop for its largest inscribed circle, per zoom
 INSCRIBED_ZOOMS = 4         # each zoom refines ±4 cells around the best point so far
 SAME_SHAPE = 1e-3           # a loop whose area is within this share of the last one's is the same hole

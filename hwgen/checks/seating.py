@@ -1,7 +1,7 @@
 """How each disk sits on the strip, measured from its STL: the tilt and play its slot allows, and
 whether its hub keeps clear of every tendon.
 
-Tilt and play. The disk is cut by planes across the strip (x = const, 1.5 mm apart over the
+Tilt and play. The disk is cut by planes across the strip (x = const, 5 mm apart over the
 strip's height) and along its mid-plane (z = const). On each cut, the material nearest the
 strip's plane above and below it (or beside its edges) is found line by line along the backbone;
 the strip, a flat plate of the measured thickness and height, may take any position and angle
@@ -28,8 +28,9 @@ from .base import Check
 from .eyelets import DiskSections, EyeletMap
 from .measure import chain_loops, inside_many, points_to_polyline, section_moments, section_robot
 
-X_STEP_MM = 1.5             # cuts across the strip for the pitch and roll
+X_STEP_MM = 5.0             # cuts across the strip for the pitch and roll (the slot and hub are prisms along x)
 Y_STEP_MM = 0.02            # lines along the backbone on each cut
+EDGE_MM = 0.05              # the outermost cuts this far inside the strip's edges
 ENGAGED_MM = 0.25           # the slot engages the strip where each face is within this of it
 MAX_ANGLE_DEG = 30.0        # tilts are sought up to this
 ANGLE_TOL_DEG = 1e-4        # and found to this
@@ -123,7 +124,8 @@ def measure_fit(disk: DiskSections, mesh, placement, strip_h: float, strip_t: fl
     corners = np.array([[x, y, z] for x in mesh.bounds[:, 0] for y in mesh.bounds[:, 1] for z in mesh.bounds[:, 2]])
     ys = corners @ P[:3, :3].T[:, 1] + P[1, 3]
     grid = np.arange(ys.min() - Y_STEP_MM, ys.max() + Y_STEP_MM, Y_STEP_MM)
-    xs = np.arange(-strip_h / 2 + X_STEP_MM / 2, strip_h / 2, X_STEP_MM)
+    # across the whole height, its edges included (less EDGE_MM): the roll is the faces' over the full width
+    xs = np.linspace(-strip_h / 2 + EDGE_MM, strip_h / 2 - EDGE_MM, max(3, math.ceil(strip_h / X_STEP_MM) + 1))
     hi = np.full(len(grid), np.inf)
     lo = np.full(len(grid), -np.inf)
     hi_x, lo_x = np.full(len(xs), np.inf), np.full(len(xs), -np.inf)
@@ -182,8 +184,8 @@ def tilt_checks(fits: list[SlotFit], max_tilt_deg: float, radius: dict[int, floa
 def hub_checks(emap: EyeletMap, fits: list[SlotFit], meshes: dict, placements: dict, tendon_d: float,
                angles_deg: np.ndarray, length: float) -> list[Check]:
     """Each disk's hub against every tendon's line through that disk over the bending sweep."""
-    n = max(2, int(round((angles_deg[-1] - angles_deg[0]) / HUB_SWEEP_STEP_DEG)) + 1)
-    angles = np.linspace(angles_deg[0], angles_deg[-1], n)      # the sweep's ends and every few degrees
+    steps = max(1, int(round((angles_deg[-1] - angles_deg[0]) / HUB_SWEEP_STEP_DEG)))
+    angles = np.linspace(angles_deg[0], angles_deg[-1], steps + 1)   # the sweep's ends and every few degrees
     kappa = kin.kappas_for_angles(angles, length)
     dirs = {n: kin.segment_directions_local(emap.stations_y, xz, kappa) for n, xz in emap.positions.items()}
     by_part = {d.part: d for d in emap.disks}
@@ -197,25 +199,30 @@ def hub_checks(emap: EyeletMap, fits: list[SlotFit], meshes: dict, placements: d
             if b - a <= 2 * FACE_OFFSET_MM:
                 continue
             ys = np.arange(a + FACE_OFFSET_MM, b - FACE_OFFSET_MM + 1e-9, HUB_PLANE_STEP_MM)
+            lines = []                                   # (tendon, direction (K, 3)) leaving on this side
+            for name, (into, outof) in dirs.items():
+                u = outof[:, disk.station] if side > 0 else -into[:, disk.station]
+                if not np.isnan(u).any():
+                    lines.append((name, u))
+            if not lines:
+                continue
+            names = [n for n, _ in lines for _ in range(len(angles))]
+            U = np.vstack([u for _, u in lines])                          # (T·K, 3)
+            X0 = np.vstack([np.tile(emap.positions[n][disk.station], (len(angles), 1)) for n, _ in lines])
             for y in ys:
                 segs = section_robot(mesh, P, 1, float(y))
                 loops = chain_loops(segs[:, :, [0, 2]]) if len(segs) else []
                 if not loops:
                     continue
                 planes += 1
-                for name, (into, outof) in dirs.items():
-                    u = outof[:, disk.station] if side > 0 else -into[:, disk.station]
-                    if np.isnan(u).any():
-                        continue
-                    x0, z0 = emap.positions[name][disk.station]
-                    t = (y - disk.y_mid) / u[:, 1]
-                    pts = np.column_stack([x0 + u[:, 0] * t, z0 + u[:, 2] * t])
-                    d = np.min([points_to_polyline(pts, lp) for lp in loops], axis=0)
-                    solid = np.sum([inside_many(lp, pts) for lp in loops], axis=0) % 2 == 1
-                    gap = np.where(solid, -d, d) * np.abs(u[:, 1])
-                    k = int(np.argmin(gap))
-                    if gap[k] < worst[0]:
-                        worst = (float(gap[k]), name, float(angles[k]))
+                t = (y - disk.y_mid) / U[:, 1]
+                pts = X0 + U[:, [0, 2]] * t[:, None]
+                d = np.min([points_to_polyline(pts, lp) for lp in loops], axis=0)
+                solid = np.sum([inside_many(lp, pts) for lp in loops], axis=0) % 2 == 1
+                gap = np.where(solid, -d, d) * np.abs(U[:, 1])
+                k = int(np.argmin(gap))
+                if gap[k] < worst[0]:
+                    worst = (float(gap[k]), names[k], float(angles[k % len(angles)]))
         where = {"part": f.part, "station": f.station}
         if planes == 0:
             out.append(Check("hub.tendon_clearance", "info", True, f"{f.part}: no hub beyond its plate", None,
