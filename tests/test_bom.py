@@ -28,7 +28,7 @@ def proto(built):
 
 def test_counts_match_the_manifest(proto):
     _, m, rows, _ = proto
-    parts = [r for r in rows if r["family"] not in ("tendon", "hardware")]
+    parts = [r for r in rows if r["family"] not in ("tendon", "hardware", "consumable")]
     assert sorted(r["part"] for r in parts) == sorted(p["name"] for p in m["parts"])
     per_family = Counter()
     for r in parts:
@@ -112,7 +112,8 @@ def test_allowances_are_parameters(proto, tmp_path):
 def test_fasteners_from_the_tip_mount_and_part_hardware(proto, tmp_path):
     folder, _, rows, d = proto
     n = len(d.disks.tip_mount.positions)
-    screws = [r for r in rows if r["family"] == "hardware" and r["part"] == bom.TIP_SCREW]
+    screws = [r for r in rows if r["family"] == "hardware" and r["part"] == bom.TIP_SCREW
+              and "base_mount" not in r["notes"]]        # the base mount's screws are other sizes
     assert len(screws) == 1 and int(screws[0]["qty"]) >= n and screws[0]["size"].startswith("M3")
     m = _copy(folder, tmp_path)
     for p, k in zip(m["parts"][:3], (1, 2, 3)):
@@ -149,8 +150,10 @@ def test_tensioner_hardware_matches_its_parts(proto, tmp_path):
     assert hw[("button head screw ISO 7380", "M2 × 6")] == clamps
     assert hw[("heat-set insert", "M2 × 4")] == clamps
     assert hw[("heat-set insert", "M3 × 5.7")] == 2 * caps + n_tip + 2      # caps, tip screws, strip set screws
-    assert not any("nut" in item for item, _ in hw)   # the housing's inserts take the tip screws
-    (size,) = [size for item, size in hw if item == bom.TIP_SCREW]
+    # the housing's inserts take the tip screws: the only nuts are the base mount's
+    assert all("base_mount" in r["notes"] for r in rows if r["family"] == "hardware" and "nut" in r["part"])
+    (size,) = [r["size"] for r in rows if r["family"] == "hardware" and r["part"] == bom.TIP_SCREW
+               and "base_mount" not in r["notes"]]
     length = float(size.split("×")[1])    # through the tip disk, stopping inside the 5.7 mm insert
     assert d.disks.end_thickness < length <= d.disks.end_thickness + 5.7 - 0.5
 
