@@ -217,11 +217,13 @@ def _fasteners(manifest: dict) -> list[tuple[str, int, str, str, str]]:
     for h, user in listed:
         key = (str(h.get("item", "hardware")), str(h.get("size", "")))
         if key not in summed:
-            summed[key] = [0, str(h.get("material", "")), set()]
+            summed[key] = [0, str(h.get("material", "")), set(), set()]
         summed[key][0] += int(h.get("qty", 1))
-        summed[key][2].add(f"{user} ({h['notes']})" if h.get("notes") else user)
-    return [(item, qty, size, material, "for " + _names(sorted(users)))
-            for (item, size), (qty, material, users) in summed.items()]
+        summed[key][2].add(user)
+        if h.get("notes"):
+            summed[key][3].add(str(h["notes"]))
+    return [(item, qty, size, material, "; ".join(["for " + _names(sorted(users)), *sorted(notes)]))
+            for (item, size), (qty, material, users, notes) in summed.items()]
 
 
 def _names(names: list[str]) -> str:
