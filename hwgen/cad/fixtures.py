@@ -91,10 +91,20 @@ def mount_solids(lay: MountLayout) -> tuple[cq.Solid, cq.Solid]:
     return lower, _one(upper.cut(*tools))
 
 
-def _to_file(solid: cq.Solid, shift) -> tuple[cq.Solid, np.ndarray]:
-    """Translate a robot-frame solid into its file; the placement moves it back."""
+# a quarter turn about Z: file (X, Y) = robot (y, -x), so a part long along the backbone lies along
+# the file's X (the printer's long axis; slicers place a part as its file has it)
+ALONG_X = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _to_file(solid: cq.Solid, shift, along_x: bool = False) -> tuple[cq.Solid, np.ndarray]:
+    """Move a robot-frame solid into its file (translated by -shift, and turned a quarter about Z
+    when ``along_x``); the placement moves it back."""
     s = np.asarray(shift, float)
-    return solid.translate(cq.Vector(*(-s))), placement(np.eye(3), s)
+    moved = solid.translate(cq.Vector(*(-s)))
+    if along_x:
+        moved = moved.rotate(cq.Vector(0, 0, 0), cq.Vector(0, 0, 1), -90)
+        return moved, placement(ALONG_X, s)
+    return moved, placement(np.eye(3), s)
 
 
 def build_mount(plan: Plan) -> Iterator[Part]:
@@ -170,7 +180,7 @@ def build_jig(plan: Plan) -> Iterator[Part]:
     lay = jig_layout(plan.design)
     holds = [s.name for s in plan.disks] + [plan.backbone.name]
     for k, pc in enumerate(lay.pieces):
-        solid, place = _to_file(jig_solid(lay, k), (0.0, pc.y0, lay.z_floor_bottom))
+        solid, place = _to_file(jig_solid(lay, k), (0.0, pc.y0, lay.z_floor_bottom), along_x=True)
         yield Part(f"jig_{k + 1}", "jig", solid, place, JIG_COLOR,
                    meta={"fixture": True, "holds": holds, "piece": k + 1, "pieces": len(lay.pieces),
                          "station_tolerance_mm": plan.design.jig.station_tolerance_mm})

@@ -88,8 +88,7 @@ def loads(parts, manifest: dict, length: float):
 
 def _case(r: sag.SagResult) -> dict:
     return {"tip_sag_mm": r.tip_sag, "tip_angle_deg": -r.tip_angle_deg, "tip_y_mm": r.tip_y,
-            "base_moment_nmm": abs(r.base_moment), "base_stress_mpa": r.base_stress,
-            "max_stress_mpa": r.max_stress, "s_max_stress_mm": r.s_max_stress,
+            "base_moment_nmm": abs(r.base_moment), "max_stress_mpa": r.max_stress, "s_max_stress_mm": r.s_max_stress,
             "carried_weight_n": r.total_weight,
             "linear": {"tip_sag_mm": r.lin_tip_sag, "tip_angle_deg": -math.degrees(r.lin_tip_angle),
                        "base_moment_nmm": abs(r.lin_base_moment)}}
