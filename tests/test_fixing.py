@@ -106,6 +106,22 @@ def test_a_shortened_hub_fails_the_tilt_check_with_its_name(faulty):
     assert "more than the 0.5° allowed" in bad[0]["message"]
 
 
+def test_each_hub_has_a_glue_port_into_the_slot(built):
+    """Cut across the backbone through the port: the hub's top wall is open over the port, closed beside it."""
+    folder = built("prototype")
+    d = load(PARAMS / "prototype.yaml").design
+    parts = {p["name"]: p for p in _manifest(folder)["parts"]}
+    for spec in make_plan(d).disks:
+        x, off, dia = spec.hub.port
+        y = spec.y + spec.hub.side * (spec.thickness / 2 + off)
+        p = parts[spec.name]
+        segs = section_robot(load_mesh(folder / p["files"]["stl"]["path"]), p["placement"], 1, y)
+        z = spec.slot_height / 2 + spec.hub.wall / 2                   # in the top wall
+        pts = np.array([[x, z], [x + dia, z]])
+        solid = np.sum([inside_many(lp, pts) for lp in chain_loops(segs[:, :, [0, 2]])], axis=0) % 2 == 1
+        assert list(solid) == [False, True], spec.name
+
+
 def test_hubs_clear_every_tendon_and_a_hub_without_windows_does_not(built, faulty):
     """C1 and C2 cross the strip at disk 6 (x = 0), H at x = -25: the hub is cut away there."""
     rep = _report(built("prototype"))
