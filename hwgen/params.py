@@ -66,6 +66,10 @@ class Backbone(_Model):
     extra_tip: NonNegLength = Field(0.0, description="strip length beyond the tip disk for the tensioner clamp, mm")
     density_g_cm3: Annotated[float, Field(gt=0.3, le=3.0, allow_inf_nan=False)] = Field(
         1.40, description="density of the strip's laminate, g/cm³")
+    modulus_gpa: Finite = Field(50.0, gt=1, le=400,
+                                description="E: the laminate's modulus in bending (thin direction), GPa")
+    allowable_stress_mpa: Finite = Field(167.0, gt=0, le=3000,
+                                         description="largest bending stress allowed in the strip, MPa")
 
 
 class Eyelets(_Model):
@@ -78,11 +82,25 @@ class Eyelets(_Model):
     sweep_deg: Angle = Field(90.0, description="bending sweep ±deg over which the worst tendon angle is taken")
 
 
-class TieOff(_Model):
-    """Knot pockets on the outer face of the base disk."""
+class Hub(_Model):
+    """The hub around each disk's slot: it holds the disk square to the strip."""
 
-    pocket_diameter: Length = Field(3.0, description="diameter of the recess a knot sits in, mm")
-    pocket_depth: Length = Field(1.5, description="depth of the recess from the base disk's outer face, mm")
+    max_tilt_deg: Finite = Field(0.5, gt=0, le=10,
+                                 description="largest tilt of a disk on the strip about x (pitch along the backbone) "
+                                             "the slot's clearance may allow; sizes the hub and limits the check, deg")
+    length: Length | None = Field(None, description="length along the backbone over which the slot holds the strip, "
+                                                    "disk included, mm (default: from max_tilt_deg)")
+    wall: Length = Field(1.2, description="wall of the hub around the slot, mm")
+    glue_port_diameter: Length = Field(1.5, description="hole through the hub's wall into the slot for the adhesive, "
+                                                        "mm")
+
+
+class Anchors(_Model):
+    """Where the tendons end at the base disk: a seat per tendon in a plate on its outer face."""
+
+    plate: Length = Field(1.2, description="thickness of the seat plate on the base disk's outer face, mm")
+    adhesive: str = Field("thin cyanoacrylate (low viscosity, wicks into the slot)",
+                          description="what fixes each disk to the strip through its glue port")
 
 
 class TipMount(_Model):
@@ -105,7 +123,8 @@ class Disks(_Model):
     outer_diameter: Length = Field(description="outer diameter, mm")
     slot_clearance: NonNegLength = Field(description="clearance per side between strip and slot, mm")
     eyelets: Eyelets = Field(default_factory=Eyelets)
-    tie_off: TieOff = Field(default_factory=TieOff)
+    hub: Hub = Field(default_factory=Hub)
+    anchors: Anchors = Field(default_factory=Anchors)
     tip_mount: TipMount = Field(default_factory=TipMount)
 
     @model_validator(mode="after")
@@ -154,12 +173,32 @@ class Tendon(_Model):
     routing: Routing
     budget_mm: NonNegLength | None = Field(
         None, description="allowed length change over the sweep, mm (default: 0.2 unless on the actuating channel)")
+    termination: Termination | None = Field(
+        None, description="how this tendon ends at the base disk (default: tendon_material.termination)")
+
+
+class Termination(_Model):
+    """How a tendon ends at the base disk: a knot, or a crimp sleeve squeezed onto it."""
+
+    kind: Literal["knot", "crimp"] = Field("knot", description="knot tied in the line, or a crimp sleeve")
+    diameter: Length = Field(1.5, description="knot: its size across; crimp: the sleeve's outer diameter after "
+                                              "crimping, mm")
+    length: Length | None = Field(None, description="crimp: the sleeve's length, mm")
+    name: str | None = Field(None, description="crimp: what to buy (maker, part number)")
+
+    @model_validator(mode="after")
+    def _crimp_has_size(self):
+        if self.kind == "crimp" and self.length is None:
+            raise ValueError("a crimp sleeve needs its 'length'")
+        return self
 
 
 class TendonMaterial(_Model):
     name: str = Field(description="what the tendon is")
     diameter: Length = Field(description="d: tendon diameter, mm")
     break_load: Length = Field(description="break load, N")
+    termination: Termination = Field(default_factory=Termination,
+                                     description="how every tendon ends at the base disk (a tendon may override it)")
 
 
 class Process(_Model):
@@ -221,6 +260,29 @@ class Tensioner(_Model):
                                              "spool, deg (the tip eyelet is sized for it)")
 
 
+class BaseMount(_Model):
+    """The printed clamp that holds the strip's base length; the base disk bolts to it, it bolts to a table."""
+
+    bolt_pattern: Literal["M6_25mm", "quarter20_1in"] = Field(
+        "M6_25mm", description="table holes: M6 on a 25 mm grid (metric breadboard) or 1/4-20 on a 1 in grid")
+    disk_screws: tuple[tuple[Coord, Coord], ...] = Field(
+        ((-22.0, 8.0), (22.0, 8.0), (-22.0, -8.0), (22.0, -8.0)),
+        description="(x, z) of the screws that fasten the base disk to the mount, mm")
+    screw_hole: Length = Field(3.4, description="clearance hole for those screws and the jaw screws (M3), mm")
+    table_clearance: Length = Field(4.0, description="between the base disk's rim and the table, mm")
+    max_tip_share: Finite = Field(0.01, gt=0, le=1,
+                                  description="largest share of the own-weight tip sag the mount's give may add")
+
+
+class Jig(_Model):
+    """The assembly jig: holds every disk square at its station while the adhesive cures."""
+
+    clearance: NonNegLength = Field(0.05, description="per side, between a disk and its slot in the jig, mm")
+    wall: Length = Field(8.0, description="thickness of the jig's comb walls, mm")
+    floor: Length = Field(6.0, description="thickness of the jig's floor, mm")
+    station_tolerance_mm: Length = Field(0.15, description="how far from its station the jig may set a disk, mm")
+
+
 class CheckSettings(_Model):
     """How `hwgen check` sweeps the bending angle and what it tolerates."""
 
@@ -231,6 +293,8 @@ class CheckSettings(_Model):
         1.0, description="step of the bending sweep, deg")
     position_tol_mm: Length = Field(0.01, description="largest eyelet offset from design intent, mm")
     interference_tol_mm3: Length = Field(0.01, description="largest intersection volume of two parts, mm³")
+    overstress: Literal["error", "warning"] = Field(
+        "error", description="what a strip stress over backbone.allowable_stress_mpa in the own-weight state is")
 
 
 class Render(_Model):
@@ -258,6 +322,8 @@ class Design(_Model):
     process: Process
     tensioner: Tensioner
     tendons: tuple[Tendon, ...] = Field(min_length=1, max_length=MAX_TENDONS)
+    base_mount: BaseMount = Field(default_factory=BaseMount, description="the clamp the robot is held by")
+    jig: Jig = Field(default_factory=Jig, description="the assembly jig")
     check: CheckSettings = Field(default_factory=CheckSettings, description="validation sweep and tolerances")
     render: Render = Field(default_factory=Render, description="pictures and drawing")
     bom: Bom = Field(default_factory=Bom, description="bill of materials: tendon cut allowances")
@@ -392,8 +458,8 @@ def _check_design(d: Design, file: Path) -> None:
                          f"{d.disks.outer_diameter} mm does not enclose the backbone slot ({2 * half_slot:g} mm)")
     if d.disks.eyelets.edge_size >= d.disks.thickness / 2:
         raise InputError(file, "disks.eyelets.edge_size", "must be less than half the disk thickness")
-    if d.disks.tie_off.pocket_depth >= d.disks.end_thickness / 2:
-        raise InputError(file, "disks.tie_off.pocket_depth", "must be less than half the end disk thickness")
+    if d.disks.anchors.plate >= d.disks.end_thickness / 2:
+        raise InputError(file, "disks.anchors.plate", "must be less than half the end disk thickness")
     sweep, checked = d.disks.eyelets.sweep_deg, d.check.max_angle_deg
     if checked is not None and checked > sweep:
         raise InputError(file, "check.max_angle_deg",

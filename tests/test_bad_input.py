@@ -22,7 +22,7 @@ def _edit(text: str, old: str, new: str) -> str:
 CASES = {
     "yaml-syntax": (_edit(PROTO, "  height: 60 ", "  height: [60 "), "<document>", "YAML syntax"),
     "duplicate-key": (_edit(PROTO, "  height: 60 ", "  height: 60\n  height: 61 "), "backbone.height", "duplicate key"),
-    "unknown-key": (_edit(PROTO, "  slot_clearance: 0.2 ", "  slot_clearance: 0.2\n  colour: red "),
+    "unknown-key": (_edit(PROTO, "  slot_clearance: 0.05 ", "  slot_clearance: 0.05\n  colour: red "),
                     "disks.colour", "unknown key"),
     "wrong-type": (_edit(PROTO, "  height: 60 ", "  height: sixty "), "backbone.height", "valid number"),
     "non-positive": (_edit(PROTO, "  thickness: 3.0 ", "  thickness: 0 "), "disks.thickness", "greater than 0"),
@@ -40,6 +40,14 @@ CASES = {
     "unsafe-tendon-name": (_edit(PROTO, "  - name: H ", "  - name: 'H/1' "), "tendons[3].name", "safe file name"),
     "spacing-mismatch": (_edit(PROTO, "  spacing: 22.5 ", "  spacing: 20 "), "disks.spacing", "backbone.length"),
     "not-a-mapping": ("- just\n- a list\n", "<document>", "mapping"),
+    # a knot smaller than the smallest seat the process prints pulls through it
+    "termination-too-small": (_edit(PROTO, "    diameter: 1.5 ", "    diameter: 0.6 "),
+                              "tendon_material.termination.diameter", "pulls through the smallest seat"),
+    # 0.2 mm of slot clearance needs a 43 mm hub for 0.5°: it runs into the next disk
+    "hub-into-next-disk": (_edit(PROTO, "  slot_clearance: 0.05 ", "  slot_clearance: 0.2 "),
+                           "disks.hub.max_tilt_deg", "leave -21.90 mm between them"),
+    "crimp-without-length": (_edit(PROTO, "    kind: knot", "    kind: crimp"),
+                             "tendon_material.termination", "needs its 'length'"),
     # each field is fine, but C1 and H would have to wind on one drum in the same plane
     "tensioner-cannot-be-laid-out": (_edit(_edit(PROTO, "    channel: H", "    channel: C1"),
                                            "channels: [A, C1, C2, H]", "channels: [A, C1, C2]"),

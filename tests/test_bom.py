@@ -28,7 +28,7 @@ def proto(built):
 
 def test_counts_match_the_manifest(proto):
     _, m, rows, _ = proto
-    parts = [r for r in rows if r["family"] not in ("tendon", "hardware")]
+    parts = [r for r in rows if r["family"] not in ("tendon", "hardware", "consumable")]
     assert sorted(r["part"] for r in parts) == sorted(p["name"] for p in m["parts"])
     per_family = Counter()
     for r in parts:
@@ -112,7 +112,8 @@ def test_allowances_are_parameters(proto, tmp_path):
 def test_fasteners_from_the_tip_mount_and_part_hardware(proto, tmp_path):
     folder, _, rows, d = proto
     n = len(d.disks.tip_mount.positions)
-    screws = [r for r in rows if r["family"] == "hardware" and r["part"] == bom.TIP_SCREW]
+    screws = [r for r in rows if r["family"] == "hardware" and r["part"] == bom.TIP_SCREW
+              and "base_mount" not in r["notes"]]        # the base mount's screws are other sizes
     assert len(screws) == 1 and int(screws[0]["qty"]) >= n and screws[0]["size"].startswith("M3")
     m = _copy(folder, tmp_path)
     for p, k in zip(m["parts"][:3], (1, 2, 3)):
@@ -146,14 +147,24 @@ def test_tensioner_hardware_matches_its_parts(proto, tmp_path):
     dowels = sum(q for (item, _), q in hw.items() if item.startswith("dowel pin"))
     assert dowels == worms + 2 * wheels
     n_tip = len(d.disks.tip_mount.positions)
-    (tip_size,) = [size for item, size in hw if item == bom.TIP_SCREW]
-    assert hw[(bom.TIP_SCREW, tip_size)] == n_tip
+    # the bill sums what the parts list; the tensioner's own lines follow from its parts
+    listed: dict[tuple[str, str], int] = {}
+    tens: dict[tuple[str, str], int] = {}
+    for p in m["parts"]:
+        for h in p.get("hardware", []):
+            k = (h["item"], h["size"])
+            listed[k] = listed.get(k, 0) + h["qty"]
+            if p["role"].startswith("tensioner"):
+                tens[k] = tens.get(k, 0) + h["qty"]
+    assert all(hw[k] == q for k, q in listed.items())
+    (tip_size,) = [size for (item, size), q in tens.items() if item == bom.TIP_SCREW]
+    assert tens[(bom.TIP_SCREW, tip_size)] == n_tip
     length = float(tip_size.split("×")[1])     # through the tip disk, ending in the nut inside the base bar
     assert d.disks.end_thickness < length <= d.disks.end_thickness + 5.0
-    m2 = [(item, size) for item, size in hw if item == "button head screw ISO 7380"]
-    assert sum(hw[k] for k in m2) == clamps and all(size.startswith("M2") for _, size in m2)
-    assert hw[("hex nut ISO 4032", "M2")] == clamps
-    assert hw[("hex nut ISO 4032", "M3")] == n_tip + 2                 # tip screws, strip set screws
+    m2 = [k for k in tens if k[0] == "button head screw ISO 7380"]
+    assert sum(tens[k] for k in m2) == clamps and all(size.startswith("M2") for _, size in m2)
+    assert tens[("hex nut ISO 4032", "M2")] == clamps
+    assert tens[("hex nut ISO 4032", "M3")] == n_tip + 2                 # tip screws, strip set screws
     assert not any("insert" in item for item, _ in hw)
 
     # without the parts' lists, the tip screws are listed from the bolt pattern, with nuts

@@ -197,11 +197,15 @@ def test_overlapping_parts_named_with_volume(built, tmp_path):
     d1["placement"][1][3] += 21.0                   # 1.5 mm into disk_02
     (folder / "manifest.json").write_text(json.dumps(m))
     rep = _check(folder)
-    bad = _failed(rep, "part.interference")
-    assert len(bad) == 1 and set(bad[0]["where"]["parts"]) == {"disk_01", "disk_02"}
-    assert "disk_01 and disk_02 interfere" in bad[0]["message"]
-    # two disks overlapping by 1.5 mm of their Ø72 faces, less the slot and holes
-    assert 1.5 * np.pi * 36 ** 2 * 0.9 < bad[0]["measured"] < 1.5 * np.pi * 36 ** 2
+    bad = {tuple(sorted(c["where"]["parts"])): c for c in _failed(rep, "part.interference")}
+    # it runs into disk_02, and out of its slot in the jig into the jig's comb
+    assert set(bad) == {("disk_01", "disk_02"), ("disk_01", "jig_1")}
+    c = bad[("disk_01", "disk_02")]
+    assert "disk_01 and disk_02 interfere" in c["message"]
+    # two disks overlapping by 1.5 mm of their Ø72 faces, less the slot and holes; and disk_01's
+    # 8.5 mm hub (151.6 mm² of ring) in disk_02 and its hub
+    hub = 8.5 * (62.5 * 3.09 - 60.1 * 0.69)
+    assert 1.5 * np.pi * 36 ** 2 * 0.9 < c["measured"] < 1.5 * np.pi * 36 ** 2 + hub
     assert any(c["where"]["part"] == "disk_01" for c in _failed(rep, "disk.station"))
 
 
@@ -281,7 +285,9 @@ def test_broken_mesh_and_build_volume(built, tmp_path):
     rep = run_checks(built("prototype"), m, make_plan(small))
     bad = _failed(rep, "part.build_volume")
     assert {f"disk_{i:02d}" for i in range(13)} <= {c["where"]["part"] for c in bad}
-    assert "disk_00: 72.0 × 72.0 × 6.0 mm does not fit the build volume 70 × 70 × 50 mm" in [c["message"] for c in bad]
+    # the base disk is 6 mm thick, its hub stands 5.5 mm on it
+    assert ("disk_00: 72.0 × 72.0 × 11.5 mm does not fit the build volume 70 × 70 × 50 mm"
+            in [c["message"] for c in bad])
 
 
 @pytest.fixture(scope="module")

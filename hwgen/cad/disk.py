@@ -1,5 +1,11 @@
-"""Tendon-support disks: one 2D face (outline, slot, holes normal to the disk) extruded once,
-then every slanted eyelet, rim chamfer and knot pocket removed in a single cut."""
+"""Tendon-support disks: one 2D face (outline, slot, holes normal to the disk) extruded once, the
+hub (one face: the sleeve around the slot, with its tendon windows) extruded and fused to it,
+then every slanted eyelet, rim chamfer, glue port and (base disk) seat removed in a single cut.
+
+Every disk file has its flat face on Z = 0 and the hub standing up from Z = T: the tip disk,
+whose hub runs toward the base, is turned over for printing. On the base disk the eyelet bores
+stop at the seat plate on its outer face (Z = 0 to the plate's thickness), which has a seat per
+tendon."""
 from __future__ import annotations
 
 import math
@@ -7,12 +13,13 @@ import math
 import cadquery as cq
 import numpy as np
 
-from ..model.specs import DiskSpec, Hole
+from ..model.specs import DiskSpec, Hole, HubSpec
 from . import DISK_ROTATION, Part, disk_placement
 
 COLOR = (0.93, 0.86, 0.62, 1.0)     # resin yellow
 NORMAL_AXIS_TOL = 1e-9              # an eyelet this close to the disk normal is drilled in the 2D face
 TOOL_OVERRUN = 1.0                  # tools run this far past the faces, mm
+SEAT_OVERLAP = 0.3                  # a seat hole runs this far past the plate into the bore above it, mm
 
 
 def _to_file(x: float, z: float) -> tuple[float, float]:
@@ -67,29 +74,68 @@ def _eyelet_tool(h: Hole, thickness: float, edge: float, base_side: bool, tip_si
     return cones
 
 
+def _hub_solid(spec: DiskSpec, hub: HubSpec) -> cq.Solid:
+    """The sleeve around the slot, in file coordinates of the unflipped disk (Z = robot y - y0):
+    from the tip-side face up (side +1) or from the base-side face down (side -1); cut away over
+    its tendon windows, which cross it from top to bottom."""
+    w, h = spec.slot_width + 2 * hub.wall, spec.slot_height + 2 * hub.wall
+    sk = cq.Sketch().rect(w, h).push([(0, 0)]).rect(spec.slot_width, spec.slot_height, mode="s")
+    for a, b in hub.windows:
+        sk = sk.push([((a + b) / 2, 0)]).rect(b - a, h + 2 * TOOL_OVERRUN, mode="s")
+    z0 = spec.thickness if hub.side > 0 else -hub.length
+    return cq.Workplane("XY").workplane(offset=z0).placeSketch(sk.reset().clean()).extrude(hub.length).val()
+
+
+def _port_tool(spec: DiskSpec, hub: HubSpec) -> cq.Solid:
+    """The glue port: a hole from inside the slot out through the hub's +z wall (file -Y)."""
+    x, off, dia = hub.port
+    z = spec.thickness + off if hub.side > 0 else -off
+    reach = spec.slot_height / 2 + hub.wall + TOOL_OVERRUN
+    return cq.Solid.makeCylinder(dia / 2, reach, cq.Vector(x, 0, z), cq.Vector(0, -1, 0))
+
+
+def _truncated(tool: cq.Solid, z_from: float, spec: DiskSpec) -> cq.Solid:
+    """The part of a tool above the file plane Z = z_from (the seat plate's top)."""
+    big = spec.outer_diameter + 4 * TOOL_OVERRUN
+    box = cq.Solid.makeBox(big, big, spec.thickness + 2 * TOOL_OVERRUN - z_from,
+                           cq.Vector(-big / 2, -big / 2, z_from))
+    return tool.intersect(box)
+
+
 def blank_and_tools(spec: DiskSpec) -> tuple[cq.Solid, list[cq.Solid]]:
-    """The extruded face (outline, slot, normal holes, bolt holes) and every solid still to cut."""
+    """The disk body (outline, slot, normal holes and bolt holes extruded, the hub fused on) and
+    every solid still to cut."""
     T = spec.thickness
+    seated = bool(spec.seats)               # the base disk: bores stop at the seat plate
     sk = cq.Sketch().circle(spec.outer_diameter / 2)
     sk = sk.push([(0, 0)]).rect(spec.slot_width, spec.slot_height, mode="s")
-    normal = [h for h in spec.holes if abs(abs(h.axis[1]) - 1) < NORMAL_AXIS_TOL]
+    normal = [h for h in spec.holes if abs(abs(h.axis[1]) - 1) < NORMAL_AXIS_TOL and not seated]
     slanted = [h for h in spec.holes if h not in normal]
     for h in normal:
         sk = sk.push([_to_file(h.x, h.z)]).circle(h.diameter / 2, mode="s")
     for x, z, dia in spec.mount_holes:
         sk = sk.push([_to_file(x, z)]).circle(dia / 2, mode="s")
     blank = cq.Workplane("XY").placeSketch(sk.reset().clean()).extrude(T).val()
+    if spec.hub is not None:
+        blank = blank.fuse(_hub_solid(spec, spec.hub)).clean()
 
-    # The base disk's outer face (file Z = 0) carries knot pockets instead of chamfers.
-    base_side = spec.role != "base"
+    # The base disk's outer face (file Z = 0) is the seat plate: no bore or chamfer reaches it.
+    base_side = not seated
     tools: list[cq.Solid] = []
     for h in slanted:
-        tools.append(_eyelet_tool(h, T, spec.edge_size, base_side, True, with_bore=True))
+        tool = _eyelet_tool(h, T, spec.edge_size, base_side, True, with_bore=True)
+        tools.append(_truncated(tool, spec.seat_plate, spec) if seated and not h.in_slot else tool)
     for h in normal:
         tools.extend(_eyelet_tool(h, T, spec.edge_size, base_side, True, with_bore=False))
-    for x, z, dia, depth in spec.knot_pockets:
+    for s in spec.seats:
+        fx, fy = _to_file(s.x, s.z)
+        tools.append(cq.Solid.makeCylinder(s.diameter / 2, spec.seat_plate + SEAT_OVERLAP + TOOL_OVERRUN,
+                                           cq.Vector(fx, fy, -TOOL_OVERRUN)))
+    for x, z, dia, height in spec.seat_chambers:
         fx, fy = _to_file(x, z)
-        tools.append(cq.Solid.makeCylinder(dia / 2, depth + TOOL_OVERRUN, cq.Vector(fx, fy, -TOOL_OVERRUN)))
+        tools.append(cq.Solid.makeCylinder(dia / 2, height, cq.Vector(fx, fy, spec.seat_plate)))
+    if spec.hub is not None and spec.hub.port is not None:
+        tools.append(_port_tool(spec, spec.hub))
     return blank, tools
 
 
@@ -100,12 +146,12 @@ def build_disk(spec: DiskSpec) -> Part:
         body = body.cut(*tools)  # one boolean with every tool
     solid = body if isinstance(body, cq.Solid) else body.Solids()[0]
     place = disk_placement(spec.y, T)
-    if spec.knot_pockets:
-        # print with the pocketed face up, so the largest flat face rests on the plate
+    if spec.hub is not None and spec.hub.side < 0:
+        # the hub runs toward the base: turn the disk over so its flat face rests on the plate
         solid = solid.rotate(cq.Vector(0, 0, 0), cq.Vector(1, 0, 0), 180).translate(cq.Vector(0, 0, T))
         place = place @ flip_about_x(T)
-    return Part(spec.name, "disk", solid, place, COLOR, station=spec.index,
-                meta={"disk_role": spec.role, "thickness_mm": T})
+    meta = {"disk_role": spec.role, "thickness_mm": T, "engagement_mm": spec.engagement}
+    return Part(spec.name, "disk", solid, place, COLOR, station=spec.index, meta=meta)
 
 
 def flip_about_x(thickness: float) -> np.ndarray:

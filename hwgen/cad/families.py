@@ -13,6 +13,7 @@ from contextlib import contextmanager
 from typing import NamedTuple
 
 from ..errors import DesignError, InputError, clip
+from ..model.fixtures import jig_layout
 from ..model.plan import Plan
 from . import Part
 
@@ -35,6 +36,20 @@ def _tensioner(plan: Plan) -> Iterator[Part]:
     yield from build_tensioner(plan)
 
 
+def _mount(plan: Plan) -> Iterator[Part]:
+    from .fixtures import build_mount
+    yield from build_mount(plan)
+
+
+def _jig(plan: Plan) -> Iterator[Part]:
+    from .fixtures import build_jig
+    yield from build_jig(plan)
+
+
+def _jig_count(plan: Plan) -> int:
+    return len(jig_layout(plan.design).pieces)
+
+
 def _tensioner_count(plan: Plan) -> int:
     lay = plan.require_tensioner_layout()
     return sum(3 + len(u.clamps) for u in lay.units) + 1
@@ -46,7 +61,7 @@ def _disk_made_from(plan: Plan, index: int) -> tuple[str, str]:
     sizes = f", {len(holes)} eyelet(s) Ø{min(holes):.3g}–{max(holes):.3g} mm" if holes else ""
     return spec.name, (f"{spec.role} disk at y = {spec.y:g} mm: thickness {spec.thickness:g} mm, "
                        f"Ø{spec.outer_diameter:g} mm, slot {spec.slot_width:g} × {spec.slot_height:g} mm{sizes}"
-                       f"{f', {len(spec.knot_pockets)} knot pocket(s)' if spec.knot_pockets else ''}"
+                       f"{f', {len(spec.seats)} tendon seat(s)' if spec.seats else ''}"
                        f"{f', {len(spec.mount_holes)} mount hole(s)' if spec.mount_holes else ''}")
 
 
@@ -64,6 +79,17 @@ def _tensioner_made_from(plan: Plan, index: int) -> tuple[str, str]:
             f"spool Ø{t.spool_diameter:g} mm, {len(t.channels)} channel(s)")
 
 
+def _mount_made_from(plan: Plan, index: int) -> tuple[str, str]:
+    m = plan.design.base_mount
+    return (("base mount", "upper jaw")[min(index, 1)],
+            f"clamps {plan.design.backbone.extra_base:g} mm of strip; {m.model_dump_json()[:120]}")
+
+
+def _jig_made_from(plan: Plan, index: int) -> tuple[str, str]:
+    j = plan.design.jig
+    return f"jig piece {index + 1}", f"{len(plan.disks)} disk slots; {j.model_dump_json()[:120]}"
+
+
 class Family(NamedTuple):
     name: str
     section: str                                          # the YAML section its parts come from
@@ -76,6 +102,8 @@ FAMILIES: list[Family] = [
     Family("disks", "disks", lambda p: len(p.disks), _disks, _disk_made_from),
     Family("backbone", "backbone", lambda p: 1, _backbone, _backbone_made_from),
     Family("tensioner", "tensioner", _tensioner_count, _tensioner, _tensioner_made_from),
+    Family("base mount", "base_mount", lambda p: 2, _mount, _mount_made_from),
+    Family("jig", "jig", _jig_count, _jig, _jig_made_from),
 ]
 
 

@@ -25,7 +25,15 @@ def design_report(plan: Plan) -> dict:
                               "tendons": list(h.tendons), "worst_angle_deg": h.worst_angle_deg,
                               "in_slot": h.in_slot} for h in d.holes],
                    "mount_holes": [list(m) for m in d.mount_holes],
-                   "knot_pockets": [list(k) for k in d.knot_pockets]} for d in plan.disks],
+                   "engagement_mm": d.engagement,
+                   "hub": None if d.hub is None else {
+                       "side": d.hub.side, "length_mm": d.hub.length, "wall_mm": d.hub.wall,
+                       "windows_x_mm": [list(w) for w in d.hub.windows],
+                       "glue_port": None if d.hub.port is None else {
+                           "x_mm": d.hub.port[0], "beyond_face_mm": d.hub.port[1], "diameter_mm": d.hub.port[2]}},
+                   "seat_plate_mm": d.seat_plate,
+                   "seats": [{"tendon": s.tendon, "x": s.x, "z": s.z, "diameter_mm": s.diameter,
+                              "termination_mm": s.termination} for s in d.seats]} for d in plan.disks],
         "merges": [{"station": m.station, "tendons": list(m.tendons), "kind": m.kind} for m in plan.merges],
         "backbone_holes": [{"tendon": h.tendon, "station": h.station, "x_mm": h.x, "y_mm": h.y,
                             "diameter_mm": h.diameter} for h in plan.backbone.holes],

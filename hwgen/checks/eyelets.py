@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .base import Check
-from .measure import Loop, area_centroid, chain_loops, inside, load_mesh, num, section_loops
+from .measure import Loop, area_centroid, chain_loops, disk_slab, inside, load_mesh, num, section_loops
 
 OFF_PLANE_FRACTION = 1 / 8   # the axis cuts sit this fraction of the thickness either side of the mid-plane,
 CLEAR_FRACTION = 1 / 2       # or this fraction of the way from the mid-plane to a recess floor, if nearer
@@ -41,7 +41,7 @@ class DiskSections:
     part: str
     station: int
     y_mid: float
-    thickness: float
+    thickness: float                 # of the plate (a hub standing on it not included)
     sections: list[tuple[float, Loop, list[Loop]]]   # (robot y, outline, inner loops): mid first
     slot: Loop | None
     holes: list[MeasuredHole]
@@ -64,7 +64,7 @@ def measure_disk(stl: Path, placement, part: str, station: int, mesh=None, reces
     """
     mesh = load_mesh(stl) if mesh is None else mesh
     P = np.asarray(placement, dtype=float)
-    zmin, zmax = (float(v) for v in mesh.bounds[:, 2])
+    zmin, zmax = disk_slab(mesh)
     T = zmax - zmin
     mid = (zmin + zmax) / 2
     h = T * OFF_PLANE_FRACTION

@@ -103,6 +103,41 @@ def section_loops(mesh, placement: np.ndarray, origin, normal, axes=(0, 2)) -> l
     return sorted(out, key=lambda lp: -lp.area)
 
 
+FLAT_NORMAL = 0.999999      # a face whose normal is this close to ±Z is flat in the file
+FLAT_DECIMALS = 4           # flat faces are grouped by their Z rounded to this many mm decimals
+
+
+def disk_slab(mesh) -> tuple[float, float]:
+    """The file Z range of a disk's plate: between its largest face turned down and its largest
+    face turned up. A hub standing on one face (or a seat plate's holes in the other) does not
+    move these: the disk's two annular faces are by far its largest flat faces."""
+    n = mesh.face_normals[:, 2]
+    z = np.round(mesh.triangles_center[:, 2], FLAT_DECIMALS)
+    area = mesh.area_faces
+    out = []
+    for sign in (-1, 1):
+        sel = sign * n > FLAT_NORMAL
+        levels, inv = np.unique(z[sel], return_inverse=True)
+        out.append(float(levels[np.argmax(np.bincount(inv, weights=area[sel]))]))
+    return out[0], out[1]
+
+
+def section_robot(mesh, placement, axis: int, value: float) -> np.ndarray:
+    """Cut a mesh (file coordinates) by the robot plane {axis = value}: (m, 2, 3) segments in robot
+    coordinates."""
+    import trimesh
+    P = np.asarray(placement, dtype=float)
+    R, t = P[:3, :3], P[:3, 3]
+    e = np.zeros(3)
+    e[axis] = 1.0
+    normal = R.T @ e                                   # the plane's normal in the file
+    origin = R.T @ (value * e - t)
+    segs = trimesh.intersections.mesh_plane(mesh, plane_normal=normal, plane_origin=origin)
+    if len(segs) == 0:
+        return np.zeros((0, 2, 3))
+    return (segs.reshape(-1, 3) @ R.T + t).reshape(-1, 2, 3)
+
+
 @dataclass(frozen=True)
 class DiskSection:
     """A disk cut at its mid-plane: the outline, the backbone slot and every hole."""
@@ -114,9 +149,9 @@ class DiskSection:
 
 
 def disk_mid_section(stl_path: str | Path, placement) -> DiskSection:
-    """Cut a disk file halfway through its thickness (disk files lie flat: thickness along file Z)."""
+    """Cut a disk file halfway through its plate (disk files lie flat: thickness along file Z)."""
     mesh = load_mesh(stl_path)
-    zmin, zmax = mesh.bounds[:, 2]
+    zmin, zmax = disk_slab(mesh)
     mid = (zmin + zmax) / 2
     loops = section_loops(mesh, placement, [0, 0, mid], [0, 0, 1])
     y_mid = float((np.asarray(placement) @ [0, 0, mid, 1])[1])
@@ -140,6 +175,18 @@ def inside(poly: np.ndarray, pt) -> bool:
     with np.errstate(divide="ignore", invalid="ignore"):
         xi = px + (y - py) * (qx - px) / (qy - py)
     return bool(np.count_nonzero(crosses & (x < xi)) % 2)
+
+
+def inside_many(poly: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Point in polygon (even-odd rule) for many points (n, 2) at once: (n,) bool."""
+    pts = np.asarray(pts, dtype=float).reshape(-1, 2)
+    x, y = pts[:, 0:1], pts[:, 1:2]
+    px, py = poly[None, :, 0], poly[None, :, 1]
+    qx, qy = np.roll(px, -1, axis=1), np.roll(py, -1, axis=1)
+    crosses = (py > y) != (qy > y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xi = px + (y - py) * (qx - px) / (qy - py)
+    return (np.count_nonzero(crosses & (x < xi), axis=1) % 2).astype(bool)
 
 
 def _point_segment_distance(pts: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -185,6 +232,29 @@ def loop_gap(a: np.ndarray, b: np.ndarray) -> float:
     j = int(np.argmin(((b - a[k]) ** 2).sum(axis=1)))
     bound = float(np.hypot(*(a[k] - b[j])))
     return min(bound, _one_side(a, b, bound), _one_side(b, a, bound))
+
+
+def section_moments(loops: list[np.ndarray]) -> dict:
+    """Area, centroid and second moments of the material bounded by closed (u, v) loops, nested by
+    the even-odd rule (a loop inside an odd number of others is a hole): ``i_v0`` = ∫ v² dA about
+    v = 0, ``i_vc`` = ∫ (v - v̄)² dA about the centroid, mm⁴."""
+    area = su = sv = svv = 0.0
+    for k, lp in enumerate(loops):
+        depth = sum(inside(o, lp[0]) for j, o in enumerate(loops) if j != k)
+        u, v = lp[:, 0], lp[:, 1]
+        un, vn = np.roll(u, -1), np.roll(v, -1)
+        cross = u * vn - un * v
+        a = cross.sum() / 2
+        sign = (-1.0 if depth % 2 else 1.0) * np.sign(a)      # material counts positive whatever the winding
+        area += sign * a
+        su += sign * float(((u + un) * cross).sum() / 6)
+        sv += sign * float(((v + vn) * cross).sum() / 6)
+        svv += sign * float((cross * (v * v + v * vn + vn * vn)).sum() / 12)
+    if area <= 0:
+        return {"area": 0.0, "cu": 0.0, "cv": 0.0, "i_v0": 0.0, "i_vc": 0.0}
+    cu, cv = su / area, sv / area
+    return {"area": float(area), "cu": float(cu), "cv": float(cv), "i_v0": float(svv),
+            "i_vc": float(svv - area * cv * cv)}
 
 
 # ---------------------------------------------------------------- solids

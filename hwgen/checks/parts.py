@@ -1,7 +1,7 @@
 """Whole parts: sound meshes, no two parts occupying the same space, each fits the printer."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from itertools import combinations
 from pathlib import Path
 
@@ -22,6 +22,12 @@ class LoadedPart:
     mesh: object               # trimesh.Trimesh in file coordinates
     placement: np.ndarray
     volume_mm3: float | None
+    entry: dict = field(default_factory=dict)   # the part's manifest entry
+
+    @property
+    def fixture(self) -> bool:
+        """An assembly aid (the jig): not part of the robot."""
+        return bool(self.entry.get("fixture"))
 
     def robot_bounds(self) -> np.ndarray:
         v = self.mesh.vertices @ self.placement[:3, :3].T + self.placement[:3, 3]
@@ -39,7 +45,7 @@ def load_parts(folder: Path, manifest: dict) -> tuple[list[LoadedPart], list[Che
                                 None, None, {"part": p["name"]}))
             continue
         parts.append(LoadedPart(p["name"], p.get("role", ""), mesh, np.asarray(p["placement"], dtype=float),
-                                p.get("volume_mm3")))
+                                p.get("volume_mm3"), p))
     return parts, checks
 
 
@@ -77,13 +83,27 @@ def mesh_checks(parts: list[LoadedPart]) -> list[Check]:
     return out
 
 
+def _together(a: LoadedPart, b: LoadedPart) -> bool:
+    """Whether two parts are ever in place at once: a fixture only with the parts it holds (and the
+    other pieces of itself), the robot's parts with each other."""
+    if a.fixture and b.fixture:
+        return True
+    if a.fixture or b.fixture:
+        f, other = (a, b) if a.fixture else (b, a)
+        return other.name in f.entry.get("holds", [])
+    return True
+
+
 def interference_checks(parts: list[LoadedPart], tol_mm3: float) -> list[Check]:
-    """Every pair whose boxes meet is intersected with manifold3d; a volume above ``tol_mm3`` fails."""
+    """Every pair whose boxes meet is intersected with manifold3d; a volume above ``tol_mm3`` fails.
+    A fixture (the jig) is tested against the parts it holds and its own other pieces only."""
     out = []
     boxes = {p.name: p.robot_bounds() for p in parts}
     cache = {}
     tested = 0
     for a, b in combinations(parts, 2):
+        if not _together(a, b):
+            continue
         ba, bb = boxes[a.name], boxes[b.name]
         if np.any(ba[0] > bb[1] + BBOX_MARGIN_MM) or np.any(bb[0] > ba[1] + BBOX_MARGIN_MM):
             continue
@@ -121,15 +141,15 @@ def build_volume_checks(parts: list[LoadedPart], build_volume) -> list[Check]:
 
 
 def mass_summary(parts: list[LoadedPart], manifest: dict) -> tuple[dict, list[Check]]:
-    """Mass and centre of mass of the robot and of everything beyond the tip disk, from the
-    STLs (volume and centroid of each closed mesh) and each part's density in the manifest
-    (design data: the files do not say what they are printed in)."""
+    """Mass and centre of mass of the robot (the base mount included, the jig not) and of everything
+    beyond the tip disk, from the STLs (volume and centroid of each closed mesh) and each part's
+    density in the manifest (design data: the files do not say what they are printed in)."""
     entries = {p["name"]: p for p in manifest["parts"]}
     tip_y = max(manifest["design_report"]["stations_mm"])
     rows = []
     for p in parts:
         e = entries.get(p.name, {})
-        if not p.mesh.is_watertight or "density_g_cm3" not in e:
+        if not p.mesh.is_watertight or "density_g_cm3" not in e or p.fixture:
             continue
         com = p.placement[:3, :3] @ p.mesh.center_mass + p.placement[:3, 3]
         rows.append((p.name, p.role, float(p.mesh.volume), float(p.mesh.volume) / 1000 * e["density_g_cm3"], com))

@@ -77,6 +77,18 @@ def write_summary(report: dict, path: Path) -> None:
     for p in report.get("pairs", []):
         lines += ["", f"Antagonistic pair {' and '.join(p['tendons'])} (channel {p['channel']}): "
                       f"{p['take_up_mm']:+.3f} mm to take up at {p['at_angle_deg']:+g}°."]
+    fits = (report.get("as_built") or {}).get("disks", [])
+    if fits:
+        pitch = max(max(abs(v) for v in f["tilt_x_deg"]) for f in fits)
+        yaw = max(max(abs(v) for v in f["tilt_z_deg"]) for f in fits)
+        lines += ["", f"Disks on the strip (measured from their STLs): pitch at most ±{pitch:.3f}° "
+                      f"(limit {report['as_built']['max_tilt_deg']:g}°), yaw ±{yaw:.3f}°, held over "
+                      f"{min(f['engagement_mm'] for f in fits):.2f} mm or more."]
+    g = report.get("gravity") or {}
+    if g.get("cases"):
+        case = g["cases"][g["gravity"]]
+        lines += ["", f"Own weight, no tendon tensioned (state N): tip sag {case['tip_sag_mm']:.1f} mm, strip stress "
+                      f"{case['max_stress_mpa']:.0f} MPa (allowable {g['allowable_stress_mpa']:g} MPa). Plot: `sag.png`."]
     if errs:
         lines += ["", "## Failed", ""] + [f"- `{c['id']}` {c['message']}" for c in errs]
     if warns:

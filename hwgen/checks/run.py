@@ -14,13 +14,16 @@ from .. import __version__
 from ..cad.manifest import sha256
 from ..model import kinematics as kin
 from ..model.routing import table_deviations
+from .anchors import seat_checks
 from .base import Check
 from .clearances import backbone_checks, hole_checks, tendon_pair_checks, wall_checks
 from .eyelets import backbone_section, locate_eyelets, measure_disk
 from .gear_mesh import gear_checks
+from .gravity import gravity_checks
 from .lengths import length_checks, pair_take_up, sweep_angles, tendon_lengths
 from .parts import build_volume_checks, interference_checks, load_parts, mass_summary, mesh_checks
 from .printing import printing_checks
+from .seating import hub_checks, measure_fit, tilt_checks
 
 TABLE_MATCH_MM = 0.1   # Table II gives one decimal: a table within this of its function samples it
 
@@ -116,9 +119,55 @@ def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     mass, c = mass_summary(parts, manifest)
     checks += c
     checks += gear_checks(folder, manifest, plan)
+    fits, c = _seating(parts, emap, bb_outline, strip_t, d, angles)
+    checks += c
+    seats, c = _seats(parts, emap, rep_in, d)
+    checks += c
+    gravity, c = gravity_checks(parts, manifest, d, fits, None if bb_outline is None else bb_outline.extent[0],
+                                strip_t, L)
+    checks += c
     report = _report(manifest["design"], checks, angles, s.step_deg, tls, pair, emap)
     report["mass"] = _plain(mass)
+    report["as_built"] = _plain({
+        "about": "what the files let each disk do on the strip (measured from its STL) and how well the jig sets "
+                 "its station (design data: jig.station_tolerance_mm), for a study of as-built tendon lengths",
+        "station_tolerance_mm": d.jig.station_tolerance_mm,
+        "max_tilt_deg": d.disks.hub.max_tilt_deg,
+        "disks": [f.to_json() for f in fits]})
+    report["seats"] = _plain(seats)
+    report["gravity"] = _plain(gravity)
     return report
+
+
+def _seating(parts, emap, bb_outline, strip_t, d, angles):
+    """Each disk's slot fit (tilt, play, engagement) and its hub against the tendons."""
+    by_name = {p.name: p for p in parts}
+    h = bb_outline.extent[0] if bb_outline is not None else d.backbone.height
+    t = strip_t if strip_t is not None else d.backbone.thickness
+    fits = [measure_fit(dk, by_name[dk.part].mesh, by_name[dk.part].placement, h, t)
+            for dk in emap.disks if dk.part in by_name]
+    radius = {e.station: 0.0 for e in emap.eyelets}
+    for e in emap.eyelets:
+        radius[e.station] = max(radius[e.station], float(np.hypot(*e.design_xz)))
+    checks = tilt_checks(fits, d.disks.hub.max_tilt_deg, radius)
+    checks += hub_checks(emap, fits, {p.name: p.mesh for p in parts}, {p.name: p.placement for p in parts},
+                         d.tendon_material.diameter, angles, d.backbone.length)
+    return fits, checks
+
+
+def _seats(parts, emap, rep_in, d):
+    """The tendons' seats on the base disk."""
+    by_name = {p.name: p for p in parts}
+    out, rows = [], []
+    for dk in emap.disks:
+        rd = next((r for r in rep_in["disks"] if r["index"] == dk.station), None)
+        if rd is None or not rd.get("seats") or dk.part not in by_name:
+            continue
+        c, r = seat_checks(dk, by_name[dk.part].mesh, by_name[dk.part].placement, rd, d, d.process.min_wall,
+                           d.tendon_material.break_load, d.tensioner.resin_strength)
+        out += c
+        rows += r
+    return rows, out
 
 
 def _measure_disks(folder: Path, manifest: dict, meshes: dict, tol: float):

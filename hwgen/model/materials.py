@@ -15,13 +15,16 @@ class Material:
     technology: str          # "SLA" or "FDM"
     density_g_cm3: float
     reason: str
+    modulus_gpa: float
+    modulus_reason: str
 
 
 @cache
 def table() -> dict[str, Material]:
     """Every material of data/materials.csv by name."""
     text = resources.files("hwgen").joinpath("data/materials.csv").read_text(encoding="utf-8")
-    return {r["material"]: Material(r["material"], r["technology"], float(r["density_g_cm3"]), r["reason"])
+    return {r["material"]: Material(r["material"], r["technology"], float(r["density_g_cm3"]), r["reason"],
+                                    float(r["modulus_gpa"]), r["modulus_reason"])
             for r in csv.DictReader(text.splitlines())}
 
 
@@ -46,3 +49,13 @@ def printed_density(process: Process) -> tuple[float, str]:
     if process.fill_fraction < 1:
         why += f"; × fill fraction {process.fill_fraction:g}"
     return rho * process.fill_fraction, why
+
+
+def printed_modulus(process: Process) -> tuple[float, str]:
+    """The modulus of a printed part's material (GPa, solid; fill scales it) and where it comes from."""
+    m = table()[process.material]
+    e, why = m.modulus_gpa, f"{m.name}: {m.modulus_reason}"
+    if process.fill_fraction < 1:
+        e *= process.fill_fraction
+        why += f"; × fill fraction {process.fill_fraction:g}"
+    return e, why

@@ -13,6 +13,7 @@ from ..errors import DesignError
 from ..params import Design
 from . import kinematics as kin
 from .crossings import crossing_angles, in_strip_plane, strip_crossings
+from .fixing import hub_spec, seats_for
 from .routing import TendonPath, tendon_paths
 from .specs import BackboneHole, BackboneSpec, DiskSpec, Hole, Merge
 from .tensioner_layout import TensionerLayout, layout
@@ -131,15 +132,21 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
             ha, hb = holes[a], holes[b]
             if np.hypot(ha.x - hb.x, ha.z - hb.z) < (ha.diameter + hb.diameter) / 2:
                 merges.append(Merge(i, ha.tendons + hb.tendons, "overlap"))
-    pockets, mounts = (), ()
+    mounts, seats, chambers = (), (), ()
     if role == "base":
-        to = dk.tie_off
-        pockets = tuple((h.x, h.z, max(to.pocket_diameter, h.diameter + 2 * proc.min_wall), to.pocket_depth)
-                        for h in holes if not h.in_slot)
+        bm = d.base_mount
+        mounts = tuple((x, z, bm.screw_hole) for x, z in bm.disk_screws)
+        leaving = {p.name: rest_axes[p.name][i] for p in paths}
+        found = [seats_for(d, h, thick, leaving) for h in holes if not h.in_slot]
+        seats = tuple(s for group, _ in found for s in group)
+        chambers = tuple(c for _, c in found if c is not None)
     if role == "tip":
         mounts = tuple((x, z, dk.tip_mount.hole_diameter) for x, z in dk.tip_mount.positions)
+    hub = hub_spec(d, i, role, thick, slot_w, slot_h, tuple(holes), {p.name: p.points[i] for p in paths},
+                   {p.name: (sweeps[p.name][0][:, i], sweeps[p.name][1][:, i]) for p in paths})
     spec = DiskSpec(i, float(d.stations[i]), role, thick, dk.outer_diameter, slot_w, slot_h, tuple(holes),
-                    dk.eyelets.edge_size if dk.eyelets.edge == "chamfer" else 0.0, pockets, mounts)
+                    dk.eyelets.edge_size if dk.eyelets.edge == "chamfer" else 0.0, mounts, hub, seats,
+                    dk.anchors.plate if seats else 0.0, chambers)
     return spec, merges
 
 

@@ -23,6 +23,34 @@ class Hole:
 
 
 @dataclass(frozen=True)
+class HubSpec:
+    """The sleeve around a disk's slot that holds the disk square to the strip.
+
+    It runs from one face of the disk (``side`` +1: the face toward the tip, -1: toward the
+    base) for ``length`` mm along the backbone, with a wall of ``wall`` mm around the slot. It is
+    cut away over the x ranges in ``windows`` wherever a tendon passes through it, and has a glue
+    port through its +z wall into the slot.
+    """
+
+    side: int
+    length: float                              # beyond the disk's face, mm
+    wall: float
+    windows: tuple[tuple[float, float], ...]   # x intervals where the hub is cut away for a tendon
+    port: tuple[float, float, float] | None    # glue port: x, distance beyond the face, diameter
+
+
+@dataclass(frozen=True)
+class Seat:
+    """Where one tendon ends: a hole through the base disk's seat plate, smaller than what it holds."""
+
+    tendon: str
+    x: float
+    z: float
+    diameter: float          # the opening
+    termination: float       # the knot's size or the crimp sleeve's outer diameter it holds
+
+
+@dataclass(frozen=True)
 class DiskSpec:
     """One tendon-support disk, ready to build."""
 
@@ -35,8 +63,16 @@ class DiskSpec:
     slot_height: float       # along z
     holes: tuple[Hole, ...]
     edge_size: float         # chamfer at hole rims, 0 for none
-    knot_pockets: tuple[tuple[float, float, float, float], ...] = ()  # (x, z, diameter, depth), base side
     mount_holes: tuple[tuple[float, float, float], ...] = ()          # (x, z, diameter), through
+    hub: HubSpec | None = None
+    seats: tuple[Seat, ...] = ()             # base disk: one per tendon, in a plate on its outer face
+    seat_plate: float = 0.0                  # thickness of that plate, mm
+    seat_chambers: tuple[tuple[float, float, float, float], ...] = ()  # (x, z, diameter, height) above the plate
+
+    @property
+    def engagement(self) -> float:
+        """Length along the backbone over which the slot holds the strip: the disk and its hub, mm."""
+        return self.thickness + (self.hub.length if self.hub else 0.0)
 
     @property
     def name(self) -> str:

@@ -12,7 +12,10 @@ Printed parts are the manifest's parts, one row per file, grouped by family (the
 * hardware a part lists in its manifest entry as ``"hardware": [{"item", "qty", "size",
   "material", "notes"}]``, summed over parts by item and size. A part that fastens to the tip
   disk lists those screws itself, marked ``"tip_mount": true``; without one, screws and nuts
-  for the tip disk's bolt pattern are listed from its clearance holes.
+  for the tip disk's bolt pattern are listed from its clearance holes;
+* the crimp sleeves of tendons that end in one (``termination``), one per tendon;
+* the adhesive that fixes the disks to the strip, enough to fill each slot's gap over the length
+  its hub holds the strip (from the report's as-built fit, else from the design), twice over.
 """
 from __future__ import annotations
 
@@ -25,6 +28,7 @@ import numpy as np
 
 from ..cad.manifest import sha256
 from ..model import kinematics as kin
+from ..model.fixing import termination_of
 
 PURCHASED_ROLES = {"backbone"}     # families that are bought and cut, not printed
 REPORT = "report.json"             # written by the checks stage, before this one
@@ -34,7 +38,9 @@ ISO273_NORMAL = {2.4: "M2", 2.9: "M2.5", 3.4: "M3", 4.5: "M4", 5.5: "M5", 6.6: "
 CLEARANCE_MATCH_MM = 0.35          # a hole within this of a table size takes that thread
 TIP_SCREW = "socket head cap screw ISO 4762"   # fastens the tensioner (or a fixture) to the tip disk
 
-FAMILY_LABELS = {"disk": "tendon-support disk", "backbone": "backbone strip"}   # others: the role, spaced
+FAMILY_LABELS = {"disk": "tendon-support disk", "backbone": "backbone strip",
+                 "jig": "assembly jig"}   # others: the role, spaced
+ADHESIVE_MARGIN = 2.0              # adhesive bought: this many times what fills the slots' gaps
 
 
 COLUMNS = ["item", "category", "part", "family", "qty", "material", "size", "volume_mm3", "mass_g",
@@ -133,13 +139,46 @@ def bom_rows(folder: Path, manifest: dict, design) -> tuple[list[dict], str]:
             allowance_mm=f"{allowance:.1f}", cut_length_mm=f"{rest + allowance:.1f}",
             notes=f"channel {t['channel']}; rest {rest:.1f} + tie-off {r.tie_off_mm:g} + spool {r.spool_mm:g} mm")
 
+    crimps: dict[tuple[str, str], list[str]] = {}
+    for t in manifest["design_report"]["tendons"]:
+        term = termination_of(design, t["name"])
+        if term.kind == "crimp":
+            key = (f"Ø{term.diameter:g} × {term.length:g} mm", term.name or "copper or aluminium")
+            crimps.setdefault(key, []).append(t["name"])
+    for (size, material), names in crimps.items():
+        add(category="purchased", part="crimp sleeve", family="hardware", qty=len(names), size=size,
+            material=material, notes=f"ends tendon{'s' if len(names) > 1 else ''} {', '.join(names)} on "
+                                     f"{'their seats' if len(names) > 1 else 'its seat'} in the base disk")
     for item, qty, size, material, notes in _fasteners(manifest):
         add(category="purchased", part=item, family="hardware", qty=qty, size=size, material=material, notes=notes)
+    ml, how = _adhesive_ml(folder, manifest, design)
+    add(category="purchased", part="adhesive", family="consumable", qty=1, material=design.disks.anchors.adhesive,
+        size=f"{ml:.2f} ml", notes=how)
     return rows, source
+
+
+def _adhesive_ml(folder: Path, manifest: dict, design) -> tuple[float, str]:
+    """Adhesive for every disk: the slot's gap around the strip over the length the disk holds it."""
+    h, t = design.backbone.height, design.backbone.thickness
+    try:
+        fits = json.loads((Path(folder) / REPORT).read_text())["as_built"]["disks"]
+        gaps = [((h + f["play_x_mm"]) * (t + f["play_z_mm"]) - h * t) * f["engagement_mm"] for f in fits]
+        how = "fills each slot's gap over the length its hub holds the strip (report.json: as_built)"
+    except (OSError, ValueError, KeyError, TypeError):
+        gaps = [(d["slot_mm"][0] * d["slot_mm"][1] - h * t) * d.get("engagement_mm", d["thickness_mm"])
+                for d in manifest["design_report"]["disks"]]
+        how = "fills each slot's gap over the length its hub holds the strip (design report)"
+    need = sum(gaps) / 1000
+    return ADHESIVE_MARGIN * need, f"{how}: {need:.2f} ml, × {ADHESIVE_MARGIN:g}; through each disk's glue port"
 
 
 def _printed_note(e: dict) -> str:
     bits = []
+    if e.get("fixture"):
+        bits.append(f"assembly jig, piece {e.get('piece', 1)} of {e.get('pieces', 1)}: not part of the robot")
+    if e["role"] in ("base_mount", "base_clamp"):
+        bits.append("base mount: clamps the strip's base; " + ("bolts to the table" if e["role"] == "base_mount"
+                                                               else "the upper jaw"))
     if "station" in e:
         bits.append(f"station {e['station']}")
     if e.get("disk_role") in ("base", "tip"):
@@ -159,11 +198,13 @@ def _fasteners(manifest: dict) -> list[tuple[str, int, str, str, str]]:
     for h, user in listed:
         key = (str(h.get("item", "hardware")), str(h.get("size", "")))
         if key not in summed:
-            summed[key] = [0, str(h.get("material", "")), set()]
+            summed[key] = [0, str(h.get("material", "")), set(), set()]
         summed[key][0] += int(h.get("qty", 1))
         summed[key][2].add(user)
-    return [(item, qty, size, material, "for " + _names(sorted(users)))
-            for (item, size), (qty, material, users) in summed.items()]
+        if h.get("notes"):
+            summed[key][3].add(str(h["notes"]))
+    return [(item, qty, size, material, "; ".join(["for " + _names(sorted(users)), *sorted(notes)]))
+            for (item, size), (qty, material, users, notes) in summed.items()]
 
 
 def _tip_screws(manifest: dict) -> list[tuple[dict, str]]:
@@ -186,12 +227,14 @@ def _names(names: list[str]) -> str:
 
 
 def family_table(manifest: dict, design, rows: list[dict] | None = None) -> list[dict]:
-    """One entry per part family, numbered in order of first appearance (the drawing's balloons)."""
+    """One entry per part family of the robot (assembly aids such as the jig are not drawn with it),
+    numbered in order of first appearance (the drawing's balloons)."""
     out: list[dict] = []
-    for e in manifest["parts"]:
+    robot = [p for p in manifest["parts"] if not p.get("fixture")]
+    for e in robot:
         if any(f["role"] == e["role"] for f in out):
             continue
-        members = [p for p in manifest["parts"] if p["role"] == e["role"]]
+        members = [p for p in robot if p["role"] == e["role"]]
         material = e.get("material", "") if is_purchased(e) else design.process.name
         out.append({"item": len(out) + 1, "role": e["role"], "label": family_label(e["role"]),
                     "qty": len(members), "material": material,
@@ -236,14 +279,16 @@ def _markdown(manifest: dict, design, rows: list[dict], source: str) -> str:
                  f"{r['mass_g']} | `{r['file']}` | {_md_cell(r['notes'])} |")
     bought = [r for r in rows if r["category"] == "purchased" and r["family"] not in ("tendon", "hardware")]
     tendons = [r for r in rows if r["family"] == "tendon"]
-    hardware = [r for r in rows if r["family"] == "hardware"]
+    hardware = [r for r in rows if r["family"] in ("hardware", "consumable")]
     L += ["", "## Purchased parts", "", "| # | part | qty | material | cut size | notes |", "|---:|---|---:|---|---|---|"]
     for r in bought:
         L.append(f"| {r['item']} | {r['part']} | {r['qty']} | {_md_cell(r['material'])} | {r['size']} | "
                  f"{_md_cell(r['notes'])} |")
     r_ = design.bom
+    term = design.tendon_material.termination
+    ends = "knot on its seat in the base disk" if term.kind == "knot" else "crimp sleeve on its seat in the base disk"
     L += ["", f"### Tendons: {design.tendon_material.name}, Ø{design.tendon_material.diameter:g} mm", "",
-          f"Cut length = rest length + {r_.tie_off_mm:g} mm tie-off (knot at the base disk) + "
+          f"Cut length = rest length + {r_.tie_off_mm:g} mm tie-off ({ends}) + "
           f"{r_.spool_mm:g} mm spool (to reach and wrap the tensioner). Rest lengths: {source}.", "",
           "| # | tendon | channel | rest, mm | cut, mm |", "|---:|---|---|---:|---:|"]
     for r in tendons:
@@ -258,7 +303,7 @@ def _markdown(manifest: dict, design, rows: list[dict], source: str) -> str:
         for r in hardware:
             L.append(f"| {r['item']} | {r['part']} | {r['qty']} | {r['size']} | {_md_cell(r['material'])} | "
                      f"{_md_cell(r['notes'])} |")
-    L += ["", "Also: glue for the disks on the strip (cyanoacrylate or epoxy).", ""]
+    L += [""]
     return "\n".join(L)
 
 

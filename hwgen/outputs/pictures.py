@@ -42,7 +42,7 @@ INSTALL_HINT = (
     "(pip install --extra-index-url https://wheels.vtk.org vtk-osmesa). "
     "The parts, checks and bill of materials were written without the pictures.")
 LABEL_GAP_MM = 6.0          # disk numbers sit this far above the disk's top on screen
-OUTPUTS = ("exploded.png", "assembled.png", "bent.png", "exploded.svg")
+OUTPUTS = ("exploded.png", "assembled.png", "bent.png", "jig.png", "exploded.svg")
 EXIT_NO_BACKEND = 3      # the child's exit code for RenderUnavailable
 
 
@@ -79,7 +79,8 @@ def station_labels(posed: list[Posed], view: View) -> list[tuple[str, np.ndarray
 
 def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table: list[dict] | None = None,
                     renderer: Renderer | None = None) -> dict:
-    """exploded.png, assembled.png, bent.png (and exploded.svg when a parts table is given)."""
+    """exploded.png, assembled.png, bent.png, jig.png when the design has an assembly jig (and
+    exploded.svg when a parts table is given)."""
     folder = Path(folder)
     timings = {}
     t0 = time.perf_counter()
@@ -124,6 +125,20 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
     _, W, H = r.draw(posed, colours, BENT, folder / "bent.png", tubes=bent, aspect_range=(0.6, 1.0), texts=texts)
     images["bent.png"] = {"width": W, "height": H}
     timings["bent_s"] = time.perf_counter() - t
+
+    aids = load_parts(folder, manifest, fixtures=True)
+    if aids:
+        t = time.perf_counter()
+        holds = {n for a in aids for n in a.meta.get("holds", [])}
+        shown = [p for p in parts if p.name in holds] + aids
+        jig_colours = family_colours(manifest, fixtures=True)
+        posed = [pose_rigid(p, p.placement, d) for p in shown]
+        roles = [role for role in jig_colours if any(p.role == role for p in shown)]
+        legend = [(f"{family_label(role)} ({sum(p.role == role for p in shown)})", jig_colours[role]) for role in roles]
+        _, W, H = r.draw(posed, jig_colours, ISOMETRIC, folder / "jig.png",
+                         texts=_legend(legend, f"{manifest['design']}: the disks and the strip in the assembly jig"))
+        images["jig.png"] = {"width": W, "height": H}
+        timings["jig_s"] = time.perf_counter() - t
 
     result = {"backend": r.backend, "images": images, "timings_s": timings, "bent_note": reachable_note(manifest),
               "palette": {k: list(v) for k, v in colours.items()},

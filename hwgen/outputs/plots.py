@@ -49,3 +49,79 @@ def plot_lengths(report: dict, path: Path) -> None:
             fig.savefig(tmp, dpi=110, format="png")
     finally:
         plt.close(fig)
+
+
+def plot_sag(report: dict, design_report: dict, path: Path) -> bool:
+    """sag.png: the robot's own-weight state N seen from the side, like the first photograph of
+    Sect. III-B: the deformed strip, every disk to scale square to it, the tip assembly's centre
+    of mass, the clamp, the straight line it would keep without weight, and the numbers. Returns
+    False (and writes nothing) when the report has no gravity state."""
+    g = report.get("gravity") or {}
+    if not g.get("curve"):
+        return False
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Polygon, Rectangle
+
+    c = g["curve"]
+    s, y, z, psi = (np.asarray(c[k], float) for k in ("s_mm", "y_mm", "z_mm", "psi_deg"))
+    psi = np.radians(psi)
+    disks = {d["index"]: d for d in design_report["disks"]}
+    st = design_report["stations_mm"]
+    fig, ax = plt.subplots(figsize=(10, 6.2), dpi=110)
+    clamp = 30.0
+    ax.add_patch(Rectangle((-clamp, -12), clamp, 24, facecolor="0.8", edgecolor="0.3", hatch="///", lw=0.8, zorder=1))
+    ax.plot([-clamp, g["length_mm"] + max(g["tip_assembly"]["a_mm"], 0)], [0, 0], "--", color="0.5", lw=1,
+            label="without its weight")
+    corners_all = [np.column_stack([y, z])]
+    for i, d in disks.items():
+        si = float(st[i])
+        p = float(np.interp(si, s, psi))
+        ctr = np.array([np.interp(si, s, y), np.interp(si, s, z)])
+        tn, nn = np.array([np.cos(p), np.sin(p)]), np.array([-np.sin(p), np.cos(p)])
+        r, th = d["outer_diameter_mm"] / 2, d["thickness_mm"]
+        pts = [ctr + u * th / 2 * tn + v * r * nn for u, v in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+        ax.add_patch(Polygon(pts, closed=True, facecolor="#e8d9a0", edgecolor="#6b5d1c", lw=0.7, zorder=4))
+        corners_all.append(np.array(pts))
+    ax.plot(y, z, color="k", lw=2.5, zorder=5, label="strip (elastica)")
+    tip = g["tip_assembly"]
+    if tip["mass_g"] > 0:
+        com = np.asarray(c["tip_com_mm"])
+        ax.plot([y[-1], com[0]], [z[-1], com[1]], color="#1f4e79", lw=1, zorder=6)
+        ax.plot(*com, marker="o", ms=10, color="#1f4e79", zorder=7)
+        ax.annotate(f"tip assembly {tip['mass_g']:.0f} g (centre of mass)", com, xytext=(-10, -18),
+                    textcoords="offset points", fontsize=8, color="#1f4e79", ha="right")
+        corners_all.append(com[None, :])
+    ax.annotate("", xy=(y[-1], z[-1]), xytext=(y[-1], 0.0), arrowprops=dict(arrowstyle="<->", color="tab:red"))
+    case = g["cases"][g["gravity"]]
+    ax.text(y[-1] + 4, z[-1] / 2, f"sag {case['tip_sag_mm']:.1f} mm", color="tab:red", fontsize=9)
+    pts = np.vstack(corners_all)
+    lo, hi = pts.min(axis=0) - 12, pts.max(axis=0) + 12
+    lo[0] = min(lo[0], -clamp - 40)
+    ax.annotate("", xy=(lo[0] + 15, -25), xytext=(lo[0] + 15, 15), arrowprops=dict(arrowstyle="-|>", lw=1.8))
+    ax.text(lo[0] + 19, -5, "g", fontsize=12, style="italic")
+    ok = case["max_stress_mpa"] <= g["allowable_stress_mpa"]
+    ax.text(0.99, 0.98, f"tip sag {case['tip_sag_mm']:.1f} mm, tip {case['tip_angle_deg']:.1f}° below horizontal\n"
+                        f"strip stress {case['max_stress_mpa']:.0f} MPa at s = {case['s_max_stress_mm']:.1f} mm "
+                        f"(allowable {g['allowable_stress_mpa']:g}: {'OK' if ok else 'OVER'})\n"
+                        f"base moment {case['base_moment_nmm']:.0f} N·mm, carried {case['carried_weight_n']:.2f} N\n"
+                        f"EI = {g['EI_nmm2']:.3g} N·mm² (E = {g['E_mpa'] / 1000:g} GPa); "
+                        f"bare strip: {g['uniform_strip']['tip_sag_mm']:.0f} mm",
+            transform=ax.transAxes, ha="right", va="top", fontsize=8.5,
+            bbox=dict(boxstyle="round", facecolor="white", edgecolor="0.6"))
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(min(lo[1], -50), max(hi[1], 60) + 45)        # room for the numbers above the robot
+    ax.set_aspect("equal")
+    ax.grid(True, lw=0.3, alpha=0.5)
+    ax.set_xlabel("horizontal (mm)")
+    ax.set_ylabel("vertical (mm)")
+    ax.legend(loc="lower left", fontsize=8)
+    ax.set_title(f"{report['design']}: own weight, no tendon tensioned (state N), flexible direction along gravity")
+    fig.tight_layout()
+    try:
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=110, format="png")
+    finally:
+        plt.close(fig)
+    return True

@@ -84,12 +84,20 @@ def transform(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:
     return points @ matrix[:3, :3].T + matrix[:3, 3]
 
 
-def load_parts(folder: Path, manifest: dict) -> list[ScenePart]:
-    """Every part of the manifest, read back from its STL (vertices merged)."""
+def is_fixture(entry: dict) -> bool:
+    """An assembly aid (the jig): drawn on its own, never in the robot's pictures."""
+    return bool(entry.get("fixture"))
+
+
+def load_parts(folder: Path, manifest: dict, fixtures: bool = False) -> list[ScenePart]:
+    """The robot's parts (or, with ``fixtures``, only the assembly aids), read back from their STLs
+    (vertices merged)."""
     import trimesh
     out = []
     keep = {"name", "role", "station", "files", "placement", "color", "volume_mm3", "bbox_mm"}
     for e in manifest["parts"]:
+        if is_fixture(e) != fixtures:
+            continue
         mesh = trimesh.load_mesh(str(Path(folder) / e["files"]["stl"]["path"]), process=True)
         out.append(ScenePart(e["name"], e["role"], np.asarray(mesh.vertices), np.asarray(mesh.faces),
                              np.asarray(e["placement"], dtype=float), e.get("station"),
@@ -97,10 +105,13 @@ def load_parts(folder: Path, manifest: dict) -> list[ScenePart]:
     return out
 
 
-def families(manifest: dict) -> list[str]:
-    """Part families (the manifest roles) in order of first appearance."""
+def families(manifest: dict, fixtures: bool = False) -> list[str]:
+    """Part families (the manifest roles) in order of first appearance; the assembly aids' too
+    with ``fixtures``."""
     seen: list[str] = []
     for e in manifest["parts"]:
+        if is_fixture(e) and not fixtures:
+            continue
         if e["role"] not in seen:
             seen.append(e["role"])
     return seen
@@ -113,12 +124,12 @@ def confusable(a, b) -> bool:
     return bool(np.min(np.linalg.norm(A[:, None] - B[None], axis=2)) < SAME_COLOUR)
 
 
-def family_colours(manifest: dict) -> dict[str, tuple[float, float, float]]:
+def family_colours(manifest: dict, fixtures: bool = False) -> dict[str, tuple[float, float, float]]:
     """One colour per family: the family's own manifest colour unless it is confusable with one
     already used (or the background), then the next palette colour that is not."""
     out: dict[str, tuple[float, float, float]] = {}
     candidates = list(FAMILY_PALETTE) + [tuple(c) for c in np.random.default_rng(0).uniform(0.1, 0.9, (64, 3))]
-    for role in families(manifest):
+    for role in families(manifest, fixtures):
         first = next(e for e in manifest["parts"] if e["role"] == role)
         rgb = np.asarray((first.get("color") or (0.7, 0.7, 0.7))[:3], dtype=float)
         if rgb.max() < MIN_LIGHTNESS:
@@ -152,18 +163,27 @@ def exploded_placements(parts: list[ScenePart], stations, explode_mm: float,
     """4x4 file -> exploded robot coordinates for every part.
 
     Disks move along y by station · explode; the strip is pulled out toward the base. The
-    other parts (the tensioner) ride with the disk nearest along y, clear of the tip disk;
-    the largest of them (the housing) stays put among them and every other one moves away
-    from its centre along its own offset, by OWN_EXPLODE_FACTOR explode distances plus half
-    the housing's width, so it comes out of the housing. Given the view, the offsets lie in
-    the picture plane: a part is moved beside the housing on the screen, not behind it.
+    other parts ride with the disk nearest along y, in groups: beyond the tip (the tensioner),
+    clear of the tip disk, and below the base (the base mount), clear of the base disk. The
+    largest part of a group (the housing, the mount) stays put among them and every other one
+    moves away from its centre along its own offset, by OWN_EXPLODE_FACTOR explode distances
+    plus half the group's width, so it comes out of it. Given the view, the offsets lie in the
+    picture plane: a part is moved beside its group's anchor on the screen, not behind it.
     """
     st = np.asarray(stations, dtype=float)
     e = float(explode_mm)
     loose = [p for p in parts if p.station is None and not _runs_along_backbone(p, st)]
-    anchor = max(loose, key=lambda p: np.prod(np.ptp(p.world_bounds(), axis=0)), default=None)
-    # a large group (the tensioner housing) needs more room than a gap to clear the tip disk on screen
-    loose_width = max((np.ptp(p.world_bounds()[:, [0, 2]], axis=0).max() for p in loose), default=0.0)
+
+    def side(p: ScenePart) -> int:
+        y = p.centre()[1]
+        return 1 if y > st[-1] else -1 if y < st[0] else 0
+
+    groups: dict[int, list[ScenePart]] = {}
+    for p in loose:
+        groups.setdefault(side(p), []).append(p)
+    anchor = {k: max(g, key=lambda p: np.prod(np.ptp(p.world_bounds(), axis=0))) for k, g in groups.items()}
+    # a large group (the tensioner housing) needs more room than a gap to clear its end disk on screen
+    width = {k: max(np.ptp(p.world_bounds()[:, [0, 2]], axis=0).max() for p in g) for k, g in groups.items()}
     d = None if toward_camera is None else np.asarray(toward_camera, float) / np.linalg.norm(toward_camera)
     out = {}
     for p in parts:
@@ -173,23 +193,22 @@ def exploded_placements(parts: list[ScenePart], stations, explode_mm: float,
         elif _runs_along_backbone(p, st):
             shift[1] = -STRIP_PULL_GAPS * e
         else:
+            k = side(p)
             c = p.centre()
             shift[1] = e * float(np.interp(c[1], st, np.arange(len(st))))
-            if c[1] > st[-1]:               # beyond the tip (the tensioner): clear of the tip disk
-                shift[1] += max(OWN_EXPLODE_FACTOR * e, loose_width)
-            elif c[1] < st[0]:
-                shift[1] -= OWN_EXPLODE_FACTOR * e
-            own = c - anchor.centre()
+            if k:                               # beyond an end disk: clear of it
+                shift[1] += k * max(OWN_EXPLODE_FACTOR * e, width[k])
+            own = c - anchor[k].centre()
             if d is not None:
                 own = own - d * (own @ d)
-                ahead = np.array([0.0, 1.0, 0.0]) - d * d[1]      # the robot's +y on the screen
-                ahead /= np.linalg.norm(ahead)
-                if own @ ahead < 0:            # never back toward the disks: sideways instead
-                    own = own - ahead * (own @ ahead)
+                away = np.array([0.0, float(k or 1), 0.0]) - d * d[1] * (k or 1)   # away from the disks, on screen
+                away /= np.linalg.norm(away)
+                if own @ away < 0:              # never back toward the disks: sideways instead
+                    own = own - away * (own @ away)
             n = np.linalg.norm(own)
-            if p is not anchor and n > 1.0:
-                # farther parts go farther (a worm and its wheel separate), and all clear the housing
-                shift += OWN_EXPLODE_SCALE * own + (OWN_EXPLODE_FACTOR * e + loose_width / 2) * own / n
+            if p is not anchor[k] and n > 1.0:
+                # farther parts go farther (a worm and its wheel separate), and all clear the anchor
+                shift += OWN_EXPLODE_SCALE * own + (OWN_EXPLODE_FACTOR * e + width[k] / 2) * own / n
         m = p.placement.copy()
         m[:3, 3] += shift
         out[p.name] = m

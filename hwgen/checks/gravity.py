@@ -1,0 +1,226 @@
+"""The robot's own weight: state N of Sect. III-B, the base mount's stiffness, and the strip's
+stress when the actuating pair bends it (:mod:`hwgen.model.sag` does the mechanics).
+
+State N: the robot straight and horizontal, its flexible direction (z) along gravity, no tendon
+tensioned. The loads are measured from the files: each part's volume and centroid from its STL,
+its density from the manifest (design data: the files do not say what they are made of). The
+strip (E from ``backbone.modulus_gpa``, I = h t³/12 from the strip's STL) is clamped at the base
+disk's mid-plane; the base disk and everything bolted to the table are the clamp's. Every other
+disk is a point weight at its centre of mass; everything beyond the tip station (the tensioner,
+and the strip it clamps) is the tip assembly, fixed to the tip frame at its centre of mass.
+Where a disk holds the strip (its plate and its hub, measured from its STL) the strip is
+stiffer: the plate holds it straight, the hub, glued on, adds its walls' E·I (E of the printed
+material from hwgen/data/materials.csv). Gravity is taken along -z and along +z and the worse
+kept. The verdict is the largest stress in the strip against ``backbone.allowable_stress_mpa``.
+
+Base mount: its thinnest section (about the axis across the robot), cut from its STL between the
+table and the strip, taken over the whole height as a cantilever under the base moment and the
+carried weight; the tip drops by the rotation this gives times the tip's reach.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..model import sag
+from ..model.materials import printed_modulus
+from .base import Check
+from .measure import chain_loops, section_moments, section_robot
+from .seating import SlotFit
+
+CURVE_POINTS = 300           # the deformed shape is reported at about this many points
+MOUNT_CUTS = 24              # sections of the base mount between the table and the strip
+GROUNDED_ROLES = ("base_mount", "base_clamp")
+
+
+def _downsample(arrs, n):
+    k = max(1, len(arrs[0]) // n)
+    return [np.r_[a[::k], a[-1:]] if (len(a) - 1) % k else a[::k] for a in arrs]
+
+
+def _spans(fits: list[SlotFit], length: float, ei_strip: float, e_print: float) -> list[sag.Span]:
+    """Where each disk holds the strip: its plate straight, its hub glued on (strip + hub walls)."""
+    spans = []
+    for f in fits:
+        a, b = f.slab
+        if min(b, length) > max(a, 0.0):
+            spans.append(sag.Span(max(a, 0.0), min(b, length), math.inf))
+        if f.hub_i:
+            ei = ei_strip + e_print * f.hub_i
+            for lo, hi in ((f.engaged[0], a), (b, f.engaged[1])):
+                lo, hi = max(lo, 0.0), min(hi, length)
+                if hi - lo > 1e-6:
+                    spans.append(sag.Span(lo, hi, ei))
+    return spans
+
+
+def loads(parts, manifest: dict, length: float):
+    """(strip mass per mm in g/mm and its record, [(part, s, mass)], tip assembly record) from the
+    STLs (volume, centroid) and the manifest's densities."""
+    entries = {p["name"]: p for p in manifest["parts"]}
+    strip, points, tip = None, [], []
+    for p in parts:
+        e = entries.get(p.name, {})
+        if not p.mesh.is_watertight or "density_g_cm3" not in e or e.get("fixture"):
+            continue
+        m = float(p.mesh.volume) / 1000 * e["density_g_cm3"]
+        com = p.placement[:3, :3] @ p.mesh.center_mass + p.placement[:3, 3]
+        if p.role == "backbone":
+            lo, hi = p.robot_bounds()[:, 1]
+            strip = {"part": p.name, "mass_g": m, "y_mm": [float(lo), float(hi)], "lambda_g_mm": m / (hi - lo)}
+            continue
+        if p.role in GROUNDED_ROLES or e.get("grounded") or (p.role == "disk" and e.get("station") == 0):
+            continue
+        if com[1] > length:
+            tip.append((p.name, m, com))
+        else:
+            points.append((p.name, float(com[1]), m))
+    if strip is not None and strip["y_mm"][1] > length:
+        beyond = strip["y_mm"][1] - length
+        tip.append((f"{strip['part']} beyond the tip", strip["lambda_g_mm"] * beyond,
+                    np.array([0.0, length + beyond / 2, 0.0])))
+    mt = sum(m for _, m, _ in tip)
+    c = sum(m * c for _, m, c in tip) / mt if mt else np.array([0.0, length, 0.0])
+    return strip, points, {"parts": [n for n, _, _ in tip], "mass_g": mt, "center_of_mass_mm": c.tolist(),
+                           "a_mm": float(c[1] - length), "z_mm": float(c[2])}
+
+
+def _case(r: sag.SagResult) -> dict:
+    return {"tip_sag_mm": r.tip_sag, "tip_angle_deg": -r.tip_angle_deg, "tip_y_mm": r.tip_y,
+            "base_moment_nmm": abs(r.base_moment), "max_stress_mpa": r.max_stress, "s_max_stress_mm": r.s_max_stress,
+            "carried_weight_n": r.total_weight,
+            "linear": {"tip_sag_mm": r.lin_tip_sag, "tip_angle_deg": -math.degrees(r.lin_tip_angle),
+                       "base_moment_nmm": abs(r.lin_base_moment)}}
+
+
+def gravity_checks(parts, manifest: dict, design, fits: list[SlotFit], strip_h: float | None,
+                   strip_t: float | None, length: float) -> tuple[dict, list[Check]]:
+    """State N, the mount's stiffness and the strip under the actuating pair: (report, checks)."""
+    bb = design.backbone
+    h = strip_h if strip_h else bb.height
+    t = strip_t if strip_t else bb.thickness
+    E = bb.modulus_gpa * 1000.0
+    I = sag.second_moment(h, t)
+    e_print, e_why = printed_modulus(design.process)
+    e_print *= 1000.0
+    strip, points, tip = loads(parts, manifest, length)
+    if strip is None:
+        return {}, [Check("gravity.strip_stress", "error", False, "no strip to load: the backbone STL is missing")]
+    spans = _spans(fits, length, E * I, e_print)
+    st = [s for _, s, _ in points]
+    ms = [m for _, _, m in points]
+    common = dict(E=E, I=I, thickness=t, strip_lin_density=strip["lambda_g_mm"], tip_mass=tip["mass_g"])
+    cases = {}
+    for down, sign in (("-z", 1.0), ("+z", -1.0)):
+        cases[down] = sag.solve_sag(length, st, ms, tip_offset=(tip["a_mm"], sign * tip["z_mm"]), spans=spans,
+                                    **common)
+    worst_key = max(cases, key=lambda k: cases[k].max_stress)
+    r = cases[worst_key]
+    bare = sag.solve_sag(length, st, ms, tip_offset=(tip["a_mm"], (1 if worst_key == "-z" else -1) * tip["z_mm"]),
+                         **common)
+    allow = bb.allowable_stress_mpa
+    s, y, z, stress = _downsample([r.s, r.y, r.z, r.stress], CURVE_POINTS)
+    report = {
+        "model": "planar elastica of the strip clamped at the base disk's mid-plane, robot horizontal, z along "
+                 "gravity, no tendon tensioned (state N); solved by shooting (hwgen.model.sag)",
+        "assumptions": [
+            "masses: STL volumes × the manifest's densities (design data); centres of mass from the STLs",
+            "the base disk and the base mount are the clamp's; other disks are point weights at their centres of mass",
+            "everything beyond the tip station (tensioner, clamped strip) is rigid on the tip frame",
+            "disk plates hold the strip straight; glued hubs add E_print·I_hub (E_print: " + e_why + ")",
+            "tendons slack and weightless; the strip's width does not curl (anticlastic factor ≈ 1.01)",
+            "the clamp is rigid; its own give is the mount check's"],
+        "E_mpa": E, "I_mm4": I, "EI_nmm2": E * I, "thickness_mm": t, "height_mm": h, "length_mm": length,
+        "print_modulus_mpa": e_print,
+        "strip": strip,
+        "disks": [{"part": n, "s_mm": s_, "mass_g": m} for n, s_, m in points],
+        "tip_assembly": tip,
+        "spans": [{"start_mm": sp.start, "end_mm": sp.end, "ei_nmm2": None if math.isinf(sp.ei) else sp.ei}
+                  for sp in spans],
+        "cases": {k: _case(v) for k, v in cases.items()},
+        "gravity": worst_key,
+        "uniform_strip": _case(bare),
+        "allowable_stress_mpa": allow,
+        "curve": {"s_mm": s.tolist(), "y_mm": y.tolist(), "z_mm": z.tolist(), "stress_mpa": stress.tolist(),
+                  "psi_deg": np.degrees(np.interp(s, r.s, r.psi)).tolist(),
+                  "tip_com_mm": list(r.tip_com), "tip_angle_deg": r.tip_angle_deg},
+        "solve_s": sum(c.solve_time for c in cases.values()) + bare.solve_time,
+    }
+    checks = []
+    ok = r.max_stress <= allow
+    sev = design.check.overstress
+    text = (f"state N (no tendon tensioned, horizontal, gravity along {worst_key}): tip sags {r.tip_sag:.1f} mm, "
+            f"tip {-r.tip_angle_deg:.1f}° below horizontal; the strip's largest bending stress "
+            f"{r.max_stress:.1f} MPa at s = {r.s_max_stress:.1f} mm "
+            f"({'under' if ok else 'over'} the allowable {allow:g} MPa), base moment {abs(r.base_moment):.0f} N·mm; "
+            f"carries {tip['mass_g']:.1f} g at {tip['a_mm']:.1f} mm beyond the tip, "
+            f"{sum(ms):.1f} g of disks and {strip['mass_g']:.1f} g of strip (masses from the STLs and the "
+            f"manifest's densities; E = {E / 1000:g} GPa); as a bare strip without hubs "
+            f"{bare.tip_sag:.1f} mm and {bare.max_stress:.1f} MPa")
+    checks.append(Check("gravity.strip_stress", sev if not ok else "error", ok, text, r.max_stress, allow,
+                        {"part": strip["part"], "gravity": worst_key, "s_mm": r.s_max_stress}))
+    checks.append(Check("gravity.sag", "info", True, f"state N: tip sag {r.tip_sag:.1f} mm (small-deflection "
+                        f"theory: {r.lin_tip_sag:.1f} mm)", r.tip_sag, None, {"gravity": worst_key}))
+    mount, c = _mount_check(parts, design, r, e_print, e_why)
+    report["mount"] = mount
+    checks += c
+    bend, c = _bend_check(design, spans, E, I, t, length)
+    report["bend"] = bend
+    checks += c
+    return report, checks
+
+
+def _mount_check(parts, design, r: sag.SagResult, e_print: float, e_why: str) -> tuple[dict, list[Check]]:
+    mount = next((p for p in parts if p.role == "base_mount"), None)
+    if mount is None:
+        return {}, []
+    lo, hi = mount.robot_bounds()[:, 2]
+    top = min(hi, 0.0)
+    zs = np.linspace(lo, top, MOUNT_CUTS + 2)[1:-1]
+    best = None
+    for zc in zs:
+        segs = section_robot(mount.mesh, mount.placement, 2, float(zc))
+        loops = chain_loops(segs[:, :, [0, 1]]) if len(segs) else []
+        if not loops:
+            continue
+        mo = section_moments(loops)
+        if best is None or mo["i_vc"] < best[1]["i_vc"]:
+            best = (float(zc), mo)
+    if best is None:
+        return {}, [Check("mount.stiffness", "error", False, f"{mount.name}: no section between table and strip")]
+    zc, mo = best
+    H = 0.0 - lo                                      # table to the strip's plane
+    M, W = abs(r.base_moment), r.total_weight
+    theta = (M + W * H / 2) * H / (e_print * mo["i_vc"])
+    drop = theta * r.tip_y
+    share = drop / r.tip_sag if r.tip_sag > 0 else 0.0
+    limit = design.base_mount.max_tip_share
+    ok = share <= limit
+    strip_k = r.EI / r.L
+    mount_k = e_print * mo["i_vc"] / H
+    rep = {"part": mount.name, "height_mm": H, "thinnest_section_z_mm": zc, "section_area_mm2": mo["area"],
+           "section_i_mm4": mo["i_vc"], "modulus_mpa": e_print, "rotation_rad": theta, "tip_drop_mm": drop,
+           "share_of_sag": share, "limit": limit, "rotational_stiffness_nmm_rad": mount_k,
+           "strip_rotational_stiffness_nmm_rad": strip_k,
+           "model": "cantilever column from the table to the strip, its thinnest section over the whole height, "
+                    "under the base moment and the carried weight; foot bolts and table rigid; E: " + e_why}
+    msg = (f"{mount.name}: thinnest section {mo['area']:.0f} mm², I = {mo['i_vc']:.3g} mm⁴ (at z = {zc:.1f} mm), "
+           f"{H:.0f} mm from table to strip: under the state-N base moment {M:.0f} N·mm it turns "
+           f"{theta * 1e3:.3f} mrad, "
+           f"dropping the tip {drop:.3f} mm, {share * 100:.2f} % of the {r.tip_sag:.1f} mm sag (limit "
+           f"{limit * 100:g} %); {mount_k / strip_k:.0f}× the strip's EI/L")
+    return rep, [Check("mount.stiffness", "error", ok, msg, share, limit, {"part": mount.name})]
+
+
+def _bend_check(design, spans, E, I, t, length) -> tuple[dict, list[Check]]:
+    ang = design.check_angle_deg
+    stress, kappa = sag.bending_stress_under_uniform_moment(length, math.radians(ang), E, I, t, spans)
+    bare = E * t / 2 * math.radians(ang) / length
+    allow = design.backbone.allowable_stress_mpa
+    ok = stress <= allow
+    msg = (f"bent {ang:g}° by the actuating pair (a moment uniform along the strip), the strip between the disks' "
+           f"plates and hubs (measured) curves at {kappa * 1000:.2f} /m: {stress:.1f} MPa, "
+           f"{'under' if ok else 'over'} the allowable {allow:g} MPa (a strip without hubs: {bare:.1f} MPa)")
+    return ({"angle_deg": ang, "stress_mpa": stress, "curvature_per_mm": kappa, "bare_stress_mpa": bare},
+            [Check("backbone.bend_stress", "error", ok, msg, stress, allow, {"angle_deg": ang})])

@@ -1,0 +1,168 @@
+"""How each disk is held on the strip, and how each tendon ends at the base disk (numpy only).
+
+Hub. A disk on the strip can tilt about x (pitch along the backbone) until the strip touches
+the slot's top and bottom: with g the slot's height over the strip's thickness and ℓ the length
+along the backbone over which the slot holds the strip, the tilt is atan(g / ℓ). A 3 mm disk
+alone lets the strip rock; a hub (a sleeve around the slot on one face of the disk) makes ℓ as
+long as the chosen tilt needs. It sits on the disk's tip-side face, except on the tip disk,
+whose tip-side face carries the tensioner, so that each disk prints on its flat face. Wherever a
+tendon passes through the hub's envelope (the strip crossings in the slot, and any tendon close
+to it over the bending sweep) the hub is cut away over the x range the tendon occupies: bending
+is about x, so a tendon's x at a given distance from the disk does not depend on the bend.
+
+Seats. Each tendon ends on its own seat: a hole through a plate on the base disk's outer face,
+smaller than its knot or crimp sleeve. The eyelet bore stops at the plate, so the routing point
+(the eyelet's centre at the disk's mid-plane) stays where the design puts it; tendons that share
+an eyelet get seats spaced around the bore's exit, at least a wall and at least a termination
+apart, in the angular order in which the tendons would leave the eyelet backwards.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..params import Design, Termination
+from .specs import Hole, HubSpec, Seat
+
+LENGTH_STEP_MM = 0.1        # hub engagement lengths are rounded up to this
+HUB_SAMPLES = 9             # planes across the hub at which each tendon's path is tested
+SEAT_MARGIN_MM = 0.2        # a chamber over the plate reaches this far beyond the outermost seat
+CHAMBER_HEIGHT_MM = 0.6     # height of that chamber above the plate
+SEAT_WALL_MARGIN = 0.1      # over the minimum wall between two seats: the STL's chords and the printer's ±0.05 mm
+
+
+def engagement_length(design: Design) -> float:
+    """ℓ: the length along the backbone over which the slot holds the strip, disk included, mm.
+
+    ``disks.hub.length`` when given; otherwise the shortest (to LENGTH_STEP_MM) over which the
+    slot's clearance allows no more than ``disks.hub.max_tilt_deg``: ℓ = g / tan θ.
+    """
+    hub = design.disks.hub
+    if hub.length is not None:
+        return float(hub.length)
+    g = 2 * design.disks.slot_clearance
+    ell = g / math.tan(math.radians(hub.max_tilt_deg))
+    return math.ceil(ell / LENGTH_STEP_MM - 1e-9) * LENGTH_STEP_MM
+
+
+def hub_side(role: str) -> int:
+    """+1: the hub runs from the disk's tip-side face toward the tip; -1 (the tip disk) toward the base."""
+    return -1 if role == "tip" else 1
+
+
+def hub_extension(design: Design, thickness: float) -> float:
+    """How far the hub stands off the disk's face: the engagement beyond the disk, and never less
+    than its glue port with a wall either side."""
+    least = design.disks.hub.glue_port_diameter + 2 * design.process.min_wall
+    return max(engagement_length(design) - thickness, least)
+
+
+def _intervals_minus(lo: float, hi: float, cuts: list[tuple[float, float]]) -> list[tuple[float, float]]:
+    """[lo, hi] without the (merged) cuts."""
+    out, x = [], lo
+    for a, b in sorted(cuts):
+        if a > x:
+            out.append((x, min(a, hi)))
+        x = max(x, b)
+        if x >= hi:
+            break
+    if x < hi:
+        out.append((x, hi))
+    return [(a, b) for a, b in out if b > a]
+
+
+def hub_spec(design: Design, i: int, role: str, thickness: float, slot_w: float, slot_h: float,
+             holes: tuple[Hole, ...], points: dict[str, np.ndarray], sweep: dict[str, tuple]) -> HubSpec:
+    """The hub of disk i: its side and length, and a window wherever a tendon passes through it.
+
+    ``points``: each tendon's (x, z) at this disk; ``sweep``: each tendon's (into, out_of)
+    directions in this disk's frame over the bending sweep, (K, 3) each.
+    """
+    side = hub_side(role)
+    ext = hub_extension(design, thickness)
+    wall = design.disks.hub.wall
+    proc, td = design.process, design.tendon_material
+    half_x, half_z = slot_w / 2 + wall, slot_h / 2 + wall
+    ys = side * np.linspace(thickness / 2, thickness / 2 + ext, HUB_SAMPLES)
+    own_hole = {t: h for h in holes for t in h.tendons}
+    cuts = []
+    for name, (into, out) in sweep.items():
+        u = out if side > 0 else -into                       # along the tendon, away from the disk
+        if np.isnan(u).any():
+            continue
+        h = own_hole.get(name)
+        w = max((h.diameter / 2 + design.disks.eyelets.edge_size) if h else 0.0,
+                td.diameter / 2 + proc.hole_clearance)
+        x0, z0 = points[name]
+        t = ys[None, :] / u[:, 1:2]                         # (K, S) distance along the line
+        x = x0 + u[:, 0:1] * t
+        z = z0 + u[:, 2:3] * t
+        near = (np.abs(x) < half_x + w) & (np.abs(z) < half_z + w)
+        if near.any():
+            cuts.append((float(x[near].min() - w), float(x[near].max() + w)))
+    solid = _intervals_minus(-half_x, half_x, cuts)
+    # a sliver of hub between two windows is no wall: drop what is thinner than two walls
+    solid = [(a, b) for a, b in solid if b - a >= 2 * proc.min_wall]
+    windows = tuple(_intervals_minus(-half_x, half_x, solid))
+    port = None
+    d_port = design.disks.hub.glue_port_diameter
+    over_slot = [(max(a, -slot_w / 2), min(b, slot_w / 2)) for a, b in solid]
+    over_slot = [(a, b) for a, b in over_slot if b - a >= d_port + 2 * proc.min_wall]
+    if over_slot:
+        a, b = max(over_slot, key=lambda ab: ab[1] - ab[0])
+        port = ((a + b) / 2, ext / 2, d_port)
+    return HubSpec(side, ext, wall, windows, port)
+
+
+def termination_of(design: Design, tendon: str) -> Termination:
+    """How a tendon (or the mirror of one) ends: its own termination, else the material's."""
+    for t in design.tendons:
+        names = {t.name}
+        if t.routing.mirror:
+            names.add(t.routing.mirror_name or f"{t.name}_m")
+        if tendon in names and t.termination is not None:
+            return t.termination
+    return design.tendon_material.termination
+
+
+def seat_diameter(design: Design) -> float:
+    """The opening of a seat: the tendon with the process's hole clearance, never under its smallest hole."""
+    return max(design.process.min_hole, design.tendon_material.diameter + design.process.hole_clearance)
+
+
+def seats_for(design: Design, hole: Hole, thickness: float, directions: dict[str, np.ndarray]
+              ) -> tuple[list[Seat], tuple[float, float, float, float] | None]:
+    """Seats for the tendons of one base-disk eyelet, and the chamber over the plate that joins
+    them to the eyelet's bore when they reach beyond it (None when the bore covers them).
+
+    ``directions``: each tendon's direction leaving the base disk in the straight robot (local
+    frame, +y toward the tip); the seats follow the order in which they would leave backwards.
+    """
+    plate = design.disks.anchors.plate
+    dia = seat_diameter(design)
+    ax = np.asarray(hole.axis, dtype=float)
+    depth = -thickness / 2 + plate                       # local y of the plate's top face
+    c = np.array([hole.x, hole.z]) + ax[[0, 2]] * depth / ax[1]
+    terms = {t: termination_of(design, t) for t in hole.tendons}
+    n = len(hole.tendons)
+    if n == 1:
+        (t,) = hole.tendons
+        return [Seat(t, float(c[0]), float(c[1]), dia, terms[t].diameter)], None
+    s = max(dia + design.process.min_wall + SEAT_WALL_MARGIN, max(tm.diameter for tm in terms.values()))
+    rho = s / (2 * math.sin(math.pi / n))
+    ang = {}
+    for t in hole.tendons:
+        u = np.asarray(directions[t], dtype=float)
+        back = -u[[0, 2]] / u[1]
+        ang[t] = math.atan2(back[1], back[0]) if np.hypot(*back) > 1e-9 else 0.0
+    order = sorted(hole.tendons, key=lambda t: ang[t])
+    phi0 = ang[order[0]]
+    seats = []
+    for j, t in enumerate(order):
+        phi = phi0 + 2 * math.pi * j / n
+        p = c + rho * np.array([math.cos(phi), math.sin(phi)])
+        seats.append(Seat(t, float(p[0]), float(p[1]), dia, terms[t].diameter))
+    reach = rho + dia / 2 + SEAT_MARGIN_MM
+    chamber = None if reach <= hole.diameter / 2 else (float(c[0]), float(c[1]), 2 * reach, CHAMBER_HEIGHT_MM)
+    return seats, chamber

@@ -1,0 +1,179 @@
+"""The base mount and the assembly jig, laid out as plain numbers (numpy only).
+
+Robot coordinates throughout (mm): y along the backbone from the base disk's mid-plane, x across
+the strip, z through it. For the own-weight test of Sect. III-B the robot lies horizontal with its
+flexible direction (z) along gravity, so the mount stands on a table with z up.
+
+Base mount. Two printed jaws clamp the strip's base length (``backbone.extra_base`` less half the
+base disk) between them; the lower jaw stands on a column and a foot that bolts to the table, the
+upper jaw is screwed down onto the strip, and the base disk bolts to the front of both jaws. The
+column stands back from the base disk (ACCESS_MM) so the seats on its outer face stay within reach;
+the foot's holes are on the table's grid.
+
+Jig. A floor with two comb walls, one each side of the disks: each disk drops into a slot in both
+walls, the floor under its rim, so it stands square at its station while the adhesive cures. The
+jig is split between two disks into pieces that fit the printer, joined by dovetails in the floor.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..params import Design
+
+# Bolt patterns of the tables the mount stands on: pitch, clearance hole, screw.
+#   M6 on 25 mm: metric optical breadboards; ISO 273 normal clearance for M6 is 6.6 mm.
+#   1/4-20 on 1 in: imperial breadboards; ASME B18.2.8 normal clearance for 1/4 in is 0.281 in (7.1 mm).
+BOLT_PATTERNS = {
+    "M6_25mm": (25.0, 6.6, "M6"),
+    "quarter20_1in": (25.4, 7.1, "1/4-20 UNC"),
+}
+FOOT_PITCHES_X = 4          # foot holes this many pitches apart across the robot (clear of the jaws)
+FOOT_PITCHES_Y = 1          # and this many along it: two rows
+FOOT_THICKNESS = 10.0       # mm: under an M6 washer a 10 mm resin plate does not dish
+FOOT_EDGE = 8.0             # mm from a foot hole's centre to the foot's edge
+ACCESS_MM = 10.0            # the column and foot stand this far back from the base disk: room to reach its seats
+JAW_MARGIN = 4.0            # jaw screws this far outside the strip's edges (centre), mm
+JAW_EDGE = 3.0              # jaw edge beyond a jaw screw hole, mm
+JAW_BOTTOM = -18.0          # the lower jaw reaches down to this z; below it, only the column (set back)
+UPPER_JAW = 12.0            # height of the upper jaw above the strip, mm
+JAW_BEYOND_STRIP = 2.0      # the jaws run this far past the strip's base end, mm
+STRIP_RECESS_FRACTION = 0.5  # the strip lies in a recess this share of its thickness deep in the lower jaw
+STRIP_RECESS_CLEARANCE = 0.1  # per side, strip to recess, mm
+CLAMP_GAP = 0.01            # each jaw stands this far off the strip until the jaw screws close them on it, mm
+JAW_SCREW_FROM_END = 7.0    # jaw screws this far from the jaws' front and back faces, mm
+NUT_AF, NUT_THICK, NUT_PLAY = 5.5, 2.4, 0.3   # ISO 4032 M3 nut and the room it slides in with
+NUT_DEPTH = 3.5             # nut traps this far below the lower jaw's top face, mm
+M3_HEAD = 5.5               # ISO 4762 M3 head diameter (for access around the disk screws), mm
+
+JIG_ENGAGE = 3.0            # a disk's rim enters each comb wall this deep (x), mm
+JIG_WALL_ABOVE = 2.0        # walls rise this far above where the disk's rim leaves them, mm
+JIG_END_TOOTH = 6.0         # comb tooth beyond each end disk, mm
+DOVETAIL = (8.0, 12.0, 6.0)  # neck width, end width, depth of each dovetail key, mm
+DOVETAIL_X = 20.0           # two keys at x = ±this, mm
+DOVETAIL_PLAY = 0.1         # per side, key in its socket, mm
+PRINT_MARGIN = 2.0          # a jig piece stays this far inside the printer's longest axis, mm
+
+
+@dataclass(frozen=True)
+class MountLayout:
+    y_face: float               # base disk's outer face: the jaws' front
+    y_back: float               # the jaws' back face
+    y_column_front: float       # the column and foot stand behind this
+    y_foot_back: float
+    jaw_half_x: float
+    z_table: float              # the foot's underside
+    z_foot_top: float
+    z_jaw_bottom: float
+    z_lower_top: float          # the lower jaw's top face (beside the strip's recess)
+    z_recess: float             # floor of the strip's recess: the strip's underside
+    z_upper_bottom: float       # the upper jaw's underside: the strip's top
+    z_upper_top: float
+    recess_half_x: float
+    jaw_screws: tuple[tuple[float, float], ...]      # (x, y), vertical M3 through both jaws
+    disk_screws: tuple[tuple[float, float], ...]     # (x, z), along y through the jaws
+    screw_hole: float
+    foot_holes: tuple[tuple[float, float], ...]      # (x, y), vertical
+    foot_hole: float
+    bolt: str                   # what goes in the foot holes
+    pitch: float
+    foot_half_x: float
+
+
+def mount_layout(d: Design) -> MountLayout:
+    bm, bb = d.base_mount, d.backbone
+    pitch, hole, bolt = BOLT_PATTERNS[bm.bolt_pattern]
+    y_face = -d.disks.end_thickness / 2
+    y_back = -bb.extra_base - JAW_BEYOND_STRIP
+    y_col = y_face - ACCESS_MM
+    t = bb.thickness
+    jaw_x = bb.height / 2 + JAW_MARGIN
+    half_x = jaw_x + bm.screw_hole / 2 + JAW_EDGE
+    z_table = -(d.disks.outer_diameter / 2 + bm.table_clearance)
+    fx = FOOT_PITCHES_X * pitch / 2
+    rows = (y_col - FOOT_EDGE, y_col - FOOT_EDGE - FOOT_PITCHES_Y * pitch)
+    feet = tuple((sx * fx, y) for y in rows for sx in (-1, 1))
+    screws = tuple((sx * jaw_x, y) for y in (y_back + JAW_SCREW_FROM_END, y_face - JAW_SCREW_FROM_END)
+                   for sx in (-1, 1))
+    return MountLayout(
+        y_face=y_face, y_back=y_back, y_column_front=y_col, y_foot_back=min(rows) - FOOT_EDGE,
+        jaw_half_x=half_x, z_table=z_table, z_foot_top=z_table + FOOT_THICKNESS, z_jaw_bottom=JAW_BOTTOM,
+        z_lower_top=-t / 2 + STRIP_RECESS_FRACTION * t, z_recess=-t / 2 - CLAMP_GAP, z_upper_bottom=t / 2 + CLAMP_GAP,
+        z_upper_top=t / 2 + CLAMP_GAP + UPPER_JAW, recess_half_x=bb.height / 2 + STRIP_RECESS_CLEARANCE,
+        jaw_screws=screws, disk_screws=tuple((float(x), float(z)) for x, z in bm.disk_screws),
+        screw_hole=bm.screw_hole, foot_holes=feet, foot_hole=hole, bolt=bolt, pitch=pitch,
+        foot_half_x=fx + FOOT_EDGE)
+
+
+def mount_problems(d: Design) -> list[tuple[str, str]]:
+    """Why the mount cannot be made for this design: (field path, message)."""
+    out = []
+    lay = mount_layout(d)
+    clamp = lay.y_face + d.backbone.extra_base
+    least = 2 * JAW_SCREW_FROM_END + 1
+    if clamp < least:
+        out.append(("backbone.extra_base", f"{d.backbone.extra_base:g} mm leaves {clamp:g} mm of strip between the "
+                                           f"base mount's jaws beyond the base disk; they need {least:g} mm "
+                                           f"(extra_base ≥ {least - lay.y_face:g})"))
+    if lay.z_table + FOOT_THICKNESS >= JAW_BOTTOM:
+        out.append(("base_mount.table_clearance", "the foot would reach the jaws"))
+    r = d.disks.outer_diameter / 2
+    for k, (x, z) in enumerate(lay.disk_screws):
+        h = lay.screw_hole / 2
+        if not (lay.z_upper_bottom + h + d.process.min_wall <= z <= lay.z_upper_top - h - d.process.min_wall
+                or JAW_BOTTOM + h + d.process.min_wall <= z <= lay.z_recess - h - d.process.min_wall):
+            out.append((f"base_mount.disk_screws[{k}]", f"z = {z:g} mm is not inside a jaw with a wall around "
+                                                        f"the screw (upper jaw {lay.z_upper_bottom:.2f} to "
+                                                        f"{lay.z_upper_top:.2f}, lower {JAW_BOTTOM:g} to "
+                                                        f"{lay.z_recess:.2f} mm)"))
+        elif math.hypot(x, z) + M3_HEAD / 2 > r or abs(x) + h + d.process.min_wall > lay.jaw_half_x:
+            out.append((f"base_mount.disk_screws[{k}]", f"({x:g}, {z:g}) is not inside the base disk and the jaws"))
+    return out
+
+
+@dataclass(frozen=True)
+class JigPiece:
+    index: int
+    y0: float                   # the piece's ends along the backbone (its floor and walls)
+    y1: float
+    key_out: bool               # dovetails stand out of its +y end (into the next piece)
+    key_in: bool                # sockets for the previous piece's dovetails at its -y end
+
+
+@dataclass(frozen=True)
+class JigLayout:
+    pieces: tuple[JigPiece, ...]
+    slots: tuple[tuple[float, float], ...]    # y ranges of the comb slots (one per disk)
+    x_inner: float              # comb walls from |x| = x_inner ...
+    x_outer: float              # ... to x_outer
+    x_slot: float               # slot bottoms at |x| = x_slot
+    z_floor_bottom: float
+    z_floor_top: float
+    z_top: float
+    dovetail: tuple[float, float, float]
+    dovetail_x: tuple[float, ...]
+    play: float
+
+
+def jig_layout(d: Design) -> JigLayout:
+    jg = d.jig
+    st = d.stations
+    r = d.disks.outer_diameter / 2
+    thick = [d.disks.end_thickness if i in (0, len(st) - 1) else d.disks.thickness for i in range(len(st))]
+    slots = tuple((y - t / 2 - jg.clearance, y + t / 2 + jg.clearance) for y, t in zip(st, thick))
+    y0 = slots[0][0] - JIG_END_TOOTH
+    y1 = slots[-1][1] + JIG_END_TOOTH
+    longest = max(d.process.build_volume[:2]) - PRINT_MARGIN - DOVETAIL[2]
+    n = max(1, math.ceil((y1 - y0) / longest))
+    # cut in the middle of the gap between two disks nearest each equal division
+    gaps = [(slots[i][1] + slots[i + 1][0]) / 2 for i in range(len(st) - 1)]
+    cuts = []
+    for k in range(1, n):
+        target = y0 + k * (y1 - y0) / n
+        cuts.append(min(gaps, key=lambda g: abs(g - target)))
+    ends = [y0, *sorted(set(cuts)), y1]
+    pieces = tuple(JigPiece(k, a, b, k < len(ends) - 2, k > 0) for k, (a, b) in enumerate(zip(ends, ends[1:])))
+    x_in = r - JIG_ENGAGE
+    z_floor_top = -r - jg.clearance
+    return JigLayout(pieces, slots, x_in, x_in + jg.wall, r + jg.clearance, z_floor_top - jg.floor, z_floor_top,
+                     math.sqrt(r**2 - x_in**2) + JIG_WALL_ABOVE, DOVETAIL, (-DOVETAIL_X, DOVETAIL_X), DOVETAIL_PLAY)
