@@ -11,6 +11,7 @@ import yaml
 from .conftest import PARAMS
 
 BASE = yaml.safe_load((PARAMS / "prototype.yaml").read_text())
+MIN_SPACING = 12.0        # mm: two hubs of the shortest length (glue port and walls) and a disk fit one gap
 
 
 def _function(rng: np.random.Generator, r_max: float) -> dict:
@@ -29,12 +30,34 @@ def _function(rng: np.random.Generator, r_max: float) -> dict:
     return f
 
 
+def _starts_in_slot(f: dict, length: float) -> bool:
+    """A tendon must start off the strip at the base disk: its knot needs a seat there."""
+    from hwgen.model.routing import sample_function
+    from hwgen.params import RoutingFunction
+    x, z = sample_function(RoutingFunction(**f), [0.0], length)[0]
+    return abs(x) < BASE["backbone"]["height"] / 2 + 2 and abs(z) < 3
+
+
+def _hub_tilt(doc: dict) -> float:
+    """The tilt a designer allows so that every hub ends short of the next disk: the default 0.5°
+    where the disks are far enough apart, more on a dense robot."""
+    from hwgen.model.feasibility import _hub_problems
+    from hwgen.params import Design
+    tilt = doc["disks"]["hub"]["max_tilt_deg"]
+    while tilt < 10 and _hub_problems(Design.model_validate(doc)):
+        tilt = round(tilt + 0.25, 2)
+        doc["disks"]["hub"]["max_tilt_deg"] = tilt
+    return tilt
+
+
 def random_robot(rng: np.random.Generator, name: str) -> dict:
-    """A design document (as from YAML) with 1-6 tendons on 4-25 disks."""
+    """A design document (as from YAML) with 1-6 tendons on 4-25 disks, at least 12 mm apart (closer,
+    two disks' hubs cannot both fit one gap), each tendon starting off the strip, and the hubs' tilt
+    allowance what the spacing leaves room for."""
     doc = copy.deepcopy(BASE)
     doc["design"] = name
     length = float(rng.choice([180, 220, 270, 320]))
-    count = int(rng.integers(4, 26))
+    count = min(int(rng.integers(4, 26)), int(length // MIN_SPACING) + 1)
     doc["backbone"]["length"] = length
     doc["disks"]["count"] = count
     doc["disks"]["spacing"] = length / (count - 1)
@@ -43,7 +66,10 @@ def random_robot(rng: np.random.Generator, name: str) -> dict:
     n = int(rng.integers(1, 7))
     pair = rng.random() < 0.5 and n >= 2
     for i in range(n - (1 if pair else 0)):
-        t = {"name": f"T{i}", "channel": f"K{i}", "routing": {"function": _function(rng, r_max)}}
+        f = _function(rng, r_max)
+        while _starts_in_slot(f, length):
+            f = _function(rng, r_max)
+        t = {"name": f"T{i}", "channel": f"K{i}", "routing": {"function": f}}
         tendons.append(t)
     if pair:          # an actuating pair on one channel, mirrored through the strip plane
         tendons[0] = {"name": "A1", "channel": "K0",
@@ -59,6 +85,7 @@ def random_robot(rng: np.random.Generator, name: str) -> dict:
         doc["backbone"]["extra_tip"] = 2
     doc["tensioner"]["channels"] = sorted({t["channel"] for t in tendons})
     doc["tensioner"]["actuating_channel"] = tendons[0]["channel"]
+    _hub_tilt(doc)
     return doc
 
 

@@ -2,7 +2,6 @@
 solver. Written with the model as a standalone prototype; the loads here are the prototype's
 (Table I stations, 11 cm³ inner and 13 cm³ end disks of 1.15 g/cm³ resin, 1.40 g/cm³ strip)."""
 import math
-import time
 
 import numpy as np
 import pytest
@@ -325,14 +324,6 @@ def test_stiff_spans_stiffen_and_carry_the_moment():
     assert np.allclose(r1.stress[inside], np.abs(r1.moment[inside]) * T / 2 / I_STRIP / 7)
     assert np.all(r2.stress[(r2.s > 23) & (r2.s < 33)] == 0)
     assert r2.base_moment == pytest.approx(sag.base_moment_from_statics(r2), rel=1e-7)
-
-
-def test_runtime_well_under_a_second():
-    proto(tip_mass=260.0, tip_offset=(60.0, 0.0))  # warm up
-    t = time.perf_counter()
-    r = proto(tip_mass=260.0, tip_offset=(60.0, 0.0))
-    assert time.perf_counter() - t < 0.5
-    assert r.solve_time < 0.5
 
 
 def test_uniform_moment_bending_stress():

@@ -32,6 +32,8 @@ def design_report(plan: Plan) -> dict:
                        "glue_port": None if d.hub.port is None else {
                            "x_mm": d.hub.port[0], "beyond_face_mm": d.hub.port[1], "diameter_mm": d.hub.port[2]}},
                    "seat_plate_mm": d.seat_plate,
+                   "seat_chambers": [{"x": x, "z": z, "diameter_mm": dia, "height_mm": h}
+                                     for x, z, dia, h in d.seat_chambers],
                    "seats": [{"tendon": s.tendon, "x": s.x, "z": s.z, "diameter_mm": s.diameter,
                               "termination_mm": s.termination} for s in d.seats]} for d in plan.disks],
         "merges": [{"station": m.station, "tendons": list(m.tendons), "kind": m.kind} for m in plan.merges],

@@ -173,8 +173,11 @@ def _seats(parts, emap, rep_in, d):
 def _measure_disks(folder: Path, manifest: dict, meshes: dict, tol: float):
     """Every disk's STL sectioned (through its placement), and where its mid-plane lies."""
     ys = manifest["design_report"]["stations_mm"]
-    recess = {d["index"]: max((k[3] for k in d.get("knot_pockets", [])), default=0.0)
-              for d in manifest["design_report"]["disks"]}
+    # how deep the base disk's seat plate and the chambers over it reach from its outer face
+    # (design data): the axis cuts stay clear of them
+    recess = {d["index"]: (d.get("seat_plate_mm", 0.0) or 0.0)
+              + max((c["height_mm"] for c in d.get("seat_chambers", [])), default=0.0)
+              for d in manifest["design_report"]["disks"] if d.get("seats")}
     disks, checks = [], []
     for p in manifest["parts"]:
         if p.get("role") != "disk":

@@ -59,12 +59,20 @@ def _hub_problems(d: Design) -> list[tuple[str, str]]:
         reach.append((st[i] - thick[i] / 2 - (ext if side < 0 else 0.0),
                       st[i] + thick[i] / 2 + (ext if side > 0 else 0.0)))
     field = "disks.hub.length" if d.disks.hub.length is not None else "disks.hub.max_tilt_deg"
+    shortest = d.disks.hub.glue_port_diameter + 2 * d.process.min_wall
     for i in range(n - 1):
         gap = reach[i + 1][0] - reach[i][1]
         if gap < HUB_GAP_MM:
-            return [(field, f"disk {i} and disk {i + 1} with their hubs leave {gap:.2f} mm between them "
-                            f"(at least {HUB_GAP_MM:g} mm): the hubs are {hub_extension(d, d.disks.thickness):.2f} mm "
-                            f"long for a slot clearance of {d.disks.slot_clearance:g} mm")]
+            ext = hub_extension(d, d.disks.thickness)
+            why = (f"disk {i} and disk {i + 1} with their hubs leave {gap:.2f} mm between them "
+                   f"(at least {HUB_GAP_MM:g} mm): the hubs are {ext:.2f} mm long")
+            if ext <= shortest + 1e-9:       # no tilt allowance makes them shorter: the disks are too close
+                where = "disks.spacing" if d.disks.spacing is not None else f"disks.stations[{i + 1}]"
+                return [(where, f"{why}, the shortest that holds a {d.disks.hub.glue_port_diameter:g} mm "
+                                          f"glue port between {d.process.min_wall:g} mm walls: space the disks "
+                                          f"further apart")]
+            return [(field, f"{why} for a slot clearance of {d.disks.slot_clearance:g} mm; allow more tilt, or "
+                            f"less slot clearance")]
     return []
 
 
