@@ -20,6 +20,8 @@ from ..model import scatter as mc
 from .base import Check
 from .eyelets import EyeletMap
 
+HIST_BINS = 60        # the report's histogram of each tendon's largest |ΔL| per sample
+HIST_SPAN = 1.08      # over 0 .. this × the largest of it, the budget and the centre-line value
 END_RUN_MM = 20.0     # without a tensioner run: the tendon leaves the tip straight along the backbone this far
 
 
@@ -66,14 +68,19 @@ def robot(emap: EyeletMap, rep: dict, manifest: dict, tendon_d: float, length: f
 
 def process_scatter(design, fits) -> mc.Scatter:
     """The stated process and the play measured in each disk's STL (half ranges about the middle)."""
-    by = {f.station: f for f in fits}
-    n = design.disks.count
-    tilt, play = np.zeros((n, 3)), np.zeros((n, 2))
-    for i, f in by.items():
-        tilt[i] = [np.ptp(f.tilt_x) / 2, np.ptp(f.tilt_y) / 2, np.ptp(f.tilt_z) / 2]
-        play[i] = [max(f.play_x, 0.0) / 2, max(f.play_z, 0.0) / 2]
+    tilt, play = _play(design.disks.count, [f.to_json() for f in fits])
     p = design.process
     return mc.Scatter(p.position_sigma, p.diameter_sigma, design.jig.station_tolerance_mm, tilt, play)
+
+
+def _play(n: int, fits: list[dict]) -> tuple[np.ndarray, np.ndarray]:
+    """Per disk (n, 3) tilt half ranges about x, y, z (deg) and (n, 2) offset half ranges in x, z (mm),
+    from the fits measured in the STLs (as in report.json); a disk not measured has none."""
+    tilt, play = np.zeros((n, 3)), np.zeros((n, 2))
+    for f in fits:
+        tilt[f["station"]] = [np.ptp(f["tilt_x_deg"]) / 2, np.ptp(f["tilt_y_deg"]) / 2, np.ptp(f["tilt_z_deg"]) / 2]
+        play[f["station"]] = [max(f["play_x_mm"], 0.0) / 2, max(f["play_z_mm"], 0.0) / 2]
+    return tilt, play
 
 
 def as_built(emap: EyeletMap, rep: dict, manifest: dict, design, fits, angles: np.ndarray,
@@ -95,24 +102,32 @@ def as_built(emap: EyeletMap, rep: dict, manifest: dict, design, fits, angles: n
                "centreline_max_abs_delta_mm": float(np.abs(res.centreline[k]).max()),
                "taut_rest_length_mm": float(res.rest[k]),
                "taut_max_abs_delta_mm": float(np.abs(res.nominal[k]).max()),
-               "taut_delta_mm": res.nominal[k], **mc.statistics(worst, budget)}
+               "taut_delta_mm": res.nominal[k], **(mc.statistics(worst, budget) if len(worst) else {})}
+        if len(worst):
+            hi = max(float(worst.max()), budget or 0.0, row["centreline_max_abs_delta_mm"]) * HIST_SPAN
+            counts, edges = np.histogram(worst, bins=HIST_BINS, range=(0.0, hi))
+            row["histogram"] = {"edges_mm": edges, "counts": counts}
         if budget is not None:
             at = mc.percentile(worst, s.robust) if len(worst) else row["taut_max_abs_delta_mm"]
             row.update(robust_mm=at, passed=at <= budget)
-            checks.append(_verdict(row, s, deviations.get(t["name"], [])))
+            checks.append(_verdict(row, s, len(worst), deviations.get(t["name"], [])))
         rows.append(row)
     out = {"about": "taut path through each measured hole's free aperture ((D - d)/2 in its own plane), from the "
                     "tendon's seat to its drum's tangent point; as built: print scatter, disk slip within the jig's "
                     "tolerance, tilt and offset within the play measured in each disk's STL",
-           "samples": s.samples, "seed": s.seed, "robust": s.robust, "seconds": seconds,
+           "samples": len(res.worst), "seed": s.seed, "tendon_diameter_mm": rb.tendon_diameter,
+           "length_mm": rb.length, "robust": s.robust, "seconds": seconds,
            "unconverged_solves": res.unconverged,
            "process": {"position_sigma_mm": sc.sigma_pos, "diameter_sigma_mm": sc.sigma_dia,
                        "station_tolerance_mm": sc.station,
                        "tilt_half_range_deg": sc.tilt.max(axis=0).tolist(), "play_half_range_mm": sc.play.max(axis=0).tolist()},
+           "robot": {"stations_mm": rb.stations, "holes": [
+               {"disk": int(i), "xz_mm": c, "axis": a, "diameter_mm": float(dd)}
+               for i, c, a, dd in zip(rb.hole_disk, rb.hole_xz, rb.hole_axis, rb.hole_diameter)],
+               "chains": rb.chain, "anchors_mm": rb.anchor, "ends_mm": rb.end},
            "angles_deg": angles, "percentiles": list(mc.PERCENTILES),
-           "tendons": rows, "band_mm": res.band, "envelope_mm": res.envelope,
-           "worst_mm": res.worst.T.round(5)}
-    if res.take_up is not None:
+           "tendons": rows, "band_mm": res.band, "envelope_mm": res.envelope}
+    if res.take_up is not None and len(res.take_up):
         i, j = act
         pair = {"channel": design.tensioner.actuating_channel, "tendons": [names[i], names[j]],
                 "centreline_mm": res.pair_nominal[0], "taut_mm": res.pair_nominal[1], **mc.statistics(res.take_up)}
@@ -125,10 +140,23 @@ def as_built(emap: EyeletMap, rep: dict, manifest: dict, design, fits, angles: n
     return out, checks
 
 
-def _verdict(row: dict, s, devs: list) -> Check:
-    """"C2: 0.188 mm through the hole centres, 0.493 mm taut, 0.594 mm at p95 — fails"."""
+def from_report(report: dict) -> tuple[mc.Robot, mc.Scatter]:
+    """The measured robot and the stated scatter back from a report.json (for what-ifs and tests)."""
+    tb, fits = report["as_built"]["taut"], report["as_built"]["disks"]
+    rb, p = tb["robot"], tb["process"]
+    h = rb["holes"]
+    robot_ = mc.Robot(np.asarray(rb["stations_mm"], float), np.array([x["disk"] for x in h]),
+                      np.array([x["xz_mm"] for x in h], float), np.array([x["axis"] for x in h], float),
+                      np.array([x["diameter_mm"] for x in h], float), np.asarray(rb["chains"]),
+                      np.asarray(rb["anchors_mm"], float), np.asarray(rb["ends_mm"], float),
+                      tb["tendon_diameter_mm"], tb["length_mm"])
+    tilt, play = _play(len(robot_.stations), fits)
+    return robot_, mc.Scatter(p["position_sigma_mm"], p["diameter_sigma_mm"], p["station_tolerance_mm"], tilt, play)
+
+
+def _verdict(row: dict, s, n: int, devs: list) -> Check:
+    """"C2: 0.188 mm through the hole centres, 0.493 mm taut, 0.594 mm at p95 — fails"; ``n`` samples."""
     ok = row["passed"]
-    n = s.samples
     msg = (f"{row['name']}: {row['centreline_max_abs_delta_mm']:.3f} mm through the hole centres, "
            f"{row['taut_max_abs_delta_mm']:.3f} mm taut (nominal print)")
     if n:

@@ -130,7 +130,7 @@ class Result:
     band: np.ndarray            # (len(PERCENTILES), T, K) of ΔL over the samples
     envelope: np.ndarray        # (2, T, K) min, max of ΔL over the samples
     worst: np.ndarray           # (S, T) each sample's largest |ΔL| over the sweep
-    take_up: np.ndarray | None  # (S,) each sample's largest −(ΔL1 + ΔL2) of the pair, or None
+    take_up: np.ndarray | None  # (S,) each sample's largest −(ΔL1 + ΔL2) of the pair (slack), or None
     pair_nominal: tuple[float, float] | None   # the same through the centres, taut nominal
     unconverged: int
 
@@ -144,16 +144,20 @@ def run(rb: Robot, sc: Scatter, angles_deg, n: int, seed: int, pair: tuple[int, 
     Ln, Ln0, bad0 = taut.sweep(chains(rb, replace(sc, sigma_pos=0.0, sigma_dia=0.0, station=0.0, tilt=None,
                                                   play=None), 1, 0), ang, rb.length)
     dn = Ln[0] - Ln0[0][:, None]
-    L, L0, bad = taut.sweep(chains(rb, sc, n, seed), ang, rb.length)
-    dL = L - L0[:, :, None]
+    bad = 0
+    if n:
+        L, L0, bad = taut.sweep(chains(rb, sc, n, seed), ang, rb.length)
+        dL = L - L0[:, :, None]
+    else:                   # no samples: the band and envelope are the nominal print's curve
+        dL = dn[None]
     band = np.percentile(dL, PERCENTILES, axis=0)
     take_up = pair_nominal = None
     if pair is not None:
         i, j = pair
-        take_up = -(dL[:, i] + dL[:, j]).min(axis=1)
+        take_up = -(dL[:, i] + dL[:, j]).min(axis=1)[:n]
         pair_nominal = (float(-(dc[i] + dc[j]).min()), float(-(dn[i] + dn[j]).min()))
-    return Result(ang, dc, dn, Ln0[0], band, np.stack([dL.min(axis=0), dL.max(axis=0)]), np.abs(dL).max(axis=2),
-                  take_up, pair_nominal, bad0 + bad)
+    return Result(ang, dc, dn, Ln0[0], band, np.stack([dL.min(axis=0), dL.max(axis=0)]),
+                  np.abs(dL).max(axis=2)[:n], take_up, pair_nominal, bad0 + bad)
 
 
 def statistics(values: np.ndarray, budget: float | None = None) -> dict:
