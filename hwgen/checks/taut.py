@@ -12,14 +12,17 @@ is ``check.robust_severity``.
 """
 from __future__ import annotations
 
+import os
 import time
 
 import numpy as np
 
+from ..errors import InputError, clip
 from ..model import scatter as mc
 from .base import Check
 from .eyelets import EyeletMap
 
+SAMPLES_ENV = "HWGEN_CHECK_SAMPLES"   # a count: overrides check.samples (smoke runs, the test suite); the report says what ran
 HIST_BINS = 60        # the report's histogram of each tendon's largest |ΔL| per sample
 HIST_SPAN = 1.08      # over 0 .. this × the largest of it, the budget and the centre-line value
 END_RUN_MM = 20.0     # without a tensioner run: the tendon leaves the tip straight along the backbone this far
@@ -73,6 +76,16 @@ def process_scatter(design, fits) -> mc.Scatter:
     return mc.Scatter(p.position_sigma, p.diameter_sigma, design.jig.station_tolerance_mm, tilt, play)
 
 
+def samples(stated: int) -> int:
+    """check.samples, or the count in $HWGEN_CHECK_SAMPLES."""
+    v = os.environ.get(SAMPLES_ENV, "").strip()
+    if not v:
+        return stated
+    if not v.isdigit() or int(v) > 100_000:
+        raise InputError("environment", SAMPLES_ENV, f"{clip(v)} is not a count of samples (0 to 100000)")
+    return int(v)
+
+
 def _play(n: int, fits: list[dict]) -> tuple[np.ndarray, np.ndarray]:
     """Per disk (n, 3) tilt half ranges about x, y, z (deg) and (n, 2) offset half ranges in x, z (mm),
     from the fits measured in the STLs (as in report.json); a disk not measured has none."""
@@ -92,7 +105,7 @@ def as_built(emap: EyeletMap, rep: dict, manifest: dict, design, fits, angles: n
     names = [t["name"] for t in rep["tendons"]]
     act = [k for k, t in enumerate(rep["tendons"]) if t["channel"] == design.tensioner.actuating_channel]
     t0 = time.perf_counter()
-    res = mc.run(rb, sc, angles, s.samples, s.seed, tuple(act) if len(act) == 2 else None)
+    res = mc.run(rb, sc, angles, samples(s.samples), s.seed, tuple(act) if len(act) == 2 else None)
     seconds = time.perf_counter() - t0
     checks, rows = [], []
     for k, t in enumerate(rep["tendons"]):
