@@ -124,7 +124,7 @@ def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     checks += c
     seats, c = _seats(parts, emap, rep_in, d)
     checks += c
-    taut, c = as_built(emap, rep_in, manifest, d, fits, angles, devs)
+    taut, c = as_built(emap, rep_in, manifest, d, fits, angles, devs, {t.name: t.max_abs_delta for t in tls})
     checks += c
     gravity, c = gravity_checks(parts, manifest, d, fits, None if bb_outline is None else bb_outline.extent[0],
                                 strip_t, L)
