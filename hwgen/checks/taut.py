@@ -21,7 +21,7 @@ from ..model import scatter as mc
 from .base import Check
 from .eyelets import EyeletMap
 
-SAMPLES_ENV = "HWGEN_CHECK_SAMPLES"   # a count: overrides check.samples (smoke runs, the test suite); the report says what ran
+SAMPLES_ENV = "HWGEN_CHECK_SAMPLES"   # a count: overrides check.samples (smoke runs, the test suite)
 HIST_BINS = 60        # the report's histogram of each tendon's largest |ΔL| per sample
 HIST_SPAN = 1.08      # over 0 .. this × the largest of it, the budget and the centre-line value
 END_RUN_MM = 20.0     # without a tensioner run: the tendon leaves the tip straight along the backbone this far
@@ -131,13 +131,17 @@ def as_built(emap: EyeletMap, rep: dict, manifest: dict, design, fits, angles: n
            "unconverged_solves": res.unconverged,
            "process": {"position_sigma_mm": sc.sigma_pos, "diameter_sigma_mm": sc.sigma_dia,
                        "station_tolerance_mm": sc.station,
-                       "tilt_half_range_deg": sc.tilt.max(axis=0).tolist(), "play_half_range_mm": sc.play.max(axis=0).tolist()},
+                       "tilt_half_range_deg": sc.tilt.max(axis=0), "play_half_range_mm": sc.play.max(axis=0)},
            "robot": {"stations_mm": rb.stations, "holes": [
                {"disk": int(i), "xz_mm": c, "axis": a, "diameter_mm": float(dd)}
                for i, c, a, dd in zip(rb.hole_disk, rb.hole_xz, rb.hole_axis, rb.hole_diameter)],
                "chains": rb.chain, "anchors_mm": rb.anchor, "ends_mm": rb.end},
            "angles_deg": angles, "percentiles": list(mc.PERCENTILES),
            "tendons": rows, "band_mm": res.band, "envelope_mm": res.envelope}
+    if res.unconverged:
+        checks.append(Check("tendon.taut_solver", "warning", False,
+                            f"{res.unconverged} taut-path solves stopped before converging: their lengths are "
+                            f"upper bounds", float(res.unconverged), 0.0, {}))
     if res.take_up is not None and len(res.take_up):
         i, j = act
         pair = {"channel": design.tensioner.actuating_channel, "tendons": [names[i], names[j]],

@@ -40,7 +40,8 @@ class Chains:
     Hole h sits on disk ``hole_disk[h]``: centre ``C[s, h]``, plane basis ``E[s, h]`` (columns)
     and free radius ``r[s, h]``, already moved by that sample's print scatter and the disk's tilt
     and offset on the strip, in the disk's own frame (origin on the backbone at its station, y
-    along the backbone, y = 0 at its mid-plane). ``stations`` are the mid-planes' arc lengths, ``dy[s, i]``: disk i's slip along the backbone. ``chain[t, j]``: the hole
+    along the backbone, y = 0 at its mid-plane). ``stations`` are the mid-planes' arc lengths,
+    ``dy[s, i]``: disk i's slip along the backbone. ``chain[t, j]``: the hole
     of tendon t's j-th aperture. ``anchor[s, t]`` is in the base disk's frame, ``end[s, t]`` in
     the tip disk's."""
 

@@ -184,7 +184,8 @@ def plot_tolerance(report: dict, path: Path) -> bool:
                 hx.legend(fontsize=7)
     p = tb["process"]
     fig.suptitle(f"{report['design']}: budgeted tendons as built, taut path through the measured holes; {n} samples "
-                 f"(σ_pos {p['position_sigma_mm']:g}, σ_dia {p['diameter_sigma_mm']:g}, station ±{p['station_tolerance_mm']:g} mm, "
+                 f"(σ_pos {p['position_sigma_mm']:g}, σ_dia {p['diameter_sigma_mm']:g}, "
+                 f"station ±{p['station_tolerance_mm']:g} mm, "
                  f"tilt and play as measured)", fontsize=9)
     fig.tight_layout(rect=(0, 0, 1, 0.95))
     try:
