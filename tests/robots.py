@@ -29,12 +29,19 @@ def _function(rng: np.random.Generator, r_max: float) -> dict:
     return f
 
 
+def _at(f: dict, s: float, length: float) -> tuple[float, float]:
+    """(x, z) of a routing function at arc length s."""
+    from hwgen.model.routing import sample_function
+    from hwgen.params import RoutingFunction
+    return tuple(sample_function(RoutingFunction(**f), [s], length)[0])
+
+
 def random_robot(rng: np.random.Generator, name: str) -> dict:
     """A design document (as from YAML) with 1-6 tendons on 4-25 disks."""
     doc = copy.deepcopy(BASE)
     doc["design"] = name
     length = float(rng.choice([180, 220, 270, 320]))
-    count = int(rng.integers(4, 26))
+    count = int(rng.integers(4, int(length // 22.5) + 2))   # ≥ 22.5 mm apart, as the prototype: room for the hubs
     doc["backbone"]["length"] = length
     doc["disks"]["count"] = count
     doc["disks"]["spacing"] = length / (count - 1)
@@ -43,8 +50,10 @@ def random_robot(rng: np.random.Generator, name: str) -> dict:
     n = int(rng.integers(1, 7))
     pair = rng.random() < 0.5 and n >= 2
     for i in range(n - (1 if pair else 0)):
-        t = {"name": f"T{i}", "channel": f"K{i}", "routing": {"function": _function(rng, r_max)}}
-        tendons.append(t)
+        f = _function(rng, r_max)
+        while abs(_at(f, 0.0, length)[1]) < 8:     # a tendon starting in the strip's slot has no seat there
+            f = _function(rng, r_max)
+        tendons.append({"name": f"T{i}", "channel": f"K{i}", "routing": {"function": f}})
     if pair:          # an actuating pair on one channel, mirrored through the strip plane
         tendons[0] = {"name": "A1", "channel": "K0",
                       "routing": {"function": {"kind": "straight", "z0": round(float(rng.uniform(15, r_max)), 1)},
@@ -52,10 +61,7 @@ def random_robot(rng: np.random.Generator, name: str) -> dict:
     doc["tendons"] = tendons
     # a designer whose tendon leaves the tip in the strip's plane ends the strip inside the tip
     # disk: nothing to clamp there, and nothing in the tendon's way
-    from hwgen.model.routing import sample_function
-    from hwgen.params import RoutingFunction
-    tips = [sample_function(RoutingFunction(**t["routing"]["function"]), [length], length)[0] for t in tendons]
-    if any(abs(z) < 8 for _, z in tips):
+    if any(abs(_at(t["routing"]["function"], length, length)[1]) < 8 for t in tendons):
         doc["backbone"]["extra_tip"] = 2
     doc["tensioner"]["channels"] = sorted({t["channel"] for t in tendons})
     doc["tensioner"]["actuating_channel"] = tendons[0]["channel"]
