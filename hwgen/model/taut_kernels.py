@@ -47,11 +47,10 @@ def _et(E, j, v0, v1, v2):
 @numba.njit(**JIT)
 def _ete(E, i, j):
     """E_i^T E_j."""
-    out = [0.0, 0.0, 0.0, 0.0]
-    for p in range(2):
-        for q in range(2):
-            out[2 * p + q] = E[i, 0, p] * E[j, 0, q] + E[i, 1, p] * E[j, 1, q] + E[i, 2, p] * E[j, 2, q]
-    return (out[0], out[1], out[2], out[3])
+    return (E[i, 0, 0] * E[j, 0, 0] + E[i, 1, 0] * E[j, 1, 0] + E[i, 2, 0] * E[j, 2, 0],
+            E[i, 0, 0] * E[j, 0, 1] + E[i, 1, 0] * E[j, 1, 1] + E[i, 2, 0] * E[j, 2, 1],
+            E[i, 0, 1] * E[j, 0, 0] + E[i, 1, 1] * E[j, 1, 0] + E[i, 2, 1] * E[j, 2, 0],
+            E[i, 0, 1] * E[j, 0, 1] + E[i, 1, 1] * E[j, 1, 1] + E[i, 2, 1] * E[j, 2, 1])
 
 
 @numba.njit(**JIT)
@@ -231,7 +230,9 @@ def _frame(y, kappa):
     if kappa == 0.0:
         return 1.0, 0.0, y, 0.0
     th = kappa * y
-    return math.cos(th), math.sin(th), math.sin(th) / kappa, 2.0 * math.sin(th / 2) ** 2 / kappa
+    c, sn = math.cos(th), math.sin(th)
+    # 1 − cos θ without cancellation: sin²θ / (1 + cos θ) while cos θ > 0
+    return c, sn, sn / kappa, (sn * sn / (1.0 + c) if c > 0.0 else 1.0 - c) / kappa
 
 
 @numba.njit(**JIT)
