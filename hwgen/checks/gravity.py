@@ -145,7 +145,6 @@ def gravity_checks(parts, manifest: dict, design, fits: list[SlotFit], strip_h: 
         "curve": {"s_mm": s.tolist(), "y_mm": y.tolist(), "z_mm": z.tolist(), "stress_mpa": stress.tolist(),
                   "psi_deg": np.degrees(np.interp(s, r.s, r.psi)).tolist(),
                   "tip_com_mm": list(r.tip_com), "tip_angle_deg": r.tip_angle_deg},
-        "solve_s": sum(c.solve_time for c in cases.values()) + bare.solve_time,
     }
     checks = []
     ok = r.max_stress <= allow
