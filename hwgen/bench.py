@@ -35,6 +35,31 @@ def _cut_one_by_one(spec):
     return body
 
 
+def _monte_carlo(report: dict) -> None:
+    """The as-built Monte Carlo alone, on the measured robot the build's report holds: the taut
+    path of every tendon over the whole sweep, per sample (CPU µs per chain: one tendon, one angle)."""
+    import os
+
+    import numba
+    import numpy as np
+
+    from hwgen.checks.taut import from_report
+    from hwgen.model import scatter as mc
+    rb, sc = from_report(report)
+    tb = report["as_built"]["taut"]
+    ang = np.asarray(tb["angles_deg"], float)
+    with timed("taut path: load the compiled kernels", "numba, cached on disk (a fresh machine compiles, ~20 s)"):
+        mc.run(rb, sc, ang, 1, 0)
+    for n in (1_000, 10_000):
+        cpu = time.process_time()
+        with timed(f"as-built Monte Carlo: {n} samples", f"× {len(ang)} angles × {len(rb.chain)} tendons, "
+                                                         f"{numba.get_num_threads()} threads"):
+            mc.run(rb, sc, ang, n, tb["seed"])
+        cpu = time.process_time() - cpu
+        ROWS[-1] = (*ROWS[-1][:2], ROWS[-1][2] + f"; {cpu:.1f} s CPU, {1e6 * cpu / (n * len(ang) * len(rb.chain)):.2f} "
+                                                f"µs per chain; load {os.getloadavg()[0]:.1f}")
+
+
 def main(argv: list[str]) -> None:
     params_path = Path(argv[0]) if argv else Path("params/prototype.yaml")
     with timed("import numpy, pydantic, yaml (schema, model)"):
@@ -66,7 +91,9 @@ def main(argv: list[str]) -> None:
         with timed("hwgen build, parts and files only", "no post-build steps"):
             build(loaded, Path(tmp) / "a", post_build=False)
         with timed("hwgen build, everything", "with checks, bill of materials and pictures"):
-            build(loaded, Path(tmp) / "b")
+            res = build(loaded, Path(tmp) / "b")
+        if res.report is not None:
+            _monte_carlo(res.report)
 
     t = Table(title=f"hwgen benchmark: {params_path}")
     t.add_column("step")

@@ -215,6 +215,10 @@ class Process(_Model):
     min_hole: Length = Field(description="smallest through hole that prints open, mm")
     hole_clearance: NonNegLength = Field(description="added to a hole's diameter over what passes through it, mm")
     build_volume: tuple[Length, Length, Length] = Field(description="printer build volume x, y, z, mm")
+    position_sigma: Annotated[float, Field(ge=0, le=5, allow_inf_nan=False)] = Field(
+        0.05, description="scatter of a printed hole's centre, per axis in the hole's plane (Gaussian σ), mm")
+    diameter_sigma: Annotated[float, Field(ge=0, le=5, allow_inf_nan=False)] = Field(
+        0.03, description="scatter of a printed hole's diameter (Gaussian σ), mm")
 
 
 class Tensioner(_Model):
@@ -295,6 +299,13 @@ class CheckSettings(_Model):
     interference_tol_mm3: Length = Field(0.01, description="largest intersection volume of two parts, mm³")
     overstress: Literal["error", "warning"] = Field(
         "error", description="what a strip stress over backbone.allowable_stress_mpa in the own-weight state is")
+    samples: int = Field(10_000, ge=0, le=100_000,
+                         description="as-built samples of the tendon-length Monte Carlo (0: the nominal print only)")
+    seed: int = Field(0, ge=0, le=2**32 - 1, description="seed of the Monte Carlo")
+    robust: Literal["p50", "p90", "p95", "p99", "max"] = Field(
+        "p95", description="statistic of the as-built samples' largest length change a budgeted tendon is judged on")
+    robust_severity: Literal["error", "warning"] = Field(
+        "error", description="what a budgeted tendon over its budget at that statistic is")
 
 
 class Render(_Model):

@@ -1,7 +1,7 @@
 """The order of the stages, and the one place that knows it.
 
     read (params) → feasibility (model) → plan (model) → parts (cad) → files and manifest (cad)
-    → checks (report.json, summary.md) → plots (lengths.png, sag.png) → bill of materials → pictures
+    → checks (report.json, summary.md) → plots (lengths.png, tolerance.png, sag.png) → bill of materials → pictures
 
 Every build writes into a fresh staging folder beside the target; only when every file is
 complete is it swapped in for ``out/<design>/`` in one step (:func:`hwgen.atomic.new_folder`).
@@ -36,9 +36,9 @@ from .model import feasibility
 from .model.materials import printed_density
 from .model.plan import Plan, plan as make_plan
 from .outputs import bom, pictures
-from .outputs.plots import plot_lengths, plot_sag
+from .outputs.plots import plot_lengths, plot_sag, plot_tolerance
 
-REPORT, PLOT, SUMMARY, SAG = "report.json", "lengths.png", "summary.md", "sag.png"
+REPORT, PLOT, SUMMARY, SAG, TOLERANCE = "report.json", "lengths.png", "summary.md", "sag.png", "tolerance.png"
 
 
 def load(path: str | Path) -> params.LoadedDesign:
@@ -88,13 +88,15 @@ def output_errors(out_root: Path) -> Iterator[None]:
 # ---------------------------------------------------------------- stages after the files
 
 def checks_stage(plan: Plan, folder: Path, manifest: dict) -> dict:
-    """Measure the fresh files: report.json, summary.md, lengths.png and sag.png; the checks go into the manifest."""
+    """Measure the fresh files: report.json, summary.md, lengths.png, tolerance.png and sag.png; the checks go
+    into the manifest."""
     report = run_checks(folder, manifest, plan)
     manifest["checks"] = report["checks"]
     manifest["checks_ok"] = report["ok"]
     write_json(folder / REPORT, report)
     write_summary(report, folder / SUMMARY)
     plot_lengths(report, folder / PLOT)
+    plot_tolerance(report, folder / TOLERANCE)
     plot_sag(report, manifest["design_report"], folder / SAG)
     return report
 

@@ -83,7 +83,8 @@ def test_paper_table2_build_and_check_exit_1(built, tmp_path):
     assert "## Failed" in (folder / "summary.md").read_text()
     manifest = json.loads((folder / "manifest.json").read_text())      # what makes `hwgen build` exit 1
     assert manifest["checks_ok"] is False
-    assert [c["id"] for c in manifest["checks"] if not c["passed"] and c["severity"] == "error"] == ["tendon.length"]
+    failed = [c for c in manifest["checks"] if not c["passed"] and c["severity"] == "error"]
+    assert [(c["id"], c["where"]["tendon"]) for c in failed] == [("tendon.robust", "C1"), ("tendon.robust", "C2")]
     r = _run("check", str(PARAMS / "paper-table2.yaml"), "--out", str(root), "--junit", str(tmp_path / "j.xml"))
     assert r.returncode == 1, r.stderr
     assert "built" not in r.stderr           # outputs were current: measured, not rebuilt
@@ -92,9 +93,9 @@ def test_paper_table2_build_and_check_exit_1(built, tmp_path):
     cases = suite.findall("testcase")
     failures = [c for c in cases if c.find("failure") is not None]
     assert int(suite.get("tests")) == len(cases) > 100
-    assert len(failures) == int(suite.get("failures")) == 1
-    assert failures[0].get("classname") == "hwgen.paper-table2.tendon.length"
-    assert "C2" in failures[0].find("failure").get("message")
+    assert len(failures) == int(suite.get("failures")) == 2
+    assert {f.get("classname") for f in failures} == {"hwgen.paper-table2.tendon.robust"}
+    assert failures[1].find("failure").get("message").startswith("C2: 0.213 mm through the hole centres")
 
 
 def test_check_exit_codes_and_report(built, tmp_path):

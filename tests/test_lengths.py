@@ -56,10 +56,12 @@ def test_prototype_lengths_from_geometry_match_paper_claims(built):
     # every eyelet was found in a disk or, at backbone crossings, in the strip; none taken from the design
     assert all(r["stations_from_design"] == [] for r in t.values())
     assert t["C2"]["stations_from_backbone"] == [2, 6, 10]
-    # Sect. IV-A: stiffening tendons change by less than 0.2 mm over 90°, actuating ones by tens of mm
+    # Sect. IV-A: through the hole centres, stiffening tendons change by less than 0.2 mm over 90°,
+    # actuating ones by tens of mm; taut through the holes' play, as built, C1 and C2 do not (test_taut)
     for n in ("C1", "C2", "H"):
-        assert t[n]["budget_mm"] == 0.2 and t[n]["passed"]
+        assert t[n]["budget_mm"] == 0.2 and t[n]["centreline_passed"]
         assert 0.01 < t[n]["max_abs_delta_mm"] < 0.2
+    assert not t["C1"]["passed"] and not t["C2"]["passed"] and t["H"]["passed"]
     for n in ("A1", "A2"):
         assert t[n]["budget_mm"] is None and 10 < t[n]["max_abs_delta_mm"] < 100
     # A1 sits at z = +30: it shortens when the robot bends toward +z; the closed form at 90°,
@@ -87,15 +89,17 @@ def test_paper_table2_fails_on_c2_and_says_why(built):
     rep = _report(built("paper-table2"))
     assert rep["ok"] is False
     t = {r["name"]: r for r in rep["tendons"]}
-    assert not t["C2"]["passed"] and t["C2"]["max_abs_delta_mm"] > 0.2
-    assert t["C1"]["passed"] and t["H"]["passed"]
+    # through the hole centres C2 alone is over its budget (reported, not the verdict)
+    assert not t["C2"]["centreline_passed"] and t["C2"]["max_abs_delta_mm"] > 0.2
+    assert t["C1"]["centreline_passed"] and t["H"]["centreline_passed"]
     failed = [c for c in rep["checks"] if not c["passed"] and c["severity"] == "error"]
-    assert [c["id"] for c in failed] == ["tendon.length"]
-    msg = failed[0]["message"]
-    assert failed[0]["where"]["tendon"] == "C2"
+    assert {c["id"] for c in failed} == {"tendon.robust"} and "C2" in {c["where"]["tendon"] for c in failed}
+    centre = [c for c in rep["checks"] if c["id"] == "tendon.length" and not c["passed"]]
+    assert [c["where"]["tendon"] for c in centre] == ["C2"] and centre[0]["severity"] == "info"
+    msg = centre[0]["message"]
     assert "C2" in msg and "exceeds its coupling budget" in msg and "does not sample" in msg
     assert "1.72 mm at stations [1, 3, 5, 7, 9, 11]" in msg
     # the same routing sampled from the function it names stays within the budget: the table is at fault
     assert "within the budget" in msg
-    assert failed[0]["measured"] == pytest.approx(t["C2"]["max_abs_delta_mm"])
-    assert failed[0]["limit"] == 0.2
+    assert centre[0]["measured"] == pytest.approx(t["C2"]["max_abs_delta_mm"])
+    assert centre[0]["limit"] == 0.2

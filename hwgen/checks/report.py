@@ -57,23 +57,50 @@ def _fmt(v) -> str:
     return f"{v:.4g}" if isinstance(v, float) else str(v)
 
 
+def as_built_lines(report: dict) -> list[str]:
+    """The verdict on the budgeted tendons in words, one line each ("C2: … — fails")."""
+    tb = (report.get("as_built") or {}).get("taut")
+    if not tb:
+        return []
+    p = tb["process"]
+    out = ["", f"As built: the taut path through the measured holes, {tb['samples']} samples (seed {tb['seed']}; "
+               f"σ {p['position_sigma_mm']:g} mm on hole position, {p['diameter_sigma_mm']:g} mm on diameter, disks "
+               f"±{p['station_tolerance_mm']:g} mm along the strip, tilt and play as measured). Plot: `tolerance.png`.",
+           ""]
+    for c in report["checks"]:
+        if c["id"] == "tendon.robust":
+            word = "" if c["passed"] or c["severity"] == "error" else " (stated as a warning: check.robust_severity)"
+            out.append(f"- {c['message'].replace(' — fails', ' — **FAILS**')}{word}")
+    pair = tb.get("pair")
+    if pair:
+        out.append(f"- actuating pair {' and '.join(pair['tendons'])}: {pair['taut_mm']:.3f} mm of slack to take up "
+                   f"(taut, nominal), {pair['p95_mm']:.3f} mm at p95")
+    return out
+
+
 def write_summary(report: dict, path: Path) -> None:
     """A short Markdown summary: verdict, tendon lengths, failing and warning findings."""
     checks = report["checks"]
     errs = [c for c in checks if not c["passed"] and c["severity"] == "error"]
     warns = [c for c in checks if not c["passed"] and c["severity"] == "warning"]
     sw = report["sweep"]
-    lines = [f"# {report['design']}: {'PASS' if report['ok'] else 'FAIL'}", "",
+    soft = [c["where"]["tendon"] for c in warns if c["id"] == "tendon.robust"]
+    head = f"# {report['design']}: {'PASS' if report['ok'] else 'FAIL'}"
+    if soft:
+        head += f"; as built, {' and '.join(soft)} FAIL{'S' if len(soft) == 1 else ''} (stated as warnings)"
+    lines = [head, "",
              f"{len(checks)} checks: {len(errs)} failed, {len(warns)} warning(s). "
              f"Tendon lengths by eq. (1)-(2) from the eyelets measured in the exported disks, "
              f"bending -{sw['max_angle_deg']:g}° to +{sw['max_angle_deg']:g}° in {sw['step_deg']:g}° steps.", "",
-             "| tendon | channel | rest length mm | Δ at +max mm | Δ at −max mm | max abs Δ mm | budget mm | |",
-             "|---|---|---:|---:|---:|---:|---:|---|"]
+             "| tendon | channel | rest length mm | Δ at +max mm | Δ at −max mm | max abs Δ mm | taut max abs Δ mm | "
+             "as built mm | budget mm | |",
+             "|---|---|---:|---:|---:|---:|---:|---:|---:|---|"]
     for t in report["tendons"]:
         lines.append(f"| {t['name']} | {t['channel']} | {t['rest_length_mm']:.3f} | {t['delta_at_max_mm']:+.4f} | "
-                     f"{t['delta_at_min_mm']:+.4f} | {t['max_abs_delta_mm']:.4f} | "
-                     f"{'–' if t['budget_mm'] is None else format(t['budget_mm'], 'g')} | "
+                     f"{t['delta_at_min_mm']:+.4f} | {t['max_abs_delta_mm']:.4f} | {t['taut_max_abs_delta_mm']:.4f} | "
+                     f"{_fmt(t.get('robust_mm'))} | {'–' if t['budget_mm'] is None else format(t['budget_mm'], 'g')} | "
                      f"{'pass' if t['passed'] else '**FAIL**'} |")
+    lines += as_built_lines(report)
     for p in report.get("pairs", []):
         lines += ["", f"Antagonistic pair {' and '.join(p['tendons'])} (channel {p['channel']}): "
                       f"{p['take_up_mm']:+.3f} mm to take up at {p['at_angle_deg']:+g}°."]
@@ -93,7 +120,7 @@ def write_summary(report: dict, path: Path) -> None:
         lines += ["", "## Failed", ""] + [f"- `{c['id']}` {c['message']}" for c in errs]
     if warns:
         lines += ["", "## Warnings", ""] + [f"- `{c['id']}` {c['message']}" for c in warns]
-    lines += ["", "Plot: `lengths.png`. Every check: `report.json`.", ""]
+    lines += ["", "Plots: `lengths.png`, `tolerance.png`. Every check: `report.json`.", ""]
     atomic.write_text(path, "\n".join(lines))
 
 
@@ -105,15 +132,19 @@ def print_report(report: dict, console, verbose: bool = False) -> None:
     from rich.text import Text
 
     t = Table(title=f"{report['design']}: tendon lengths from the geometry (±{report['sweep']['max_angle_deg']:g}°)")
-    for col in ("tendon", "channel", "rest mm", "Δ+max mm", "Δ−max mm", "max |Δ| mm", "budget mm", ""):
+    robust = ((report.get("as_built") or {}).get("taut") or {}).get("robust", "p95")
+    for col in ("tendon", "channel", "rest mm", "Δ+max mm", "Δ−max mm", "max |Δ| mm", "taut mm", f"{robust} mm",
+                "budget mm", ""):
         t.add_column(col, justify="left" if col in ("tendon", "channel", "") else "right")
     for r in report["tendons"]:
         t.add_row(r["name"], r["channel"], f"{r['rest_length_mm']:.3f}", f"{r['delta_at_max_mm']:+.4f}",
-                  f"{r['delta_at_min_mm']:+.4f}", f"{r['max_abs_delta_mm']:.4f}",
+                  f"{r['delta_at_min_mm']:+.4f}", f"{r['max_abs_delta_mm']:.4f}", f"{r['taut_max_abs_delta_mm']:.4f}",
+                  _fmt(r.get("robust_mm")),
                   "–" if r["budget_mm"] is None else f"{r['budget_mm']:g}",
                   Text("pass", style="green") if r["passed"] else Text("FAIL", style="bold red"))
     console.print(t)
-    shown = [c for c in report["checks"] if verbose or not c["passed"] or c["id"] == "tendon.take_up"]
+    shown = [c for c in report["checks"] if verbose or not c["passed"]
+             or c["id"] in ("tendon.take_up", "tendon.robust", "tendon.take_up_as_built")]
     ft = Table(title="findings" if not verbose else "checks")
     for col in ("", "check", "where", "measured", "limit", "message"):
         ft.add_column(col, overflow="fold")

@@ -24,6 +24,7 @@ from .lengths import length_checks, pair_take_up, sweep_angles, tendon_lengths
 from .parts import build_volume_checks, interference_checks, load_parts, mass_summary, mesh_checks
 from .printing import printing_checks
 from .seating import hub_checks, measure_fit, tilt_checks
+from .taut import as_built
 
 TABLE_MATCH_MM = 0.1   # Table II gives one decimal: a table within this of its function samples it
 
@@ -123,17 +124,20 @@ def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     checks += c
     seats, c = _seats(parts, emap, rep_in, d)
     checks += c
+    taut, c = as_built(emap, rep_in, manifest, d, fits, angles, devs, {t.name: t.max_abs_delta for t in tls})
+    checks += c
     gravity, c = gravity_checks(parts, manifest, d, fits, None if bb_outline is None else bb_outline.extent[0],
                                 strip_t, L)
     checks += c
-    report = _report(manifest["design"], checks, angles, s.step_deg, tls, pair, emap)
+    report = _report(manifest["design"], checks, angles, s.step_deg, tls, pair, emap, taut)
     report["mass"] = _plain(mass)
     report["as_built"] = _plain({
         "about": "what the files let each disk do on the strip (measured from its STL) and how well the jig sets "
                  "its station (design data: jig.station_tolerance_mm), for a study of as-built tendon lengths",
         "station_tolerance_mm": d.jig.station_tolerance_mm,
         "max_tilt_deg": d.disks.hub.max_tilt_deg,
-        "disks": [f.to_json() for f in fits]})
+        "disks": [f.to_json() for f in fits],
+        "taut": taut})
     report["seats"] = _plain(seats)
     report["gravity"] = _plain(gravity)
     return report
@@ -246,8 +250,11 @@ def _take_up_check(pair: dict) -> Check:
                  {"channel": pair["channel"], "tendons": pair["tendons"]})
 
 
-def _report(design: str, checks: list[Check], angles, step_deg: float, tls, pair, emap) -> dict:
+def _report(design: str, checks: list[Check], angles, step_deg: float, tls, pair, emap, taut: dict) -> dict:
+    """``tendons``: eq. (2) through the measured hole centres beside the taut path (nominal print)
+    and the as-built statistic; ``passed`` is the verdict, on the taut path as built."""
     ok = not any(c.severity == "error" and not bool(c.passed) for c in checks)
+    tt = {r["name"]: r for r in taut["tendons"]}
     return _plain({
         "design": design,
         "ok": ok,
@@ -258,10 +265,14 @@ def _report(design: str, checks: list[Check], angles, step_deg: float, tls, pair
             "name": t.name, "channel": t.channel, "source": "geometry",
             "rest_length_mm": t.rest,
             "delta_at_max_mm": float(t.delta[-1]), "delta_at_min_mm": float(t.delta[0]),
-            "max_abs_delta_mm": t.max_abs_delta, "budget_mm": t.budget, "passed": t.passed,
+            "max_abs_delta_mm": t.max_abs_delta, "budget_mm": t.budget, "centreline_passed": t.passed,
+            "taut_rest_length_mm": tt[t.name]["taut_rest_length_mm"],
+            "taut_max_abs_delta_mm": tt[t.name]["taut_max_abs_delta_mm"],
+            "robust_mm": tt[t.name].get("robust_mm"), "passed": tt[t.name].get("passed", True),
             "stations_from_backbone": emap.via_backbone.get(t.name, []),
             "stations_from_design": emap.unmeasured.get(t.name, []),
             "delta_mm": [float(v) for v in t.delta],
+            "taut_delta_mm": [float(v) for v in tt[t.name]["taut_delta_mm"]],
         } for t in tls],
         "pairs": [pair] if pair else [],
         "eyelets": [{

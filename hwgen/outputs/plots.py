@@ -125,3 +125,72 @@ def plot_sag(report: dict, design_report: dict, path: Path) -> bool:
     finally:
         plt.close(fig)
     return True
+
+
+def plot_tolerance(report: dict, path: Path) -> bool:
+    """tolerance.png, like the lower panel of Fig. 6 for each budgeted tendon: ΔL against the
+    bending angle through the hole centres (eq. (2)), along the taut path of the nominal print,
+    and the as-built spread (p5-p95 band, p50, min-max envelope) against ±budget; below, the
+    histogram of each sample's largest |ΔL| with the budget and the verdict's statistic. Returns
+    False (and writes nothing) without a budgeted tendon."""
+    tb = (report.get("as_built") or {}).get("taut")
+    if not tb:
+        return False
+    rows = [(k, r) for k, r in enumerate(tb["tendons"]) if r["budget_mm"] is not None]
+    if not rows:
+        return False
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    ang = np.asarray(tb["angles_deg"], float)
+    band, env = np.asarray(tb["band_mm"], float), np.asarray(tb["envelope_mm"], float)
+    centre = {t["name"]: np.asarray(t["delta_mm"], float) for t in report["tendons"]}
+    n = tb["samples"]
+    fig, axes = plt.subplots(2 if n else 1, len(rows), figsize=(4.4 * len(rows), 6.8 if n else 4.2), squeeze=False,
+                             gridspec_kw=dict(height_ratios=[2.2, 1] if n else [1]))
+    for col, (k, r) in enumerate(rows):
+        ax, b = axes[0, col], r["budget_mm"]
+        if n:
+            ax.fill_between(ang, env[0, k], env[1, k], color="tab:blue", alpha=0.12, lw=0, label="as built, min–max")
+            ax.fill_between(ang, band[0, k], band[-1, k], color="tab:blue", alpha=0.35, lw=0, label="as built, p5–p95")
+            ax.plot(ang, band[1, k], color="tab:blue", lw=0.8, label="as built, p50")
+        ax.plot(ang, r["taut_delta_mm"], color="k", lw=1.6, label="taut path, nominal print")
+        ax.plot(ang, centre[r["name"]], color="tab:green", lw=1.3, ls="--", label="eq. (2), hole centres")
+        for s in (1, -1):
+            ax.axhline(s * b, color="tab:red", ls=":", lw=1.2, label="budget" if s == 1 else None)
+        ax.axhline(0, color="0.6", lw=0.5)
+        ax.set_xlim(ang[0], ang[-1])
+        ax.set_xlabel("bending angle θ = κL (deg)")
+        ax.set_title(f"{r['name']}: {r['robust_mm']:.3f} mm at {tb['robust'] if n else 'nominal'} — "
+                     f"{'passes' if r['passed'] else 'fails'}", fontsize=10)
+        ax.grid(alpha=0.3)
+        if col == 0:
+            ax.set_ylabel("L(θ) − L(0) (mm)")
+            ax.legend(fontsize=7)
+        if n:
+            hx, hist = axes[1, col], r["histogram"]
+            edges = np.asarray(hist["edges_mm"], float)
+            hx.stairs(hist["counts"], edges, fill=True, color="tab:blue", alpha=0.7)
+            hx.axvline(b, color="tab:red", ls=":", lw=1.4, label=f"budget {b:g} mm")
+            hx.axvline(r["centreline_max_abs_delta_mm"], color="tab:green", ls="--", lw=1.2, label="eq. (2)")
+            hx.axvline(r["taut_max_abs_delta_mm"], color="k", lw=1.4, label="taut, nominal")
+            hx.axvline(r["robust_mm"], color="tab:blue", ls="-.", lw=1.2, label=tb["robust"])
+            hx.set_xlim(0, edges[-1])
+            hx.set_xlabel("largest |ΔL| over the sweep (mm)")
+            hx.grid(alpha=0.3)
+            if col == 0:
+                hx.set_ylabel(f"samples (of {n})")
+                hx.legend(fontsize=7)
+    p = tb["process"]
+    fig.suptitle(f"{report['design']}: budgeted tendons as built, taut path through the measured holes; {n} samples "
+                 f"(σ_pos {p['position_sigma_mm']:g}, σ_dia {p['diameter_sigma_mm']:g}, "
+                 f"station ±{p['station_tolerance_mm']:g} mm, "
+                 f"tilt and play as measured)", fontsize=9)
+    fig.tight_layout(rect=(0, 0, 1, 0.95))
+    try:
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=110, format="png")
+    finally:
+        plt.close(fig)
+    return True

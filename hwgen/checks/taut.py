@@ -1,0 +1,187 @@
+"""Tendon lengths as built: the taut path through the measured holes, under print scatter and
+the disks' play on the strip (:mod:`hwgen.model.taut`, :mod:`hwgen.model.scatter`).
+
+Everything comes from the files: each hole's centre, axis and diameter as measured in its disk's
+STL (the eyelet map), each disk's tilt and play as measured from its STL (:mod:`.seating`), each
+tendon's seat on the base disk and its run to the tensioner's drum from the manifest. What the
+files cannot show, the process's scatter and the jig's station tolerance, is design data.
+
+The verdict on a budgeted (stiffening) tendon is its largest |ΔL| over the sweep at the
+statistic ``check.robust`` (p95 by default) of ``check.samples`` as-built samples; its severity
+is ``check.robust_severity``.
+"""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from ..errors import InputError, clip
+from ..model import scatter as mc
+from .base import Check
+from .eyelets import EyeletMap
+
+SAMPLES_ENV = "HWGEN_CHECK_SAMPLES"   # a count: overrides check.samples (smoke runs, the test suite)
+HIST_BINS = 60        # the report's histogram of each tendon's largest |ΔL| per sample
+HIST_SPAN = 1.08      # over 0 .. this × the largest of it, the budget and the centre-line value
+END_RUN_MM = 20.0     # without a tensioner run: the tendon leaves the tip straight along the backbone this far
+
+
+def robot(emap: EyeletMap, rep: dict, manifest: dict, tendon_d: float, length: float) -> mc.Robot:
+    """The measured robot: one hole per physical hole (a shared hole once), every tendon's chain,
+    its anchor at its seat and its end at its drum's tangent point."""
+    design_holes = {(rd["index"], tuple(h["tendons"])): h for rd in rep["disks"] for h in rd["holes"]}
+    names = [t["name"] for t in rep["tendons"]]
+    ND = len(rep["stations_mm"])
+    chain = np.full((len(names), ND), -1)
+    disk, xz, axis, dia, seen = [], [], [], [], {}
+    for e in emap.eyelets:
+        key = id(e.hole) if e.hole is not None and e.status == "merged" else id(e)
+        if key not in seen:
+            h = design_holes[(e.station, e.tendons)]
+            seen[key] = len(disk)
+            disk.append(e.station)
+            xz.append(e.measured_xz if e.measured_xz is not None else e.design_xz)
+            found = e.hole is not None and e.hole.axis is not None and e.status in ("ok", "moved")
+            axis.append(e.hole.axis if found else np.asarray(h["axis"], float))
+            dia.append(e.hole.diameter if found else h["diameter_mm"])
+        for t in e.tendons:
+            chain[names.index(t), e.station] = seen[key]
+    base, tip = rep["disks"][0], rep["disks"][-1]
+    seats = {s["tendon"]: s for s in base.get("seats", [])}
+    runs = {r["tendon"]: r for p in manifest["parts"] for r in p.get("tendon_runs", [])}
+    anchor, end = [], []
+    for k, t in enumerate(names):
+        if t in seats:     # the tendon leaves its seat at the plate's inner face
+            anchor.append([seats[t]["x"], -base["thickness_mm"] / 2 + base.get("seat_plate_mm", 0.0), seats[t]["z"]])
+        else:
+            x, z = xz[chain[k, 0]]
+            anchor.append([x, -base["thickness_mm"] / 2, z])
+        if t in runs:
+            x, y, z = runs[t]["end"]
+            end.append([x, y - rep["stations_mm"][-1], z])
+        else:
+            x, z = xz[chain[k, -1]]
+            end.append([x, tip["thickness_mm"] / 2 + END_RUN_MM, z])
+    return mc.Robot(np.asarray(emap.stations_y, float), np.asarray(disk), np.asarray(xz, float),
+                    np.asarray(axis, float), np.asarray(dia, float), chain, np.asarray(anchor, float),
+                    np.asarray(end, float), tendon_d, length)
+
+
+def process_scatter(design, fits) -> mc.Scatter:
+    """The stated process and the play measured in each disk's STL (half ranges about the middle)."""
+    tilt, play = _play(design.disks.count, [f.to_json() for f in fits])
+    p = design.process
+    return mc.Scatter(p.position_sigma, p.diameter_sigma, design.jig.station_tolerance_mm, tilt, play)
+
+
+def samples(stated: int) -> int:
+    """check.samples, or the count in $HWGEN_CHECK_SAMPLES."""
+    v = os.environ.get(SAMPLES_ENV, "").strip()
+    if not v:
+        return stated
+    if not v.isdigit() or int(v) > 100_000:
+        raise InputError("environment", SAMPLES_ENV, f"{clip(v)} is not a count of samples (0 to 100000)")
+    return int(v)
+
+
+def _play(n: int, fits: list[dict]) -> tuple[np.ndarray, np.ndarray]:
+    """Per disk (n, 3) tilt half ranges about x, y, z (deg) and (n, 2) offset half ranges in x, z (mm),
+    from the fits measured in the STLs (as in report.json); a disk not measured has none."""
+    tilt, play = np.zeros((n, 3)), np.zeros((n, 2))
+    for f in fits:
+        tilt[f["station"]] = [np.ptp(f["tilt_x_deg"]) / 2, np.ptp(f["tilt_y_deg"]) / 2, np.ptp(f["tilt_z_deg"]) / 2]
+        play[f["station"]] = [max(f["play_x_mm"], 0.0) / 2, max(f["play_z_mm"], 0.0) / 2]
+    return tilt, play
+
+
+def as_built(emap: EyeletMap, rep: dict, manifest: dict, design, fits, angles: np.ndarray,
+             deviations: dict[str, list], centre: dict[str, float]) -> tuple[dict, list[Check]]:
+    """The taut-path report section and its checks: one verdict per budgeted tendon, the pair's take-up.
+    ``centre``: each tendon's largest |ΔL| by eq. (2) between the measured hole centres (quoted beside)."""
+    s = design.check
+    rb = robot(emap, rep, manifest, design.tendon_material.diameter, design.backbone.length)
+    sc = process_scatter(design, fits)
+    names = [t["name"] for t in rep["tendons"]]
+    act = [k for k, t in enumerate(rep["tendons"]) if t["channel"] == design.tensioner.actuating_channel]
+    res = mc.run(rb, sc, angles, samples(s.samples), s.seed, tuple(act) if len(act) == 2 else None)
+    checks, rows = [], []
+    for k, t in enumerate(rep["tendons"]):
+        budget = t["budget_mm"]
+        worst = res.worst[:, k]
+        row = {"name": t["name"], "channel": t["channel"], "budget_mm": budget,
+               "centreline_max_abs_delta_mm": centre[t["name"]],
+               "taut_rest_length_mm": float(res.rest[k]),
+               "taut_max_abs_delta_mm": float(np.abs(res.nominal[k]).max()),
+               "taut_delta_mm": res.nominal[k], **(mc.statistics(worst, budget) if len(worst) else {})}
+        if len(worst):
+            hi = max(float(worst.max()), budget or 0.0, row["centreline_max_abs_delta_mm"]) * HIST_SPAN
+            counts, edges = np.histogram(worst, bins=HIST_BINS, range=(0.0, hi))
+            row["histogram"] = {"edges_mm": edges, "counts": counts}
+        if budget is not None:
+            at = mc.percentile(worst, s.robust) if len(worst) else row["taut_max_abs_delta_mm"]
+            row.update(robust_mm=at, passed=at <= budget)
+            checks.append(_verdict(row, s, len(worst), deviations.get(t["name"], [])))
+        rows.append(row)
+    out = {"about": "taut path through each measured hole's free aperture ((D - d)/2 in its own plane), from the "
+                    "tendon's seat to its drum's tangent point; as built: print scatter, disk slip within the jig's "
+                    "tolerance, tilt and offset within the play measured in each disk's STL",
+           "samples": len(res.worst), "seed": s.seed, "tendon_diameter_mm": rb.tendon_diameter,
+           "length_mm": rb.length, "robust": s.robust,
+           "unconverged_solves": res.unconverged,
+           "process": {"position_sigma_mm": sc.sigma_pos, "diameter_sigma_mm": sc.sigma_dia,
+                       "station_tolerance_mm": sc.station,
+                       "tilt_half_range_deg": sc.tilt.max(axis=0), "play_half_range_mm": sc.play.max(axis=0)},
+           "robot": {"stations_mm": rb.stations, "holes": [
+               {"disk": int(i), "xz_mm": c, "axis": a, "diameter_mm": float(dd)}
+               for i, c, a, dd in zip(rb.hole_disk, rb.hole_xz, rb.hole_axis, rb.hole_diameter)],
+               "chains": rb.chain, "anchors_mm": rb.anchor, "ends_mm": rb.end},
+           "angles_deg": angles, "percentiles": list(mc.PERCENTILES),
+           "tendons": rows, "band_mm": res.band, "envelope_mm": res.envelope}
+    if res.unconverged:
+        checks.append(Check("tendon.taut_solver", "warning", False,
+                            f"{res.unconverged} taut-path solves stopped before converging: their lengths are "
+                            f"upper bounds", float(res.unconverged), 0.0, {}))
+    if res.take_up is not None and len(res.take_up):
+        i, j = act
+        pair = {"channel": design.tensioner.actuating_channel, "tendons": [names[i], names[j]],
+                "centreline_mm": res.pair_nominal[0], "taut_mm": res.pair_nominal[1], **mc.statistics(res.take_up)}
+        out["pair"] = pair
+        checks.append(Check("tendon.take_up_as_built", "info", True,
+                            f"actuating pair {' and '.join(pair['tendons'])}: slack to take up over the sweep "
+                            f"{pair['centreline_mm']:.3f} mm through the hole centres, {pair['taut_mm']:.3f} mm taut, "
+                            f"as built p50 {pair['p50_mm']:.3f}, p95 {pair['p95_mm']:.3f}, max {pair['max_mm']:.3f} mm",
+                            pair["p95_mm"], None, {"channel": pair["channel"], "tendons": pair["tendons"]}))
+    return out, checks
+
+
+def from_report(report: dict) -> tuple[mc.Robot, mc.Scatter]:
+    """The measured robot and the stated scatter back from a report.json (for what-ifs and tests)."""
+    tb, fits = report["as_built"]["taut"], report["as_built"]["disks"]
+    rb, p = tb["robot"], tb["process"]
+    h = rb["holes"]
+    robot_ = mc.Robot(np.asarray(rb["stations_mm"], float), np.array([x["disk"] for x in h]),
+                      np.array([x["xz_mm"] for x in h], float), np.array([x["axis"] for x in h], float),
+                      np.array([x["diameter_mm"] for x in h], float), np.asarray(rb["chains"]),
+                      np.asarray(rb["anchors_mm"], float), np.asarray(rb["ends_mm"], float),
+                      tb["tendon_diameter_mm"], tb["length_mm"])
+    tilt, play = _play(len(robot_.stations), fits)
+    return robot_, mc.Scatter(p["position_sigma_mm"], p["diameter_sigma_mm"], p["station_tolerance_mm"], tilt, play)
+
+
+def _verdict(row: dict, s, n: int, devs: list) -> Check:
+    """"C2: 0.188 mm through the hole centres, 0.493 mm taut, 0.594 mm at p95 — fails"; ``n`` samples."""
+    ok = row["passed"]
+    msg = (f"{row['name']}: {row['centreline_max_abs_delta_mm']:.3f} mm through the hole centres, "
+           f"{row['taut_max_abs_delta_mm']:.3f} mm taut (nominal print)")
+    if n:
+        msg += (f", {row['robust_mm']:.3f} mm at {s.robust} of {n} as-built samples (p50 {row['p50_mm']:.3f}, "
+                f"max {row['max_mm']:.3f}; {100 * row['p_within']:.0f} % within)")
+    msg += f", budget {row['budget_mm']:g} mm — {'passes' if ok else 'fails'}"
+    big = [(j, d) for j, d in devs if d > 1e-3]
+    if not ok and big:
+        m = max(d for _, d in big)
+        msg += (f". Its eyelet table does not sample the eq. (3) function it names: it departs by up to {m:.2f} mm "
+                f"at stations {[j for j, d in big if d > 0.5 * m]}")
+    return Check("tendon.robust", s.robust_severity, ok, msg, row["robust_mm"], row["budget_mm"],
+                 {"tendon": row["name"], "channel": row["channel"], "statistic": s.robust if n else "nominal"})

@@ -1,0 +1,120 @@
+"""The taut path and the as-built Monte Carlo (issue 11): the solver against closed forms and the
+centre line, the distribution against the scatter, and the verdicts on the shipped designs."""
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from hwgen.checks.taut import from_report
+from hwgen.model import kinematics as kin
+from hwgen.model import scatter as mc
+from hwgen.model import taut
+
+# what README "As built" names: holes that fit the tendon (no free play) and a tenth of the stated
+# scatter (σ 0.005 mm on hole position, disks within ±0.015 mm of their station, a tenth of the slot's play)
+WHAT_IT_TAKES = 0.1
+ANGLES = np.arange(-90.0, 91.0)
+N = 300
+
+
+def _report(folder):
+    return json.loads((folder / "report.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def proto(built):
+    return from_report(_report(built("prototype")))
+
+
+def test_single_hole_closed_form():
+    """A straight tendon past one oversized hole: around its rim, 2·sqrt((d − r)² + h²); through it, |b − a|."""
+    E = np.array([[[1.0, 0.0], [0.0, 0.0], [0.0, 1.0]]])
+    for d, h, r in ((1.0, 10.0, 0.3), (2.5, 4.0, 1.2), (0.4, 7.0, 0.05)):
+        L, w, ok = taut.shortest([d, 0, 0], [d, 2 * h, 0], [[0, h, 0]], E, [r])
+        assert ok and abs(L - 2 * np.hypot(d - r, h)) < 1e-9
+        assert np.allclose(w[0], [r, 0], atol=1e-7)
+    L, _, ok = taut.shortest([0.2, 0, 0.1], [-0.1, 10, 0.3], [[0, 5, 0]], E, [0.5])
+    assert ok and abs(L - np.linalg.norm([-0.3, 10, 0.2])) < 1e-9
+
+
+def test_solver_against_slsqp():
+    """Random chains (tilted apertures, some of zero radius) against scipy's SLSQP on the same problem."""
+    from scipy.optimize import minimize
+    rng = np.random.default_rng(3)
+    for _ in range(8):
+        n = int(rng.integers(2, 10))
+        C = np.c_[rng.normal(0, 1, n), 5.0 * np.arange(1, n + 1), rng.normal(0, 1, n)]
+        E = np.array([np.array([[1, 0, 0], [0, np.cos(a), -np.sin(a)], [0, np.sin(a), np.cos(a)]])
+                      @ [[1.0, 0.0], [0.0, 0.0], [0.0, 1.0]] for a in rng.normal(0, 0.3, n)])
+        r = np.where(rng.random(n) < 0.2, 0.0, rng.uniform(0.1, 1.5, n))
+        a, b = [rng.normal(), 0, rng.normal()], [rng.normal(), 5.0 * (n + 1), rng.normal()]
+        L, _, ok = taut.shortest(a, b, C, E, r)
+
+        free = r > 0              # apertures of zero radius are their centres: no variables
+
+        def f(x):
+            w = np.zeros((n, 2))
+            w[free] = x.reshape(-1, 2)
+            P = C + np.einsum("nij,nj->ni", E, w)
+            return np.linalg.norm(np.diff(np.vstack([a, P, b]), axis=0), axis=1).sum()
+        cons = {"type": "ineq", "fun": lambda x: r[free] ** 2 - (x.reshape(-1, 2) ** 2).sum(axis=1)}
+        ref = minimize(f, np.zeros(2 * free.sum()), method="SLSQP", constraints=[cons],
+                       options=dict(ftol=1e-13, maxiter=500))
+        assert ok and L <= ref.fun + 1e-9 and abs(L - ref.fun) < 1e-6
+
+
+def test_zero_play_is_the_centre_line(proto):
+    """No scatter, no play, holes equal to the tendon: the chord sum from the seat through every
+    measured hole centre to the drum's tangent point, by eq. (1)-(2), to 1e-9 mm."""
+    rb, _ = proto
+    L = mc.centreline(rb, ANGLES)
+    R, o = kin.frames(rb.stations, kin.kappas_for_angles(ANGLES, rb.length))
+    for t in range(len(rb.chain)):
+        h = rb.chain[t]
+        local = np.column_stack([rb.hole_xz[h, 0], np.zeros(len(h)), rb.hole_xz[h, 1]])
+        pts = o + np.einsum("knij,nj->kni", R, local)
+        a = o[:, 0] + R[:, 0] @ rb.anchor[t]
+        b = o[:, -1] + R[:, -1] @ rb.end[t]
+        chord = np.linalg.norm(np.diff(np.concatenate([a[:, None], pts, b[:, None]], axis=1), axis=1), axis=2).sum(1)
+        assert np.abs(L[t] - chord).max() < 1e-9
+
+
+def test_distribution_narrows_to_nominal(proto):
+    """Less scatter and play, a narrower spread; none: every sample is the nominal print."""
+    rb, sc = proto
+    spreads = []
+    for f in (1.0, 0.5, 0.25, 0.0):
+        res = mc.run(rb, sc.scaled(f), ANGLES, N, 7)
+        spreads.append(np.ptp(res.worst, axis=0))
+        if f == 0:
+            assert np.abs(res.worst - np.abs(res.nominal).max(axis=1)).max() < 1e-8
+    spreads = np.array(spreads)
+    assert np.all(np.diff(spreads, axis=0) <= 1e-9) and np.all(spreads[0] > 0) and np.all(spreads[-1] < 1e-8)
+
+
+def test_shipped_prototype_as_built(built, proto):
+    """As shipped, C1 and C2 fail at p95 (stated as a warning, so the prototype still builds) and H
+    passes; with holes that fit the tendon and the scatter README names it passes at p95."""
+    rep = _report(built("prototype"))
+    robust = {c["where"]["tendon"]: c for c in rep["checks"] if c["id"] == "tendon.robust"}
+    assert set(robust) == {"C1", "C2", "H"} and rep["ok"]
+    assert not robust["C1"]["passed"] and not robust["C2"]["passed"] and robust["H"]["passed"]
+    assert all(c["severity"] == "warning" for c in robust.values())
+    assert "— **FAILS**" in (built("prototype") / "summary.md").read_text()
+    assert (built("prototype") / "tolerance.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    rb, sc = proto
+    names = [t["name"] for t in rep["tendons"]]
+    res = mc.run(rb, replace(sc.scaled(WHAT_IT_TAKES), hole_play=0.0), ANGLES, N, 0)
+    for t in ("C1", "C2", "H"):
+        assert np.percentile(res.worst[:, names.index(t)], 95) <= 0.2, t
+
+
+def test_paper_table2_fails_on_c2(built):
+    rep = _report(built("paper-table2"))
+    bad = [c for c in rep["checks"] if c["id"] == "tendon.robust" and not c["passed"]]
+    assert not rep["ok"] and any(c["where"]["tendon"] == "C2" and c["severity"] == "error" for c in bad)
+    c2 = next(c for c in bad if c["where"]["tendon"] == "C2")
+    assert "does not sample the eq. (3) function" in c2["message"]
