@@ -87,7 +87,7 @@ add("yaml", "deep-in-a-field", Case(edit(PROTO, "  height: 60 ", f"  height: {ne
                                     "backbone.height", ("nested deeper",)))
 add("yaml", "list-as-key", Case(PROTO + "\n? [a, b]\n: 1\n", "<document>", ("list used as a key",)))
 add("yaml", "mapping-as-key", Case(PROTO + "\n? {a: 1}\n: 1\n", "<document>", ("mapping used as a key",)))
-add("yaml", "list-as-key-in-section", Case(edit(PROTO, "  slot_clearance: 0.2 ", "  slot_clearance: 0.2\n  [x]: 1 "),
+add("yaml", "list-as-key-in-section", Case(edit(PROTO, "  slot_clearance: 0.05 ", "  slot_clearance: 0.05\n  [x]: 1 "),
                                            "disks", ("list used as a key",)))
 add("yaml", "integer-5001-digits", Case(edit(PROTO, "  height: 60 ", "  height: " + "9" * 5001 + " "),
                                         "backbone.height", ("5,001 characters",)))
@@ -147,9 +147,9 @@ add("yaml", "integer-key", Case(PROTO + "\n1: one\n", "[1]", ("Keys should be st
 add("yaml", "null-key", Case(PROTO + "\n~: one\n", "None", ("Keys should be strings",)))
 
 # ---------------------------------------------------------------- text that must never be markup
-add("echo", "markup-key", Case(edit(PROTO, "  slot_clearance: 0.2 ", "  slot_clearance: 0.2\n  '[/x]': 1 "),
+add("echo", "markup-key", Case(edit(PROTO, "  slot_clearance: 0.05 ", "  slot_clearance: 0.05\n  '[/x]': 1 "),
                                "disks.[/x]", ("unknown key",)))
-add("echo", "markup-open-key", Case(edit(PROTO, "  slot_clearance: 0.2 ", "  slot_clearance: 0.2\n  '[bold red]': 1 "),
+add("echo", "markup-open-key", Case(edit(PROTO, "  slot_clearance: 0.05 ", "  slot_clearance: 0.05\n  '[bold red]': 1 "),
                                     "disks.[bold red]", ("unknown key",)))
 add("echo", "markup-design-name", Case(edit(PROTO, "design: prototype", "design: '[/x]'"), "design",
                                        ("'[/x]'", "safe file name")))
@@ -159,9 +159,9 @@ add("echo", "markup-open-file-name", Case("- x\n", "<document>", ("mapping",), n
 add("echo", "emoji-file-name", Case("- x\n", "<document>", ("mapping",), name=":smile:.yaml"))
 add("echo", "emoji-value", Case(edit(PROTO, "  height: 60 ", "  height: ':thumbs_up:' "), "backbone.height",
                                 (":thumbs_up:",)))
-add("echo", "escape-sequence-key", Case(edit(PROTO, "  slot_clearance: 0.2 ", '  slot_clearance: 0.2\n  "\\e[2J\\e[31m": 1 '),
+add("echo", "escape-sequence-key", Case(edit(PROTO, "  slot_clearance: 0.05 ", '  slot_clearance: 0.05\n  "\\e[2J\\e[31m": 1 '),
                                         "disks.\\x1b[2J", ("unknown key",)))
-add("echo", "newline-key", Case(edit(PROTO, "  slot_clearance: 0.2 ", '  slot_clearance: 0.2\n  "a\\nb": 1 '),
+add("echo", "newline-key", Case(edit(PROTO, "  slot_clearance: 0.05 ", '  slot_clearance: 0.05\n  "a\\nb": 1 '),
                                 "disks.a\\nb", ("unknown key",)))
 add("echo", "bidi-override-value", Case(edit(PROTO, "design: prototype", 'design: "abc\\u202edef"'), "design",
                                         ("\\u202e", "safe file name")))
