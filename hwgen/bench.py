@@ -55,6 +55,12 @@ def main(argv: list[str]) -> None:
     with timed(f"same {len(plan.disks)} disks, tools cut one by one", "for comparison"):
         for s in plan.disks:
             _cut_one_by_one(s)
+    from hwgen.cad.tensioner_parts import gear_solid
+    from hwgen.model.gearing import worm_pair
+    pair = worm_pair(loaded.design.tensioner, loaded.design.process.min_wall)
+    with timed("build the throated wheel's gear", "blank minus every tooth-space tool in one boolean; "
+                                                 "built once per distinct pair"):
+        gear_solid.__wrapped__(pair)
     with tempfile.TemporaryDirectory() as tmp:
         with timed(f"export {len(disks)} disks STL"):
             for p in disks:
@@ -66,7 +72,12 @@ def main(argv: list[str]) -> None:
         with timed("hwgen build, parts and files only", "no post-build steps"):
             build(loaded, Path(tmp) / "a", post_build=False)
         with timed("hwgen build, everything", "with checks, bill of materials and pictures"):
-            build(loaded, Path(tmp) / "b")
+            out = build(loaded, Path(tmp) / "b")
+        from hwgen.checks.gear_mesh import gear_checks
+        from hwgen.checks.measure import read_manifest
+        with timed("gear checks from the meshes", "axes, counts and sweeps per channel; backlash, loaded "
+                                                  "face and Lewis Y on one pair"):
+            gear_checks(out.folder, read_manifest(out.folder), plan)
 
     t = Table(title=f"hwgen benchmark: {params_path}")
     t.add_column("step")

@@ -21,7 +21,7 @@ MU = 0.1
 MIN_WALL = 0.8
 INTERFERENCE_TOL_MM3 = 0.01
 GAP_TOL_MM = 0.02
-CASE_TIMEOUT_S = 60
+CASE_TIMEOUT_S = 120       # a throated wheel takes ~5 s alone, 15-25 s on a loaded 2-core machine
 RANDOM_CASES = 20
 SEED = 20261121
 

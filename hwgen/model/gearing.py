@@ -428,12 +428,18 @@ def hertz_allowable(strength_mpa: float) -> float:
     return HERTZ_YIELD_FACTOR * strength_mpa
 
 
-def engagement_length(pair: WormPair) -> float:
-    """Length of worm along its axis that the wheel's outside radius reaches, mm."""
-    depth = pair.outside_radius - (pair.center_distance - pair.ra1)
-    if depth <= 0:
+def engagement_length(pair: WormPair, planes: int = 41) -> float:
+    """Length of worm along its axis that the wheel reaches, mm: in each plane Z = z across
+    the face, the chord of the wheel's tip circle (throat or outside radius) that lies inside
+    the worm's tip cylinder; the longest."""
+    z = np.linspace(-pair.face_width / 2, pair.face_width / 2, planes)
+    z = z[np.abs(z) < pair.ra1]
+    reach = np.asarray(pair.tip_radius(z))
+    worm_tip = pair.center_distance - np.sqrt(pair.ra1 ** 2 - z ** 2)     # the worm's tip surface in that plane
+    inside = reach > worm_tip
+    if not inside.any():
         return 0.0
-    return 2 * math.sqrt(pair.outside_radius ** 2 - (pair.outside_radius - depth) ** 2)
+    return float(2 * np.sqrt(np.max(reach[inside] ** 2 - worm_tip[inside] ** 2)))
 
 
 def worm_pair(t, min_tip: float = 0.8) -> WormPair:
