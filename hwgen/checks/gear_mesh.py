@@ -283,7 +283,7 @@ def gear_checks(folder: Path, manifest: dict, plan) -> list[Check]:
         m = measure_pair(folder, pw["worm"], pw["wheel"])
         measured[channel] = m
         a, a_nom = m["center_distance"], pair.center_distance
-        fit = f"axes fitted to the crests, RMS {1e3 * m['worm_axis'].rms:.1f} / {1e3 * m['wheel_axis'].rms:.1f} µm"
+        fit = f"axes fitted to the crests, RMS {1e6 * m['worm_axis'].rms:.1f} / {1e6 * m['wheel_axis'].rms:.1f} nm"
         out.append(Check("gear.center_distance", "error", abs(a - a_nom) <= CENTER_TOL_MM,
                          f"channel {channel}: worm and wheel axes {a:.4f} mm apart ({fit}); design (d1 + d2)/2 + "
                          f"center_offset = {a_nom:.4f} mm", a, a_nom, where))
