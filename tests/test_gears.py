@@ -22,7 +22,7 @@ MIN_WALL = 0.8
 INTERFERENCE_TOL_MM3 = 0.01
 GAP_TOL_MM = 0.02
 CASE_TIMEOUT_S = 120       # a throated wheel takes ~5 s alone, 15-25 s on a loaded 2-core machine
-RANDOM_CASES = 20
+RANDOM_CASES = 12          # the seed draws 5 that build and 7 that loading refuses
 SEED = 20261121
 
 
