@@ -80,6 +80,12 @@ def main(argv: list[str]) -> None:
     with timed(f"same {len(plan.disks)} disks, tools cut one by one", "for comparison"):
         for s in plan.disks:
             _cut_one_by_one(s)
+    from hwgen.cad.tensioner_parts import gear_solid
+    from hwgen.model.gearing import worm_pair
+    pair = worm_pair(loaded.design.tensioner, loaded.design.process.min_wall)
+    with timed("build the throated wheel's gear", "blank minus every tooth-space tool in one boolean; "
+                                                 "built once per distinct pair"):
+        gear_solid.__wrapped__(pair)
     with tempfile.TemporaryDirectory() as tmp:
         with timed(f"export {len(disks)} disks STL"):
             for p in disks:
@@ -92,6 +98,11 @@ def main(argv: list[str]) -> None:
             build(loaded, Path(tmp) / "a", post_build=False)
         with timed("hwgen build, everything", "with checks, bill of materials and pictures"):
             res = build(loaded, Path(tmp) / "b")
+        from hwgen.checks.gear_mesh import gear_checks
+        from hwgen.checks.measure import read_manifest
+        with timed("gear checks from the meshes", "axes, counts and sweeps per channel; backlash, loaded "
+                                                  "face and Lewis Y on one pair"):
+            gear_checks(res.folder, read_manifest(res.folder), plan)
         if res.report is not None:
             _monte_carlo(res.report)
 

@@ -238,12 +238,13 @@ class Tensioner(_Model):
                                   description="added to the centre distance (d1 + d2)/2: the flanks' clearance "
                                               "(backlash) follows from it, mm")
     friction_coefficient: Finite = Field(0.1, gt=0, le=1,
-                          description="μ of the worm/wheel material pair (self-locking needs lead angle < atan μ)")
+                          description="μ of the worm/wheel material pair (self-locking needs lead angle < atan(μ / cos α_n))")
     spool_diameter: Finite = Field(10.0, gt=0, le=40,
                           description="diameter of the spool core the tendon winds on, mm")
     resin_strength: Finite = Field(35.0, gt=0, le=200, description="tensile strength of the printed resin, MPa")
     safety_factor: Finite = Field(2.0, ge=1, le=10,
-                          description="required ratio of resin strength to the Lewis tooth stress at the tendon break load")
+                          description="required ratio of resin strength to the Lewis tooth stress, and of the "
+                                      "Hertz allowable to the contact pressure, at the tendon break load")
     hex_key: Finite = Field(2.5, gt=0, le=6, description="across-flats of the hex key that turns each worm, mm")
     shaft_diameter: Finite = Field(3.0, gt=0, le=6,
                           description="diameter of the ISO 2338 dowel pins the wheels and worms turn on, mm")

@@ -21,14 +21,14 @@ MU = 0.1
 MIN_WALL = 0.8
 INTERFERENCE_TOL_MM3 = 0.01
 GAP_TOL_MM = 0.02
-CASE_TIMEOUT_S = 60
-RANDOM_CASES = 20
+CASE_TIMEOUT_S = 120       # a throated wheel takes ~5 s alone, 15-25 s on a loaded 2-core machine
+RANDOM_CASES = 12          # the seed draws 5 that build and 7 that loading refuses
 SEED = 20261121
 
 
 def _pair(**kw) -> WormPair:
     base = dict(module=1.25, starts=1, teeth=24, worm_pitch_diameter=14.0, pressure_angle_deg=20.0,
-                face_width=8.0, worm_length=24.0, backlash=0.1)
+                face_width=8.0, worm_length=24.0, center_offset=0.1)
     base.update(kw)
     return WormPair(**base)
 
@@ -36,27 +36,57 @@ def _pair(**kw) -> WormPair:
 def test_basic_dimensions():
     p = _pair()
     assert p.center_distance == pytest.approx((14.0 + 1.25 * 24) / 2 + 0.1)
+    assert p.a0 == pytest.approx((14.0 + 1.25 * 24) / 2)
     assert p.ratio == 24
     assert math.degrees(p.lead_angle) == pytest.approx(math.degrees(math.atan(1.25 / 14)))
     assert p.lead == pytest.approx(math.pi * 1.25)
     assert _pair(starts=2).lead == pytest.approx(2 * math.pi * 1.25)
-    # the wheel's teeth follow the thread: a right-hand helix at the lead angle
-    assert p.twist_per_mm * p.r2 == pytest.approx(math.tan(p.lead_angle))
-
-
-def test_tooth_thickness_at_pitch_is_half_the_pitch():
-    """The generated flank passes the pitch circle at a quarter pitch from the tooth centre."""
-    p = _pair()
-    fl = p.flank_points()
-    r = np.hypot(fl[:, 0], fl[:, 1])
-    half = np.arctan2(fl[:, 1], fl[:, 0])
-    at_pitch = np.interp(p.r2, r, half)
-    assert 2 * p.r2 * at_pitch == pytest.approx(p.pitch / 2, rel=2e-3)
     assert 2 * p.thread_half_width(p.r1) == pytest.approx(p.pitch / 2)
 
 
+def _involute_half_angle(p: WormPair, r):
+    """Half-angle of a standard involute tooth centred on 0 (its own formula, not hwgen's)."""
+    def inv(a):
+        return math.tan(a) - a
+    rb = p.r2 * math.cos(p.alpha)
+    return math.pi / (2 * p.teeth) + inv(p.alpha) - np.array([inv(math.acos(rb / x)) for x in r])
+
+
+@pytest.mark.parametrize("kw", [{}, dict(module=1.0, teeth=30, worm_pitch_diameter=12.0),
+                                dict(module=1.5, starts=2, teeth=20, worm_pitch_diameter=20.0)])
+def test_mid_plane_generation_is_the_involute(kw):
+    """In the mid-plane the worm is a rack: the flank its thread generates is the involute
+    (above the tip corner's trochoid), to a micrometre; the tooth is p/2 thick at the pitch circle."""
+    p = _pair(**kw)
+    radii = np.linspace(p.r2 - 0.4 * p.module, p.ra2 - 0.05, 25)
+    lo, hi = p.space_bounds(0.0, radii)
+    inv = _involute_half_angle(p, radii)
+    assert np.max(np.abs(lo - inv) * radii) < 1e-3
+    assert np.max(np.abs(hi - (2 * math.pi / p.teeth - inv)) * radii) < 1e-3
+    half = p.tooth_half_angles(0.0, [p.r2])[1][0]
+    assert 2 * p.r2 * half == pytest.approx(p.pitch / 2, rel=2e-3)
+
+
+def test_throat_rises_toward_the_face_edges_and_root_follows_the_hob():
+    p = _pair()
+    h = p.face_width / 2
+    assert p.tip_radius(0.0) == pytest.approx(p.ra2)
+    assert p.tip_radius(h) > p.tip_radius(0.0) + 0.1
+    assert p.tip_radius(h) == pytest.approx(p.tip_radius(-h))
+    for z in (0.0, 2.0, 3.5):        # the root is the hob's tip torus, ra_hob = ra1 + 0.25 m
+        assert p.root_radius(z) == pytest.approx(p.a0 - math.sqrt((p.ra1 + 0.25 * p.module) ** 2 - z ** 2))
+    assert p.root_radius(0.0) == pytest.approx(p.rf2)
+
+
+def test_outside_radius_keeps_the_tip_thick_enough():
+    p = _pair(min_tip=MIN_WALL)
+    tips = [p.tip_thickness(z) for z in np.linspace(0, p.face_width / 2, 17)]
+    assert min(tips) >= MIN_WALL - 1e-3
+    assert p.ra2 < p.outside_radius <= p.ra2 + p.module
+
+
 # Lewis form factors, 20° full depth, load at the tip (Shigley, Table 14-2). Our Y comes from
-# the tooth as built (generated root, no fillet radius), so it must be lower, but not absurdly.
+# the tooth as generated (no fillet radius), so it must be lower, but not absurdly.
 SHIGLEY_Y = {20: 0.322, 30: 0.359, 50: 0.409}
 
 
@@ -67,29 +97,50 @@ def test_lewis_form_factor_is_conservative_and_rises_with_teeth():
     assert ys[20] < ys[30] < ys[50]
 
 
-def test_lewis_stress_and_worm_torque_formulas():
+def test_strength_and_worm_torque_formulas():
     p = _pair()
     t2 = 44.5 * 5.075
-    sigma = p.lewis_stress(t2)
-    assert sigma == pytest.approx(t2 / p.r2 / (p.effective_face_width * p.module * p.lewis_form_factor()))
+    assert p.lewis_stress(t2, 8.0, 0.28) == pytest.approx(t2 / p.r2 / (8.0 * p.module * 0.28))
+    hz = p.hertz_line(t2, 8.0, MU, 2800.0, 0.4)
+    F, R, L, es = hz["force_n"], hz["radius_mm"], hz["length_mm"], hz["e_star_mpa"]
+    assert es == pytest.approx(2800.0 / (2 * (1 - 0.4 ** 2)))
+    assert L == pytest.approx(8.0 / math.cos(p.lead_angle))
+    assert hz["p0_mpa"] == pytest.approx(math.sqrt(F * es / (math.pi * L * R)))
+    assert F > t2 / p.r2                                  # the normal force exceeds the tangential one
     # torque on the worm: axial force × r1 × tan(γ + φ'); with μ → 0 it is the ideal T2 / ratio
     assert p.worm_torque(t2, 1e-12) == pytest.approx(t2 / p.ratio, rel=1e-6)
     assert p.worm_torque(t2, MU) > t2 / p.ratio
     assert 0 < p.efficiency(MU) < 0.5        # self-locking worms are below 50 %
 
 
-def test_generated_root_undercuts_small_wheels_only():
-    assert _pair(teeth=10).undercut_depth > 0
-    assert _pair(teeth=24).undercut_depth == 0
-    assert _pair(teeth=17).min_teeth_no_undercut == pytest.approx(2 / math.sin(math.radians(20)) ** 2)
+def test_one_self_locking_criterion_consistent_with_the_torque():
+    """φ' = atan(μ / cos α_n) in both; locked ⇔ the back-driving efficiency tan(γ − φ')/tan γ ≤ 0."""
+    p = _pair()
+    phi = p.friction_angle(MU)
+    assert phi == pytest.approx(math.atan(MU / math.cos(math.atan(math.tan(p.alpha) * math.cos(p.lead_angle)))))
+    for d1 in (9.0, 11.5, 12.0, 14.0, 20.0):
+        q = _pair(worm_pitch_diameter=d1)
+        g, f = q.lead_angle, q.friction_angle(MU)
+        assert q.self_locking(MU) == (math.tan(g - f) / math.tan(g) <= 0)
+    # γ = 5.9°: locked by atan(μ / cos α_n) = 6.07°, though above atan μ = 5.71°
+    q = _pair(worm_pitch_diameter=1.25 / math.tan(math.radians(5.9)))
+    assert q.self_locking(MU) and q.lead_angle > math.atan(MU)
+
+
+def test_centre_offset_gives_this_backlash():
+    b = _pair().backlash()
+    assert b["circumferential_mm"] == pytest.approx(2 * 0.1 * math.tan(math.radians(20)))
+    assert b["wheel_deg"] == pytest.approx(math.degrees(b["circumferential_mm"] / 15.0))
+    assert _pair(center_offset=0.0).backlash()["circumferential_mm"] == 0.0
 
 
 def test_problems_name_the_field():
     assert _pair().problems(MU, MIN_WALL) == []
     fields = [f for f, _ in _pair(worm_pitch_diameter=8.0).problems(MU, MIN_WALL)]
-    assert "worm_pitch_diameter" in fields                 # γ = 8.9° > atan 0.1
+    assert "worm_pitch_diameter" in fields                 # γ = 8.9° > atan(0.1 / cos α_n)
     msgs = dict(_pair(teeth=12).problems(MU, MIN_WALL))
     assert "undercut" in msgs["wheel_teeth"]
+    assert _pair(teeth=17).min_teeth_no_undercut == pytest.approx(2 / math.sin(math.radians(20)) ** 2)
     assert "thinner" in dict(_pair(module=0.8).problems(MU, MIN_WALL))["module"]
 
 
@@ -172,9 +223,9 @@ def _mesh_case(params: dict, mu: float) -> dict:
         w = man(meshes[0], wp @ rz(psi))
         h = man(meshes[1], hp @ rz(-psi / pair.ratio))
         vols.append((w ^ h).volume())
-        gaps.append(w.min_gap(h, pair.backlash + 1.0))
+        gaps.append(w.min_gap(h, pair.center_offset + 1.0))
     moved = hp.copy()
-    moved[0, 3] += pair.backlash + 0.1
+    moved[0, 3] += pair.center_offset + 0.1
     out.update(interference=max(vols), gap=max(gaps),
                moved=(man(meshes[0], wp) ^ man(meshes[1], moved)).volume(), seconds=time.time() - t0)
     return out
@@ -193,7 +244,7 @@ def _random_cases(n: int, seed: int) -> list[tuple[dict, float]]:
                     worm_pitch_diameter=float(np.round(min(40.0, starts * m / math.tan(gamma)), 2)),
                     pressure_angle_deg=float(rng.choice([20.0, 20.0, 25.0])),
                     face_width=float(np.round(rng.uniform(5, 12), 1)),
-                    worm_length=1.0, backlash=float(np.round(rng.uniform(0.02, 0.2), 3)))
+                    worm_length=1.0, center_offset=float(np.round(rng.uniform(0.02, 0.2), 3)))
         probe = WormPair(**pair)
         pair["worm_length"] = float(np.round(engagement_length(probe) + 2 * probe.pitch, 1))
         cases.append((pair, float(np.round(rng.uniform(0.08, 0.3), 3))))
@@ -203,13 +254,13 @@ def _random_cases(n: int, seed: int) -> list[tuple[dict, float]]:
 # Other modules, tooth counts and thread starts that must build meshing pairs.
 FIXED_CASES = [
     (dict(module=1.5, starts=1, teeth=30, worm_pitch_diameter=18.0, pressure_angle_deg=20.0, face_width=10.0,
-          worm_length=30.0, backlash=0.1), 0.1),
+          worm_length=30.0, center_offset=0.1), 0.1),
     (dict(module=2.0, starts=1, teeth=20, worm_pitch_diameter=24.0, pressure_angle_deg=20.0, face_width=12.0,
-          worm_length=36.0, backlash=0.15), 0.1),
+          worm_length=36.0, center_offset=0.15), 0.1),
     (dict(module=1.5, starts=2, teeth=40, worm_pitch_diameter=20.0, pressure_angle_deg=25.0, face_width=8.0,
-          worm_length=34.0, backlash=0.05), 0.3),
+          worm_length=34.0, center_offset=0.05), 0.3),
     (dict(module=1.25, starts=3, teeth=36, worm_pitch_diameter=22.0, pressure_angle_deg=20.0, face_width=8.0,
-          worm_length=28.0, backlash=0.1), 0.3),
+          worm_length=28.0, center_offset=0.1), 0.3),
 ]
 
 
@@ -237,7 +288,7 @@ def _assert_meshes(case, r):
     assert r["watertight"], (case, "STL not watertight")
     assert min(r["volumes"]) > 0
     assert r["interference"] <= INTERFERENCE_TOL_MM3, (case, r)
-    assert r["gap"] <= case[0]["backlash"] + GAP_TOL_MM, (case, r)
+    assert r["gap"] <= case[0]["center_offset"] + GAP_TOL_MM, (case, r)
     assert r["moved"] > INTERFERENCE_TOL_MM3, (case, "moving the wheel in does not collide: check is blind")
 
 

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from hwgen.checks.gear_mesh import (INTERFERENCE_TOL_MM3, GAP_TOL_MM, axis, gear_checks, manifold, mesh_measure,
-                                tendon_checks, toward)
-from hwgen.checks.measure import load_mesh
+from hwgen.checks.gear_mesh import (INTERFERENCE_TOL_MM3, GAP_TOL_MM, count_teeth, gear_checks, manifold,
+                                   measure_pair, mesh_measure, placed_mesh, tendon_checks, toward)
+from hwgen.checks.measure import fit_axis, load_mesh
 from hwgen.model.plan import plan
 from hwgen.model.gearing import worm_pair
 from hwgen.pipeline import load
@@ -60,12 +60,14 @@ def test_worm_and_wheel_files_are_closed_solids(proto):
 
 def test_step_files_of_worm_and_wheel_are_valid_solids(proto):
     import cadquery as cq
+
+    from hwgen.cad import mass_properties
     folder, man, _ = proto
     for role in ("tensioner_worm", "tensioner_wheel"):
         q = _by_role(man, role)["C1"]
         shape = cq.importers.importStep(str(folder / q["files"]["step"]["path"])).val()
         assert shape.isValid() and len(shape.Solids()) == 1
-        assert shape.Volume() == pytest.approx(q["volume_mm3"], rel=1e-4)
+        assert mass_properties(shape)[0] == pytest.approx(q["volume_mm3"], rel=1e-4)
 
 
 def test_worm_has_a_thread_and_wheel_has_teeth(proto):
@@ -117,9 +119,9 @@ def test_nominal_mesh_no_interference_gap_within_backlash(proto, channel):
     folder, man, p = proto
     pair = worm_pair(p.design.tensioner)
     worm, wheel = _by_role(man, "tensioner_worm")[channel], _by_role(man, "tensioner_wheel")[channel]
-    vol, gap = mesh_measure(manifold(folder, worm), manifold(folder, wheel), pair.backlash + 1.0)
+    vol, gap = mesh_measure(manifold(folder, worm), manifold(folder, wheel), pair.center_offset + 1.0)
     assert vol <= INTERFERENCE_TOL_MM3
-    assert gap <= pair.backlash + GAP_TOL_MM
+    assert gap <= pair.center_offset + GAP_TOL_MM
     assert gap > 0.0         # teeth do not touch: the backlash is real
 
 
@@ -130,9 +132,12 @@ def test_wheel_moved_toward_worm_interferes(proto):
     moved = manifold(folder, wheel, toward(wheel, worm, 0.2))
     vol, _ = mesh_measure(wm, moved)
     assert vol > INTERFERENCE_TOL_MM3 * 10
+    _, nominal = mesh_measure(wm, manifold(folder, wheel))
     away = manifold(folder, wheel, toward(wheel, worm, -0.2))
     _, gap = mesh_measure(wm, away)
-    assert gap > 0.1
+    # 0.2 mm more centre distance opens each flank by about 0.2 sin α (less where the throated
+    # wheel's flank normals lean toward its axis)
+    assert gap > nominal + 0.5 * 0.2 * math.sin(math.radians(20))
 
 
 def test_mesh_holds_through_the_motion_and_only_with_the_right_sense(proto):
@@ -162,15 +167,90 @@ def test_mesh_holds_through_the_motion_and_only_with_the_right_sense(proto):
     assert max(wrong) > 1.0
 
 
-def test_centre_distance_from_placements(proto):
-    _, man, p = proto
+def test_centre_distance_shaft_angle_and_counts_come_from_the_meshes(proto):
+    """Axes fitted to each worm's and wheel's crests (not read from the placements) meet at
+    (d1 + d2)/2 + center_offset and 90°; 24 teeth and 1 start counted in their sections."""
+    folder, man, p = proto
     pair = worm_pair(p.design.tensioner)
     for ch, worm in _by_role(man, "tensioner_worm").items():
-        wheel = _by_role(man, "tensioner_wheel")[ch]
-        (pa, da), (pb, db) = axis(wheel), axis(worm)
-        n = np.cross(da, db)
-        assert np.linalg.norm(n) == pytest.approx(1.0)          # axes at right angles
-        assert abs(np.dot(pb - pa, n)) == pytest.approx((pair.worm_pitch_diameter + 2 * pair.r2) / 2 + pair.backlash)
+        m = measure_pair(folder, worm, _by_role(man, "tensioner_wheel")[ch])
+        assert m["worm_axis"].rms < 0.005 and m["wheel_axis"].rms < 0.005
+        assert m["center_distance"] == pytest.approx(pair.center_distance, abs=0.002)
+        assert m["shaft_angle"] == pytest.approx(90.0, abs=0.01)
+        assert (m["teeth"], m["starts"]) == (pair.teeth, pair.starts)
+
+
+def _tip_radii(mesh, axis, bands):
+    """Largest radius of the STL's vertices in bands along the fitted axis (from mid-crest)."""
+    rad, along = axis.radial(mesh.vertices)
+    mid = sum(axis.crest) / 2
+    return [float(rad[(along >= mid + lo) & (along < mid + hi)].max()) for lo, hi in bands]
+
+
+def test_wheel_tip_is_throated(proto):
+    """Measured on the exported STL: the tip radius at mid-face is the throat radius, smaller
+    than toward the face edges (the wheel wraps round the worm)."""
+    folder, man, p = proto
+    pair = worm_pair(p.design.tensioner)
+    mesh = placed_mesh(folder, _by_role(man, "tensioner_wheel")["C1"])
+    ax = fit_axis(mesh)
+    h = pair.face_width / 2
+    centre, lo, hi = _tip_radii(mesh, ax, [(-0.2, 0.2), (-0.8 * h, -0.5 * h), (0.5 * h, 0.8 * h)])
+    assert centre == pytest.approx(pair.ra2, abs=0.01)
+    assert lo > centre + 0.1 and hi > centre + 0.1
+    assert ax.radius == pytest.approx(pair.outside_radius, abs=0.005)
+
+
+def _gear_checks_of(checks, channel=None):
+    return {c.id: c for c in checks if c.id.startswith("gear.") and c.where.get("channel") in (channel, "all")}
+
+
+def test_moved_wheels_and_an_edited_mesh_are_caught(proto, tmp_path):
+    """In a copy of the design: channel C1's wheel placed 0.2 mm toward its worm (overlap),
+    C2's 0.1 mm (back at the generating distance: flanks touch, no measurable overlap, the gap
+    check sees it), and H's wheel STL moved 0.05 mm away from its worm in its own file (placement untouched):
+    each fails on the measured centre distance; A, untouched, passes."""
+    import copy
+    import shutil
+    folder, man, p = proto
+    work = tmp_path / "design"
+    shutil.copytree(folder, work)
+    moved = copy.deepcopy(man)
+    worms, wheels = _by_role(moved, "tensioner_worm"), _by_role(moved, "tensioner_wheel")
+    wheels["C1"]["placement"] = toward(wheels["C1"], worms["C1"], 0.2).tolist()
+    wheels["C2"]["placement"] = toward(wheels["C2"], worms["C2"], 0.1).tolist()
+    ph = np.asarray(wheels["H"]["placement"])
+    away = toward(wheels["H"], worms["H"], -1.0)[:3, 3] - ph[:3, 3]      # unit vector from the worm, robot frame
+    stl = work / wheels["H"]["files"]["stl"]["path"]
+    mesh = load_mesh(stl)
+    mesh.apply_translation(0.05 * ph[:3, :3].T @ away)                  # the same move, in the file's frame
+    mesh.export(stl)
+    checks = gear_checks(work, moved, p)
+    a, c1, c2, h = (_gear_checks_of(checks, ch) for ch in ("A", "C1", "C2", "H"))
+    assert all(c.passed for c in a.values() if c.severity == "error")
+    for ch in (c1, c2, h):
+        assert not ch["gear.center_distance"].passed
+    assert not c1["gear.interference"].passed and c1["gear.interference"].measured > 0.1
+    assert c2["gear.interference"].passed and not c2["gear.gap"].passed and c2["gear.gap"].measured < 0.005
+    nominal = worm_pair(p.design.tensioner).center_distance
+    assert h["gear.center_distance"].measured == pytest.approx(nominal + 0.05, abs=0.002)
+    assert c1["gear.center_distance"].measured == pytest.approx(nominal - 0.2, abs=0.002)
+
+
+def test_counts_are_read_from_the_sections(proto):
+    """The design says 25 teeth (module 1.2, so the pitch circle stays): the 24 teeth counted
+    in the wheel's section fail the check."""
+    import dataclasses
+    folder, man, p = proto
+    ts = p.design.tensioner.model_copy(update={"wheel_teeth": 25, "module": 1.2})
+    design = p.design.model_copy(update={"tensioner": ts})
+    one = {"parts": [_by_role(man, "tensioner_worm")["C1"], _by_role(man, "tensioner_wheel")["C1"]]}
+    checks = gear_checks(folder, one, dataclasses.replace(p, design=design))
+    teeth = next(c for c in checks if c.id == "gear.teeth")
+    assert not teeth.passed and teeth.measured == 24 and teeth.limit == 25
+    assert next(c for c in checks if c.id == "gear.starts").passed
+    worm = placed_mesh(folder, _by_role(man, "tensioner_worm")["C1"])
+    assert count_teeth(worm, fit_axis(worm)) == 1
 
 
 def test_every_tendon_clears_every_other_part(proto):
@@ -202,13 +282,24 @@ def test_gear_checks_pass_on_the_prototype(proto):
     failed = [c.message for c in checks if c.severity == "error" and not c.passed]
     assert not failed
     ids = {c.id for c in checks}
-    assert {"gear.center_distance", "gear.interference", "gear.gap", "gear.lewis", "gear.worm_torque",
-            "gear.self_locking", "gear.undercut", "gear.ratio", "gear.lead_angle"} <= ids
+    assert {"gear.center_distance", "gear.shaft_angle", "gear.teeth", "gear.starts", "gear.interference", "gear.gap",
+            "gear.backlash", "gear.loaded_face", "gear.lewis", "gear.hertz", "gear.worm_torque", "gear.ratio",
+            "gear.lead_angle"} <= ids
+    # loading refuses what is not self-locking or undercut: no check that could never fail
+    assert not {"gear.self_locking", "gear.undercut"} & ids
+    pair = worm_pair(p.design.tensioner)
+    face = next(c for c in checks if c.id == "gear.loaded_face")
+    assert 0.95 * pair.face_width < face.measured <= pair.face_width + 0.01      # throated: the whole face
+    lash = next(c for c in checks if c.id == "gear.backlash")
+    assert 0.5 * lash.limit < lash.measured < lash.limit       # less than the rack formula: normals lean off-plane
     lewis = [c for c in checks if c.id == "gear.lewis"]
+    assert all(c.where["face_mm"] == face.measured for c in lewis)
     # the actuating drum carries two tendons: twice the stress of a single-tendon channel
     sa = next(c for c in lewis if c.where["channel"] == "A").where["stress_mpa"]
     sc = next(c for c in lewis if c.where["channel"] == "C1").where["stress_mpa"]
     assert sa == pytest.approx(2 * sc)
+    hz = {c.where["channel"]: c.where["p0_mpa"] for c in checks if c.id == "gear.hertz"}
+    assert hz["A"] == pytest.approx(math.sqrt(2) * hz["C1"])          # p0 ∝ √F
 
 
 def test_tensioner_parts_fit_the_printer(proto):

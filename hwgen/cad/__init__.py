@@ -47,3 +47,17 @@ def location(matrix: np.ndarray):
     t = gp_Trsf()
     t.SetValues(*(float(matrix[r, c]) for r in range(3) for c in range(4)))
     return cq.Location(t)
+
+
+MASS_EPS = 1e-6   # relative precision of the volume integration (CadQuery's Volume() is 0.2-0.3 % off
+#                   on the throated wheel's B-spline flanks; its STL agrees with this to 0.04 %)
+
+
+def mass_properties(solid) -> tuple[float, tuple[float, float, float]]:
+    """Volume (mm³) and centroid (file mm) of a solid, integrated to MASS_EPS."""
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+    props = GProp_GProps()
+    BRepGProp.VolumeProperties_s(solid.wrapped, props, MASS_EPS)
+    c = props.CentreOfMass()
+    return props.Mass(), (c.X(), c.Y(), c.Z())

@@ -6,7 +6,7 @@ import hashlib
 from pathlib import Path
 
 from ..model.plan import Plan
-from . import Part
+from . import Part, mass_properties
 
 
 def sha256(path: Path) -> str:
@@ -49,9 +49,8 @@ def part_entry(part: Part, files: dict[str, Path], root: Path, material: str, de
     bb = part.solid.BoundingBox()
     if part.density_g_cm3 is not None:
         material, density_g_cm3 = part.material, part.density_g_cm3
-    volume = part.solid.Volume()
-    com = part.solid.Center()
-    com_robot = part.placement @ [com.x, com.y, com.z, 1.0]
+    volume, com = mass_properties(part.solid)
+    com_robot = part.placement @ [*com, 1.0]
     entry = {
         "name": part.name,
         "role": part.role,

@@ -22,9 +22,21 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
+from functools import lru_cache
 
 import cadquery as cq
 import numpy as np
+from OCP.BRep import BRep_Tool
+from OCP.BRepBuilderAPI import (BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeSolid,
+                                BRepBuilderAPI_MakeWire, BRepBuilderAPI_Sewing)
+from OCP.BRepFill import BRepFill
+from OCP.Geom import Geom_BSplineSurface
+from OCP.gp import gp_Pnt
+from OCP.ShapeFix import ShapeFix_Solid
+from OCP.TColgp import TColgp_Array2OfPnt
+from OCP.TColStd import TColStd_Array1OfInteger, TColStd_Array1OfReal
+from OCP.TopExp import TopExp
+from OCP.TopoDS import TopoDS
 
 from ..model.gearing import GearDesignError, WormPair
 from ..model.plan import Plan
@@ -97,32 +109,173 @@ def drive_solid(lay: TensionerLayout) -> cq.Solid:
 
 
 # ---- wheel ------------------------------------------------------------------------------
-def gear_solid(pair: WormPair) -> cq.Solid:
-    """Helical involute wheel, file Z from 0 to the face width; at mid-width a tooth is
-    centred on +X. Each tooth: two generated flanks (splines), tip and root arcs; the
-    section turns by twist_per_mm · Z so the teeth follow the worm's thread."""
-    n, b = pair.teeth, pair.face_width
-    fl = pair.flank_points()
-    lower = fl * [1, -1]
-    step = 2 * math.pi / n
-    theta0 = -pair.twist_per_mm * b / 2
+# The throated wheel: a blank of revolution minus one tooth-space tool per tooth, cut in one
+# boolean. A tool's flanks and root are one bicubic B-spline surface through the tooth-space
+# outlines that :meth:`WormPair.level_outline` generates plane by plane (the same points and
+# parameters at every level), closed by a ruled top above the blank and two planar caps.
+GEAR_LEVELS = 11          # transverse planes interpolated over the face (+ TOOL_OVERRUN each side)
+GEAR_FLANK_POINTS = 16    # outline points per flank and level (≤ 2.6 µm from the envelope)
+GEAR_ROOT_POINTS = 7      # outline points on the root arc
+TOOL_OVERRUN = 0.4        # the tooth-space tool reaches this far beyond each face, mm
+TOOL_TOP_MARGIN = 0.2     # the tool's top above the outside radius, mm (halved until neighbours stay apart)
+TOOL_MIN_LAND = 0.05      # tooth left between two neighbouring tools at their top, mm
+SURFACE_TOL = 1e-7        # face made on the interpolated surface, mm
+SEWING_TOL = 1e-6         # sewing the tool's faces into a shell, mm
+BSPLINE_DEGREE = 3
 
-    def rot(p, a):
-        c, s = math.cos(a), math.sin(a)
-        return cq.Vector(p[0] * c - p[1] * s, p[0] * s + p[1] * c, 0)
-    edges = []
-    for k in range(n):
-        a = theta0 + k * step
-        lo = [rot(p, a) for p in lower]
-        up = [rot(p, a) for p in fl[::-1]]
-        edges.append(cq.Edge.makeSpline(lo))
-        edges.append(cq.Edge.makeThreePointArc(lo[-1], rot((pair.ra2, 0), a), up[0]))
-        edges.append(cq.Edge.makeSpline(up))
-        mid = rot((pair.rf2 * math.cos(step / 2), pair.rf2 * math.sin(step / 2)), a)
-        edges.append(cq.Edge.makeThreePointArc(up[-1], mid, rot(lower[0], a + step)))
-    wire = cq.Wire.assembleEdges(edges)
-    return cq.Solid.extrudeLinearWithRotation(wire, [], cq.Vector(0, 0, 0), cq.Vector(0, 0, b),
-                                              math.degrees(pair.twist_per_mm * b))
+
+def _v(x, y, z=0.0) -> cq.Vector:
+    return cq.Vector(float(x), float(y), float(z))
+
+
+def _blank(pair: WormPair) -> cq.Solid:
+    """The wheel's blank, mid-plane at Z = 0: throat torus about the worm axis, outside
+    cylinder, 45° rim chamfers; its half-section in the XZ plane revolved about Z."""
+    h, ch, ro = pair.face_width / 2, pair.rim_chamfer, pair.outside_radius
+    zo = pair.z_outside
+    band = zo < h - ch                       # the outside cylinder is reached inside the face
+    if band and zo < 1e-3:
+        raise GearDesignError("wheel throat never rises: the outside radius equals the throat radius")
+    throat = _v(pair.ra2, 0, 0)
+    if band:
+        edge = ro
+        rim = [cq.Edge.makeLine(_v(edge - ch, 0, -h), _v(edge, 0, -h + ch)),
+               cq.Edge.makeLine(_v(edge, 0, -h + ch), _v(ro, 0, -zo)),
+               cq.Edge.makeThreePointArc(_v(ro, 0, -zo), throat, _v(ro, 0, zo)),
+               cq.Edge.makeLine(_v(ro, 0, zo), _v(edge, 0, h - ch)),
+               cq.Edge.makeLine(_v(edge, 0, h - ch), _v(edge - ch, 0, h))]
+    else:                                    # the face edge lies on the torus: chamfer down to it
+        edge, zc = float(pair.tip_radius(h)), h - ch
+        rc = float(pair.tip_radius(zc))
+        rim = [cq.Edge.makeLine(_v(edge - ch, 0, -h), _v(rc, 0, -zc)),
+               cq.Edge.makeThreePointArc(_v(rc, 0, -zc), throat, _v(rc, 0, zc)),
+               cq.Edge.makeLine(_v(rc, 0, zc), _v(edge - ch, 0, h))]
+    edges = [cq.Edge.makeLine(_v(0, 0, -h), _v(edge - ch, 0, -h)), *rim,
+             cq.Edge.makeLine(_v(edge - ch, 0, h), _v(0, 0, h)), cq.Edge.makeLine(_v(0, 0, h), _v(0, 0, -h))]
+    face = cq.Face.makeFromWires(cq.Wire.assembleEdges(edges))
+    return cq.Solid.revolve(face, 360.0, _v(0, 0, 0), _v(0, 0, 1))
+
+
+def _tool_top(pair: WormPair, levels: np.ndarray) -> float:
+    """The tool's top radius, the same at every level (a top that followed the throat would
+    kink the outlines' radial spacing where throat and cylinder meet, and the interpolation
+    would carry the kink into the flanks): TOOL_TOP_MARGIN above the outside radius, halved
+    until the tooth left between two tools is TOOL_MIN_LAND thick there at every level."""
+    margin = TOOL_TOP_MARGIN
+    while margin > 0.02:
+        top = pair.outside_radius + margin
+        if all(2 * top * pair.tooth_half_angles(float(z), [top])[1][0] > TOOL_MIN_LAND for z in levels[::2]):
+            break
+        margin /= 2
+    return pair.outside_radius + margin
+
+
+def _knots(t: np.ndarray, degree: int) -> np.ndarray:
+    """Clamped knot vector for interpolation at parameters t (de Boor's averaging)."""
+    inner = [float(np.mean(t[j:j + degree])) for j in range(1, len(t) - degree)]
+    return np.concatenate([np.zeros(degree + 1), inner, np.ones(degree + 1)])
+
+
+def _basis(knots: np.ndarray, degree: int, t: np.ndarray) -> np.ndarray:
+    """(len(t), n) B-spline basis functions at t (Cox-de Boor), the last knot span closed."""
+    spans = len(knots) - 1
+    N = np.zeros((len(t), spans))
+    for i in range(spans):
+        if knots[i] < knots[i + 1]:
+            N[:, i] = (t >= knots[i]) & (t < knots[i + 1])
+    last = max(i for i in range(spans) if knots[i] < knots[i + 1])
+    N[t >= knots[-1]] = 0.0
+    N[t >= knots[-1], last] = 1.0
+    for k in range(1, degree + 1):
+        M = np.zeros((len(t), spans - k))
+        for i in range(spans - k):
+            d1, d2 = knots[i + k] - knots[i], knots[i + k + 1] - knots[i + 1]
+            M[:, i] = ((t - knots[i]) / d1 * N[:, i] if d1 > 0 else 0.0) + \
+                      ((knots[i + k + 1] - t) / d2 * N[:, i + 1] if d2 > 0 else 0.0)
+        N = M
+    return N[:, :len(knots) - degree - 1]
+
+
+def _occ_knots(knots: np.ndarray):
+    vals, mult = np.unique(np.round(knots, 12), return_counts=True)
+    k, m = TColStd_Array1OfReal(1, len(vals)), TColStd_Array1OfInteger(1, len(vals))
+    for i, (x, c) in enumerate(zip(vals, mult)):
+        k.SetValue(i + 1, float(x))
+        m.SetValue(i + 1, int(c))
+    return k, m
+
+
+def _interpolating_surface(P: np.ndarray, u: np.ndarray, v: np.ndarray):
+    """Bicubic B-spline surface through the grid P (nu, nv, 3) at parameters u × v (poles
+    solved with numpy: OCCT's own lofts re-approximate to degree 5 and cut 6× slower)."""
+    d = BSPLINE_DEGREE
+    ku, kv = _knots(u, d), _knots(v, d)
+    nu, nv = len(u), len(v)
+    C = np.linalg.solve(_basis(ku, d, u), P.reshape(nu, -1)).reshape(nu, nv, 3)
+    C = np.linalg.solve(_basis(kv, d, v), C.transpose(1, 0, 2).reshape(nv, -1)).reshape(nv, nu, 3).transpose(1, 0, 2)
+    poles = TColgp_Array2OfPnt(1, nu, 1, nv)
+    for i in range(nu):
+        for j in range(nv):
+            poles.SetValue(i + 1, j + 1, gp_Pnt(*map(float, C[i, j])))
+    (uk, um), (vk, vm) = _occ_knots(ku), _occ_knots(kv)
+    return Geom_BSplineSurface(poles, uk, vk, um, vm, d, d)
+
+
+def _tooth_space_tool(pair: WormPair) -> cq.Solid:
+    """One tooth-space tool (the space centred near π/z2, mid-plane at Z = 0), a closed solid."""
+    h = pair.face_width / 2 + TOOL_OVERRUN
+    zs = np.linspace(-h, h, GEAR_LEVELS)
+    top = _tool_top(pair, zs)
+    outlines = np.array([pair.level_outline(z, top, GEAR_FLANK_POINTS, GEAR_ROOT_POINTS) for z in zs])
+    seg = np.linalg.norm(np.diff(outlines, axis=1), axis=2)         # one chord-length parameter set for all
+    u = np.concatenate([np.zeros((len(zs), 1)), np.cumsum(seg, axis=1)], axis=1)
+    u = (u / u[:, -1:]).mean(axis=0)
+    P = np.concatenate([outlines, np.broadcast_to(zs[:, None, None], outlines.shape[:2] + (1,))], axis=2)
+    surf = _interpolating_surface(np.ascontiguousarray(P.transpose(1, 0, 2)), u, (zs + h) / (2 * h))
+    u0, u1, v0, v1 = surf.Bounds()
+
+    def iso(along_u: bool, val: float):
+        return BRepBuilderAPI_MakeEdge(surf.UIso(val) if along_u else surf.VIso(val)).Edge()
+    sew = BRepBuilderAPI_Sewing(SEWING_TOL)
+    sew.Add(BRepBuilderAPI_MakeFace(surf, SURFACE_TOL).Face())
+    sew.Add(BRepFill.Face_s(iso(True, u0), iso(True, u1)))          # the ruled top
+    for val in (v0, v1):                                              # planar caps beyond the faces
+        e = iso(False, val)
+        a, b = BRep_Tool.Pnt_s(TopExp.FirstVertex_s(e)), BRep_Tool.Pnt_s(TopExp.LastVertex_s(e))
+        sew.Add(BRepBuilderAPI_MakeFace(BRepBuilderAPI_MakeWire(e, BRepBuilderAPI_MakeEdge(b, a).Edge()).Wire(),
+                                        True).Face())
+    sew.Perform()
+    fix = ShapeFix_Solid(BRepBuilderAPI_MakeSolid(TopoDS.Shell_s(sew.SewedShape())).Solid())
+    fix.Perform()
+    tool = cq.Solid(fix.Solid())
+    if tool.Volume() < 0:
+        tool = cq.Solid(tool.wrapped.Reversed())
+    if not tool.isValid():
+        raise GearDesignError("the wheel's tooth-space tool is not a valid solid")
+    return tool
+
+
+@lru_cache(maxsize=8)
+def gear_solid(pair: WormPair) -> cq.Solid:
+    """Throated worm wheel generated by the pair's worm thread, file Z from 0 to the face
+    width, a tooth centred on +X at mid-width. Built once per distinct pair (a few seconds:
+    one boolean of the blank and all tooth-space tools); one valid solid (loose chips of the
+    tooth spaces' tops dropped) or :class:`GearDesignError`."""
+    tool = _tooth_space_tool(pair)
+    step = 360.0 / pair.teeth
+    tools = [tool] + [tool.rotate(_v(0, 0, 0), _v(0, 0, 1), k * step) for k in range(1, pair.teeth)]
+    pieces = sorted(_blank(pair).cut(*tools).Solids(), key=lambda s: s.Volume())
+    # The tool's top is a chord between its corners; where the tooth tips leave little room
+    # above the outside radius, the chord dips under it mid-space and leaves a loose chip of
+    # the outside band on each side of the throat. Chips lie wholly beyond the throat radius
+    # and belong to the space anyway; a loose piece reaching further in (a lost tooth) is an error.
+    loose = pieces[:-1]
+    if not pieces or any(min(math.hypot(v.X, v.Y) for v in s.Vertices()) <= pair.ra2 for s in loose):
+        raise GearDesignError(f"the wheel came out in {len(pieces)} pieces, expected one solid")
+    wheel = pieces[-1]
+    if not wheel.isValid():
+        raise GearDesignError("the wheel is not a valid solid")
+    return wheel.translate(_v(0, 0, pair.face_width / 2))
 
 
 def clamp_site(lay: TensionerLayout) -> float:

@@ -1,12 +1,20 @@
-"""Worm-gear tensioner checks: the mesh measured from the exported files, the formulas,
-and the free span of every tendon from its tip eyelet to its spool.
+"""Worm-gear tensioner checks measured from the exported meshes, and the free span of every
+tendon from its tip eyelet to its spool.
 
-Measured from files (placed by the manifest's placement): centre distance and shaft angle
-of each worm/wheel pair from their axes (file Z of both), the interference volume of worm
-and wheel at the nominal mesh and their closest gap (manifold3d), and each tendon's
-clearance to every part it passes. Computed from the parameters (hwgen.gears): ratio, lead
-angle, self-locking, undercut, Lewis tooth stress at the tendon break load and the torque
-on the worm for that pull.
+From the files (each STL placed by its manifest placement, nothing else of the manifest):
+the axes of each worm and wheel fitted to their surfaces give the centre distance and the
+shaft angle; the wheel's teeth and the worm's starts are counted in sections; the worm is
+turned through one thread period and the wheel by the counted ratio, for the interference
+and the closest gap. On one representative pair (the channel with the most tendons: every
+channel has the same gear, one tensioner section) the wheel is turned until each flank
+touches, for the backlash, and the zone where the closed flank lies within ZONE_GAP_MM of
+the worm gives the face width that carries load; the wheel's mid-face section gives the
+tooth's Lewis form factor.
+
+From the design, and each message says so: the tendon break load, the winding radius, μ,
+the module, pressure and lead angles, the resin's strength, modulus and Poisson ratio. Rules
+that loading enforces (self-locking by γ < atan(μ / cos α_n), no undercut) are not checked
+again here: a design that breaks them is never built.
 """
 from __future__ import annotations
 
@@ -15,15 +23,28 @@ from pathlib import Path
 
 import numpy as np
 
-from ..model.gearing import worm_pair
+from ..model.gearing import hertz_allowable, worm_pair
+from ..model.materials import contact_elasticity
 from .base import Check
-from .measure import load_mesh, to_manifold
+from .measure import (Axis, SurfaceDistance, axes_angle, axes_distance, common_normal, fit_axis, load_mesh,
+                      sample_surface, to_manifold)
 
-INTERFERENCE_TOL_MM3 = 0.01   # worm ∩ wheel at the nominal mesh counts as zero below this
+INTERFERENCE_TOL_MM3 = 0.01   # worm ∩ wheel counts as zero below this
 GAP_TOL_MM = 0.02             # STL chordal tolerance is 0.01 mm on each part
-CENTER_TOL_MM = 1e-3
-SHAFT_ANGLE_TOL_DEG = 1e-3
-GAP_SEARCH_MM = 1.0           # min_gap search length between worm and wheel beyond the backlash
+GAP_MIN_SHARE = 0.25          # the closest gap must be this share of the flank clearance the offset gives:
+#                               at the generating distance the flanks touch with no measurable overlap
+CENTER_TOL_MM = 0.005         # axes fitted to STL crests at 0.01 mm chord: a few µm RMS
+SHAFT_ANGLE_TOL_DEG = 0.02
+GAP_SEARCH_MM = 1.0           # min_gap search length between worm and wheel, beyond the centre offset
+SWEEP_STEPS = 6               # worm angles over one thread period for interference and gap
+SENSE_ANGLES = (math.pi / 3, 2 * math.pi / 3)   # worm angles at which the wheel's turning sense is told
+ZONE_GAP_MM = 0.05            # a flank point this close to the worm carries load (≈ the Hertz approach at break load)
+ZONE_STEPS = 3                # worm angles over one thread period for the loaded zone and the backlash
+ZONE_SPACING_MM = 0.1         # sample spacing on the wheel's flanks
+ZONE_REACH_MM = 0.6           # flank faces that come this near the worm's crest cylinder are sampled
+ZONE_MARGIN_MM = 0.1          # closing a flank moves its points less than this (r·δ ≈ 0.03 mm for the prototype)
+CLOSE_TOL_RAD = 2e-6          # the wheel's turn to close a flank is iterated to this
+RING_WIDTH_MM = 0.05          # ring in a section where teeth (or starts) are counted
 TENDON_SEARCH_MM = 5.0        # a tendon's nearest other part is reported up to this far
 TENDON_SEGMENTS = 16          # facets of the tendon's cylinder
 
@@ -34,22 +55,18 @@ def manifold(folder: Path, entry: dict, placement: np.ndarray | None = None):
     return to_manifold(mesh, entry["placement"] if placement is None else placement)
 
 
-def axis(entry: dict) -> tuple[np.ndarray, np.ndarray]:
-    """Rotation axis of a worm or wheel in robot coordinates: file Z through the file origin."""
-    m = np.asarray(entry["placement"], dtype=float)
-    return m[:3, 3].copy(), m[:3, 2] / np.linalg.norm(m[:3, 2])
-
-
-def axes_distance(a: tuple[np.ndarray, np.ndarray], b: tuple[np.ndarray, np.ndarray]) -> float:
-    n = np.cross(a[1], b[1])
-    if np.linalg.norm(n) < 1e-12:
-        return float(np.linalg.norm(np.cross(b[0] - a[0], a[1])))
-    return float(abs(np.dot(b[0] - a[0], n)) / np.linalg.norm(n))
+def placed_mesh(folder: Path, entry: dict, placement: np.ndarray | None = None):
+    """The part's STL as a trimesh in robot coordinates (or under ``placement``)."""
+    mesh = load_mesh(Path(folder) / entry["files"]["stl"]["path"])
+    mesh.apply_transform(np.asarray(entry["placement"] if placement is None else placement, dtype=float))
+    return mesh
 
 
 def toward(wheel: dict, worm: dict, distance: float) -> np.ndarray:
-    """The wheel's placement moved ``distance`` mm toward the worm along their common normal."""
-    (pa, da), (pb, db) = axis(wheel), axis(worm)
+    """The wheel's placement moved ``distance`` mm toward the worm along the common normal of
+    their file Z axes (a what-if for tests: the checks never read axes from placements)."""
+    pa, da = (np.asarray(wheel["placement"], dtype=float)[:3, k] for k in (3, 2))
+    pb, db = (np.asarray(worm["placement"], dtype=float)[:3, k] for k in (3, 2))
     n = np.cross(da, db)
     n /= np.linalg.norm(n)
     if np.dot(pb - pa, n) < 0:
@@ -78,6 +95,154 @@ def tendon_cylinder(p0, p1, radius: float):
     return m3d.Manifold.cylinder(length, radius, radius, TENDON_SEGMENTS).transform(m.tolist())
 
 
+# ---- teeth and tooth form from sections ---------------------------------------------------
+def _section(mesh, axis: Axis, at: float):
+    """The part cut normal to its axis at ``at`` (along it from axis.point): a manifold3d
+    CrossSection in the plane's (x, y), the axis at the origin."""
+    return to_manifold(mesh, axis.frame()).slice(at)
+
+
+def _outline_root(polys: list[np.ndarray]) -> tuple[float, float]:
+    """(root, tip) radii of a toothed section: the outer loop's smallest and largest radius."""
+    r = [np.hypot(p[:, 0], p[:, 1]) for p in polys]
+    outer = max(range(len(polys)), key=lambda i: r[i].max())
+    return float(r[outer].min()), float(r[outer].max())
+
+
+def count_teeth(mesh, axis: Axis) -> int:
+    """Teeth of a wheel, or thread starts of a worm: the pieces of its section (normal to the
+    axis, midway along its crest) in a thin ring midway between root and tip."""
+    import manifold3d as m3d
+    cs = _section(mesh, axis, sum(axis.crest) / 2)
+    root, tip = _outline_root([np.asarray(p) for p in cs.to_polygons()])
+    r = (root + tip) / 2
+    ring = m3d.CrossSection.circle(r + RING_WIDTH_MM / 2, 2048) - m3d.CrossSection.circle(r - RING_WIDTH_MM / 2, 2048)
+    return len((cs ^ ring).decompose())
+
+
+def tooth_form_factor(mesh, axis: Axis, module: float, n: int = 40) -> float:
+    """Lewis Y of one wheel tooth as exported, loaded at its tip: the chordal thickness s at
+    n radii of the mid-face section (root to tip), Y = min s² / (6 l m) with l the lever to
+    the tip (a cantilever without stress concentration)."""
+    import manifold3d as m3d
+    cs = _section(mesh, axis, sum(axis.crest) / 2)
+    polys = [np.asarray(p) for p in cs.to_polygons()]
+    root, tip = _outline_root(polys)
+    pts = np.vstack(polys)
+    ref = pts[np.argmax(np.hypot(pts[:, 0], pts[:, 1]))]
+    ref_ang = math.atan2(ref[1], ref[0])
+    radii = np.linspace(root + 0.02, tip - 0.005, n)
+    thick = []
+    for rad in radii:
+        ring = m3d.CrossSection.circle(rad + 0.001, 4096) - m3d.CrossSection.circle(rad - 0.001, 4096)
+        best, width = math.inf, math.nan
+        for piece in (cs ^ ring).decompose():
+            q = np.vstack([np.asarray(p) for p in piece.to_polygons()])
+            a = np.arctan2(q[:, 1], q[:, 0])
+            c = math.atan2(np.sin(a).mean(), np.cos(a).mean())
+            off = abs(math.remainder(c - ref_ang, 2 * math.pi))
+            if off < best:
+                best, width = off, float(np.ptp(np.angle(np.exp(1j * (a - c)))))
+        thick.append(2 * rad * math.sin(width / 2))
+    lever = tip - radii
+    ok = lever > 0.05
+    return float(np.min(np.asarray(thick)[ok] ** 2 / (6 * lever[ok] * module)))
+
+
+# ---- the meshing motion -----------------------------------------------------------------
+class Meshing:
+    """A worm and its wheel as placed in the files (robot mm). The worm turns by ψ about its
+    fitted axis and the wheel by sense·ψ/ratio about its own; the ratio is counted from the
+    meshes, the sense is the one that does not collide."""
+
+    def __init__(self, worm, wheel, worm_axis: Axis, wheel_axis: Axis, teeth: int, starts: int):
+        self.worm, self.wheel = worm, wheel
+        self.worm_axis, self.wheel_axis = worm_axis, wheel_axis
+        self.ratio = teeth / starts
+        self.period = 2 * math.pi / starts           # the worm's turn that moves the wheel one tooth
+        self._worm_m, self._wheel_m = to_manifold(worm), to_manifold(wheel)
+        self._distance = None
+        self.sense = 1
+        vols = {}
+        for s in (1, -1):
+            self.sense = s
+            vols[s] = max(self.interference(psi) for psi in SENSE_ANGLES)
+        self.sense = min(vols, key=vols.get)
+
+    def poses(self, psi: float, extra: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """(worm, wheel) 4×4 motions at worm angle ψ, the wheel turned ``extra`` further."""
+        return (self.worm_axis.rotation(psi),
+                self.wheel_axis.rotation(self.sense * psi / self.ratio + extra))
+
+    def _placed(self, psi: float):
+        wm, hm = self.poses(psi)
+        return (self._worm_m.transform(np.ascontiguousarray(wm[:3, :4])),
+                self._wheel_m.transform(np.ascontiguousarray(hm[:3, :4])))
+
+    def interference(self, psi: float) -> float:
+        w, h = self._placed(psi)
+        return float((w ^ h).volume())
+
+    def sweep(self, steps: int, search: float) -> tuple[float, float]:
+        """(largest interference mm³, smallest gap mm) over one thread period."""
+        vols, gaps = [], []
+        for psi in np.linspace(0, self.period, steps, endpoint=False):
+            v, g = mesh_measure(*self._placed(psi), search)
+            vols.append(v)
+            gaps.append(g)
+        return max(vols), min(gaps)
+
+    def _flank_samples(self, flank: int, spacing: float):
+        """Points on the wheel's flanks that lead when it turns by flank·δ, on faces that come
+        within ZONE_REACH_MM of the worm's crest cylinder during the motion: (points, their
+        radius from the wheel axis, the cosine between normal and motion, position along the axis)."""
+        ha, wa = self.wheel_axis, self.worm_axis
+        c = np.asarray(self.wheel.triangles_center)
+        motion = np.cross(ha.direction, c - ha.point)
+        motion /= np.linalg.norm(motion, axis=1)[:, None]
+        leading = (np.asarray(self.wheel.face_normals) * motion).sum(axis=1) * flank > 0.2
+        near = np.zeros(len(c), bool)
+        for psi in np.linspace(0, self.period, 4 * ZONE_STEPS + 1):
+            hm = self.poses(psi)[1]
+            near |= wa.radial(c @ hm[:3, :3].T + hm[:3, 3])[0] < wa.radius + ZONE_REACH_MM
+        pts, nrm = sample_surface(self.wheel, spacing, near & leading)
+        rr, along = ha.radial(pts)
+        motion = np.cross(ha.direction, pts - ha.point) / rr[:, None]
+        cos_t = np.maximum((nrm * motion).sum(axis=1) * flank, 0.2)
+        return pts, rr, cos_t, along
+
+    def contact(self, flank: int, steps: int = ZONE_STEPS, gap: float = ZONE_GAP_MM,
+                spacing: float = ZONE_SPACING_MM) -> dict:
+        """The wheel turned by flank·δ (δ ≥ 0 when it starts clear) until that flank touches the
+        worm, at ``steps`` worm angles over a thread period; then the flank's points within
+        ``gap`` of the worm form the contact zone. Returns the turns (deg) and the zone's
+        extent along the wheel axis (mm) at each angle."""
+        if self._distance is None:
+            self._distance = SurfaceDistance(self.worm)
+        pts, rr, cos_t, along = self._flank_samples(flank, spacing)
+        turns, extents = [], []
+        for psi in np.linspace(0, self.period, steps, endpoint=False):
+            wm, hm = self.poses(psi)
+            inv_w = np.linalg.inv(wm)
+
+            def gaps(extra, idx):
+                m = inv_w @ self.wheel_axis.rotation(flank * extra) @ hm
+                return self._distance(pts[idx] @ m[:3, :3].T + m[:3, 3], max_dist=gap + ZONE_MARGIN_MM)
+            idx = np.arange(len(pts))
+            idx = idx[gaps(0.0, idx) < gap + ZONE_MARGIN_MM]     # only these can close or enter the zone
+            extra = 0.0
+            for _ in range(8):
+                # first-order turn that closes each point's gap: gap / (r · normal·motion)
+                step = float(np.min(gaps(extra, idx) / (rr[idx] * cos_t[idx]))) if len(idx) else 0.0
+                extra += step
+                if abs(step) < CLOSE_TOL_RAD:
+                    break
+            zone = idx[gaps(extra, idx) <= gap]
+            turns.append(math.degrees(extra))
+            extents.append(float(np.ptp(along[zone])) if len(zone) else 0.0)
+        return {"turn_deg": turns, "extent_mm": extents, "points": int(len(pts))}
+
+
 def _pairs(manifest: dict) -> dict[str, dict[str, dict]]:
     out: dict[str, dict[str, dict]] = {}
     for p in manifest.get("parts", []):
@@ -86,71 +251,135 @@ def _pairs(manifest: dict) -> dict[str, dict[str, dict]]:
     return out
 
 
+def measure_pair(folder: Path, worm: dict, wheel: dict) -> dict:
+    """Axes, counts and the meshing motion of one worm and wheel, from their files."""
+    wm, hm = placed_mesh(folder, worm), placed_mesh(folder, wheel)
+    wa, ha = fit_axis(wm), fit_axis(hm)
+    out = {"worm": wm, "wheel": hm, "worm_axis": wa, "wheel_axis": ha,
+           "center_distance": axes_distance(wa, ha), "shaft_angle": axes_angle(wa, ha),
+           "teeth": count_teeth(hm, ha), "starts": count_teeth(wm, wa)}
+    if out["teeth"] and out["starts"]:
+        out["meshing"] = Meshing(wm, hm, wa, ha, out["teeth"], out["starts"])
+    return out
+
+
 def gear_checks(folder: Path, manifest: dict, plan) -> list[Check]:
     folder = Path(folder)
     d = plan.design
     ts = d.tensioner
-    pair = worm_pair(ts)
-    mu = ts.friction_coefficient
-    load = d.tendon_material.break_load
-    out: list[Check] = []
+    pair = worm_pair(ts, d.process.min_wall)
     pairs = _pairs(manifest)
     if not pairs:
         return [Check("gear.parts", "error", False, "no tensioner worm/wheel parts in the manifest")]
-    phi = math.degrees(math.atan(mu))
-    gamma = math.degrees(pair.lead_angle)
+    out: list[Check] = []
+    measured = {}
+    flank_gap = pair.backlash()["normal_mm"] / 2
     for channel, pw in sorted(pairs.items()):
         where = {"channel": channel}
         if set(pw) != {"worm", "wheel"}:
             out.append(Check("gear.parts", "error", False, f"channel {channel}: worm or wheel missing", None, None,
                              where))
             continue
-        worm, wheel = pw["worm"], pw["wheel"]
-        aw, ah = axis(worm), axis(wheel)
-        a_meas = axes_distance(aw, ah)
-        a_nom = pair.center_distance
-        out.append(Check("gear.center_distance", "error", abs(a_meas - a_nom) <= CENTER_TOL_MM,
-                         f"channel {channel}: worm and wheel axes {a_meas:.4f} mm apart, (d1 + d2)/2 + backlash = "
-                         f"{a_nom:.4f} mm", a_meas, a_nom, where))
-        ang = math.degrees(math.acos(min(1.0, abs(float(np.dot(aw[1], ah[1]))))))
-        out.append(Check("gear.shaft_angle", "error", abs(ang - 90) <= SHAFT_ANGLE_TOL_DEG,
-                         f"channel {channel}: worm and wheel axes at {ang:.4f}° (90° wanted)", ang, 90.0, where))
-        wm, hm = manifold(folder, worm), manifold(folder, wheel)
-        vol, gap = mesh_measure(wm, hm, pair.backlash + GAP_SEARCH_MM)
+        m = measure_pair(folder, pw["worm"], pw["wheel"])
+        measured[channel] = m
+        a, a_nom = m["center_distance"], pair.center_distance
+        fit = f"axes fitted to the crests, RMS {1e6 * m['worm_axis'].rms:.1f} / {1e6 * m['wheel_axis'].rms:.1f} nm"
+        out.append(Check("gear.center_distance", "error", abs(a - a_nom) <= CENTER_TOL_MM,
+                         f"channel {channel}: worm and wheel axes {a:.4f} mm apart ({fit}); design (d1 + d2)/2 + "
+                         f"center_offset = {a_nom:.4f} mm", a, a_nom, where))
+        out.append(Check("gear.shaft_angle", "error", abs(m["shaft_angle"] - 90) <= SHAFT_ANGLE_TOL_DEG,
+                         f"channel {channel}: worm and wheel axes at {m['shaft_angle']:.4f}° (90° wanted)",
+                         m["shaft_angle"], 90.0, where))
+        for what, n, want in (("teeth", m["teeth"], pair.teeth), ("starts", m["starts"], pair.starts)):
+            part = "wheel" if what == "teeth" else "worm"
+            out.append(Check(f"gear.{what}", "error", n == want,
+                             f"channel {channel}: {n} {what if part == 'wheel' else 'thread starts'} counted in the "
+                             f"{part}'s section, the design has {want}", float(n), float(want), where))
+        if "meshing" not in m:
+            continue
+        vol, gap = m["meshing"].sweep(SWEEP_STEPS, pair.center_offset + GAP_SEARCH_MM)
         out.append(Check("gear.interference", "error", vol <= INTERFERENCE_TOL_MM3,
-                         f"channel {channel}: worm and wheel overlap by {vol:.4f} mm³ at the nominal mesh",
-                         vol, INTERFERENCE_TOL_MM3, where))
-        out.append(Check("gear.gap", "error", gap <= pair.backlash + GAP_TOL_MM,
-                         f"channel {channel}: closest gap between worm and wheel {gap:.4f} mm "
-                         f"(backlash {pair.backlash:g} mm)", gap, pair.backlash + GAP_TOL_MM, where))
-        n_tendons = len(wheel.get("tendons", [])) or 1
-        r_w = wheel.get("winding_radius_mm", ts.spool_diameter / 2 + d.tendon_material.diameter / 2)
-        torque2 = n_tendons * load * r_w
-        sigma = pair.lewis_stress(torque2)
+                         f"channel {channel}: worm and wheel overlap by at most {vol:.4f} mm³ over one thread "
+                         f"period ({SWEEP_STEPS} positions)", vol, INTERFERENCE_TOL_MM3, where))
+        lo, hi = GAP_MIN_SHARE * flank_gap, pair.center_offset + GAP_TOL_MM
+        out.append(Check("gear.gap", "error", lo <= gap <= hi,
+                         f"channel {channel}: closest gap between worm and wheel {gap:.4f} mm over one thread period "
+                         f"(from {lo:.4f} to {hi:.4f} mm wanted: the design's center_offset {pair.center_offset:g} mm "
+                         f"leaves {flank_gap:.4f} mm per flank by the rack formula)", gap, lo, where))
+    out += _strength_checks(measured, manifest, plan, pair)
+    out += tendon_checks(folder, manifest, plan)
+    return out
+
+
+def _strength_checks(measured: dict, manifest: dict, plan, pair) -> list[Check]:
+    """Backlash and loaded face on the representative pair; Lewis and Hertz on every channel."""
+    d = plan.design
+    ts = d.tensioner
+    mu, load = ts.friction_coefficient, d.tendon_material.break_load
+    wheels = {p["channel"]: p for p in manifest["parts"] if p.get("role") == "tensioner_wheel"}
+    usable = [c for c, m in measured.items() if "meshing" in m]
+    if not usable:
+        return []
+    rep = max(usable, key=lambda c: (len(wheels[c].get("tendons", [])), c))
+    m = measured[rep]
+    contact = {f: m["meshing"].contact(f) for f in (1, -1)}
+    face = min(min(c["extent_mm"]) for c in contact.values())
+    turn = float(np.mean(np.add(contact[1]["turn_deg"], contact[-1]["turn_deg"])))
+    jt = math.radians(turn) * pair.r2
+    formula = pair.backlash()
+    y = tooth_form_factor(m["wheel"], m["wheel_axis"], pair.module)
+    common = {"channel": "all", "measured_on": rep}
+    out = [Check("gear.backlash", "info", True,
+                 f"measured on channel {rep}'s files: the wheel turns {turn:.3f}° from one flank touching the worm to "
+                 f"the other (mean of {ZONE_STEPS} worm angles), j_t = {jt:.4f} mm at its pitch circle (design r2 = "
+                 f"{pair.r2:g} mm); the rack formula 2·center_offset·tan α gives {formula['circumferential_mm']:.4f} mm "
+                 f"({formula['wheel_deg']:.3f}°)", jt, formula["circumferential_mm"],
+                 {**common, "wheel_turn_deg": turn, "formula_mm": formula["circumferential_mm"]}),
+           Check("gear.loaded_face", "info", True,
+                 f"measured on channel {rep}'s files: with each flank turned into contact, the wheel lies within "
+                 f"{ZONE_GAP_MM:g} mm of the worm over {face:.2f} mm of its {pair.face_width:g} mm face (least of "
+                 f"{ZONE_STEPS} worm angles and both flanks); Lewis and Hertz use this face",
+                 face, pair.face_width, {**common, "form_factor": y}),
+           Check("gear.ratio", "info", True,
+                 f"ratio {m['teeth'] / m['starts']:g}:1 ({m['teeth']} teeth, {m['starts']} start"
+                 f"{'s' if m['starts'] > 1 else ''}, counted on channel {rep}'s files)", m["teeth"] / m["starts"],
+                 None, common)]
+    gamma, phi = math.degrees(pair.lead_angle), math.degrees(pair.friction_angle(mu))
+    out.append(Check("gear.lead_angle", "info", True,
+                     f"lead angle {gamma:.3f}° (design: d1 = {pair.worm_pitch_diameter:g} mm, m = {pair.module:g} mm), "
+                     f"{phi - gamma:.2f}° below the friction angle atan(μ / cos α_n) = {phi:.3f}° (design μ = {mu:g}; "
+                     f"loading refuses a pair that is not self-locking)", gamma, phi, common))
+    e_mpa, nu, why = contact_elasticity(d.process)
+    allow = hertz_allowable(ts.resin_strength)
+    for channel in sorted(measured):
+        where = {"channel": channel}
+        n = len(wheels[channel].get("tendons", [])) or 1
+        r_w = wheels[channel].get("winding_radius_mm", ts.spool_diameter / 2 + d.tendon_material.diameter / 2)
+        t2 = n * load * r_w
+        design = (f"{n} × {load:g} N (design: tendon break load) at r = {r_w:.3f} mm: {t2:.0f} N·mm on the wheel, "
+                  f"F_t2 = {pair.wheel_tangential_force(t2):.1f} N")
+        sigma = pair.lewis_stress(t2, face, y)
         sf = ts.resin_strength / sigma
         out.append(Check("gear.lewis", "error", sf >= ts.safety_factor,
-                         f"channel {channel}: {n_tendons} × {load:g} N at r = {r_w:.3f} mm gives {torque2:.0f} N·mm on "
-                         f"the wheel, Lewis tooth stress {sigma:.1f} MPa (Y = {pair.lewis_form_factor():.3f}, "
-                         f"b = {pair.effective_face_width:g} mm): safety factor {sf:.2f} against "
-                         f"{ts.resin_strength:g} MPa", sf, ts.safety_factor, {**where, "stress_mpa": sigma}))
-        t1 = pair.worm_torque(torque2, mu)
+                         f"channel {channel}: {design}; Lewis tooth stress {sigma:.1f} MPa on the loaded face "
+                         f"{face:.2f} mm with Y = {y:.3f} (both measured on channel {rep}'s files), m = "
+                         f"{pair.module:g} mm: safety {sf:.2f} against the design's resin_strength "
+                         f"{ts.resin_strength:g} MPa (need {ts.safety_factor:g})", sf, ts.safety_factor,
+                         {**where, "stress_mpa": sigma, "face_mm": face, "form_factor": y}))
+        hz = pair.hertz_line(t2, face, mu, e_mpa, nu)
+        sh = allow / hz["p0_mpa"]
+        out.append(Check("gear.hertz", "error", sh >= ts.safety_factor,
+                         f"channel {channel}: {design}; Hertz line contact over {hz['length_mm']:.2f} mm (the measured "
+                         f"face / cos γ) on the flank's radius {hz['radius_mm']:.2f} mm at the pitch point, normal force "
+                         f"{hz['force_n']:.1f} N (μ = {mu:g}): peak pressure {hz['p0_mpa']:.1f} MPa, safety {sh:.2f} "
+                         f"against {allow:.1f} MPa = 1.67 × the design's resin_strength (onset of yield below the "
+                         f"surface; E = {e_mpa:g} MPa, ν = {nu:g} from the materials table, {d.process.material}) "
+                         f"(need {ts.safety_factor:g})", sh, ts.safety_factor,
+                         {**where, "p0_mpa": hz["p0_mpa"], "allowable_mpa": allow, "elasticity": why}))
+        t1 = pair.worm_torque(t2, mu)
         out.append(Check("gear.worm_torque", "info", True,
                          f"channel {channel}: {t1:.1f} N·mm on the worm's hex key to hold the tendon break load "
-                         f"(tightening, μ = {mu:g}, efficiency {pair.efficiency(mu):.2f})", t1, None, where))
-    common = {"channel": "all"}
-    out.append(Check("gear.ratio", "info", True, f"ratio {pair.ratio:g}:1 ({pair.teeth} teeth, {pair.starts} start"
-                     f"{'s' if pair.starts > 1 else ''})", pair.ratio, None, common))
-    out.append(Check("gear.lead_angle", "info", True, f"lead angle {gamma:.3f}° (d1 = {pair.worm_pitch_diameter:g} mm, "
-                     f"m = {pair.module:g} mm)", gamma, None, common))
-    out.append(Check("gear.self_locking", "error", pair.self_locking(mu),
-                     f"lead angle {gamma:.3f}° {'<' if pair.self_locking(mu) else '≥'} friction angle atan({mu:g}) = "
-                     f"{phi:.3f}°: the tendon {'cannot' if pair.self_locking(mu) else 'can'} turn the worm back",
-                     gamma, phi, common))
-    zmin = pair.min_teeth_no_undercut
-    out.append(Check("gear.undercut", "error", pair.teeth >= zmin,
-                     f"{pair.teeth} wheel teeth, {math.ceil(zmin)} the fewest without undercut at "
-                     f"{pair.pressure_angle_deg:g}°", float(pair.teeth), zmin, common))
-    out += tendon_checks(folder, manifest, plan)
+                         f"(design data; tightening, μ = {mu:g}, efficiency {pair.efficiency(mu):.2f})", t1, None, where))
     return out
 
 

@@ -32,7 +32,8 @@ def problems(d: Design) -> list[tuple[str, str]]:
         out.append(("process.material", material))
     out += _slot_problems(d) + _tendon_size_problems(d) + _mount_problems(d)
     ts = d.tensioner
-    out += [(f"tensioner.{f}", m) for f, m in worm_pair(ts).problems(ts.friction_coefficient, d.process.min_wall)]
+    pair = worm_pair(ts, d.process.min_wall)
+    out += [(f"tensioner.{f}", m) for f, m in pair.problems(ts.friction_coefficient, d.process.min_wall)]
     wall = spool_wall_problem(ts, d.process.min_wall)
     if wall:
         out.append(("tensioner.spool_diameter", wall))

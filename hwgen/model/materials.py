@@ -17,6 +17,9 @@ class Material:
     reason: str
     modulus_gpa: float
     modulus_reason: str
+    contact_modulus_gpa: float   # for contact stress: the high end (a stiffer flank concentrates the contact)
+    poisson: float
+    contact_reason: str
 
 
 @cache
@@ -24,7 +27,8 @@ def table() -> dict[str, Material]:
     """Every material of data/materials.csv by name."""
     text = resources.files("hwgen").joinpath("data/materials.csv").read_text(encoding="utf-8")
     return {r["material"]: Material(r["material"], r["technology"], float(r["density_g_cm3"]), r["reason"],
-                                    float(r["modulus_gpa"]), r["modulus_reason"])
+                                    float(r["modulus_gpa"]), r["modulus_reason"], float(r["contact_modulus_gpa"]),
+                                    float(r["poisson"]), r["contact_reason"])
             for r in csv.DictReader(text.splitlines())}
 
 
@@ -59,3 +63,10 @@ def printed_modulus(process: Process) -> tuple[float, str]:
         e *= process.fill_fraction
         why += f"; × fill fraction {process.fill_fraction:g}"
     return e, why
+
+
+def contact_elasticity(process: Process) -> tuple[float, float, str]:
+    """(modulus MPa, Poisson's ratio, where they come from) of the printed material, for the
+    Hertz contact of two printed gears (solid material: a gear's flanks are printed solid)."""
+    m = table()[process.material]
+    return 1000.0 * m.contact_modulus_gpa, m.poisson, f"{m.name}: {m.contact_reason}"

@@ -355,7 +355,7 @@ class _Sizes:
     @staticmethod
     def of(d: Design, tip: DiskSpec) -> _Sizes:
         ts = d.tensioner
-        pair = worm_pair(ts)
+        pair = worm_pair(ts, d.process.min_wall)
         r_s = ts.spool_diameter / 2
         problem = spool_wall_problem(ts, d.process.min_wall)
         if problem:
@@ -579,7 +579,7 @@ def _place_units(arr: _Arrangement, stacks: dict[str, _Stack], clamp, sz: _Sizes
     """Wheel-axis heights y: in each column units stack along +y; a unit whose z span meets the
     strip clamp goes beyond it."""
     pair = sz.pair
-    wheel_reach = max(pair.ra2, sz.r_f, BOSS) + UNIT_GAP / 2
+    wheel_reach = max(pair.outside_radius, sz.r_f, BOSS) + UNIT_GAP / 2
     worm_reach = pair.center_distance + max(pair.ra1, DRIVE_FLANGE[0] / 2, POST / 2) + UNIT_GAP / 2
     centers_y: dict[str, float] = {}
     y_next = {1: sz.y_face + sz.base_t + GAP + lift, -1: sz.y_face + sz.base_t + GAP + lift}
@@ -628,7 +628,7 @@ def _frame(x_u: float, arr: _Arrangement, centers_y, stacks, eyelets: Eyelets, w
     L = pair.worm_length
     n = round(-L / (2 * pair.pitch))
     x_thread = x_u - n * pair.pitch                  # |x| of the thread's spine-side end
-    x_near = max(x_thread + WORM_END, x_u + pair.ra2 + GAP)    # the worm's spine-side face
+    x_near = max(x_thread + WORM_END, x_u + pair.outside_radius + GAP)    # the worm's spine-side face
     near_end = x_near - x_thread                     # worm file Z of the thread's start
     spine = (x_near + AXIAL_PLAY / 2, x_near + AXIAL_PLAY / 2 + sz.spine_t)
     ty = -near_end + n * pair.pitch                  # a thread space on the wheel's tooth at mesh y = 0
@@ -685,7 +685,7 @@ def _obstacles(fr: _Frame, clamp, sz: _Sizes) -> _Obstacles:
             xs = sorted((s * x0, s * x1))
             R.append((f"{ch} {name}", (xs[0], xs[1], min(y0, y1), max(y0, y1)), z0, z1))
         C.append((f"{ch} spool", (cx, cy, max(sz.r_f, sz.hub_r)), *u.z_part, ch, True))
-        C.append((f"{ch} wheel", (cx, cy, pair.ra2), *u.z_gear, ch, True))
+        C.append((f"{ch} wheel", (cx, cy, pair.outside_radius), *u.z_gear, ch, True))
         C += [(f"{ch} cap", (cx, cy, pair.rf2), *cap, ch, True) for cap in u.caps]
         C += [(f"{ch} clamp", (cx, cy, pair.rf2), min(zc, zc + sg * reach), max(zc, zc + sg * reach), ch, False)
               for zc, sg in u.clamps]
@@ -867,7 +867,7 @@ def _housing(fr: _Frame, clamp, sz: _Sizes, mounts, fast: str, ts: Tensioner,
         members.append(Member(f"spine foot {'+' if s > 0 else '-'}x", "box", (x0, x1, yb0, yb1, z_lo, z_hi)))
         y_from, prev = yb0, (z_lo, z_hi)
         for u in col:
-            top = max(u.center[1] + pair.ra2, u.worm_y + reach)
+            top = max(u.center[1] + pair.outside_radius, u.worm_y + reach)
             z0, z1 = u.lower_bar[0], u.upper_shelf[1]
             if z1 < prev[0] + SHELF or z0 > prev[1] - SHELF:     # no shared z with the pad below: reach it
                 z0, z1 = min(z0, prev[0]), max(z1, prev[1])
