@@ -26,7 +26,7 @@ import numpy as np
 from ..model.gearing import hertz_allowable, worm_pair
 from ..model.materials import contact_elasticity
 from .base import Check
-from .measure import (Axis, SurfaceDistance, axes_angle, axes_distance, common_normal, fit_axis, load_mesh,
+from .measure import (Axis, SurfaceDistance, axes_angle, axes_distance, fit_axis, load_mesh,
                       sample_surface, to_manifold)
 
 INTERFERENCE_TOL_MM3 = 0.01   # worm ∩ wheel counts as zero below this
