@@ -46,7 +46,8 @@ def test_base_disk_axes_are_measured_clear_of_the_seat_plate(tmp_path):
 def test_the_check_sweeps_what_the_eyelets_are_sized_for(tmp_path):
     d = _load(tmp_path, PROTO.replace("    sweep_deg: 90 ", "    sweep_deg: 60 ")).design
     assert d.check_angle_deg == 60
-    d = _load(tmp_path, PROTO.replace("    sweep_deg: 90 ", "    sweep_deg: 60 ") + "\ncheck: {max_angle_deg: 45}\n").design
+    d = _load(tmp_path, PROTO.replace("    sweep_deg: 90 ", "    sweep_deg: 60 ").replace(
+        "\ncheck:", "\ncheck:\n  max_angle_deg: 45   #", 1)).design
     assert d.check_angle_deg == 45
 
 

@@ -370,13 +370,6 @@ def axes_angle(a: Axis, b: Axis) -> float:
     return math.degrees(math.acos(min(1.0, abs(float(a.direction @ b.direction)))))
 
 
-def common_normal(a: Axis, b: Axis) -> np.ndarray:
-    """Unit vector along the common perpendicular of two skew axes, from a toward b."""
-    n = np.cross(a.direction, b.direction)
-    n /= np.linalg.norm(n)
-    return n if (b.point - a.point) @ n >= 0 else -n
-
-
 # ---------------------------------------------------------------- distance to a surface
 
 def closest_on_triangles(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
