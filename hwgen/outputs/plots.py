@@ -9,10 +9,25 @@ import numpy as np
 from ..atomic import atomic_path
 
 
-def plot_lengths(report: dict, path: Path) -> None:
+def _pyplot():
+    """matplotlib's pyplot on the Agg backend (no display), imported when a plot is drawn."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    return plt
+
+
+def _save(plt, fig, path: Path) -> None:
+    """Write the figure as a PNG whole or not at all, and free it."""
+    try:
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=110, format="png")
+    finally:
+        plt.close(fig)
+
+
+def plot_lengths(report: dict, path: Path) -> None:
+    plt = _pyplot()
 
     ang = np.asarray(report["sweep"]["angles_deg"])
     tendons = report["tendons"]
@@ -44,11 +59,7 @@ def plot_lengths(report: dict, path: Path) -> None:
         ax.grid(True, alpha=0.3)
     axes[-1, 0].set_xlabel("constant-curvature bending angle (deg)")
     fig.tight_layout()
-    try:
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=110, format="png")
-    finally:
-        plt.close(fig)
+    _save(plt, fig, path)
 
 
 def plot_sag(report: dict, design_report: dict, path: Path) -> bool:
@@ -59,9 +70,7 @@ def plot_sag(report: dict, design_report: dict, path: Path) -> bool:
     g = report.get("gravity") or {}
     if not g.get("curve"):
         return False
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
     from matplotlib.patches import Polygon, Rectangle
 
     c = g["curve"]
@@ -119,11 +128,7 @@ def plot_sag(report: dict, design_report: dict, path: Path) -> bool:
     ax.legend(loc="lower left", fontsize=8)
     ax.set_title(f"{report['design']}: own weight, no tendon tensioned (state N), flexible direction along gravity")
     fig.tight_layout()
-    try:
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=110, format="png")
-    finally:
-        plt.close(fig)
+    _save(plt, fig, path)
     return True
 
 
@@ -139,9 +144,7 @@ def plot_tolerance(report: dict, path: Path) -> bool:
     rows = [(k, r) for k, r in enumerate(tb["tendons"]) if r["budget_mm"] is not None]
     if not rows:
         return False
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = _pyplot()
 
     ang = np.asarray(tb["angles_deg"], float)
     band, env = np.asarray(tb["band_mm"], float), np.asarray(tb["envelope_mm"], float)
@@ -188,9 +191,5 @@ def plot_tolerance(report: dict, path: Path) -> bool:
                  f"station ±{p['station_tolerance_mm']:g} mm, "
                  f"tilt and play as measured)", fontsize=9)
     fig.tight_layout(rect=(0, 0, 1, 0.95))
-    try:
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=110, format="png")
-    finally:
-        plt.close(fig)
+    _save(plt, fig, path)
     return True
