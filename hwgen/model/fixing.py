@@ -23,6 +23,7 @@ import math
 import numpy as np
 
 from ..params import Design, Termination
+from .intervals import interval_difference
 from .specs import Hole, HubSpec, Seat
 
 LENGTH_STEP_MM = 0.1        # hub engagement lengths are rounded up to this
@@ -58,20 +59,6 @@ def hub_extension(design: Design, thickness: float) -> float:
     return max(engagement_length(design) - thickness, least)
 
 
-def _intervals_minus(lo: float, hi: float, cuts: list[tuple[float, float]]) -> list[tuple[float, float]]:
-    """[lo, hi] without the (merged) cuts."""
-    out, x = [], lo
-    for a, b in sorted(cuts):
-        if a > x:
-            out.append((x, min(a, hi)))
-        x = max(x, b)
-        if x >= hi:
-            break
-    if x < hi:
-        out.append((x, hi))
-    return [(a, b) for a, b in out if b > a]
-
-
 def hub_spec(design: Design, i: int, role: str, thickness: float, slot_w: float, slot_h: float,
              holes: tuple[Hole, ...], points: dict[str, np.ndarray], sweep: dict[str, tuple]) -> HubSpec:
     """The hub of disk i: its side and length, and a window wherever a tendon passes through it.
@@ -101,10 +88,10 @@ def hub_spec(design: Design, i: int, role: str, thickness: float, slot_w: float,
         near = (np.abs(x) < half_x + w) & (np.abs(z) < half_z + w)
         if near.any():
             cuts.append((float(x[near].min() - w), float(x[near].max() + w)))
-    solid = _intervals_minus(-half_x, half_x, cuts)
+    solid = interval_difference(-half_x, half_x, cuts)
     # a sliver of hub between two windows is no wall: drop what is thinner than two walls
     solid = [(a, b) for a, b in solid if b - a >= 2 * proc.min_wall]
-    windows = tuple(_intervals_minus(-half_x, half_x, solid))
+    windows = tuple(interval_difference(-half_x, half_x, solid))
     port = None
     d_port = design.disks.hub.glue_port_diameter
     over_slot = [(max(a, -slot_w / 2), min(b, slot_w / 2)) for a, b in solid]

@@ -48,6 +48,7 @@ import numpy as np
 
 from ..params import Design, Tensioner
 from .gearing import WORM_TO_MESH, WormPair, worm_pair
+from .intervals import interval_difference
 from .routing import TendonPath
 from .specs import DiskSpec
 
@@ -894,14 +895,7 @@ WINDOW_MIN = 6.0         # narrower openings are not worth cutting
 
 def _free(lo: float, hi: float, keep: list[tuple[float, float]]) -> list[tuple[float, float]]:
     """The parts of [lo, hi] outside every kept band, each at least WINDOW_MIN long."""
-    out, at = [], lo
-    for k0, k1 in sorted(keep):
-        if k0 > at:
-            out.append((at, min(k0, hi)))
-        at = max(at, k1)
-    if at < hi:
-        out.append((at, hi))
-    return [(a, b) for a, b in out if b - a >= WINDOW_MIN]
+    return [(a, b) for a, b in interval_difference(lo, hi, keep) if b - a >= WINDOW_MIN]
 
 
 def _windows(name: str, axis: int, lo: float, hi: float, ys: tuple[float, float], vs: tuple[float, float],
