@@ -51,11 +51,20 @@ def test_the_check_sweeps_what_the_eyelets_are_sized_for(tmp_path):
     assert d.check_angle_deg == 45
 
 
+def _template_with_one_hole(tmp_path, x: float, y: float, r: float):
+    """A strip template (DXF) whose HOLES layer has one circle."""
+    import ezdxf
+    dxf = tmp_path / "t.dxf"
+    doc = ezdxf.new("R2010")
+    doc.layers.add("HOLES")
+    doc.modelspace().add_circle((x, y), r, dxfattribs={"layer": "HOLES"})
+    doc.saveas(dxf)
+    return dxf
+
+
 def test_a_strip_hole_through_the_edge_is_called_a_notch(tmp_path):
     """A crossing 0.4 mm inside the 60 mm strip's edge: its Ø1.4 hole opens the edge. The STL has
     no hole loop there, only a notch in the outline; the message says so."""
-    import ezdxf
-
     from hwgen.checks.clearances import backbone_checks
     from hwgen.checks.eyelets import EyeletMap
     from hwgen.checks.measure import Loop, area_centroid
@@ -64,11 +73,7 @@ def test_a_strip_hole_through_the_edge_is_called_a_notch(tmp_path):
     arc = [(30 - r * np.sin(a), y - r * np.cos(a)) for a in np.linspace(0, np.pi, 25)]
     outline = np.array([(-30, -5), (30, -5), (30, y - r), *arc[1:-1], (30, y + r), (30, 20), (-30, 20)], float)
     loop = Loop(outline, *area_centroid(outline))
-    dxf = tmp_path / "t.dxf"
-    doc = ezdxf.new("R2010")
-    doc.layers.add("HOLES")
-    doc.modelspace().add_circle((x, y), r, dxfattribs={"layer": "HOLES"})
-    doc.saveas(dxf)
+    dxf = _template_with_one_hole(tmp_path, x, y, r)
     emap = EyeletMap(stations_y=np.array([0.0, 10.0]), eyelets=[], positions={"T": np.array([[x, 1.0], [x, -1.0]])},
                      unmeasured={}, via_backbone={}, disks=[])
     checks = backbone_checks(emap, dxf, loop, [], 0.15, 0.01, [], 0.59, np.array([0.0]), 10.0)
@@ -83,8 +88,6 @@ def test_a_strip_hole_through_the_edge_is_called_a_notch(tmp_path):
 def test_a_strip_hole_through_the_end_is_called_a_notch_at_the_end(tmp_path):
     """Found building random robots: a tendon crossing in the slot of the tip disk, 2 mm before
     the strip ends, whose hole opens the strip's end, was said to open its edge."""
-    import ezdxf
-
     from hwgen.checks.clearances import backbone_checks
     from hwgen.checks.eyelets import Eyelet, EyeletMap
     from hwgen.checks.measure import Loop, area_centroid
@@ -94,11 +97,7 @@ def test_a_strip_hole_through_the_end_is_called_a_notch_at_the_end(tmp_path):
     notch = [(x + r * np.cos(t), y + r * np.sin(t)) for t in np.radians(np.linspace(top, -180 - top, 61))]
     outline = np.array([(-30, -20), (30, -20), (30, 272), *notch, (-30, 272)], float)
     loop = Loop(outline, *area_centroid(outline))
-    dxf = tmp_path / "t.dxf"
-    doc = ezdxf.new("R2010")
-    doc.layers.add("HOLES")
-    doc.modelspace().add_circle((x, y), r, dxfattribs={"layer": "HOLES"})
-    doc.saveas(dxf)
+    dxf = _template_with_one_hole(tmp_path, x, y, r)
     e = Eyelet(1, "disk_01", ("T",), np.array([x, 0.0]), 1.0, True, status="in_slot")
     emap = EyeletMap(stations_y=np.array([0.0, 270.0]), eyelets=[e],
                      positions={"T": np.array([[x, 5.0], [x, 0.0]])}, unmeasured={}, via_backbone={}, disks=[])

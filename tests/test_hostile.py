@@ -30,6 +30,12 @@ def edit(text: str, old: str, new: str) -> str:
     return text.replace(old, new, 1)
 
 
+def with_disks_key(key: str) -> str:
+    """The prototype with one more key, written as given (YAML source), in its disks section."""
+    anchor = "  slot_clearance: 0.05 "
+    return edit(PROTO, anchor, f"{anchor.rstrip()}\n  {key}: 1 ")
+
+
 def tree_edit(text: str, change) -> str:
     """The document parsed, changed by ``change(doc)`` and dumped again."""
     doc = yaml.safe_load(text)
@@ -87,7 +93,7 @@ add("yaml", "deep-in-a-field", Case(edit(PROTO, "  height: 60 ", f"  height: {ne
                                     "backbone.height", ("nested deeper",)))
 add("yaml", "list-as-key", Case(PROTO + "\n? [a, b]\n: 1\n", "<document>", ("list used as a key",)))
 add("yaml", "mapping-as-key", Case(PROTO + "\n? {a: 1}\n: 1\n", "<document>", ("mapping used as a key",)))
-add("yaml", "list-as-key-in-section", Case(edit(PROTO, "  slot_clearance: 0.05 ", "  slot_clearance: 0.05\n  [x]: 1 "),
+add("yaml", "list-as-key-in-section", Case(with_disks_key("[x]"),
                                            "disks", ("list used as a key",)))
 add("yaml", "integer-5001-digits", Case(edit(PROTO, "  height: 60 ", "  height: " + "9" * 5001 + " "),
                                         "backbone.height", ("5,001 characters",)))
@@ -147,9 +153,9 @@ add("yaml", "integer-key", Case(PROTO + "\n1: one\n", "[1]", ("Keys should be st
 add("yaml", "null-key", Case(PROTO + "\n~: one\n", "None", ("Keys should be strings",)))
 
 # ---------------------------------------------------------------- text that must never be markup
-add("echo", "markup-key", Case(edit(PROTO, "  slot_clearance: 0.05 ", "  slot_clearance: 0.05\n  '[/x]': 1 "),
+add("echo", "markup-key", Case(with_disks_key("'[/x]'"),
                                "disks.[/x]", ("unknown key",)))
-add("echo", "markup-open-key", Case(edit(PROTO, "  slot_clearance: 0.05 ", "  slot_clearance: 0.05\n  '[bold red]': 1 "),
+add("echo", "markup-open-key", Case(with_disks_key("'[bold red]'"),
                                     "disks.[bold red]", ("unknown key",)))
 add("echo", "markup-design-name", Case(edit(PROTO, "design: prototype", "design: '[/x]'"), "design",
                                        ("'[/x]'", "safe file name")))
@@ -159,9 +165,9 @@ add("echo", "markup-open-file-name", Case("- x\n", "<document>", ("mapping",), n
 add("echo", "emoji-file-name", Case("- x\n", "<document>", ("mapping",), name=":smile:.yaml"))
 add("echo", "emoji-value", Case(edit(PROTO, "  height: 60 ", "  height: ':thumbs_up:' "), "backbone.height",
                                 (":thumbs_up:",)))
-add("echo", "escape-sequence-key", Case(edit(PROTO, "  slot_clearance: 0.05 ", '  slot_clearance: 0.05\n  "\\e[2J\\e[31m": 1 '),
+add("echo", "escape-sequence-key", Case(with_disks_key('"\\e[2J\\e[31m"'),
                                         "disks.\\x1b[2J", ("unknown key",)))
-add("echo", "newline-key", Case(edit(PROTO, "  slot_clearance: 0.05 ", '  slot_clearance: 0.05\n  "a\\nb": 1 '),
+add("echo", "newline-key", Case(with_disks_key('"a\\nb"'),
                                 "disks.a\\nb", ("unknown key",)))
 add("echo", "bidi-override-value", Case(edit(PROTO, "design: prototype", 'design: "abc\\u202edef"'), "design",
                                         ("\\u202e", "safe file name")))
