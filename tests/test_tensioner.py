@@ -380,7 +380,7 @@ def test_layout_adapts_to_other_gears(tmp_path, change):
     tendons' planes and the tendons' turn at the tip within its limit (numpy only)."""
     import yaml
 
-    from hwgen.model.tensioner_layout import WORM_CLEAR
+    from hwgen.model.tensioner_layout.sizes import WORM_CLEAR
     data = yaml.safe_load((PARAMS / "prototype.yaml").read_text())
     data["tensioner"].update(change)
     f = tmp_path / "v.yaml"

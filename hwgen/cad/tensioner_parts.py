@@ -40,9 +40,10 @@ from OCP.TopoDS import TopoDS
 
 from ..model.gearing import GearDesignError, WormPair
 from ..model.plan import Plan
-from ..model.tensioner_layout import (ANCHOR_HOLE, AXIAL_PLAY, CAP, CLAMP_PLATE, CLAMP_SCREW, DRIVE_FLANGE, DRIVE_HEX,
-                                      DRIVE_HEX_LENGTH, DRIVE_SHAFT, NUT, NUT_PLAY, PIN_ENGAGE, POST, WORM_END, Fastening,
-                                      TensionerLayout, Unit, joint, tip_joint)
+from ..model.tensioner_layout import Fastening, TensionerLayout, Unit, joint, tip_joint
+from ..model.tensioner_layout.sizes import (ANCHOR_HOLE, AXIAL_PLAY, CAP, CLAMP_PLATE, CLAMP_SCREW, DRIVE_FLANGE,
+                                            DRIVE_HEX, DRIVE_HEX_LENGTH, DRIVE_SHAFT, NUT, NUT_PLAY, PIN_ENGAGE, POST,
+                                            WORM_END)
 from . import DISK_ROTATION, Part, location, placement
 
 WORM_COLOR = (0.75, 0.76, 0.78, 1.0)

@@ -1,0 +1,171 @@
+"""Fixed sizes of the tensioner's parts (mm), the fasteners each process takes, and
+:class:`Sizes`: what one design's parameters make of them, shared by every unit."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ...params import Design, Tensioner
+from ..gearing import WormPair, worm_pair
+from ..specs import DiskSpec
+
+# Spool and wheel part (mm)
+WIND_WIDTH = 3.0         # axial length of one tendon's winding zone
+FLANGE_HEIGHT = 2.5      # flange radius above the drum core: holds a few turns of 0.15 mm line
+FLANGE = 1.2             # flange thickness (≥ 0.8 mm process wall)
+CLAMP_GAP = 3.5          # axial gap between the inner flange and the wheel face, room for the clamp
+WORM_CLEAR = 1.5         # least z distance from a worm to its own unit's tendon planes
+HUB_WALL = 2.0           # radial wall of the drum around the pin bore
+CLAMP_SCREW = 2.0        # M2: pinches the tendon under the clamp plate
+CLAMP_PLATE = (6.0, 5.0, 1.5)   # clamp plate x, y, thickness
+CLAMP_HEAD = 1.4         # M2 low head (ISO 7380) height above the plate
+ANCHOR_HOLE = 1.0        # axial hole through the inner flange the tendon leaves the drum by
+CAP = 5.0                # end cap at the far end of a two-zone drum, holds the second clamp
+# Housing (mm)
+GAP = 0.5                # axial gap between a turning part and a housing face
+SHELF = 3.0              # shelf and bar thickness
+WORM_END = 1.5           # plain core beyond the thread at each end of the worm (no knife edge at a face)
+DRIVE_SHAFT = 7.0        # drive shaft through the spine: Ø, holds the hex key's socket with walls
+DRIVE_HEX = 5.0          # its hex end, across flats, pressed into the worm's hex bore
+DRIVE_HEX_LENGTH = 7.5   # ... and how far it goes in
+DRIVE_FLANGE = (11.0, 2.0)   # its flange outside the spine: Ø, thickness (stops it going further in)
+AXIAL_PLAY = 0.25        # worm end play between the far post and the spine
+POST = 6.0               # far worm bearing post, square section
+BOSS = 3.5               # radius of the pin bosses and bars around a dowel
+UNIT_GAP = 2.0           # y gap between neighbouring units' parts
+PIN_ENGAGE = 5.0         # dowel length inside a turning part's bore
+PIN_LENGTHS = (8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30)   # ISO 2338 lengths for Ø3, mm
+STRIP_CLAMP_Z = (-1.5, 6.0)   # strip clamp block, z range (set screws from +z)
+STRIP_CLAMP_X = 2.0       # block beyond the strip's edges, x
+STRIP_SLOT_CLEARANCE = 0.05   # per side, strip in its slot
+M3_CLEARANCE = 3.4        # ISO 273 normal
+M2_CLEARANCE = 2.4
+MOUNT_BAR = 9.0           # z height of the base bar through a row of tip-disk screws
+TENDON_HOLE = 3.0         # minimum hole through a base bar around a tendon
+# Fasteners by process: (hole it needs). Resin: hex nuts (ISO 4032) in traps, 0.2 mm over the
+# nut (SLA holds ±0.05 mm; the nut must slide in); thermoplastic: heat-set inserts.
+NUT = {"M2": (4.0, 1.6), "M3": (5.5, 2.4)}      # across flats, height
+NUT_PLAY = 0.2
+INSERT = {"M2": (3.2, 4.0), "M3": (4.0, 5.7)}   # bore, length (M2 × 4, M3 × 5.7)
+SPINE = 4.0              # spine wall: the drive shaft's bearing and the worm's thrust face
+BASE = {"nut": 5.0, "insert": 7.0}    # base bars on the tip disk (y)
+SCREW_LENGTHS = {"M2": (4, 5, 6, 8, 10, 12, 16, 20), "M3": (6, 8, 10, 12, 16, 20, 25)}
+# Layout search
+X_STEP = 0.5
+X_COARSE = 2.0
+X_SEARCH = 80.0
+MAX_LIFTS = 30
+EVERY_ORDER_UP_TO = 3     # channels up to which every order along y is tried; beyond, orders by geometry
+MAX_SOLVES = 32           # arrangements solved at most, in order of their lower bound (each takes ~0.2 s)
+
+
+@dataclass(frozen=True)
+class Fastening:
+    """How a screw is held in a printed body: a nut in a trap (resin) or a heat-set insert
+    (thermoplastic). Depths are from the face the screw enters the body by."""
+
+    kind: str                # "nut" or "insert"
+    thread: str              # "M2", "M3"
+    screw_length: float      # standard length, mm
+    hole: float              # clearance hole (nut) or insert bore (insert), mm
+    nut_from: float          # nut: depth of the trap's near face; insert: 0
+    depth: float             # nut: depth of the trap's far face; insert: the bore's depth
+    body: float              # the printed body's thickness along the screw
+
+    @property
+    def screw(self) -> str:
+        return f"{self.thread} × {self.screw_length:g}"
+
+    def held_by(self, qty: int, notes: str) -> dict:
+        """The bill-of-materials line for what holds ``qty`` of these screws."""
+        if self.kind == "nut":
+            return {"item": "hex nut ISO 4032", "size": self.thread, "qty": qty, "material": "steel",
+                    "notes": f"{notes}, in a trap"}
+        return {"item": "heat-set insert", "size": f"{self.thread} × {INSERT[self.thread][1]:g}", "qty": qty,
+                "material": "brass", "notes": f"{notes}, melted in"}
+
+
+def joint(fast: str, thread: str, grip: float, body: float) -> Fastening:
+    """A screw of ``thread`` through ``grip`` mm of other parts into a printed body ``body`` mm
+    thick: with a nut, the longest standard screw that stays inside the body, ending at the
+    nut's far face; with an insert, the longest that ends inside the insert."""
+    if fast == "nut":
+        af, h = NUT[thread]
+        screw = standard_screw(thread, grip + body)
+        far = screw - grip                                     # the screw's end, deep in the body
+        if far < h + 0.6:
+            raise NoFit(f"a {thread} nut and its screw do not fit in {body:g} mm of resin")
+        clear = M3_CLEARANCE if thread == "M3" else M2_CLEARANCE
+        return Fastening("nut", thread, screw, clear, far - h - NUT_PLAY / 2, far + NUT_PLAY / 2, body)
+    bore, length = INSERT[thread]
+    depth = min(body, length + 0.5)
+    return Fastening("insert", thread, standard_screw(thread, grip + depth - 0.5), bore, 0.0, depth, body)
+
+
+class NoFit(ValueError):
+    """No arrangement fits; the message names the tendon, what it hits and what would free it."""
+
+
+def spool_wall_problem(ts: Tensioner, min_wall: float) -> str | None:
+    """Why the spool drum leaves too little wall around its pin's bore, or None."""
+    if ts.spool_diameter < ts.shaft_diameter + ts.running_fit + 2 * min_wall:
+        return (f"{ts.spool_diameter:g} mm leaves less than {min_wall:g} mm of wall around "
+                f"the Ø{ts.shaft_diameter:g} mm pin's bore")
+    return None
+
+
+def fastening(technology: str) -> str:
+    """Resin (SLA) takes nuts in traps; thermoplastic (FDM) takes heat-set inserts."""
+    return "nut" if technology == "SLA" else "insert"
+
+
+@dataclass(frozen=True)
+class Sizes:
+    """Dimensions every unit shares, derived once from the parameters (mm)."""
+
+    pair: WormPair
+    y_face: float            # the tip disk's outer face
+    tendon_d: float
+    need: float              # least distance from a tendon's axis to another part's surface
+    max_exit: float          # rad
+    r_s: float               # spool core radius
+    r_w: float               # winding radius: the tendon's centre on the drum
+    r_f: float               # flange radius
+    hub_r: float
+    spine_hole: float        # the drive shaft's bearing
+    spine_t: float
+    base_t: float
+    tip_t: float             # the tip disk's thickness (the tip screws' grip)
+    strip_half_x: float
+    strip_half_z: float
+    y_end: float             # the strip's tip end
+
+    @staticmethod
+    def of(d: Design, tip: DiskSpec) -> Sizes:
+        ts = d.tensioner
+        pair = worm_pair(ts, d.process.min_wall)
+        r_s = ts.spool_diameter / 2
+        problem = spool_wall_problem(ts, d.process.min_wall)
+        if problem:
+            raise NoFit(f"tensioner.spool_diameter {problem}")
+        fast = fastening(d.process.technology)
+        td = d.tendon_material.diameter
+        return Sizes(pair, tip.y + tip.thickness / 2, td, td / 2 + ts.tendon_clearance + td / 2,
+                     math.radians(ts.max_exit_deg), r_s, r_s + td / 2, r_s + FLANGE_HEIGHT,
+                     max(ts.shaft_diameter / 2 + ts.running_fit / 2 + HUB_WALL, r_s),
+                     DRIVE_SHAFT + ts.running_fit,
+                     SPINE, BASE[fast], tip.thickness, d.backbone.height / 2, d.backbone.thickness / 2,
+                     d.backbone.length + d.backbone.extra_tip)
+
+
+def standard_screw(kind: str, reach: float) -> float:
+    """Longest standard screw of this size no longer than ``reach``."""
+    fits = [n for n in SCREW_LENGTHS[kind] if n <= reach + 1e-9]
+    if not fits:
+        raise NoFit(f"no standard {kind} screw is as short as {reach:.1f} mm")
+    return float(max(fits))
+
+
+def tip_joint(fast: str, tip_thickness: float, base_t: float) -> Fastening:
+    """The screws that hold the housing to the tip disk, through the disk into the base bars."""
+    return joint(fast, "M3", tip_thickness, base_t)
