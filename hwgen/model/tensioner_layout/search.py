@@ -19,8 +19,6 @@ from .result import Member, TendonRun, TensionerLayout
 from .sizes import MAX_SOLVES, POST, STRIP_CLAMP_Z, NoFit, Sizes, fastening
 
 
-# ---------------------------------------------------------------- the search
-
 @dataclass
 class _Best:
     arrangement: Arrangement
