@@ -26,7 +26,7 @@ import numpy as np
 from ..model.gearing import hertz_allowable, worm_pair
 from ..model.materials import contact_elasticity
 from .base import Check
-from .measure import (Axis, SurfaceDistance, axes_angle, axes_distance, fit_axis, load_mesh,
+from .measure import (Axis, SurfaceDistance, across, axes_angle, axes_distance, fit_axis, load_mesh,
                       sample_surface, to_manifold)
 
 INTERFERENCE_TOL_MM3 = 0.01   # worm ∩ wheel counts as zero below this
@@ -88,8 +88,7 @@ def tendon_cylinder(p0, p1, radius: float):
     d = p1 - p0
     length = float(np.linalg.norm(d))
     z = d / length
-    x = np.cross(z, [1.0, 0.0, 0.0] if abs(z[0]) < 0.9 else [0.0, 1.0, 0.0])
-    x /= np.linalg.norm(x)
+    x = across(z)
     y = np.cross(z, x)
     m = np.column_stack([x, y, z, p0])
     return m3d.Manifold.cylinder(length, radius, radius, TENDON_SEGMENTS).transform(m.tolist())

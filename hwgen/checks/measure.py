@@ -74,6 +74,12 @@ def chain_loops(segments: np.ndarray) -> list[np.ndarray]:
     return loops
 
 
+def signed_area(p: np.ndarray) -> float:
+    """Area of a closed polygon (n, 2), positive when it winds counter-clockwise (shoelace)."""
+    x, y = p[:, 0], p[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
 def area_centroid(p: np.ndarray) -> tuple[float, tuple[float, float]]:
     """Unsigned area and centroid of a closed polygon (n, 2)."""
     x, y = p[:, 0], p[:, 1]
@@ -280,6 +286,13 @@ def read_manifest(folder: str | Path) -> dict:
 AXIS_BAND_MM = (0.05, 0.01)   # crest vertices: within this of the largest radius, first pass then second
 
 
+def across(direction: np.ndarray) -> np.ndarray:
+    """A unit vector square to ``direction`` (a unit vector): its cross product with x, or with
+    y when it lies close to x."""
+    v = np.cross(direction, [1.0, 0.0, 0.0] if abs(direction[0]) < 0.9 else [0.0, 1.0, 0.0])
+    return v / np.linalg.norm(v)
+
+
 @dataclass(frozen=True)
 class Axis:
     """The rotation axis of a toothed or threaded part, fitted to its mesh (robot mm)."""
@@ -299,8 +312,7 @@ class Axis:
     def frame(self) -> np.ndarray:
         """4×4 taking robot coordinates into a frame whose Z is this axis, origin at ``point``."""
         z = self.direction
-        x = np.cross(z, [1.0, 0, 0]) if abs(z[0]) < 0.9 else np.cross(z, [0, 1.0, 0])
-        x /= np.linalg.norm(x)
+        x = across(z)
         m = np.eye(4)
         m[:3, :3] = np.vstack([x, np.cross(z, x), z])
         m[:3, 3] = -m[:3, :3] @ self.point
@@ -337,8 +349,7 @@ def fit_axis(mesh) -> Axis:
     for band in AXIS_BAND_MM:
         rad = Axis(p, d, 0.0, 0.0, (0.0, 0.0)).radial(v)[0]
         sel = v[rad >= rad.max() - band]
-        e1 = np.cross(d, [1.0, 0, 0]) if abs(d[0]) < 0.9 else np.cross(d, [0, 1.0, 0])
-        e1 /= np.linalg.norm(e1)
+        e1 = across(d)
         e2 = np.cross(d, e1)
 
         def unpack(x, p=p, d=d, e1=e1, e2=e2):

@@ -9,15 +9,10 @@ import numpy as np
 
 from .base import Check
 from .parts import NOT_PRINTED, LoadedPart
-from .measure import to_manifold
+from .measure import signed_area, to_manifold
 
 LAYER_MM = 0.5               # slicing step: finer than any cavity worth reporting
 CUP_MIN_AREA_MM2 = 1.0       # a closed-below hole smaller than this (under Ø1.1 mm) holds too little to matter
-
-
-def _area(contour: np.ndarray) -> float:
-    x, y = contour[:, 0], contour[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
 
 
 def cups(mesh) -> list[tuple[float, float, tuple[float, float]]]:
@@ -31,7 +26,7 @@ def cups(mesh) -> list[tuple[float, float, tuple[float, float]]]:
         section = solid.slice(float(z))
         if below is not None:
             for contour in section.to_polygons():
-                a = _area(contour)
+                a = signed_area(contour)
                 if a >= 0 or -a < CUP_MIN_AREA_MM2:
                     continue            # outer boundaries wind counter-clockwise, holes clockwise
                 hole = m3d.CrossSection([contour[::-1]])
