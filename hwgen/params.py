@@ -107,9 +107,9 @@ class TipMount(_Model):
     """Bolt pattern on the tip disk that the tensioner housing fastens to."""
 
     hole_diameter: Length = Field(3.4, description="clearance hole for the screws (M3 normal fit), mm")
-    positions: tuple[tuple[Coord, Coord], ...] = Field(
-        ((-22.0, 14.0), (22.0, 14.0), (-22.0, -14.0), (22.0, -14.0)),
-        description="hole centres (x, z) on the tip disk, mm")
+    positions: tuple[tuple[Coord, Coord], ...] | None = Field(
+        None, description="hole centres (x, z) on the tip disk, mm (default: four, placed clear of this "
+                          "robot's tip eyelets, slot and hub)")
 
 
 class Disks(_Model):
@@ -270,9 +270,9 @@ class BaseMount(_Model):
 
     bolt_pattern: Literal["M6_25mm", "quarter20_1in"] = Field(
         "M6_25mm", description="table holes: M6 on a 25 mm grid (metric breadboard) or 1/4-20 on a 1 in grid")
-    disk_screws: tuple[tuple[Coord, Coord], ...] = Field(
-        ((-22.0, 8.0), (22.0, 8.0), (-22.0, -8.0), (22.0, -8.0)),
-        description="(x, z) of the screws that fasten the base disk to the mount, mm")
+    disk_screws: tuple[tuple[Coord, Coord], ...] | None = Field(
+        None, description="(x, z) of the screws that fasten the base disk to the mount, mm (default: four, "
+                          "placed clear of this robot's eyelets, seats, slot and hub)")
     screw_hole: Length = Field(3.4, description="clearance hole for those screws and the jaw screws (M3), mm")
     table_clearance: Length = Field(4.0, description="between the base disk's rim and the table, mm")
     max_tip_share: Finite = Field(0.01, gt=0, le=1,

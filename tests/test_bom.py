@@ -110,8 +110,8 @@ def test_allowances_are_parameters(proto, tmp_path):
 
 
 def test_fasteners_from_the_tip_mount_and_part_hardware(proto, tmp_path):
-    folder, _, rows, d = proto
-    n = len(d.disks.tip_mount.positions)
+    folder, m0, rows, d = proto
+    n = len(m0["design_report"]["disks"][-1]["mount_holes"])
     screws = [r for r in rows if r["family"] == "hardware" and r["part"] == bom.TIP_SCREW
               and "base_mount" not in r["notes"]]        # the base mount's screws are other sizes
     assert len(screws) == 1 and int(screws[0]["qty"]) >= n and screws[0]["size"].startswith("M3")
@@ -146,7 +146,7 @@ def test_tensioner_hardware_matches_its_parts(proto, tmp_path):
     assert len(hw) == len([r for r in rows if r["family"] == "hardware"])   # one row per item and size
     dowels = sum(q for (item, _), q in hw.items() if item.startswith("dowel pin"))
     assert dowels == worms + 2 * wheels
-    n_tip = len(d.disks.tip_mount.positions)
+    n_tip = len(m["design_report"]["disks"][-1]["mount_holes"])
     # the bill sums what the parts list; the tensioner's own lines follow from its parts
     listed: dict[tuple[str, str], int] = {}
     tens: dict[tuple[str, str], int] = {}

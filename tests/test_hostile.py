@@ -238,8 +238,8 @@ for path, value, words in [
     if path == "disks.stations":
         text = text.replace("  spacing: 22.5\n", "")
     field = path.replace(".0.", "[0].").replace(".1.", "[1].")
-    if path == "backbone.height":       # valid as a number; the jaws that clamp so thin a strip hold no screw
-        field, words = "base_mount.disk_screws[0]", ("not inside the base disk and the jaws",)
+    if path == "backbone.height":       # valid as a number; no strip that narrow takes C1's hole where it crosses
+        field, words = "tendons[1].routing.function", ("wider than the 1e-300 mm strip",)
     if path == "tendon_material.diameter" and value == 30:
         field = "tendons[0].routing.function"
     if path == "disks.tip_mount.positions" and value == [[-100, 14], [100, 14]]:

@@ -110,7 +110,7 @@ def _to_file(solid: cq.Solid, shift, along_x: bool = False) -> tuple[cq.Solid, n
 
 def build_mount(plan: Plan) -> Iterator[Part]:
     d = plan.design
-    lay = mount_layout(d)
+    lay = mount_layout(d, [(x, z) for x, z, _ in plan.disks[0].mount_holes])
     lower, upper = mount_solids(lay)
     t_disk = d.disks.end_thickness
     depth = lay.y_face - lay.y_back

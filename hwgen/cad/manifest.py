@@ -24,6 +24,7 @@ def design_report(plan: Plan) -> dict:
                    "holes": [{"x": h.x, "z": h.z, "axis": list(h.axis), "diameter_mm": h.diameter,
                               "tendons": list(h.tendons), "worst_angle_deg": h.worst_angle_deg,
                               "in_slot": h.in_slot} for h in d.holes],
+                   "edge_mm": d.edge_size,
                    "mount_holes": [list(m) for m in d.mount_holes],
                    "engagement_mm": d.engagement,
                    "hub": None if d.hub is None else {

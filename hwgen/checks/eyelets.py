@@ -11,6 +11,8 @@ cannot be seen in the disk; their x is read from the matching hole of the backbo
 """
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -280,19 +282,52 @@ def _unexpected(disk: DiskSections, mh: MeasuredHole) -> Check:
                  float(mh.diameter), None, {"part": disk.part, "station": disk.station, "x": float(x), "z": float(z)})
 
 
+def _footprint(rd: dict, hole: dict) -> float:
+    """The radius a designed hole takes on the disk's faces: its own, its chamfer and the drift of a
+    slanted axis over half the disk's thickness."""
+    ax, ay, az = hole["axis"]
+    drift = rd["thickness_mm"] / 2 * math.hypot(ax, az) / max(abs(ay), 1e-9)
+    return hole["diameter_mm"] / 2 + rd.get("edge_mm", 0.0) + drift
+
+
+def _crowded(rd: dict, tendons) -> bool:
+    """Whether the design's own hole for ``tendons`` reaches another designed eyelet of the disk
+    (their footprints on the faces overlap): two tendons routed too close, not a fault of the part."""
+    mine = [h for h in rd["holes"] if tuple(h["tendons"]) == tuple(tendons)]
+    return any(math.hypot(h["x"] - m["x"], h["z"] - m["z"]) < _footprint(rd, h) + _footprint(rd, m)
+               for m in mine for h in rd["holes"] if h is not m)
+
+
+def _reaches_slot(rd: dict, tendons) -> bool:
+    """Whether the design's own hole for ``tendons`` (its circle on the mid-plane, with its chamfer at
+    the faces) reaches the slot."""
+    w, h = rd["slot_mm"]
+    for hole in rd["holes"]:
+        if tuple(hole["tendons"]) == tuple(tendons):
+            r = hole["diameter_mm"] / 2 + rd.get("edge_mm", 0.0)
+            dx, dz = max(abs(hole["x"]) - w / 2, 0.0), max(abs(hole["z"]) - h / 2, 0.0)
+            return math.hypot(dx, dz) < r
+    return False
+
+
 def _position_checks(report: dict, eyelets: list[Eyelet], tol: float) -> list[Check]:
     """One check per disk: every eyelet found, none further than ``tol`` from design intent."""
     out = []
+    overlapping = {(m["station"], t) for m in report.get("merges", []) if m["kind"] == "overlap" for t in m["tendons"]}
     for rd in report["disks"]:
         i = rd["index"]
         mine = [e for e in eyelets if e.station == i and e.status != "in_slot"]
         part = mine[0].part if mine else f"disk_{i:02d}"
-        bad = []
+        bad, overlaps = [], []
         worst = 0.0
         for e in mine:
             name = "+".join(e.tendons)
             x, z = e.design_xz
-            if e.status == "ok":
+            if e.status == "merged" and (all((i, t) in overlapping for t in e.tendons) or _crowded(rd, e.tendons)):
+                overlaps.append(f"{name} at x={num(x)}, z={num(z)} runs into another eyelet")
+            elif e.status == "into_slot" and _reaches_slot(rd, e.tendons):
+                overlaps.append(f"{name} at x={num(x)}, z={num(z)} opens into the backbone slot")
+            elif e.status == "ok":
                 worst = max(worst, e.offset)
             elif e.status == "moved":
                 worst = max(worst, e.offset)
@@ -309,6 +344,12 @@ def _position_checks(report: dict, eyelets: list[Eyelet], tol: float) -> list[Ch
                 worst = float("inf")
                 bad.append(f"{name} eyelet at x={num(x)}, z={num(z)} is missing")
         where = {"part": part, "station": i}
+        if overlaps:
+            # the design itself puts these eyelets into one opening (the plan's "overlap" merges)
+            out.append(Check("eyelet.overlap", "error", False,
+                             f"{part}: the routing puts eyelets where their holes open into another hole or the "
+                             f"slot, so they cannot hold their tendons apart: {'; '.join(overlaps)}; move these "
+                             f"tendons (tendons[].routing) at station {i}", None, None, where))
         if bad:
             out.append(Check("eyelet.position", "error", False, f"{part}: " + "; ".join(bad),
                              None if not np.isfinite(worst) else worst, tol, where))

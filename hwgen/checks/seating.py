@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model import kinematics as kin
+from ..model.fixing import HUB_GAP_MM
 from .base import Check
 from .eyelets import DiskSections, EyeletMap
 from .measure import chain_loops, inside_many, points_to_polyline, section_moments, section_robot
@@ -169,9 +170,12 @@ def tilt_checks(fits: list[SlotFit], max_tilt_deg: float, radius: dict[int, floa
                                                           f"({-f.play_z:.3f} mm too tight)", f.play_z, 0.0, where))
             continue
         tilt = max(abs(v) for v in f.tilt_x)
-        ok = tilt <= max_tilt_deg
+        ok = tilt <= max_tilt_deg + ANGLE_TOL_DEG        # the limit, to what the measurement resolves
         r = radius.get(f.station, 0.0)
-        over = "" if ok else f", more than the {max_tilt_deg:g}° allowed"
+        over = "" if ok else (
+            f", more than the {max_tilt_deg:g}° allowed: holding it needs "
+            f"{f.play_z / math.tan(math.radians(max_tilt_deg)):.1f} mm of engagement (a hub stops {HUB_GAP_MM:g} mm "
+            f"short of the next disk); change disks.spacing, disks.slot_clearance or disks.hub.max_tilt_deg")
         msg = (f"{f.part}: the slot holds the strip over {f.engagement:.2f} mm with {f.play_z:.3f} mm of play "
                f"through its thickness: the disk can pitch ±{tilt:.3f}°{over} (an eyelet at r = {r:g} mm moves "
                f"{r * math.tan(math.radians(tilt)):.3f} mm along the backbone), yaw ±"

@@ -13,14 +13,13 @@ import numpy as np
 
 from ..errors import DesignError, InputError
 from ..params import Design
-from .fixing import CHAMBER_HEIGHT_MM, hub_extension, hub_side, seat_diameter
+from .fixing import CHAMBER_HEIGHT_MM, disk_gaps, disk_thicknesses, seat_diameter
 from .fixtures import mount_problems
 from .gearing import worm_pair
 from .materials import material_problem
 from .routing import sample_function
 from .tensioner_layout import spool_wall_problem
 
-HUB_GAP_MM = 1.0            # the least gap between a hub's end and the next disk
 EYELET_CUT_FRACTION = 1 / 8  # the checks cut a disk this share of its thickness off its mid-plane (keep clear)
 
 
@@ -42,38 +41,21 @@ def problems(d: Design) -> list[tuple[str, str]]:
         out.append(("tensioner.hex_key", f"a {ts.hex_key:g} mm hex socket does not fit in the worm's core "
                                          f"({core:g} mm) with {d.process.min_wall:g} mm walls"))
     out += _eyelets_outside(d)
-    out += _hub_problems(d)
+    out += _spacing_problems(d)
     out += _anchor_problems(d)
     out += mount_problems(d)
     return out
 
 
-def _hub_problems(d: Design) -> list[tuple[str, str]]:
-    """Each hub must end short of the next disk (or of that disk's own hub)."""
-    st = d.stations
-    n = len(st)
-    thick = [d.disks.end_thickness if i in (0, n - 1) else d.disks.thickness for i in range(n)]
-    reach = []
-    for i in range(n):
-        role = "base" if i == 0 else "tip" if i == n - 1 else "inner"
-        side, ext = hub_side(role), hub_extension(d, thick[i])
-        reach.append((st[i] - thick[i] / 2 - (ext if side < 0 else 0.0),
-                      st[i] + thick[i] / 2 + (ext if side > 0 else 0.0)))
-    field = "disks.hub.length" if d.disks.hub.length is not None else "disks.hub.max_tilt_deg"
-    shortest = d.disks.hub.glue_port_diameter + 2 * d.process.min_wall
-    for i in range(n - 1):
-        gap = reach[i + 1][0] - reach[i][1]
-        if gap < HUB_GAP_MM:
-            ext = hub_extension(d, d.disks.thickness)
-            why = (f"disk {i} and disk {i + 1} with their hubs leave {gap:.2f} mm between them "
-                   f"(at least {HUB_GAP_MM:g} mm): the hubs are {ext:.2f} mm long")
-            if ext <= shortest + 1e-9:       # no tilt allowance makes them shorter: the disks are too close
-                where = "disks.spacing" if d.disks.spacing is not None else f"disks.stations[{i + 1}]"
-                return [(where, f"{why}, the shortest that holds a {d.disks.hub.glue_port_diameter:g} mm "
-                                          f"glue port between {d.process.min_wall:g} mm walls: space the disks "
-                                          f"further apart")]
-            return [(field, f"{why} for a slot clearance of {d.disks.slot_clearance:g} mm; allow more tilt, or "
-                            f"less slot clearance")]
+def _spacing_problems(d: Design) -> list[tuple[str, str]]:
+    """Neighbouring disks must not overlap (a hub cut short is a finding of the checks, not this)."""
+    for i, gap in enumerate(disk_gaps(d)):
+        if gap <= 0:
+            where = "disks.spacing" if d.disks.spacing is not None else f"disks.stations[{i + 1}]"
+            return [(where, f"disk {i} and disk {i + 1} overlap: their stations are "
+                            f"{d.stations[i + 1] - d.stations[i]:g} mm apart and they are "
+                            f"{disk_thicknesses(d)[i] / 2 + disk_thicknesses(d)[i + 1] / 2:g} mm thick "
+                            f"between their mid-planes (disks.thickness, disks.end_thickness)")]
     return []
 
 
@@ -166,6 +148,8 @@ def _tendon_size_problems(d: Design) -> list[tuple[str, str]]:
 def _mount_problems(d: Design) -> list[tuple[str, str]]:
     """The tip disk's bolt holes must lie inside the disk and clear of the backbone slot."""
     dk, tm = d.disks, d.disks.tip_mount
+    if tm.positions is None:
+        return []                       # derived by the plan, clear of the slot
     if len(tm.positions) > MAX_MOUNT_HOLES:
         return [("disks.tip_mount.positions", f"{len(tm.positions)} holes; at most {MAX_MOUNT_HOLES}")]
     r_out = dk.outer_diameter / 2

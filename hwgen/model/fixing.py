@@ -5,7 +5,17 @@ the slot's top and bottom: with g the slot's height over the strip's thickness a
 along the backbone over which the slot holds the strip, the tilt is atan(g / ℓ). A 3 mm disk
 alone lets the strip rock; a hub (a sleeve around the slot on one face of the disk) makes ℓ as
 long as the chosen tilt needs. It sits on the disk's tip-side face, except on the tip disk,
-whose tip-side face carries the tensioner, so that each disk prints on its flat face. Wherever a
+whose tip-side face carries the tensioner, so that each disk prints on its flat face.
+
+Each hub is sized to the gap it stands in (:func:`hub_lengths`): as long as the tilt allowance
+asks, or, where the next disk is closer than that, the longest that leaves HUB_GAP_MM before it
+(the last gap holds two hubs, the tip disk's and its neighbour's, and they share it in
+proportion to what each asks). A hub cut short is not a refusal: the disk is built with it, and
+``hwgen check`` measures the tilt its slot then allows and fails ``disk.tilt`` naming what to
+change. One-sided hubs were kept rather than splitting each hub over both faces: a split hub
+holds the same length in the same gaps (every gap still holds one hub's worth), but the disk
+would no longer print flat on one face. A hub shorter than its glue port with a wall either side
+has no port (the adhesive wicks in from the slot's open ends); one shorter than a wall is left off. Wherever a
 tendon passes through the hub's envelope (the strip crossings in the slot, and any tendon close
 to it over the bending sweep) the hub is cut away over the x range the tendon occupies: bending
 is about x, so a tendon's x at a given distance from the disk does not depend on the bend.
@@ -27,9 +37,12 @@ from .intervals import interval_difference
 from .specs import Hole, HubSpec, Seat
 
 LENGTH_STEP_MM = 0.1        # hub engagement lengths are rounded up to this
+HUB_GAP_MM = 1.0            # the least gap a derived hub leaves before the next disk (or that disk's hub)
 HUB_SAMPLES = 9             # planes across the hub at which each tendon's path is tested
 SEAT_MARGIN_MM = 0.2        # a chamber over the plate reaches this far beyond the outermost seat
 CHAMBER_HEIGHT_MM = 0.6     # height of that chamber above the plate
+SEAT_STEP_MM = 0.1          # a single seat differs from a slanted bore it continues by at least this (diameter)
+SLANT_TOL = 1e-9            # a bore whose axis is this close to the disk's normal is not slanted
 SEAT_WALL_MARGIN = 0.1      # over the minimum wall between two seats: the STL's chords and the printer's ±0.05 mm
 
 
@@ -53,21 +66,70 @@ def hub_side(role: str) -> int:
 
 
 def hub_extension(design: Design, thickness: float) -> float:
-    """How far the hub stands off the disk's face: the engagement beyond the disk, and never less
-    than its glue port with a wall either side."""
-    least = design.disks.hub.glue_port_diameter + 2 * design.process.min_wall
-    return max(engagement_length(design) - thickness, least)
+    """How far the hub would stand off the disk's face with room to spare: the engagement beyond
+    the disk, and never less than its glue port with a wall either side."""
+    return max(engagement_length(design) - thickness, least_hub(design))
 
 
-def hub_spec(design: Design, i: int, role: str, thickness: float, slot_w: float, slot_h: float,
-             holes: tuple[Hole, ...], points: dict[str, np.ndarray], sweep: dict[str, tuple]) -> HubSpec:
-    """The hub of disk i: its side and length, and a window wherever a tendon passes through it.
+def least_hub(design: Design) -> float:
+    """The shortest hub that holds its glue port with a wall either side, mm."""
+    return design.disks.hub.glue_port_diameter + 2 * design.process.min_wall
+
+
+def disk_role(i: int, n: int) -> str:
+    """"base" (i = 0), "tip" (i = n - 1) or "inner"."""
+    return "base" if i == 0 else "tip" if i == n - 1 else "inner"
+
+
+def disk_thicknesses(design: Design) -> tuple[float, ...]:
+    """Each disk's thickness along y: the end disks ``end_thickness``, the rest ``thickness``."""
+    n = len(design.stations)
+    return tuple(design.disks.thickness if disk_role(i, n) == "inner" else design.disks.end_thickness
+                 for i in range(n))
+
+
+def disk_gaps(design: Design) -> tuple[float, ...]:
+    """The clear length between each disk and the next (face to face), mm; negative where they overlap."""
+    st, th = design.stations, disk_thicknesses(design)
+    return tuple((st[i + 1] - th[i + 1] / 2) - (st[i] + th[i] / 2) for i in range(len(st) - 1))
+
+
+def hub_lengths(design: Design) -> tuple[float, ...]:
+    """Each disk's hub length beyond its face, mm (0: no hub).
+
+    ``disks.hub.length`` given: honoured on every disk as given (the checks measure what it does).
+    Otherwise each hub is :func:`hub_extension` long, cut to the gap it stands in less HUB_GAP_MM;
+    two hubs in one gap (the tip disk's, facing the base, and its neighbour's) share it in
+    proportion to their wanted lengths. A hub thinner than a wall is left off.
+    """
+    th = disk_thicknesses(design)
+    n = len(th)
+    want = [hub_extension(design, t) for t in th]
+    if design.disks.hub.length is not None:
+        return tuple(want)
+    out = list(want)
+    for g, gap in enumerate(disk_gaps(design)):
+        room = max(gap - HUB_GAP_MM, 0.0)
+        here = [i for i in (g, g + 1) if (i == g) == (hub_side(disk_role(i, n)) > 0)]
+        asked = sum(want[i] for i in here)
+        if asked > room:
+            for i in here:
+                out[i] = min(out[i], room * want[i] / asked)
+    wall = design.process.min_wall
+    return tuple(math.floor(v / LENGTH_STEP_MM + 1e-9) * LENGTH_STEP_MM if v >= wall else 0.0 for v in out)
+
+
+def hub_spec(design: Design, role: str, ext: float, thickness: float, slot_w: float, slot_h: float,
+             holes: tuple[Hole, ...], points: dict[str, np.ndarray], sweep: dict[str, tuple]) -> HubSpec | None:
+    """The hub of one disk, ``ext`` mm beyond its face (from :func:`hub_lengths`; None when 0):
+    its side and length, and a window wherever a tendon passes through it.
 
     ``points``: each tendon's (x, z) at this disk; ``sweep``: each tendon's (into, out_of)
     directions in this disk's frame over the bending sweep, (K, 3) each.
     """
+    if ext <= 0:
+        return None
     side = hub_side(role)
-    ext = hub_extension(design, thickness)
     wall = design.disks.hub.wall
     proc, td = design.process, design.tendon_material
     half_x, half_z = slot_w / 2 + wall, slot_h / 2 + wall
@@ -96,7 +158,7 @@ def hub_spec(design: Design, i: int, role: str, thickness: float, slot_w: float,
     d_port = design.disks.hub.glue_port_diameter
     over_slot = [(max(a, -slot_w / 2), min(b, slot_w / 2)) for a, b in solid]
     over_slot = [(a, b) for a, b in over_slot if b - a >= d_port + 2 * proc.min_wall]
-    if over_slot:
+    if over_slot and ext >= least_hub(design) - 1e-9:
         a, b = max(over_slot, key=lambda ab: ab[1] - ab[0])
         port = ((a + b) / 2, ext / 2, d_port)
     return HubSpec(side, ext, wall, windows, port)
@@ -135,6 +197,10 @@ def seats_for(design: Design, hole: Hole, thickness: float, directions: dict[str
     n = len(hole.tendons)
     if n == 1:
         (t,) = hole.tendons
+        if abs(abs(ax[1]) - 1) > SLANT_TOL and abs(hole.diameter - dia) < SEAT_STEP_MM:
+            # a slanted bore the seat's own size would meet the seat's wall tangentially where it
+            # enters the plate (a seam no mesher closes): the seat steps out past the bore instead
+            dia = hole.diameter + SEAT_STEP_MM
         return [Seat(t, float(c[0]), float(c[1]), dia, terms[t].diameter)], None
     s = max(dia + design.process.min_wall + SEAT_WALL_MARGIN, max(tm.diameter for tm in terms.values()))
     rho = s / (2 * math.sin(math.pi / n))

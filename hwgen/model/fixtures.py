@@ -20,6 +20,7 @@ import math
 from dataclasses import dataclass
 
 from ..params import Design
+from .fixing import disk_thicknesses
 
 # Bolt patterns of the tables the mount stands on: pitch, clearance hole, screw.
 #   M6 on 25 mm: metric optical breadboards; ISO 273 normal clearance for M6 is 6.6 mm.
@@ -47,6 +48,8 @@ NUT_DEPTH = 3.5             # nut traps this far below the lower jaw's top face,
 M3_HEAD = 5.5               # ISO 4762 M3 head diameter (for access around the disk screws), mm
 
 JIG_ENGAGE = 3.0            # a disk's rim enters each comb wall this deep (x), mm
+JIG_CLEAR = 1.0             # the comb walls stand this far clear of the strip's edges and the hubs' sides, mm
+JIG_CUT_CLEAR = 8.0           # a cut between jig pieces stays this far from a disk's slot (a dovetail and a wall), mm
 JIG_WALL_ABOVE = 2.0        # walls rise this far above where the disk's rim leaves them, mm
 JIG_END_TOOTH = 6.0         # comb tooth beyond each end disk, mm
 DOVETAIL = (8.0, 12.0, 6.0)  # neck width, end width, depth of each dovetail key, mm
@@ -80,7 +83,9 @@ class MountLayout:
     foot_half_x: float
 
 
-def mount_layout(d: Design) -> MountLayout:
+def mount_layout(d: Design, disk_screws=()) -> MountLayout:
+    """The mount for design ``d``, with the base disk's screws at ``disk_screws`` ((x, z) each: the
+    base disk's mount holes as the plan placed them)."""
     bm, bb = d.base_mount, d.backbone
     pitch, hole, bolt = BOLT_PATTERNS[bm.bolt_pattern]
     y_face = -d.disks.end_thickness / 2
@@ -100,15 +105,28 @@ def mount_layout(d: Design) -> MountLayout:
         jaw_half_x=half_x, z_table=z_table, z_foot_top=z_table + FOOT_THICKNESS, z_jaw_bottom=JAW_BOTTOM,
         z_lower_top=-t / 2 + STRIP_RECESS_FRACTION * t, z_recess=-t / 2 - CLAMP_GAP, z_upper_bottom=t / 2 + CLAMP_GAP,
         z_upper_top=t / 2 + CLAMP_GAP + UPPER_JAW, recess_half_x=bb.height / 2 + STRIP_RECESS_CLEARANCE,
-        jaw_screws=screws, disk_screws=tuple((float(x), float(z)) for x, z in bm.disk_screws),
+        jaw_screws=screws, disk_screws=tuple((float(x), float(z)) for x, z in disk_screws),
         screw_hole=bm.screw_hole, foot_holes=feet, foot_hole=hole, bolt=bolt, pitch=pitch,
         foot_half_x=fx + FOOT_EDGE)
+
+
+def disk_screw_region(d: Design) -> tuple[tuple[tuple[float, float], tuple[float, float]], float]:
+    """Where a base-disk screw may go in the jaws: its z band in the upper jaw and in the lower one
+    (a wall around its hole inside the jaw, clear of the strip), and the largest |x| (a wall inside
+    the jaw's side, clear of the jaw screws and their nut traps)."""
+    lay = mount_layout(d)
+    h = lay.screw_hole / 2 + d.process.min_wall
+    bands = ((lay.z_upper_bottom + h, lay.z_upper_top - h), (JAW_BOTTOM + h, lay.z_recess - h))
+    jaw_x = abs(lay.jaw_screws[0][0])
+    nut = (NUT_AF + NUT_PLAY) / math.sqrt(3)           # the nut trap's half width across corners
+    x_max = min(lay.jaw_half_x - h, jaw_x - max(lay.screw_hole / 2, nut) - h)
+    return bands, x_max
 
 
 def mount_problems(d: Design) -> list[tuple[str, str]]:
     """Why the mount cannot be made for this design: (field path, message)."""
     out = []
-    lay = mount_layout(d)
+    lay = mount_layout(d, d.base_mount.disk_screws or ())
     clamp = lay.y_face + d.backbone.extra_base
     least = 2 * JAW_SCREW_FROM_END + 1
     if clamp < least:
@@ -155,25 +173,40 @@ class JigLayout:
     play: float
 
 
+def jig_inner_floor(d: Design) -> float:
+    """The least |x| the comb walls may start at: clear of the strip's edges and the hubs' sides
+    (both run through the walls' length between the disks) by JIG_CLEAR."""
+    hub = d.backbone.height / 2 + d.disks.slot_clearance + d.disks.hub.wall
+    return max(d.backbone.height / 2, hub) + JIG_CLEAR
+
+
+def jig_engagement(d: Design) -> float:
+    """How deep each disk's rim enters the comb walls, mm: JIG_ENGAGE, or less where the strip or
+    the hubs reach further out than the walls would start (a disk barely wider than its strip)."""
+    return d.disks.outer_diameter / 2 - jig_layout(d).x_inner
+
+
 def jig_layout(d: Design) -> JigLayout:
     jg = d.jig
     st = d.stations
     r = d.disks.outer_diameter / 2
-    thick = [d.disks.end_thickness if i in (0, len(st) - 1) else d.disks.thickness for i in range(len(st))]
+    thick = disk_thicknesses(d)
     slots = tuple((y - t / 2 - jg.clearance, y + t / 2 + jg.clearance) for y, t in zip(st, thick))
     y0 = slots[0][0] - JIG_END_TOOTH
     y1 = slots[-1][1] + JIG_END_TOOTH
     longest = max(d.process.build_volume[:2]) - PRINT_MARGIN - DOVETAIL[2]
     n = max(1, math.ceil((y1 - y0) / longest))
-    # cut in the middle of the gap between two disks nearest each equal division
+    # cut at each equal division, or, where that falls in or near a disk's slot, in the middle of
+    # the nearest gap between two disks (a wide gap is cut anywhere: its walls are plain)
     gaps = [(slots[i][1] + slots[i + 1][0]) / 2 for i in range(len(st) - 1)]
     cuts = []
     for k in range(1, n):
         target = y0 + k * (y1 - y0) / n
-        cuts.append(min(gaps, key=lambda g: abs(g - target)))
+        free = all(target < a - JIG_CUT_CLEAR or target > b + JIG_CUT_CLEAR for a, b in slots)
+        cuts.append(target if free else min(gaps, key=lambda g: abs(g - target)))
     ends = [y0, *sorted(set(cuts)), y1]
     pieces = tuple(JigPiece(k, a, b, k < len(ends) - 2, k > 0) for k, (a, b) in enumerate(zip(ends, ends[1:])))
-    x_in = r - JIG_ENGAGE
+    x_in = max(r - JIG_ENGAGE, jig_inner_floor(d))
     z_floor_top = -r - jg.clearance
     return JigLayout(pieces, slots, x_in, x_in + jg.wall, r + jg.clearance, z_floor_top - jg.floor, z_floor_top,
                      math.sqrt(r**2 - x_in**2) + JIG_WALL_ABOVE, DOVETAIL, (-DOVETAIL_X, DOVETAIL_X), DOVETAIL_PLAY)

@@ -12,8 +12,10 @@ import numpy as np
 from ..errors import DesignError
 from ..params import Design
 from . import kinematics as kin
+from . import screws
 from .crossings import crossing_angles, in_strip_plane, strip_crossings
-from .fixing import hub_spec, seats_for
+from .fixtures import disk_screw_region
+from .fixing import disk_role, disk_thicknesses, hub_lengths, hub_spec, seats_for
 from .routing import TendonPath, tendon_paths
 from .specs import BackboneHole, BackboneSpec, DiskSpec, Hole, Merge
 from .tensioner_layout import TensionerLayout, layout
@@ -100,8 +102,7 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
     dk, proc = d.disks, d.process
     slot_w = d.backbone.height + 2 * dk.slot_clearance
     slot_h = d.backbone.thickness + 2 * dk.slot_clearance
-    role = "base" if i == 0 else "tip" if i == n - 1 else "inner"
-    thick = dk.thickness if role == "inner" else dk.end_thickness
+    role, thick = disk_role(i, n), disk_thicknesses(d)[i]
     exits = exits or {}
     groups: list[list[TendonPath]] = []
     for p in paths:
@@ -132,22 +133,45 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
             ha, hb = holes[a], holes[b]
             if np.hypot(ha.x - hb.x, ha.z - hb.z) < (ha.diameter + hb.diameter) / 2:
                 merges.append(Merge(i, ha.tendons + hb.tendons, "overlap"))
-    mounts, seats, chambers = (), (), ()
+    seats, chambers = (), ()
     if role == "base":
-        bm = d.base_mount
-        mounts = tuple((x, z, bm.screw_hole) for x, z in bm.disk_screws)
         leaving = {p.name: rest_axes[p.name][i] for p in paths}
         found = [seats_for(d, h, thick, leaving) for h in holes if not h.in_slot]
         seats = tuple(s for group, _ in found for s in group)
         chambers = tuple(c for _, c in found if c is not None)
-    if role == "tip":
-        mounts = tuple((x, z, dk.tip_mount.hole_diameter) for x, z in dk.tip_mount.positions)
-    hub = hub_spec(d, i, role, thick, slot_w, slot_h, tuple(holes), {p.name: p.points[i] for p in paths},
+    hub = hub_spec(d, role, hub_lengths(d)[i], thick, slot_w, slot_h, tuple(holes), {p.name: p.points[i] for p in paths},
                    {p.name: (sweeps[p.name][0][:, i], sweeps[p.name][1][:, i]) for p in paths})
+    mounts = _mount_holes(d, role, holes, seats, chambers, (slot_w, slot_h), hub)
     spec = DiskSpec(i, float(d.stations[i]), role, thick, dk.outer_diameter, slot_w, slot_h, tuple(holes),
                     dk.eyelets.edge_size if dk.eyelets.edge == "chamfer" else 0.0, mounts, hub, seats,
                     dk.anchors.plate if seats else 0.0, chambers)
     return spec, merges
+
+
+def _mount_holes(d: Design, role: str, holes, seats, chambers, slot: tuple[float, float],
+                 hub) -> tuple[tuple[float, float, float], ...]:
+    """(x, z, diameter) of an end disk's screws: as the YAML gives them, else placed clear of the
+    disk's eyelets, seats, slot and hub (:mod:`hwgen.model.screws`): in the base mount's jaws on
+    the base disk, above and below the strip on the tip disk."""
+    if role == "inner":
+        return ()
+    wall = d.process.min_wall
+    if role == "base":
+        dia, given = d.base_mount.screw_hole, d.base_mount.disk_screws
+    else:
+        dia, given = d.disks.tip_mount.hole_diameter, d.disks.tip_mount.positions
+    if given is not None:
+        return tuple((float(x), float(z), dia) for x, z in given)
+    hub_half = None if hub is None else (slot[0] / 2 + hub.wall, slot[1] / 2 + hub.wall)
+    keep = screws.disk_keepout(holes, d.disks.eyelets.edge_size, seats, chambers, (slot[0] / 2, slot[1] / 2),
+                               hub_half, dia, wall)
+    rim = screws.head_rim(d.disks.outer_diameter, dia, wall)
+    if role == "base":
+        bands, x_max = disk_screw_region(d)
+    else:
+        low = slot[1] / 2 + (hub.wall if hub is not None else 0.0) + screws.WASHER_OD / 2
+        bands, x_max = ((low, rim), (-rim, -low)), rim
+    return tuple((x, z, dia) for x, z in screws.place(keep, bands, x_max, rim))
 
 
 def plan(design: Design) -> Plan:

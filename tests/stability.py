@@ -1,0 +1,142 @@
+"""The stability run: robots as a lab writes them (:mod:`tests.robots`), each built whole by the CLI in
+its own process, classified by exit code with the checks it fails, and a table at the end.
+
+    python -m tests.stability [--robots 100] [--seed 20261125] [--jobs 2] [--keep DIR]
+
+(``make stability`` runs the 100.) Exit 0 builds and passes; 1 builds and fails checks (a finding:
+the design breaks a rule); 2 is refused as bad input. What the generator must never do, whatever
+the robot, is break its own parts: :data:`SELF_FAULTS` are the checks that say so (parts that
+overlap, a mesh that is not closed, an eyelet away from where its routing puts it), and a crash
+(any other exit, or a traceback) or a time-out is never right either. The run prints the table
+and returns non-zero when any robot shows one of those.
+"""
+from __future__ import annotations
+
+import argparse
+import collections
+import functools
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from .robots import random_robot
+
+SEED = 20261125
+ROBOTS = 100
+TIME_LIMIT_S = 900          # one robot's whole build and checks (today's slowest: about 2 minutes alone)
+SELF_FAULTS = ("part.interference", "part.mesh", "eyelet.position", "eyelet.unexpected")
+HWGEN = Path(sys.executable).with_name("hwgen")
+
+
+@dataclass
+class Outcome:
+    index: int
+    exit: int | str                  # 0, 1, 2, "crash" or "timed out"
+    failed: list[str] = field(default_factory=list)       # ids of the failed error checks
+    message: str = ""                # exit 2: the one line; a crash: the last lines of stderr
+    seconds: float = 0.0
+    robot: str = ""                  # what the robot is, in a few words
+
+    @property
+    def self_faults(self) -> list[str]:
+        return sorted({f for f in self.failed if f in SELF_FAULTS})
+
+    @property
+    def broken(self) -> bool:
+        return self.exit in ("crash", "timed out") or bool(self.self_faults)
+
+
+def describe(doc: dict) -> str:
+    kinds = collections.Counter(t["routing"]["function"]["kind"] for t in doc["tendons"])
+    return (f"{doc['disks']['count']} disks over {doc['backbone']['length']:g} mm, strip "
+            f"{doc['backbone']['height']:g} × {doc['backbone']['thickness']:g}, slot ±"
+            f"{doc['disks']['slot_clearance']:g}, tendons " + " ".join(f"{n} {k}" for k, n in sorted(kinds.items())))
+
+
+def build_one(index: int, doc: dict, root: Path) -> Outcome:
+    """Build one robot with the CLI in a child process and read what it says."""
+    src = root / f"{doc['design']}.yaml"
+    src.write_text(yaml.safe_dump(doc, sort_keys=False))
+    env = {**os.environ, "HWGEN_RENDER_BACKEND": "none", "HWGEN_CHECK_SAMPLES": os.environ.get(
+        "HWGEN_CHECK_SAMPLES", "64")}
+    t0 = time.monotonic()
+    try:
+        r = subprocess.run([str(HWGEN), "build", str(src), "--out", str(root / "out"), "-q"], env=env,
+                           capture_output=True, text=True, timeout=TIME_LIMIT_S)
+    except subprocess.TimeoutExpired:
+        return Outcome(index, "timed out", seconds=TIME_LIMIT_S, robot=describe(doc))
+    dt = time.monotonic() - t0
+    out = Outcome(index, r.returncode, seconds=dt, robot=describe(doc))
+    if r.returncode not in (0, 1, 2) or "Traceback" in r.stderr:
+        out.exit, out.message = "crash", " | ".join(r.stderr.strip().splitlines()[-3:])
+    elif r.returncode == 2:
+        out.message = (r.stderr.strip().splitlines() or [""])[-1]
+    else:
+        report = root / "out" / doc["design"] / "report.json"
+        checks = json.loads(report.read_text())["checks"] if report.exists() else []
+        out.failed = sorted({c["id"] for c in checks if not c["passed"] and c["severity"] == "error"})
+    return out
+
+
+def run(robots: int = ROBOTS, seed: int = SEED, jobs: int = 2, keep: Path | None = None,
+        echo=functools.partial(print, flush=True)) -> list[Outcome]:
+    rng = np.random.default_rng(seed)
+    docs = [random_robot(rng, f"robot{i:03d}") for i in range(robots)]
+    with tempfile.TemporaryDirectory() as tmp:
+        root = keep or Path(tmp)
+        root.mkdir(parents=True, exist_ok=True)
+        with ThreadPoolExecutor(max_workers=jobs) as pool:
+            futures = [pool.submit(build_one, i, d, root) for i, d in enumerate(docs)]
+            outcomes = []
+            for f in futures:
+                o = f.result()
+                outcomes.append(o)
+                echo(f"  {o.index:3d}  exit {o.exit!s:9}  {o.seconds:5.0f} s  {o.robot}"
+                     + (f"\n        failed: {', '.join(o.failed)}" if o.failed else "")
+                     + (f"\n        {o.message}" if o.message else ""))
+    return outcomes
+
+
+def table(outcomes: list[Outcome], seed: int = SEED) -> str:
+    """Exit codes, the failed checks by kind, and every robot the generator broke."""
+    n = len(outcomes)
+    by_exit = collections.Counter(str(o.exit) for o in outcomes)
+    lines = [f"{n} robots (seed {seed}): " + ", ".join(f"exit {k}: {v}" for k, v in sorted(by_exit.items())),
+             f"built (exit 0 or 1): {by_exit['0'] + by_exit['1']} of {n}", "", "| failed check | robots |", "|---|---:|"]
+    kinds = collections.Counter(f for o in outcomes for f in o.failed)
+    lines += [f"| {k} | {v} |" for k, v in kinds.most_common()]
+    refused = collections.Counter(o.message.split(": ")[1] if o.message.count(": ") >= 1 else o.message
+                                  for o in outcomes if o.exit == 2)
+    if refused:
+        lines += ["", "| refused (exit 2) at | robots |", "|---|---:|"] + [f"| {k} | {v} |" for k, v in
+                                                                          refused.most_common()]
+    broken = [o for o in outcomes if o.broken]
+    lines += ["", f"broken by the generator (crash, time-out, {', '.join(SELF_FAULTS)}): {len(broken)}"]
+    lines += [f"  robot {o.index:03d}: {o.exit} {o.self_faults or ''} {o.message}" for o in broken]
+    return "\n".join(lines)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--robots", type=int, default=ROBOTS)
+    ap.add_argument("--seed", type=int, default=SEED)
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--keep", type=Path, help="build into this folder and keep it")
+    a = ap.parse_args()
+    outcomes = run(a.robots, a.seed, a.jobs, a.keep)
+    print()
+    print(table(outcomes, a.seed))
+    return 1 if any(o.broken for o in outcomes) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,159 @@
+"""Robots other than the prototype: what the prototype once hard-coded is derived from the robot at
+hand (hubs sized to their gaps, the end disks' screws placed clear of what the disks carry, the
+jig's walls clear of the strip and the hubs), and a broken rule is a finding, not a refusal."""
+from __future__ import annotations
+
+import copy
+import math
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from hwgen.errors import DesignError, InputError
+from hwgen.model import screws
+from hwgen.model.fixing import HUB_GAP_MM, disk_gaps, hub_extension, hub_lengths, least_hub
+from hwgen.model.fixtures import jig_layout, mount_layout
+from hwgen.model.plan import plan as make_plan
+from hwgen.params import Design
+from hwgen.pipeline import design_plan, load
+
+from .conftest import PARAMS
+from .robots import BASE, random_robot
+from .stability import SEED, build_one
+
+PLAN_ROBOTS = 100
+
+
+def _design(doc: dict) -> Design:
+    return Design.model_validate(doc)
+
+
+def _dense() -> dict:
+    """The prototype with 25 disks over 240 mm at a slot clearance of 0.1 mm: a 0.5° tilt needs a
+    hub of 19.9 mm where the disks stand 7 mm apart."""
+    doc = copy.deepcopy(BASE)
+    doc["backbone"]["length"] = 240.0
+    doc["disks"].update(count=25, spacing=10.0, slot_clearance=0.1)
+    return doc
+
+
+def _hub_reach(plan) -> list[tuple[float, float]]:
+    """Each disk's extent along y with its hub."""
+    out = []
+    for d in plan.disks:
+        lo, hi = d.y - d.thickness / 2, d.y + d.thickness / 2
+        ext = d.hub.length if d.hub else 0.0
+        out.append((lo - ext, hi) if d.hub and d.hub.side < 0 else (lo, hi + ext))
+    return out
+
+
+def test_hubs_fit_their_gaps_on_a_dense_robot():
+    d = _design(_dense())
+    p = make_plan(d)
+    reach = _hub_reach(p)
+    gaps = [b[0] - a[1] for a, b in zip(reach, reach[1:])]
+    assert min(gaps) >= HUB_GAP_MM - 1e-9
+    # every gap but the last holds one hub, as long as the gap allows; the last holds two
+    ext = [d.hub.length for d in p.disks]
+    clear = disk_gaps(d)
+    assert all(e < hub_extension(d, 3.0) for e in ext[1:-1])
+    assert all(e == pytest.approx(g - HUB_GAP_MM, abs=0.1) for e, g in zip(ext[1:-2], clear[1:-1]))
+    assert ext[-2] + ext[-1] == pytest.approx(clear[-1] - HUB_GAP_MM, abs=0.2)
+    # too short for a glue port with its walls: none is cut
+    assert all((disk.hub.port is None) == (disk.hub.length < least_hub(d)) for disk in p.disks)
+
+
+def test_the_prototypes_hubs_are_what_its_tilt_asks():
+    d = load(PARAMS / "prototype.yaml").design
+    g = 2 * d.disks.slot_clearance / math.tan(math.radians(d.disks.hub.max_tilt_deg))
+    lengths = hub_lengths(d)
+    assert lengths[1:-1] == tuple([pytest.approx(math.ceil(g * 10) / 10 - d.disks.thickness)] * 11)
+    assert min(disk_gaps(d)) - max(lengths) > HUB_GAP_MM
+
+
+def test_a_given_hub_length_is_honoured():
+    doc = _dense()
+    doc["disks"]["hub"]["length"] = 30.0
+    d = _design(doc)
+    assert set(hub_lengths(d)) == {27.0, 24.0}          # 30 less the inner and end disks' thickness
+
+
+def test_end_disk_screws_keep_clear_of_what_the_disks_carry():
+    """Over random robots: every derived screw keeps its washer off the eyelets and the hub, a wall
+    from the slot and the seats, inside the rim; the base disk's lie inside the mount's jaws."""
+    rng = np.random.default_rng(SEED)
+    checked = 0
+    for i in range(40):
+        doc = random_robot(rng, f"r{i}")
+        try:
+            with tempfile.TemporaryDirectory() as t:
+                f = Path(t) / "r.yaml"
+                f.write_text(yaml.safe_dump(doc))
+                p = design_plan(load(f))
+        except (InputError, DesignError):
+            continue
+        for disk in (p.disks[0], p.disks[-1]):
+            hub = None if disk.hub is None else (disk.slot_width / 2 + disk.hub.wall, disk.slot_height / 2 + disk.hub.wall)
+            keep = screws.disk_keepout(disk.holes, disk.edge_size, disk.seats, disk.seat_chambers,
+                                       (disk.slot_width / 2, disk.slot_height / 2), hub, 3.4, 0.8)
+            xy = np.array([m[:2] for m in disk.mount_holes])
+            assert len(xy) == 4
+            margin = keep.margin(xy[:, 0], xy[:, 1])
+            rim = screws.head_rim(disk.outer_diameter, 3.4, 0.8) - np.hypot(xy[:, 0], xy[:, 1])
+            assert (np.minimum(margin, rim) >= -1e-9).all(), (i, disk.name, xy, margin, rim)
+        lay = mount_layout(p.design, [m[:2] for m in p.disks[0].mount_holes])
+        for x, z in lay.disk_screws:
+            h = lay.screw_hole / 2
+            in_upper = lay.z_upper_bottom + h <= z <= lay.z_upper_top - h
+            in_lower = lay.z_jaw_bottom + h <= z <= lay.z_recess - h
+            assert (in_upper or in_lower) and abs(x) + h <= lay.jaw_half_x
+            for jx, _ in lay.jaw_screws:
+                assert abs(abs(x) - abs(jx)) >= lay.screw_hole
+        checked += 1
+    assert checked >= 30
+
+
+def test_the_jig_walls_clear_the_strip_and_hubs():
+    """A 66 mm strip in 72 mm disks: the comb walls start beyond the strip's edges and the hubs'
+    sides, so the disks' rims enter them less deep."""
+    doc = copy.deepcopy(BASE)
+    doc["backbone"]["height"] = 66.0
+    d = _design(doc)
+    lay = jig_layout(d)
+    assert lay.x_inner >= 66.0 / 2 + d.disks.slot_clearance + d.disks.hub.wall
+    assert lay.x_inner < d.disks.outer_diameter / 2
+
+
+def test_robots_as_a_lab_writes_them_are_planned_not_refused():
+    """The plan (no CAD) of 100 robots drawn from tests/robots.py's ranges: at least 90 can be
+    built; what is refused names a field (the full builds: `make stability`)."""
+    rng = np.random.default_rng(SEED)
+    refused = []
+    with tempfile.TemporaryDirectory() as t:
+        for i in range(PLAN_ROBOTS):
+            doc = random_robot(rng, f"robot{i:03d}")
+            f = Path(t) / f"{doc['design']}.yaml"
+            f.write_text(yaml.safe_dump(doc))
+            try:
+                design_plan(load(f))
+            except InputError as e:
+                refused.append((i, e.path, e.message))
+            except DesignError as e:
+                refused.append((i, e.path, e.message))
+    assert len(refused) <= PLAN_ROBOTS // 10, refused
+    assert all(path and message for _, path, message in refused)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("index", [0, 5])
+def test_lab_robots_build_without_breaking_their_own_parts(index, tmp_path):
+    """Two robots of the stability draw built whole by the CLI: exit 0 or 1, and none of the checks
+    that say the generator broke its own parts fails (the 100: `make stability`)."""
+    rng = np.random.default_rng(SEED)
+    docs = [random_robot(rng, f"robot{i:03d}") for i in range(index + 1)]
+    out = build_one(index, docs[index], tmp_path)
+    assert out.exit in (0, 1), (out.exit, out.message)
+    assert not out.self_faults, (out.failed, out.robot)
