@@ -6,7 +6,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: build test bench docs-images clean venv
+.PHONY: build test bench stability docs-images clean venv
 
 venv: $(STAMP)
 
@@ -24,6 +24,10 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python -m hwgen.bench
+
+# 100 robots drawn as a lab writes them, each built whole: a table of exit codes and failed checks
+stability: $(STAMP)
+	$(BIN)/python -m tests.stability --robots 100
 
 # the README's pictures, from a fresh build of the prototype
 docs-images: $(STAMP)

@@ -62,7 +62,9 @@ class Backbone(_Model):
     length: Length = Field(description="L: length between the base and tip disk mid-planes, mm")
     height: Length = Field(description="h: strip width along x, mm")
     thickness: Length = Field(description="t: strip thickness along z, mm")
-    extra_base: NonNegLength = Field(0.0, description="strip length below the base disk for clamping, mm")
+    extra_base: NonNegLength | None = Field(None, description="strip length below the base disk's mid-plane for "
+                                                              "the base mount's jaws, mm (default: the least the "
+                                                              "jaws need)")
     extra_tip: NonNegLength = Field(0.0, description="strip length beyond the tip disk for the tensioner clamp, mm")
     density_g_cm3: Annotated[float, Field(gt=0.3, le=3.0, allow_inf_nan=False)] = Field(
         1.40, description="density of the strip's laminate, g/cm³")
@@ -116,7 +118,8 @@ class Disks(_Model):
     """The tendon-support disks."""
 
     count: int = Field(ge=2, le=200, description="N: number of disks, base (i = 0) to tip (i = N-1)")
-    spacing: Length | None = Field(None, description="ΔL: equal spacing between disks, mm (or give stations)")
+    spacing: Length | None = Field(None, description="ΔL: equal spacing between disks, mm (or give stations; "
+                                                     "neither: backbone.length / (count - 1))")
     stations: tuple[Coord, ...] | None = Field(None, description="explicit y_i of every disk, mm, increasing")
     thickness: Length = Field(description="thickness of the inner disks along y, mm")
     end_thickness: Length = Field(description="thickness of the base and tip disks, mm")
@@ -129,8 +132,8 @@ class Disks(_Model):
 
     @model_validator(mode="after")
     def _one_station_rule(self):
-        if (self.spacing is None) == (self.stations is None):
-            raise ValueError("give exactly one of 'spacing' or 'stations'")
+        if self.spacing is not None and self.stations is not None:
+            raise ValueError("give 'spacing' or 'stations', not both")
         return self
 
 
@@ -345,6 +348,8 @@ class Design(_Model):
         d = self.disks
         if d.stations is not None:
             return tuple(d.stations)
+        if d.spacing is None:            # equal gaps over the backbone's length
+            return tuple(i * self.backbone.length / (d.count - 1) for i in range(d.count))
         return tuple(i * d.spacing for i in range(d.count))
 
     @property
@@ -460,7 +465,7 @@ def _check_design(d: Design, file: Path) -> None:
         if abs(st[0]) > 1e-9 or abs(st[-1] - d.backbone.length) > 1e-6:
             raise InputError(file, "disks.stations",
                              f"must run from 0 to backbone.length = {d.backbone.length} mm")
-    elif abs(d.disks.spacing * (n - 1) - d.backbone.length) > 1e-6:
+    elif d.disks.spacing is not None and abs(d.disks.spacing * (n - 1) - d.backbone.length) > 1e-6:
         raise InputError(file, "disks.spacing",
                          f"{n - 1} gaps of {d.disks.spacing} mm give {d.disks.spacing * (n - 1):g} mm, "
                          f"backbone.length is {d.backbone.length} mm")

@@ -82,7 +82,7 @@ def _tensioner_made_from(plan: Plan, index: int) -> tuple[str, str]:
 def _mount_made_from(plan: Plan, index: int) -> tuple[str, str]:
     m = plan.design.base_mount
     return (("base mount", "upper jaw")[min(index, 1)],
-            f"clamps {plan.design.backbone.extra_base:g} mm of strip; {m.model_dump_json()[:120]}")
+            f"clamps {-plan.backbone.y_start:g} mm of strip; {m.model_dump_json()[:120]}")
 
 
 def _jig_made_from(plan: Plan, index: int) -> tuple[str, str]:

@@ -51,7 +51,8 @@ def _spacing_problems(d: Design) -> list[tuple[str, str]]:
     """Neighbouring disks must not overlap (a hub cut short is a finding of the checks, not this)."""
     for i, gap in enumerate(disk_gaps(d)):
         if gap <= 0:
-            where = "disks.spacing" if d.disks.spacing is not None else f"disks.stations[{i + 1}]"
+            where = (f"disks.stations[{i + 1}]" if d.disks.stations is not None else
+                     "disks.spacing" if d.disks.spacing is not None else "disks.count")
             return [(where, f"disk {i} and disk {i + 1} overlap: their stations are "
                             f"{d.stations[i + 1] - d.stations[i]:g} mm apart and they are "
                             f"{disk_thicknesses(d)[i] / 2 + disk_thicknesses(d)[i + 1] / 2:g} mm thick "

@@ -44,6 +44,9 @@ STRIP_RECESS_CLEARANCE = 0.1  # per side, strip to recess, mm
 CLAMP_GAP = 0.01            # each jaw stands this far off the strip until the jaw screws close them on it, mm
 JAW_SCREW_FROM_END = 7.0    # jaw screws this far from the jaws' front and back faces, mm
 NUT_AF, NUT_THICK, NUT_PLAY = 5.5, 2.4, 0.3   # ISO 4032 M3 nut and the room it slides in with
+JAW_NUT_WALL = 1.0          # resin between the two rows of jaw screws' nut traps, mm
+# the least strip the jaws clamp beyond the base disk: two rows of screws whose nut traps keep a wall between them, mm
+JAW_LEAST = math.ceil(2 * JAW_SCREW_FROM_END + NUT_AF + NUT_PLAY + JAW_NUT_WALL - JAW_BEYOND_STRIP)
 NUT_DEPTH = 3.5             # nut traps this far below the lower jaw's top face, mm
 M3_HEAD = 5.5               # ISO 4762 M3 head diameter (for access around the disk screws), mm
 
@@ -83,13 +86,21 @@ class MountLayout:
     foot_half_x: float
 
 
+def base_length(d: Design) -> float:
+    """The strip's length below the base disk's mid-plane: ``backbone.extra_base``, else half the base
+    disk and the least the jaws clamp (JAW_LEAST), to the next whole mm."""
+    if d.backbone.extra_base is not None:
+        return d.backbone.extra_base
+    return float(math.ceil(d.disks.end_thickness / 2 + JAW_LEAST))
+
+
 def mount_layout(d: Design, disk_screws=()) -> MountLayout:
     """The mount for design ``d``, with the base disk's screws at ``disk_screws`` ((x, z) each: the
     base disk's mount holes as the plan placed them)."""
     bm, bb = d.base_mount, d.backbone
     pitch, hole, bolt = BOLT_PATTERNS[bm.bolt_pattern]
     y_face = -d.disks.end_thickness / 2
-    y_back = -bb.extra_base - JAW_BEYOND_STRIP
+    y_back = -base_length(d) - JAW_BEYOND_STRIP
     y_col = y_face - ACCESS_MM
     t = bb.thickness
     jaw_x = bb.height / 2 + JAW_MARGIN
@@ -127,8 +138,8 @@ def mount_problems(d: Design) -> list[tuple[str, str]]:
     """Why the mount cannot be made for this design: (field path, message)."""
     out = []
     lay = mount_layout(d, d.base_mount.disk_screws or ())
-    clamp = lay.y_face + d.backbone.extra_base
-    least = 2 * JAW_SCREW_FROM_END + 1
+    clamp = lay.y_face + base_length(d)
+    least = JAW_LEAST
     if clamp < least:
         out.append(("backbone.extra_base", f"{d.backbone.extra_base:g} mm leaves {clamp:g} mm of strip between the "
                                            f"base mount's jaws beyond the base disk; they need {least:g} mm "

@@ -14,7 +14,7 @@ from ..params import Design
 from . import kinematics as kin
 from . import screws
 from .crossings import crossing_angles, in_strip_plane, strip_crossings
-from .fixtures import disk_screw_region
+from .fixtures import base_length, disk_screw_region
 from .fixing import disk_role, disk_thicknesses, hub_lengths, hub_spec, seats_for
 from .routing import TendonPath, tendon_paths
 from .specs import BackboneHole, BackboneSpec, DiskSpec, Hole, Merge
@@ -191,7 +191,7 @@ def plan(design: Design) -> Plan:
         disks.append(spec)
         merges += m
     bb_holes, findings = _backbone_holes(d, paths, disks)
-    backbone = BackboneSpec(d.backbone.height, d.backbone.thickness, -d.backbone.extra_base,
+    backbone = BackboneSpec(d.backbone.height, d.backbone.thickness, -base_length(d),
                             d.backbone.length + d.backbone.extra_tip, tuple(bb_holes), d.backbone.density_g_cm3)
     first = Plan(d, paths, tuple(disks), backbone, tuple(merges), tuple(findings))
     try:
@@ -201,7 +201,9 @@ def plan(design: Design) -> Plan:
     exits = {r.tendon: np.subtract(r.end, r.start) / r.length for r in lay.runs}
     tip, tip_merges = _disk_spec(d, len(disks) - 1, paths, rest_axes, exits, sweeps)
     merges = [m for m in merges if m.station != tip.index] + tip_merges
-    return replace(first, disks=(*disks[:-1], tip), merges=tuple(merges), tensioner_layout=lay)
+    findings = first.findings + ((f"tensioner strip clamp {lay.search['strip_clamp']}",)
+                                 if "strip_clamp" in lay.search else ())
+    return replace(first, disks=(*disks[:-1], tip), merges=tuple(merges), tensioner_layout=lay, findings=findings)
 
 
 def _backbone_holes(d: Design, paths: list[TendonPath], disks: list[DiskSpec]):

@@ -70,12 +70,17 @@ def layout(design: Design, paths: list[TendonPath], tip: DiskSpec) -> TensionerL
                 continue
             stack_sets.add(sig)
             clamp_sets: set = set()
+            sides = []
             for up in (1, -1):
                 clamp = strip_clamp(sz, up)
                 blocked = clamp_blockers(eyelets, clamp, sz)
                 if blocked:                   # some tendon would run through the clamp on this side
                     blockers.append(blocked[0])
                     continue
+                sides.append((up, clamp))
+            if not sides:                     # a tendon is in the clamp's way either side: the tip disk alone holds
+                sides = [(1, None)]           # the housing on the strip, and the layout says so
+            for up, clamp in sides:
                 # which units and tendons the clamp side can touch: the same for both sides, one is enough
                 touch = None if clamp is None else (
                     tuple(sorted(c for c in stacks if meets_clamp(stacks[c], clamp))),
@@ -116,7 +121,14 @@ def layout(design: Design, paths: list[TendonPath], tip: DiskSpec) -> TensionerL
             best = _Best(c.arrangement, x_u, fr, c.clamp, sz, members, cuts, load)
     if best is None:
         raise NoFit(_explain(failures, len(candidates), ts))
-    return _assemble(best, ts, fast, len(candidates), solved)
+    lay = _assemble(best, ts, fast, len(candidates), solved)
+    if best.clamp is None and blockers:
+        n, x, z = blockers[0]
+        lay.search["strip_clamp"] = (f"left off: tendon {n} leaves the tip at x = {x:g}, z = {z:g} mm, where the "
+                                     f"block that clamps the strip's tip would stand either side; the tensioner is "
+                                     f"held by its screws into the tip disk alone (backbone.extra_tip of strip runs "
+                                     f"into the housing unclamped)")
+    return lay
 
 
 def _load(members: list[Member], fr: Frame, sz: Sizes, length: float) -> float:
