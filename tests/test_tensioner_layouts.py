@@ -140,8 +140,10 @@ def test_two_tendons_of_different_x_wind_on_one_drum_in_their_own_grooves(odd_bu
     assert ends == pytest.approx([-24, 22])
 
 
-def test_refusal_names_the_tendon_what_it_hits_and_what_to_change(tmp_path):
-    """A tendon that leaves the tip in the strip's plane, where the strip's tip is clamped."""
+def test_a_tendon_where_the_strip_clamp_stands_leaves_the_clamp_off_and_says_so(tmp_path):
+    """A tendon that leaves the tip in the strip's plane, where the strip's tip would be clamped on
+    either side: the tensioner is laid out without the clamp, and the plan's findings name the
+    tendon; with the strip ending inside the tip disk there is no clamp to leave off."""
     from hwgen.model.plan import plan
     from hwgen.pipeline import load
     doc = _prototype(design="in-the-clamp")
@@ -151,12 +153,15 @@ def test_refusal_names_the_tendon_what_it_hits_and_what_to_change(tmp_path):
     f = tmp_path / "z.yaml"
     f.write_text(yaml.safe_dump(doc))
     p = plan(load(f).design)
-    assert p.tensioner_layout is None
-    assert "tendon Z" in p.tensioner_error and "clamp" in p.tensioner_error
-    assert "backbone.extra_tip" in p.tensioner_error
+    assert p.tensioner_layout is not None and p.tensioner_layout.clamp_block is None
+    finding = p.tensioner_layout.search["strip_clamp"]
+    assert "tendon Z" in finding and "backbone.extra_tip" in finding
+    proto = plan(load(PARAMS / "prototype.yaml").design)
+    assert proto.tensioner_layout.clamp_block is not None and "strip_clamp" not in proto.tensioner_layout.search
     doc["backbone"]["extra_tip"] = 2          # the strip ends inside the tip disk: nothing to clamp
     f.write_text(yaml.safe_dump(doc))
-    assert plan(load(f).design).tensioner_layout is not None
+    p = plan(load(f).design)
+    assert p.tensioner_layout is not None and "strip_clamp" not in p.tensioner_layout.search
 
 
 def test_opposite_winding_puts_the_pair_on_either_side_of_its_drum(tmp_path):

@@ -74,6 +74,14 @@ def _file_checks(folder: Path, manifest: dict) -> list[Check]:
     return out
 
 
+def _strip_clamp_checks(manifest: dict) -> list[Check]:
+    """A warning where the tensioner was laid out without the block that clamps the strip's tip
+    (a tendon leaves the tip where it would stand): as its housing's layout record says."""
+    return [Check("tensioner.strip_clamp", "warning", False,
+                  f"{p['name']}: strip clamp {p['layout_search']['strip_clamp']}", None, None, {"part": p["name"]})
+            for p in manifest["parts"] if "strip_clamp" in p.get("layout_search", {})]
+
+
 def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     """Measure the design in ``folder`` against the intent in its manifest; return the report.
 
@@ -119,7 +127,7 @@ def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     checks += printing_checks(parts, proc.technology)
     mass, c = mass_summary(parts, manifest)
     checks += c
-    checks += gear_checks(folder, manifest, plan)
+    checks += gear_checks(folder, manifest, plan) + _strip_clamp_checks(manifest)
     fits, c = _seating(parts, emap, bb_outline, strip_t, d, angles)
     checks += c
     seats, c = _seats(parts, emap, rep_in, d)

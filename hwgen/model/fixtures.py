@@ -197,6 +197,15 @@ def jig_engagement(d: Design) -> float:
     return d.disks.outer_diameter / 2 - jig_layout(d).x_inner
 
 
+def _nearest_free(target: float, slots, gaps) -> float:
+    """The point nearest ``target`` at least JIG_CUT_CLEAR from every slot; the nearest gap's middle
+    when the slots leave none near it."""
+    near = [target] + [v for a, b in slots for v in (a - JIG_CUT_CLEAR, b + JIG_CUT_CLEAR)]
+    free = [v for v in near if all(v <= a - JIG_CUT_CLEAR + 1e-9 or v >= b + JIG_CUT_CLEAR - 1e-9 for a, b in slots)
+            and slots[0][0] < v < slots[-1][1]]
+    return min(free, key=lambda v: abs(v - target)) if free else min(gaps, key=lambda g: abs(g - target))
+
+
 def jig_layout(d: Design) -> JigLayout:
     jg = d.jig
     st = d.stations
@@ -207,15 +216,13 @@ def jig_layout(d: Design) -> JigLayout:
     y1 = slots[-1][1] + JIG_END_TOOTH
     longest = max(d.process.build_volume[:2]) - PRINT_MARGIN - DOVETAIL[2]
     n = max(1, math.ceil((y1 - y0) / longest))
-    # cut at each equal division, or, where that falls in or near a disk's slot, in the middle of
-    # the nearest gap between two disks (a wide gap is cut anywhere: its walls are plain)
+    # cut in the middle of the gap between two disks nearest each equal division; where that makes
+    # a piece too long for the printer (disks far apart), as near each division as the slots allow
     gaps = [(slots[i][1] + slots[i + 1][0]) / 2 for i in range(len(st) - 1)]
-    cuts = []
-    for k in range(1, n):
-        target = y0 + k * (y1 - y0) / n
-        free = all(target < a - JIG_CUT_CLEAR or target > b + JIG_CUT_CLEAR for a, b in slots)
-        cuts.append(target if free else min(gaps, key=lambda g: abs(g - target)))
-    ends = [y0, *sorted(set(cuts)), y1]
+    targets = [y0 + k * (y1 - y0) / n for k in range(1, n)]
+    ends = [y0, *sorted({min(gaps, key=lambda g: abs(g - t)) for t in targets}), y1]
+    if max(b - a for a, b in zip(ends, ends[1:])) > longest:
+        ends = [y0, *sorted({_nearest_free(t, slots, gaps) for t in targets}), y1]
     pieces = tuple(JigPiece(k, a, b, k < len(ends) - 2, k > 0) for k, (a, b) in enumerate(zip(ends, ends[1:])))
     x_in = max(r - JIG_ENGAGE, jig_inner_floor(d))
     z_floor_top = -r - jg.clearance

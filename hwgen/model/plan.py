@@ -201,9 +201,7 @@ def plan(design: Design) -> Plan:
     exits = {r.tendon: np.subtract(r.end, r.start) / r.length for r in lay.runs}
     tip, tip_merges = _disk_spec(d, len(disks) - 1, paths, rest_axes, exits, sweeps)
     merges = [m for m in merges if m.station != tip.index] + tip_merges
-    findings = first.findings + ((f"tensioner strip clamp {lay.search['strip_clamp']}",)
-                                 if "strip_clamp" in lay.search else ())
-    return replace(first, disks=(*disks[:-1], tip), merges=tuple(merges), tensioner_layout=lay, findings=findings)
+    return replace(first, disks=(*disks[:-1], tip), merges=tuple(merges), tensioner_layout=lay)
 
 
 def _backbone_holes(d: Design, paths: list[TendonPath], disks: list[DiskSpec]):

@@ -113,7 +113,7 @@ class TensionerLayout:
     flange_radius: float
     hub_radius: float
     strip: tuple[float, float, float, float]    # strip x half-width, z half-thickness, y start of clamp, y end
-    clamp_block: tuple[float, float, float, float, float, float]   # x0, x1, y0, y1, z0, z1
+    clamp_block: tuple[float, float, float, float, float, float] | None   # x0, x1, y0, y1, z0, z1; None: no clamp
     members: tuple[Member, ...]                 # housing pieces to fuse
     cuts: tuple[Member, ...]                    # and to cut away
     turn: np.ndarray                            # 4x4 layout frame -> robot: identity, or 180° about y
