@@ -81,39 +81,72 @@ def test_a_given_hub_length_is_honoured():
     assert set(hub_lengths(d)) == {27.0, 24.0}          # 30 less the inner and end disks' thickness
 
 
-def test_end_disk_screws_keep_clear_of_what_the_disks_carry():
-    """Over random robots: every derived screw keeps its washer off the eyelets and the hub, a wall
-    from the slot and the seats, inside the rim; the base disk's lie inside the mount's jaws."""
+def _screws_clear(p) -> None:
+    """Every screw of both end disks keeps its washer off the eyelets and the hub, a wall from the
+    slot and the seats, inside the rim; the base disk's lie inside the mount's jaws, clear of the
+    jaw screws."""
+    for disk in (p.disks[0], p.disks[-1]):
+        hub = None if disk.hub is None else (disk.slot_width / 2 + disk.hub.wall, disk.slot_height / 2 + disk.hub.wall)
+        keep = screws.disk_keepout(disk.holes, disk.edge_size, disk.seats, disk.seat_chambers,
+                                   (disk.slot_width / 2, disk.slot_height / 2), hub, 3.4, 0.8)
+        xy = np.array([m[:2] for m in disk.mount_holes])
+        assert len(xy) == 4
+        margin = keep.margin(xy[:, 0], xy[:, 1])
+        rim = screws.head_rim(disk.outer_diameter, 3.4, 0.8) - np.hypot(xy[:, 0], xy[:, 1])
+        assert (np.minimum(margin, rim) >= -1e-9).all(), (disk.name, xy, margin, rim)
+    lay = mount_layout(p.design, [m[:2] for m in p.disks[0].mount_holes])
+    for x, z in lay.disk_screws:
+        h = lay.screw_hole / 2
+        in_upper = lay.z_upper_bottom + h <= z <= lay.z_upper_top - h
+        in_lower = lay.z_jaw_bottom + h <= z <= lay.z_recess - h
+        assert (in_upper or in_lower) and abs(x) + h <= lay.jaw_half_x
+        for jx, _ in lay.jaw_screws:
+            assert abs(abs(x) - abs(jx)) >= lay.screw_hole
+
+
+def _narrow() -> dict:
+    """A 30 mm strip: the prototype's (±22, ±8) would fall outside the base mount's jaws."""
+    doc = copy.deepcopy(BASE)
+    doc["backbone"]["height"] = 30.0
+    return doc
+
+
+@pytest.mark.parametrize("doc", [BASE, _dense(), _narrow()], ids=["prototype", "dense", "narrow"])
+def test_end_disk_screws_keep_clear_of_what_the_disks_carry(doc):
+    _screws_clear(make_plan(_design(doc)))
+
+
+@pytest.fixture(scope="module")
+def lab_plans():
+    """(index, plan or (field, message)) of 100 robots drawn from tests/robots.py's ranges."""
     rng = np.random.default_rng(SEED)
-    checked = 0
-    for i in range(40):
-        doc = random_robot(rng, f"r{i}")
-        try:
-            with tempfile.TemporaryDirectory() as t:
-                f = Path(t) / "r.yaml"
-                f.write_text(yaml.safe_dump(doc))
-                p = design_plan(load(f))
-        except (InputError, DesignError):
-            continue
-        for disk in (p.disks[0], p.disks[-1]):
-            hub = None if disk.hub is None else (disk.slot_width / 2 + disk.hub.wall, disk.slot_height / 2 + disk.hub.wall)
-            keep = screws.disk_keepout(disk.holes, disk.edge_size, disk.seats, disk.seat_chambers,
-                                       (disk.slot_width / 2, disk.slot_height / 2), hub, 3.4, 0.8)
-            xy = np.array([m[:2] for m in disk.mount_holes])
-            assert len(xy) == 4
-            margin = keep.margin(xy[:, 0], xy[:, 1])
-            rim = screws.head_rim(disk.outer_diameter, 3.4, 0.8) - np.hypot(xy[:, 0], xy[:, 1])
-            assert (np.minimum(margin, rim) >= -1e-9).all(), (i, disk.name, xy, margin, rim)
-        lay = mount_layout(p.design, [m[:2] for m in p.disks[0].mount_holes])
-        for x, z in lay.disk_screws:
-            h = lay.screw_hole / 2
-            in_upper = lay.z_upper_bottom + h <= z <= lay.z_upper_top - h
-            in_lower = lay.z_jaw_bottom + h <= z <= lay.z_recess - h
-            assert (in_upper or in_lower) and abs(x) + h <= lay.jaw_half_x
-            for jx, _ in lay.jaw_screws:
-                assert abs(abs(x) - abs(jx)) >= lay.screw_hole
-        checked += 1
-    assert checked >= 30
+    out = []
+    with tempfile.TemporaryDirectory() as t:
+        for i in range(PLAN_ROBOTS):
+            doc = random_robot(rng, f"robot{i:03d}")
+            f = Path(t) / f"{doc['design']}.yaml"
+            f.write_text(yaml.safe_dump(doc))
+            try:
+                out.append((i, design_plan(load(f))))
+            except (InputError, DesignError) as e:
+                out.append((i, (e.path, e.message)))
+    return out
+
+
+@pytest.mark.slow
+def test_robots_as_a_lab_writes_them_are_planned_not_refused(lab_plans):
+    """The plan (no CAD) of 100 robots: at least 90 can be built; what is refused names a field
+    (the full builds: `make stability`)."""
+    refused = [(i, r) for i, r in lab_plans if isinstance(r, tuple)]
+    assert len(refused) <= PLAN_ROBOTS // 10, refused
+    assert all(path and message for _, (path, message) in refused)
+
+
+@pytest.mark.slow
+def test_lab_robots_screws_keep_clear(lab_plans):
+    for i, p in lab_plans:
+        if not isinstance(p, tuple):
+            _screws_clear(p)
 
 
 def test_the_jig_walls_clear_the_strip_and_hubs():
@@ -125,26 +158,6 @@ def test_the_jig_walls_clear_the_strip_and_hubs():
     lay = jig_layout(d)
     assert lay.x_inner >= 66.0 / 2 + d.disks.slot_clearance + d.disks.hub.wall
     assert lay.x_inner < d.disks.outer_diameter / 2
-
-
-def test_robots_as_a_lab_writes_them_are_planned_not_refused():
-    """The plan (no CAD) of 100 robots drawn from tests/robots.py's ranges: at least 90 can be
-    built; what is refused names a field (the full builds: `make stability`)."""
-    rng = np.random.default_rng(SEED)
-    refused = []
-    with tempfile.TemporaryDirectory() as t:
-        for i in range(PLAN_ROBOTS):
-            doc = random_robot(rng, f"robot{i:03d}")
-            f = Path(t) / f"{doc['design']}.yaml"
-            f.write_text(yaml.safe_dump(doc))
-            try:
-                design_plan(load(f))
-            except InputError as e:
-                refused.append((i, e.path, e.message))
-            except DesignError as e:
-                refused.append((i, e.path, e.message))
-    assert len(refused) <= PLAN_ROBOTS // 10, refused
-    assert all(path and message for _, path, message in refused)
 
 
 @pytest.mark.slow
