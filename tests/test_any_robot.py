@@ -149,6 +149,23 @@ def test_lab_robots_screws_keep_clear(lab_plans):
             _screws_clear(p)
 
 
+@pytest.mark.parametrize("count, length", [(13, 270.0), (4, 385.0), (10, 445.0), (25, 450.0)])
+def test_jig_pieces_fit_the_printer_and_cut_clear_of_the_slots(count, length):
+    """Disks far apart are cut between where the printer needs it, not only at a gap's middle."""
+    from hwgen.model.fixtures import DOVETAIL, JIG_CUT_CLEAR, PRINT_MARGIN
+    doc = copy.deepcopy(BASE)
+    doc["backbone"]["length"] = length
+    doc["disks"].update(count=count, spacing=length / (count - 1))
+    d = _design(doc)
+    lay = jig_layout(d)
+    longest = max(d.process.build_volume[:2]) - PRINT_MARGIN - DOVETAIL[2]
+    assert all(p.y1 - p.y0 <= longest + 1e-9 for p in lay.pieces)
+    assert lay.pieces[0].y0 < lay.slots[0][0] and lay.pieces[-1].y1 > lay.slots[-1][1]
+    for p in lay.pieces[1:]:
+        assert all(p.y0 <= a - JIG_CUT_CLEAR + 1e-9 or p.y0 >= b + JIG_CUT_CLEAR - 1e-9 for a, b in lay.slots) \
+            or any(abs(p.y0 - (b + a2) / 2) < 1e-9 for (_, b), (a2, _) in zip(lay.slots, lay.slots[1:]))
+
+
 def test_the_jig_walls_clear_the_strip_and_hubs():
     """A 66 mm strip in 72 mm disks: the comb walls start beyond the strip's edges and the hubs'
     sides, so the disks' rims enter them less deep."""

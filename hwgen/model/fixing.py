@@ -15,10 +15,12 @@ proportion to what each asks). A hub cut short is not a refusal: the disk is bui
 change. One-sided hubs were kept rather than splitting each hub over both faces: a split hub
 holds the same length in the same gaps (every gap still holds one hub's worth), but the disk
 would no longer print flat on one face. A hub shorter than its glue port with a wall either side
-has no port (the adhesive wicks in from the slot's open ends); one shorter than a wall is left off. Wherever a
-tendon passes through the hub's envelope (the strip crossings in the slot, and any tendon close
-to it over the bending sweep) the hub is cut away over the x range the tendon occupies: bending
-is about x, so a tendon's x at a given distance from the disk does not depend on the bend.
+has no port (the adhesive wicks in from the slot's open ends); one shorter than a wall is left off.
+
+Wherever a tendon passes through the hub's envelope (the strip crossings in the slot, and any
+tendon close to it over the bending sweep) the hub is cut away over the x range the tendon
+occupies: bending is about x, so a tendon's x at a given distance from the disk does not depend
+on the bend.
 
 Seats. Each tendon ends on its own seat: a hole through a plate on the base disk's outer face,
 smaller than its knot or crimp sleeve. The eyelet bore stops at the plate, so the routing point

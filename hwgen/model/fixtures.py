@@ -197,13 +197,22 @@ def jig_engagement(d: Design) -> float:
     return d.disks.outer_diameter / 2 - jig_layout(d).x_inner
 
 
-def _nearest_free(target: float, slots, gaps) -> float:
-    """The point nearest ``target`` at least JIG_CUT_CLEAR from every slot; the nearest gap's middle
-    when the slots leave none near it."""
-    near = [target] + [v for a, b in slots for v in (a - JIG_CUT_CLEAR, b + JIG_CUT_CLEAR)]
-    free = [v for v in near if all(v <= a - JIG_CUT_CLEAR + 1e-9 or v >= b + JIG_CUT_CLEAR - 1e-9 for a, b in slots)
-            and slots[0][0] < v < slots[-1][1]]
-    return min(free, key=lambda v: abs(v - target)) if free else min(gaps, key=lambda g: abs(g - target))
+def _free_cuts(y0: float, y1: float, longest: float, slots) -> list[float]:
+    """Piece ends from y0 to y1, none longer than ``longest``, each cut JIG_CUT_CLEAR clear of every
+    slot: the remaining length shared equally among the pieces it needs, each cut moved back
+    toward the base out of any slot's reach."""
+    ends = [y0]
+    while y1 - ends[-1] > longest:
+        start = ends[-1]
+        cut = start + (y1 - start) / math.ceil((y1 - start) / longest)
+        for a, b in sorted(slots, reverse=True):
+            if a - JIG_CUT_CLEAR < cut < b + JIG_CUT_CLEAR:
+                cut = a - JIG_CUT_CLEAR
+        if cut <= start:            # slots too close to cut clear of them: the nearest gap's middle
+            cut = min(((b + a2) / 2 for (_, b), (a2, _) in zip(slots, slots[1:]) if (b + a2) / 2 > start),
+                      key=lambda g: abs(g - (start + longest)), default=y1)
+        ends.append(cut)
+    return ends + [y1] if ends[-1] < y1 else ends
 
 
 def jig_layout(d: Design) -> JigLayout:
@@ -222,7 +231,7 @@ def jig_layout(d: Design) -> JigLayout:
     targets = [y0 + k * (y1 - y0) / n for k in range(1, n)]
     ends = [y0, *sorted({min(gaps, key=lambda g: abs(g - t)) for t in targets}), y1]
     if max(b - a for a, b in zip(ends, ends[1:])) > longest:
-        ends = [y0, *sorted({_nearest_free(t, slots, gaps) for t in targets}), y1]
+        ends = _free_cuts(y0, y1, longest, slots)
     pieces = tuple(JigPiece(k, a, b, k < len(ends) - 2, k > 0) for k, (a, b) in enumerate(zip(ends, ends[1:])))
     x_in = max(r - JIG_ENGAGE, jig_inner_floor(d))
     z_floor_top = -r - jg.clearance
