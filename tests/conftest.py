@@ -1,4 +1,9 @@
-"""Shared fixtures: the shipped designs are built once per test session into a temp folder."""
+"""Shared fixtures: the shipped designs are built once per test session into a temp folder.
+
+Two tiers (``make test-fast`` and ``make test``): a test that builds parts with the CAD kernel is
+marked ``slow``; every test that asks for the session's :func:`built` designs (directly or through
+a fixture of its module) is marked here, the others that build by themselves carry the mark.
+"""
 from __future__ import annotations
 
 import os
@@ -13,6 +18,13 @@ os.environ.setdefault("HWGEN_CHECK_SAMPLES", "64")
 
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / "params"
+BUILDS = "built"          # the fixture that makes a test slow wherever it is asked for
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        if BUILDS in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.slow)
 
 
 @pytest.fixture(scope="session")
