@@ -16,19 +16,22 @@ naming ``--out`` (:class:`hwgen.errors.InputError`), like any other.
 from __future__ import annotations
 
 import errno
+import hashlib
 import json
 import os
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
-from . import __version__, params
+import numpy as np
+
+from . import __version__, cache, params
 from .atomic import new_folder, snapshot, write_json
-from .cad import export
-from .cad.families import build_parts, kernel_errors, part_count
+from .cad import Part, export
+from .cad.families import build_unit, kernel_errors, part_count, units
 from .errors import InputError
-from .cad.manifest import design_report, part_entry, sha256
+from .cad.manifest import describe, design_report, entry, measure, sha256
 from .checks.measure import read_manifest
 from .checks.report import write_summary
 from .checks.run import run_checks
@@ -132,42 +135,148 @@ class BuildResult:
     manifest: dict
     plan: Plan
     report: dict | None = None        # the checks' report, when they ran
+    built: list[str] = field(default_factory=list)     # the parts made afresh (the others came from the cache)
 
 
 def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, int, int], None] | None = None,
-          post_build: bool = True) -> BuildResult:
+          post_build: bool = True, cache_dir: Path | None | bool = True) -> BuildResult:
     """Build every part and file of the design into ``out_root/<design>/``, then (``post_build``)
-    run the stages after the files. ``progress(part_name, done, total)`` follows each part."""
+    run the stages after the files. ``progress(part_name, done, total)`` follows each part.
+    ``cache_dir``: the part cache's folder (True: :func:`hwgen.cache.default_dir`; None or False:
+    build everything afresh and keep nothing)."""
     plan = design_plan(loaded)
     total = part_count(plan)
     out_root = Path(out_root)
     target = out_root / loaded.design.design
+    store = cache.Store(cache.default_dir() if cache_dir is True else (cache_dir or None))
     with output_errors(out_root), new_folder(target) as tmp:
-        manifest = _write_files(loaded, plan, tmp, total, progress)
+        manifest, built = _write_files(loaded, plan, tmp, total, progress, store)
         done = {}
         if post_build:
             for name, stage in AFTER_FILES:
                 done[name] = stage(plan, tmp, manifest)
         write_json(tmp / "manifest.json", manifest)
-    return BuildResult(target, manifest, plan, done.get("checks"))
+    return BuildResult(target, manifest, plan, done.get("checks"), built)
 
 
-def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: int, progress) -> dict:
+# ---------------------------------------------------------------- the parts, through the cache
+
+def _sources_digest() -> str:
+    """The sha256 of the code that makes the solids (hwgen/cad and hwgen/model): a cached part
+    made by other code is not reused, even under the same version number."""
+    root = Path(__file__).resolve().parent
+    h = hashlib.sha256()
+    for f in sorted([*root.glob("cad/*.py"), *root.glob("model/**/*.py")]):
+        h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+def _kernel_version() -> dict:
+    from importlib.metadata import PackageNotFoundError, version
+    out = {}
+    for dist in ("cadquery", "cadquery-ocp"):
+        try:
+            out[dist] = version(dist)
+        except PackageNotFoundError:
+            out[dist] = None
+    return out
+
+
+def _salt() -> dict:
+    """What every cached file also depends on besides its unit's inputs."""
+    return {"hwgen": __version__, "kernel": _kernel_version(), "export": export.settings(), "code": _sources_digest()}
+
+
+def _json(obj):
+    """``obj`` as JSON gives it back: a part's entry is the same whether it was just built or
+    read from the cache."""
+    return json.loads(json.dumps(obj))
+
+
+def _unit_from_cache(store: cache.Store, key: str) -> dict | None:
+    """The cached record of a unit with every file of it present and sound, else None."""
+    rec = store.get_record(key)
+    if rec is None:
+        return None
+    try:
+        blobs = {}
+        for p in rec["parts"]:
+            for kind in ("stl", "step"):
+                data = store.get_bytes(p["files"][kind])
+                if data is None:
+                    return None
+                blobs[p["files"][kind]] = data
+        rec["blobs"] = blobs
+        return rec
+    except (KeyError, TypeError):
+        return None
+
+
+def _unit_to_cache(store: cache.Store, key: str, plan: Plan, parts, folder: Path) -> dict:
+    """Export a freshly built unit into ``folder`` and keep its files, solids (BREP) and entries."""
+    records, blobs = [], {}
+    for k, part in enumerate(parts):
+        stl, step = folder / "stl" / f"{part.name}.stl", folder / "step" / f"{part.name}.step"
+        files = {}
+        with kernel_errors(plan, part, "write the files of"):
+            export.write_stl(part.solid, stl)
+            export.write_step(part.solid, step, part.name)
+            measured = _json(measure(part))
+            same = next((j for j in range(k) if parts[j].solid is part.solid), None)
+            if store.enabled and same is None:
+                files["brep"] = store.put_bytes(export.write_brep(part.solid))
+        for kind, path in (("stl", stl), ("step", step)):
+            data = path.read_bytes()
+            files[kind] = store.put_bytes(data)
+            blobs[files[kind]] = data
+        records.append({**_json(describe(part)), "measured": measured, "files": files, "same_solid_as": same})
+    rec = {"parts": records}
+    store.put_record(key, rec)
+    return {**rec, "blobs": blobs}
+
+
+def _solids(store: cache.Store, rec: dict) -> list | None:
+    """The solids of a cached unit, from their BREP (parts that shared a solid share it again)."""
+    out = []
+    for p in rec["parts"]:
+        if p["same_solid_as"] is not None:
+            out.append(out[p["same_solid_as"]])
+            continue
+        data = store.get_bytes(p["files"].get("brep", ""))
+        if data is None:
+            return None
+        out.append(export.read_brep(data))
+    return out
+
+
+def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: int, progress,
+                 store: cache.Store) -> tuple[dict, list[str]]:
+    """Every part's STL and STEP, assembly.step, backbone_template.dxf and the manifest; a unit
+    whose key is in the cache is copied from it, the others are built (and kept). Returns the
+    manifest and the names of the parts built afresh."""
     (folder / "stl").mkdir()
     (folder / "step").mkdir()
-    parts, entries = [], []
+    entries, built, units_done = [], [], []
     density, _ = printed_density(plan.design.process)
-    for part in build_parts(plan):
-        files = {"stl": folder / "stl" / f"{part.name}.stl", "step": folder / "step" / f"{part.name}.step"}
-        with kernel_errors(plan, part, "write the files of"):
-            export.write_stl(part.solid, files["stl"])
-            export.write_step(part.solid, files["step"], part.name)
-            entries.append(part_entry(part, files, folder, plan.design.process.material, density))
-        parts.append(part)
-        if progress:
-            progress(part.name, len(parts), total)
-    with kernel_errors(plan, None, "write assembly.step"):
-        export.write_assembly(parts, loaded.design.design, folder / "assembly.step")
+    salt = _salt()
+    for family, first, unit in units(plan):
+        key = cache.key("unit", family.name, unit.inputs, salt)
+        rec = _unit_from_cache(store, key)
+        parts = None
+        if rec is None:
+            parts = list(build_unit(plan, family, first, unit))
+            rec = _unit_to_cache(store, key, plan, parts, folder)
+            built += [p.name for p in parts]
+        for p in rec["parts"]:
+            files = {"stl": folder / "stl" / f"{p['name']}.stl", "step": folder / "step" / f"{p['name']}.step"}
+            if parts is None:
+                for kind, path in files.items():
+                    path.write_bytes(rec["blobs"][p["files"][kind]])
+            entries.append(entry(p, p["measured"], files, folder, plan.design.process.material, density))
+            if progress:
+                progress(p["name"], len(entries), total)
+        units_done.append((key, rec, parts))
+    _write_assembly(loaded, plan, folder, store, units_done, salt)
     export.write_backbone_dxf(plan.backbone, plan.stations, folder / "backbone_template.dxf")
     return {
         "design": loaded.design.design,
@@ -181,7 +290,29 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
         },
         "parts": entries,
         "design_report": design_report(plan),
-    }
+    }, built
+
+
+def _write_assembly(loaded, plan: Plan, folder: Path, store: cache.Store, units_done, salt) -> None:
+    """assembly.step: from the cache when every unit is what it was, else put together from the
+    solids (built now, or read back from the cache's BREP; built again if that is gone)."""
+    path = folder / "assembly.step"
+    key = cache.key("assembly", loaded.design.design, [k for k, _, _ in units_done], salt)
+    rec = store.get_record(key)
+    data = store.get_bytes(rec["step"]) if isinstance(rec, dict) and isinstance(rec.get("step"), str) else None
+    if data is not None:
+        path.write_bytes(data)
+        return
+    parts = []
+    for (family, first, unit), (_, rec, fresh) in zip(units(plan), units_done):
+        solids = [p.solid for p in fresh] if fresh is not None else _solids(store, rec)
+        if solids is None:
+            solids = [p.solid for p in build_unit(plan, family, first, unit)]
+        parts += [Part(p["name"], p["role"], s, np.asarray(p["placement"], float), tuple(p["color"]))
+                  for p, s in zip(rec["parts"], solids)]
+    with kernel_errors(plan, None, "write assembly.step"):
+        export.write_assembly(parts, loaded.design.design, path)
+    store.put_record(key, {"step": store.put_bytes(path.read_bytes())})
 
 
 # ---------------------------------------------------------------- on existing outputs
@@ -211,7 +342,8 @@ def stale_reason(folder: Path, loaded) -> str | None:
     return None
 
 
-def check(loaded: params.LoadedDesign, out_root: Path, progress=None) -> tuple[dict, Path, str | None]:
+def check(loaded: params.LoadedDesign, out_root: Path, progress=None,
+          cache_dir: Path | None | bool = True) -> tuple[dict, Path, str | None]:
     """`hwgen check`: build if needed, then measure. Returns (report, folder, why it was rebuilt or None)."""
     folder = Path(out_root) / loaded.design.design
     plan = design_plan(loaded)
@@ -219,10 +351,11 @@ def check(loaded: params.LoadedDesign, out_root: Path, progress=None) -> tuple[d
         why = stale_reason(view, loaded)
         if why is None:
             return run_checks(view, read_manifest(view), plan), folder, None
-    return build(loaded, Path(out_root), progress).report, folder, why
+    return build(loaded, Path(out_root), progress, cache_dir=cache_dir).report, folder, why
 
 
-def render(loaded: params.LoadedDesign, out_root: Path) -> tuple[dict, Path, str | None]:
+def render(loaded: params.LoadedDesign, out_root: Path,
+           cache_dir: Path | None | bool = True) -> tuple[dict, Path, str | None]:
     """`hwgen render`: the bill of materials, pictures and drawing of ``out_root/<design>/``.
 
     Builds first (which draws) when the outputs are missing or stale; otherwise draws into the
@@ -233,7 +366,7 @@ def render(loaded: params.LoadedDesign, out_root: Path) -> tuple[dict, Path, str
     plan = design_plan(loaded)
     why = stale_reason(folder, loaded)
     if why is not None:
-        result = build(loaded, Path(out_root))
+        result = build(loaded, Path(out_root), cache_dir=cache_dir)
         return result.manifest.get("render", {}), folder, why
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
         manifest = read_manifest(tmp)
