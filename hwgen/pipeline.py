@@ -136,6 +136,7 @@ class BuildResult:
     plan: Plan
     report: dict | None = None        # the checks' report, when they ran
     built: list[str] = field(default_factory=list)     # the parts made afresh (the others came from the cache)
+    reused: list[str] = field(default_factory=list)    # the stages after the files taken from the cache
 
 
 def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, int, int], None] | None = None,
@@ -151,12 +152,81 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
     store = cache.Store(cache.default_dir() if cache_dir is True else (cache_dir or None))
     with output_errors(out_root), new_folder(target) as tmp:
         manifest, built = _write_files(loaded, plan, tmp, total, progress, store)
-        done = {}
+        done, reused = {}, []
         if post_build:
             for name, stage in AFTER_FILES:
-                done[name] = stage(plan, tmp, manifest)
+                done[name] = _cached_stage(store, name, stage, plan, tmp, manifest, reused)
         write_json(tmp / "manifest.json", manifest)
-    return BuildResult(target, manifest, plan, done.get("checks"), built)
+    return BuildResult(target, manifest, plan, done.get("checks"), built, reused)
+
+
+# ---------------------------------------------------------------- the stages after the files, through the cache
+
+# what the stages read besides the folder, the manifest and the design
+STAGE_ENV = ("HWGEN_CHECK_SAMPLES", "HWGEN_RENDER_BACKEND", "SOURCE_DATE_EPOCH", "DISPLAY")
+STAGE_RESULT = {"checks": REPORT}       # a stage whose return value is this file of its outputs
+CACHED_STAGES = ("checks", "bom", "pictures")
+
+
+def _files(folder: Path) -> dict[str, str]:
+    return {str(p.relative_to(folder)): sha256(p) for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _package_digest() -> str:
+    root = Path(__file__).resolve().parent
+    h = hashlib.sha256()
+    for f in sorted(root.rglob("*.py")):
+        h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+def _versions() -> dict:
+    from importlib.metadata import PackageNotFoundError, version
+    out = {}
+    for dist in ("numpy", "scipy", "numba", "trimesh", "manifold3d", "matplotlib", "vtk", "pillow", "ezdxf"):
+        try:
+            out[dist] = version(dist)
+        except PackageNotFoundError:
+            out[dist] = None
+    return out
+
+
+def _cached_stage(store: cache.Store, name: str, stage, plan: Plan, folder: Path, manifest: dict,
+                  reused: list[str]):
+    """Run a stage after the files, or take what it wrote last time from the cache: the files it
+    added to the folder and the manifest fields it set, keyed by every file in the folder, the
+    manifest, the design, the environment it reads and hwgen's code. Pictures that could not be
+    drawn are not kept (another try may find a renderer)."""
+    if not store.enabled or name not in CACHED_STAGES:
+        return stage(plan, folder, manifest)
+    before = _files(folder)
+    key = cache.key("stage", name, before, manifest, plan.design, {e: os.environ.get(e) for e in STAGE_ENV},
+                    __version__, _package_digest(), _versions())
+    rec = store.get_record(key)
+    if isinstance(rec, dict):
+        try:
+            blobs = {path: store.get_bytes(sha) for path, sha in rec["files"].items()}
+            if all(b is not None for b in blobs.values()):
+                for path, data in blobs.items():
+                    (folder / path).parent.mkdir(parents=True, exist_ok=True)
+                    (folder / path).write_bytes(data)
+                manifest.update(_json(rec["manifest"]))
+                reused.append(name)
+                result = STAGE_RESULT.get(name)
+                return json.loads((folder / result).read_text()) if result else None
+        except (KeyError, TypeError, AttributeError, ValueError):
+            pass
+    fields = {k: json.dumps(v, sort_keys=True) for k, v in manifest.items()}
+    out = stage(plan, folder, manifest)
+    after = _files(folder)
+    if any(after.get(path) != sha for path, sha in before.items()):
+        return out                              # it changed a file it was given: not kept
+    if name == "pictures" and manifest.get("render", {}).get("status") != "ok":
+        return out
+    files = {path: store.put_bytes((folder / path).read_bytes()) for path in after if path not in before}
+    changed = {k: v for k, v in manifest.items() if fields.get(k) != json.dumps(v, sort_keys=True)}
+    store.put_record(key, {"files": files, "manifest": changed})
+    return out
 
 
 # ---------------------------------------------------------------- the parts, through the cache

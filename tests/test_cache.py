@@ -173,3 +173,60 @@ def test_a_no_op_rebuild_reads_the_cache_without_the_cad_kernel(built, tmp_path)
                        capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     assert r.stdout.split() == ["0", "False", "False"]
+
+
+@pytest.mark.slow
+def test_the_stages_after_the_files_are_reused_with_the_same_bytes(built, tmp_path):
+    """With every part and stage of the prototype in the session's cache, a whole build (checks,
+    bill of materials, pictures) takes them all from it, and writes the session build's bytes;
+    another number of Monte Carlo samples is another key: the checks run again."""
+    from hwgen.pipeline import build, load
+    first = _tree(built("prototype"))
+    loaded = load(PARAMS / "prototype.yaml")
+    again = build(loaded, tmp_path / "again")
+    assert again.built == [] and again.reused == ["checks", "bom", "pictures"]
+    assert _tree(again.folder) == first
+    assert again.report == json.loads((again.folder / "report.json").read_text())
+
+
+def test_a_stage_is_reused_only_for_the_same_files_manifest_design_and_environment(tmp_path, monkeypatch):
+    """The stage memo on a stand-in stage: what it wrote and set comes back without running it;
+    another input file, manifest, design or $HWGEN_CHECK_SAMPLES runs it again."""
+    from hwgen import pipeline
+    from hwgen.pipeline import load
+
+    runs = []
+
+    def stage(plan, folder, manifest):
+        runs.append(1)
+        (folder / "report.json").write_text(json.dumps({"n": len(runs)}))
+        manifest["checks_ok"] = True
+        return {"n": len(runs)}
+
+    class P:
+        design = load(PARAMS / "prototype.yaml").design
+
+    store = cache.Store(tmp_path / "cache")
+
+    def run(files: dict, manifest: dict, plan=P):
+        folder = tmp_path / f"f{len(list(tmp_path.iterdir()))}"
+        folder.mkdir()
+        for name, text in files.items():
+            (folder / name).write_text(text)
+        reused = []
+        out = pipeline._cached_stage(store, "checks", stage, plan, folder, manifest, reused)
+        return out, manifest, (folder / "report.json").read_text(), reused
+
+    first = run({"a.stl": "x"}, {"design": "d"})
+    assert first[3] == [] and len(runs) == 1
+    again = run({"a.stl": "x"}, {"design": "d"})
+    assert again == (first[0], first[1], first[2], ["checks"]) and len(runs) == 1
+    run({"a.stl": "y"}, {"design": "d"})
+    run({"a.stl": "x"}, {"design": "e"})
+
+    class Q:
+        design = P.design.model_copy(update={"design": "other"})
+    run({"a.stl": "x"}, {"design": "d"}, Q)
+    monkeypatch.setenv("HWGEN_CHECK_SAMPLES", "32")
+    run({"a.stl": "x"}, {"design": "d"})
+    assert len(runs) == 5
