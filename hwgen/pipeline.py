@@ -162,10 +162,9 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
 
 # ---------------------------------------------------------------- the stages after the files, through the cache
 
-# what the stages read besides the folder, the manifest and the design
-STAGE_ENV = ("HWGEN_CHECK_SAMPLES", "HWGEN_RENDER_BACKEND", "SOURCE_DATE_EPOCH", "DISPLAY")
+# the stages the cache keeps, and what each reads besides the folder, the manifest and the design
+STAGE_ENV = {"checks": ("HWGEN_CHECK_SAMPLES",), "bom": (), "pictures": ("HWGEN_RENDER_BACKEND", "DISPLAY")}
 STAGE_RESULT = {"checks": REPORT}       # a stage whose return value is this file of its outputs
-CACHED_STAGES = ("checks", "bom", "pictures")
 
 
 def _files(folder: Path) -> dict[str, str]:
@@ -197,10 +196,10 @@ def _cached_stage(store: cache.Store, name: str, stage, plan: Plan, folder: Path
     added to the folder and the manifest fields it set, keyed by every file in the folder, the
     manifest, the design, the environment it reads and hwgen's code. Pictures that could not be
     drawn are not kept (another try may find a renderer)."""
-    if not store.enabled or name not in CACHED_STAGES:
+    if not store.enabled or name not in STAGE_ENV:
         return stage(plan, folder, manifest)
     before = _files(folder)
-    key = cache.key("stage", name, before, manifest, plan.design, {e: os.environ.get(e) for e in STAGE_ENV},
+    key = cache.key("stage", name, before, manifest, plan.design, {e: os.environ.get(e) for e in STAGE_ENV[name]},
                     __version__, _package_digest(), _versions())
     rec = store.get_record(key)
     if isinstance(rec, dict):
