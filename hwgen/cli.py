@@ -141,7 +141,13 @@ def _write_side_file(path: Path, option: str, write) -> None:
 @_command
 def build(params: Path = PARAMS, out_dir: Path = OUT,
           quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
-          cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
+          cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE,
+          parts: str = typer.Option(None, "--parts", show_default=False,
+                                    help="write only the parts whose names match this pattern ('disk_*'); "
+                                         "no assembly, checks or pictures"),
+          jobs: int = typer.Option(1, "--jobs", "-j", min=1, help="worker processes for the parts not in the cache "
+                                                                  "(used when there are enough to pay their start-up)")
+          ) -> None:
     """Build every part (STL, STEP), assembly.step, the backbone DXF and manifest.json."""
     loaded = _load(params)
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
@@ -155,8 +161,13 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
         def progress(name: str, done: int, total: int) -> None:
             bar.update(task, total=total, completed=done, description=f"built {name}")
 
-        result = run_build(loaded, out_dir, progress, cache_dir=_cache(cache_dir, no_cache))
+        result = run_build(loaded, out_dir, progress, cache_dir=_cache(cache_dir, no_cache), parts=parts, jobs=jobs)
     n = len(result.manifest["parts"])
+    if parts is not None:
+        written = result.manifest["parts_written"]["names"]
+        out.print(f"{loaded.design.design}: {len(written)} of {n} parts written to {printable(result.folder)} "
+                  f"({n - len(result.built)} from the part cache); no assembly, checks or pictures")
+        return
     reused = f" ({n - len(result.built)} from the part cache)" if len(result.built) < n else ""
     out.print(f"{loaded.design.design}: {n} parts written to {printable(result.folder)}{reused}")
     failed = [c for c in result.manifest.get("checks", []) if not c.get("passed", True)

@@ -16,9 +16,11 @@ naming ``--out`` (:class:`hwgen.errors.InputError`), like any other.
 from __future__ import annotations
 
 import errno
+import fnmatch
 import hashlib
 import json
 import os
+import tempfile
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -30,7 +32,7 @@ from . import __version__, cache, params
 from .atomic import new_folder, snapshot, write_json
 from .cad import Part, export
 from .cad.families import build_unit, kernel_errors, part_count, units
-from .errors import InputError
+from .errors import DesignError, InputError, clip
 from .cad.manifest import describe, design_report, entry, measure, sha256
 from .checks.measure import read_manifest
 from .checks.report import write_summary
@@ -140,18 +142,35 @@ class BuildResult:
 
 
 def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, int, int], None] | None = None,
-          post_build: bool = True, cache_dir: Path | None | bool = True) -> BuildResult:
+          post_build: bool = True, cache_dir: Path | None | bool = True, parts: str | None = None,
+          jobs: int = 1) -> BuildResult:
     """Build every part and file of the design into ``out_root/<design>/``, then (``post_build``)
     run the stages after the files. ``progress(part_name, done, total)`` follows each part.
     ``cache_dir``: the part cache's folder (True: :func:`hwgen.cache.default_dir`; None or False:
-    build everything afresh and keep nothing)."""
+    build everything afresh and keep nothing).
+
+    ``parts``: a shell pattern (``disk_*``); only the parts whose names match get their STL and
+    STEP written. The manifest still lists every part as a whole build would (the others' entries
+    from the cache, or built for it and not written); the assembly, the DXF and the stages after
+    the files describe the whole robot and are left out, so ``hwgen check`` sees the folder as
+    incomplete and builds it whole first. A pattern that matches no part is bad input.
+
+    ``jobs``: worker processes that build the parts not in the cache (1: all in this process)."""
     plan = design_plan(loaded)
     total = part_count(plan)
     out_root = Path(out_root)
     target = out_root / loaded.design.design
     store = cache.Store(cache.default_dir() if cache_dir is True else (cache_dir or None))
+    select = None if parts is None else (lambda name: fnmatch.fnmatchcase(name, parts))
     with output_errors(out_root), new_folder(target) as tmp:
-        manifest, built = _write_files(loaded, plan, tmp, total, progress, store)
+        manifest, built = _write_files(loaded, plan, tmp, total, progress, store, select, jobs)
+        if select is not None:
+            written = [p["name"] for p in manifest["parts"] if select(p["name"])]
+            if not written:
+                names = ", ".join(p["name"] for p in manifest["parts"])
+                raise InputError(loaded.source, "--parts", f"{clip(parts)!r} matches none of the parts: {clip(names, 200)}")
+            manifest["parts_written"] = {"pattern": parts, "names": written}
+            post_build = False
         done, reused = {}, []
         if post_build:
             for name, stage in AFTER_FILES:
@@ -281,82 +300,155 @@ def _unit_from_cache(store: cache.Store, key: str) -> dict | None:
         return None
 
 
-def _unit_to_cache(store: cache.Store, key: str, plan: Plan, parts, folder: Path) -> dict:
-    """Export a freshly built unit into ``folder`` and keep its files, solids (BREP) and entries."""
-    records, blobs = [], {}
+def _export_unit(plan: Plan, parts, where: Path, brep: bool) -> list[dict]:
+    """Each part of a freshly built unit: its description and measurements, its STL and STEP
+    (written under ``where``) as bytes, and (``brep``) its solid as BREP bytes, once per solid."""
+    out = []
     for k, part in enumerate(parts):
-        stl, step = folder / "stl" / f"{part.name}.stl", folder / "step" / f"{part.name}.step"
-        files = {}
+        stl, step = where / "stl" / f"{part.name}.stl", where / "step" / f"{part.name}.step"
         with kernel_errors(plan, part, "write the files of"):
             export.write_stl(part.solid, stl)
             export.write_step(part.solid, step, part.name)
             measured = _json(measure(part))
             same = next((j for j in range(k) if parts[j].solid is part.solid), None)
-            if store.enabled and same is None:
-                files["brep"] = store.put_bytes(export.write_brep(part.solid))
-        for kind, path in (("stl", stl), ("step", step)):
-            data = path.read_bytes()
-            files[kind] = store.put_bytes(data)
-            blobs[files[kind]] = data
-        records.append({**_json(describe(part)), "measured": measured, "files": files, "same_solid_as": same})
+            solid = export.write_brep(part.solid) if brep and same is None else None
+        out.append({"part": _json(describe(part)), "measured": measured, "same_solid_as": same,
+                    "stl": stl.read_bytes(), "step": step.read_bytes(), "brep": solid})
+    return out
+
+
+def _keep_unit(store: cache.Store, key: str, exported: list[dict]) -> dict:
+    """The record of a freshly exported unit, kept in the cache with its files and solids; the
+    bytes stay with it in memory (``blobs``, ``breps``) for this build."""
+    records, blobs, breps = [], {}, {}
+    for e in exported:
+        files = {kind: store.put_bytes(e[kind]) for kind in ("stl", "step")}
+        blobs.update({files[kind]: e[kind] for kind in ("stl", "step")})
+        if e["brep"] is not None:
+            files["brep"] = store.put_bytes(e["brep"])
+            breps[files["brep"]] = e["brep"]
+        records.append({**e["part"], "measured": e["measured"], "files": files, "same_solid_as": e["same_solid_as"]})
     rec = {"parts": records}
     store.put_record(key, rec)
-    return {**rec, "blobs": blobs}
+    return {**rec, "blobs": blobs, "breps": breps}
 
 
 def _solids(store: cache.Store, rec: dict) -> list | None:
-    """The solids of a cached unit, from their BREP (parts that shared a solid share it again)."""
+    """The solids of a unit not built in this process, from their BREP (parts that shared a
+    solid share it again)."""
     out = []
     for p in rec["parts"]:
         if p["same_solid_as"] is not None:
             out.append(out[p["same_solid_as"]])
             continue
-        data = store.get_bytes(p["files"].get("brep", ""))
+        sha = p["files"].get("brep", "")
+        data = rec.get("breps", {}).get(sha) or store.get_bytes(sha)
         if data is None:
             return None
         out.append(export.read_brep(data))
     return out
 
 
+# ---------------------------------------------------------------- parts built in worker processes
+
+MIN_PARALLEL_UNITS = 4     # fewer units to build than this are built here: a worker's start-up (importing
+#                            CadQuery, ~3 s) would cost more than it saves
+
+
+def _unit_in_worker(plan: Plan, index: int) -> tuple[str, object]:
+    """Build and export the ``index``-th unit of the plan in a worker process. A DesignError or
+    InputError comes back as its fields (they do not pickle as themselves)."""
+    try:
+        family, first, unit = list(units(plan))[index]
+        parts = list(build_unit(plan, family, first, unit))
+        with tempfile.TemporaryDirectory(prefix="hwgen-unit-") as tmp:
+            (Path(tmp) / "stl").mkdir()
+            (Path(tmp) / "step").mkdir()
+            return "ok", _export_unit(plan, parts, Path(tmp), brep=True)
+    except DesignError as e:
+        return "design", (e.path, e.message)
+    except InputError as e:
+        return "input", (e.file, e.path, e.message)
+
+
+def _build_in_workers(plan: Plan, indices: list[int], jobs: int) -> dict[int, list[dict]]:
+    """The exported units ``indices`` of the plan, built by ``jobs`` worker processes. The workers
+    come from a fork server that imported CadQuery and hwgen before any solid existed (a plain
+    fork of a process that has built CadQuery geometry hangs), so each pays no import."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload(["cadquery", "hwgen.pipeline"])
+    out = {}
+    with ProcessPoolExecutor(max_workers=min(jobs, len(indices)), mp_context=ctx) as pool:
+        futures = {i: pool.submit(_unit_in_worker, plan, i) for i in indices}
+        for i, f in futures.items():
+            kind, value = f.result()
+            if kind == "design":
+                raise DesignError(*value)
+            if kind == "input":
+                raise InputError(*value)
+            out[i] = value
+    return out
+
+
 def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: int, progress,
-                 store: cache.Store) -> tuple[dict, list[str]]:
+                 store: cache.Store, select: Callable[[str], bool] | None = None,
+                 jobs: int = 1) -> tuple[dict, list[str]]:
     """Every part's STL and STEP, assembly.step, backbone_template.dxf and the manifest; a unit
     whose key is in the cache is copied from it, the others are built (and kept). Returns the
-    manifest and the names of the parts built afresh."""
+    manifest and the names of the parts built afresh. With ``select``, only the parts it takes
+    get their files, and the assembly and the DXF are not written. With ``jobs`` > 1 and enough
+    units to build, worker processes build them (:func:`_build_in_workers`)."""
     (folder / "stl").mkdir()
     (folder / "step").mkdir()
     entries, built, units_done = [], [], []
     density, _ = printed_density(plan.design.process)
     salt = _salt()
+    todo = []
     for family, first, unit in units(plan):
         key = cache.key("unit", family.name, unit.inputs, salt)
-        rec = _unit_from_cache(store, key)
+        todo.append((family, first, unit, key, _unit_from_cache(store, key)))
+    missing = [i for i, t in enumerate(todo) if t[4] is None]
+    elsewhere = _build_in_workers(plan, missing, jobs) if jobs > 1 and len(missing) >= MIN_PARALLEL_UNITS else {}
+    for i, (family, first, unit, key, rec) in enumerate(todo):
         parts = None
+        in_place = False                 # the files are in the folder already
         if rec is None:
-            parts = list(build_unit(plan, family, first, unit))
-            rec = _unit_to_cache(store, key, plan, parts, folder)
-            built += [p.name for p in parts]
+            if i in elsewhere:
+                exported = elsewhere.pop(i)
+            else:
+                parts = list(build_unit(plan, family, first, unit))
+                exported = _export_unit(plan, parts, folder, brep=store.enabled)
+                in_place = True
+            rec = _keep_unit(store, key, exported)
+            built += [p["name"] for p in rec["parts"]]
         for p in rec["parts"]:
             files = {"stl": folder / "stl" / f"{p['name']}.stl", "step": folder / "step" / f"{p['name']}.step"}
-            if parts is None:
-                for kind, path in files.items():
-                    path.write_bytes(rec["blobs"][p["files"][kind]])
-            entries.append(entry(p, p["measured"], files, folder, plan.design.process.material, density))
+            hashes = {kind: p["files"][kind] for kind in files}
+            for kind, path in files.items():
+                if select is not None and not select(p["name"]):
+                    path.unlink(missing_ok=True)        # built for the manifest, not asked for
+                elif not in_place:
+                    path.write_bytes(rec["blobs"][hashes[kind]])
+            entries.append(entry(p, p["measured"], files, folder, plan.design.process.material, density, hashes))
             if progress:
                 progress(p["name"], len(entries), total)
         units_done.append((key, rec, parts))
-    _write_assembly(loaded, plan, folder, store, units_done, salt)
-    export.write_backbone_dxf(plan.backbone, plan.stations, folder / "backbone_template.dxf")
+    files = {}
+    if select is None:
+        _write_assembly(loaded, plan, folder, store, units_done, salt)
+        export.write_backbone_dxf(plan.backbone, plan.stations, folder / "backbone_template.dxf")
+        files = {"assembly": {"path": "assembly.step", "sha256": sha256(folder / "assembly.step")},
+                 "backbone_template": {"path": "backbone_template.dxf",
+                                       "sha256": sha256(folder / "backbone_template.dxf")}}
     return {
         "design": loaded.design.design,
         "hwgen_version": __version__,
         "params_file": loaded.source,
         "params_sha256": loaded.sha256,
-        "files": {
-            "assembly": {"path": "assembly.step", "sha256": sha256(folder / "assembly.step")},
-            "backbone_template": {"path": "backbone_template.dxf",
-                                  "sha256": sha256(folder / "backbone_template.dxf")},
-        },
+        "files": files,
         "parts": entries,
         "design_report": design_report(plan),
     }, built

@@ -230,3 +230,41 @@ def test_a_stage_is_reused_only_for_the_same_files_manifest_design_and_environme
     monkeypatch.setenv("HWGEN_CHECK_SAMPLES", "32")
     run({"a.stl": "x"}, {"design": "d"})
     assert len(runs) == 5
+
+
+@pytest.mark.slow
+def test_parts_writes_only_the_parts_it_names_and_the_whole_manifest(built, tmp_path):
+    """--parts 'disk_*' (the session's cache holds the prototype): the disks' files and nothing
+    else, a manifest with every part as the whole build has it; a pattern that names no part is
+    bad input naming --parts."""
+    from hwgen.pipeline import build, load, stale_reason
+    from .test_hostile import run_cli
+    whole = json.loads((built("prototype") / "manifest.json").read_text())
+    loaded = load(PARAMS / "prototype.yaml")
+    res = build(loaded, tmp_path / "out", parts="disk_*")
+    disks = sorted(p["name"] for p in whole["parts"] if p["name"].startswith("disk_"))
+    assert sorted(_tree(res.folder)) == ["manifest.json"] + [f"step/{n}.step" for n in disks] + \
+        [f"stl/{n}.stl" for n in disks]
+    assert res.manifest["parts"] == whole["parts"] and res.manifest["parts_written"]["names"] == disks
+    for n in disks:
+        assert _tree(res.folder)[f"stl/{n}.stl"] == _tree(built("prototype"))[f"stl/{n}.stl"]
+    assert "missing" in stale_reason(res.folder, loaded)          # hwgen check builds it whole first
+    code, stdout, stderr, escaped = run_cli("build", str(PARAMS / "prototype.yaml"), "--out", str(tmp_path / "o2"),
+                                            "-q", "--parts", "tensioner_w*")
+    n = sum(p["name"].startswith(("tensioner_worm", "tensioner_wheel")) for p in whole["parts"])
+    assert escaped is None and code == 0 and f"{n} of {len(whole['parts'])} parts written" in stdout, stdout
+    code, _, stderr, escaped = run_cli("build", str(PARAMS / "prototype.yaml"), "--out", str(tmp_path / "o3"),
+                                       "-q", "--parts", "gear_*")
+    assert escaped is None and code == 2 and "--parts: 'gear_*' matches none of the parts: disk_00" in stderr
+    assert not (tmp_path / "o3" / "prototype").exists()
+
+
+@pytest.mark.slow
+def test_parts_built_in_worker_processes_have_the_bytes_of_a_serial_build(fresh, tmp_path):
+    """--jobs 2 without a cache: every unit is built in a forkserver worker, the assembly is put
+    together from their BREP; every file has the bytes of the serial build."""
+    from hwgen.pipeline import build
+    loaded, _, first = fresh
+    res = build(loaded, tmp_path / "out", post_build=False, cache_dir=None, jobs=2)
+    assert sorted(res.built) == sorted(p["name"] for p in res.manifest["parts"])
+    assert _tree(res.folder) == first

@@ -69,9 +69,9 @@ def part_entry(part: Part, files: dict[str, Path], root: Path, material: str, de
 
 
 def entry(described: dict, measured: dict, files: dict[str, Path], root: Path, material: str,
-          density_g_cm3: float) -> dict:
+          density_g_cm3: float, hashes: dict[str, str] | None = None) -> dict:
     """A manifest entry from :func:`describe` and :func:`measure` of a part (fresh, or as the part
-    cache kept them) and its files."""
+    cache kept them) and its files (their sha256 from ``hashes`` when given, else read)."""
     if described["density_g_cm3"] is not None:
         material, density_g_cm3 = described["material"], described["density_g_cm3"]
     volume = measured["volume_mm3"]
@@ -79,7 +79,8 @@ def entry(described: dict, measured: dict, files: dict[str, Path], root: Path, m
     out = {
         "name": described["name"],
         "role": described["role"],
-        "files": {kind: {"path": str(p.relative_to(root)), "sha256": sha256(p)} for kind, p in files.items()},
+        "files": {kind: {"path": str(p.relative_to(root)), "sha256": hashes[kind] if hashes else sha256(p)}
+                  for kind, p in files.items()},
         "volume_mm3": volume,
         "material": material,
         "density_g_cm3": density_g_cm3,
