@@ -34,6 +34,7 @@ from .cad import Part, export
 from .cad.families import build_unit, kernel_errors, part_count, units
 from .errors import DesignError, InputError, clip
 from .cad.manifest import describe, design_report, entry, measure, sha256
+from .cad.memo import kept_in
 from .checks.measure import read_manifest
 from .checks.report import write_summary
 from .checks.run import run_checks
@@ -355,12 +356,13 @@ MIN_PARALLEL_UNITS = 4     # fewer units to build than this are built here: a wo
 #                            CadQuery, ~3 s) would cost more than it saves
 
 
-def _unit_in_worker(plan: Plan, index: int) -> tuple[str, object]:
+def _unit_in_worker(plan: Plan, index: int, store: cache.Store, salt: dict) -> tuple[str, object]:
     """Build and export the ``index``-th unit of the plan in a worker process. A DesignError or
     InputError comes back as its fields (they do not pickle as themselves)."""
     try:
         family, first, unit = list(units(plan))[index]
-        parts = list(build_unit(plan, family, first, unit))
+        with kept_in(store, salt):
+            parts = list(build_unit(plan, family, first, unit))
         with tempfile.TemporaryDirectory(prefix="hwgen-unit-") as tmp:
             (Path(tmp) / "stl").mkdir()
             (Path(tmp) / "step").mkdir()
@@ -371,7 +373,7 @@ def _unit_in_worker(plan: Plan, index: int) -> tuple[str, object]:
         return "input", (e.file, e.path, e.message)
 
 
-def _build_in_workers(plan: Plan, indices: list[int], jobs: int) -> dict[int, list[dict]]:
+def _build_in_workers(plan: Plan, indices: list[int], jobs: int, store: cache.Store, salt: dict) -> dict[int, list[dict]]:
     """The exported units ``indices`` of the plan, built by ``jobs`` worker processes. The workers
     come from a fork server that imported CadQuery and hwgen before any solid existed (a plain
     fork of a process that has built CadQuery geometry hangs), so each pays no import."""
@@ -382,7 +384,7 @@ def _build_in_workers(plan: Plan, indices: list[int], jobs: int) -> dict[int, li
     ctx.set_forkserver_preload(["cadquery", "hwgen.pipeline"])
     out = {}
     with ProcessPoolExecutor(max_workers=min(jobs, len(indices)), mp_context=ctx) as pool:
-        futures = {i: pool.submit(_unit_in_worker, plan, i) for i in indices}
+        futures = {i: pool.submit(_unit_in_worker, plan, i, store, salt) for i in indices}
         for i, f in futures.items():
             kind, value = f.result()
             if kind == "design":
@@ -411,7 +413,33 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
         key = cache.key("unit", family.name, unit.inputs, salt)
         todo.append((family, first, unit, key, _unit_from_cache(store, key)))
     missing = [i for i, t in enumerate(todo) if t[4] is None]
-    elsewhere = _build_in_workers(plan, missing, jobs) if jobs > 1 and len(missing) >= MIN_PARALLEL_UNITS else {}
+    elsewhere = _build_in_workers(plan, missing, jobs, store, salt) \
+        if jobs > 1 and len(missing) >= MIN_PARALLEL_UNITS else {}
+    with kept_in(store, salt):
+        _place_units(plan, folder, todo, elsewhere, store, select, entries, built, units_done, density, total,
+                     progress)
+    files = {}
+    if select is None:
+        _write_assembly(loaded, plan, folder, store, units_done, salt)
+        export.write_backbone_dxf(plan.backbone, plan.stations, folder / "backbone_template.dxf")
+        files = {"assembly": {"path": "assembly.step", "sha256": sha256(folder / "assembly.step")},
+                 "backbone_template": {"path": "backbone_template.dxf",
+                                       "sha256": sha256(folder / "backbone_template.dxf")}}
+    return {
+        "design": loaded.design.design,
+        "hwgen_version": __version__,
+        "params_file": loaded.source,
+        "params_sha256": loaded.sha256,
+        "files": files,
+        "parts": entries,
+        "design_report": design_report(plan),
+    }, built
+
+
+def _place_units(plan: Plan, folder: Path, todo, elsewhere: dict, store: cache.Store, select, entries: list,
+                 built: list, units_done: list, density: float, total: int, progress) -> None:
+    """Each unit's files into the folder and its parts' entries, in build order: from the cache,
+    from a worker, or built here."""
     for i, (family, first, unit, key, rec) in enumerate(todo):
         parts = None
         in_place = False                 # the files are in the folder already
@@ -436,22 +464,6 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
             if progress:
                 progress(p["name"], len(entries), total)
         units_done.append((key, rec, parts))
-    files = {}
-    if select is None:
-        _write_assembly(loaded, plan, folder, store, units_done, salt)
-        export.write_backbone_dxf(plan.backbone, plan.stations, folder / "backbone_template.dxf")
-        files = {"assembly": {"path": "assembly.step", "sha256": sha256(folder / "assembly.step")},
-                 "backbone_template": {"path": "backbone_template.dxf",
-                                       "sha256": sha256(folder / "backbone_template.dxf")}}
-    return {
-        "design": loaded.design.design,
-        "hwgen_version": __version__,
-        "params_file": loaded.source,
-        "params_sha256": loaded.sha256,
-        "files": files,
-        "parts": entries,
-        "design_report": design_report(plan),
-    }, built
 
 
 def _write_assembly(loaded, plan: Plan, folder: Path, store: cache.Store, units_done, salt) -> None:
