@@ -1,12 +1,13 @@
 # Two commands on a fresh machine with only python3 and make:
 #   make build   set up .venv, install hwgen, build out/prototype/ from params/prototype.yaml
 #   make test    same set-up, then the whole test suite
+#   make test-fast  the tests that build no part with the CAD kernel (under a minute)
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: build test bench stability docs-images clean venv
+.PHONY: build test test-fast bench stability docs-images clean venv
 
 venv: $(STAMP)
 
@@ -21,6 +22,9 @@ build: $(STAMP)
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q
+
+test-fast: $(STAMP)
+	$(BIN)/python -m pytest -q -m "not slow"
 
 bench: $(STAMP)
 	$(BIN)/python -m hwgen.bench

@@ -1,9 +1,14 @@
-"""`make bench`: where the time goes, printed as a table. Nothing here is asserted.
+"""`make bench`: what the commands cost, printed as one table. Nothing here is asserted.
 
-Run: python -m hwgen.bench [PARAMS]
+Run: python -m hwgen.bench [PARAMS]          each command as a whole process: wall time, CPU, peak memory
+     python -m hwgen.bench --steps [PARAMS]  where one process's build goes, step by step
 """
 from __future__ import annotations
 
+import os
+import re
+import shutil
+import subprocess
 import sys
 import tempfile
 import time
@@ -60,7 +65,76 @@ def _monte_carlo(report: dict) -> None:
                                                 f"µs per chain; load {os.getloadavg()[0]:.1f}")
 
 
+# ---------------------------------------------------------------- whole processes
+
+EDIT_FROM, EDIT_TO = "function: {kind: cosine, a: 25, k: 3, axis: z}", "function: {kind: cosine, a: 24.5, k: 3, axis: z}"
+
+
+def _process(label: str, args: list[str], env: dict, note: str = "") -> tuple[str, float, float, float, str, str]:
+    """Run ``hwgen ARGS`` as its own process: (label, wall s, CPU s, peak MB, note, stdout). The peak
+    is the largest resident set of the process and the children it waited for (the renderer)."""
+    t = time.perf_counter()
+    p = subprocess.Popen([sys.executable, "-m", "hwgen.cli", *args], env=env, stdout=subprocess.PIPE,
+                         stderr=subprocess.DEVNULL, text=True)
+    stdout = p.stdout.read()
+    p.stdout.close()
+    _, status, usage = os.wait4(p.pid, 0)
+    wall = time.perf_counter() - t
+    code = os.waitstatus_to_exitcode(status)
+    note = f"{note}; exit {code}" if code else note
+    return label, wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024, note, stdout
+
+
+def _from_cache(stdout: str) -> str:
+    m = re.search(r"(\d+) parts written.*?(?:\((\d+) from the part cache\))?$", stdout.strip().splitlines()[-1]
+                  if stdout.strip() else "")
+    if not m:
+        return ""
+    return f"{int(m.group(1)) - int(m.group(2) or 0)} of {m.group(1)} parts built"
+
+
+def processes(params_path: Path) -> None:
+    """Cold build (empty part cache), the same build again, one tendon edited, hwgen check on the
+    built outputs, hwgen routing: each a fresh process with the shipped Monte Carlo sample count."""
+    env = {k: v for k, v in os.environ.items() if k not in ("HWGEN_CHECK_SAMPLES", "HWGEN_CACHE_DIR")}
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        out, store = tmp / "out", tmp / "cache"
+        params = tmp / params_path.name
+        shutil.copy(params_path, params)
+        build = ["build", str(params), "--out", str(out), "--cache-dir", str(store), "-q"]
+        for label, note in (("cold build", "empty part cache"), ("no-op rebuild", "nothing changed")):
+            r = _process(label, build, env, note)
+            rows.append((*r[:4], "; ".join(x for x in (r[4], _from_cache(r[5])) if x)))
+        rows.append(_process("cold build, --no-cache", [*build, "--no-cache"], env,
+                             "every part and stage afresh")[:5])
+        rows.append(_process("cold build, --no-cache --jobs 2", [*build, "--no-cache", "--jobs", "2"], env,
+                             "parts in 2 forkserver workers")[:5])
+        text = params.read_text()
+        if EDIT_FROM in text:
+            params.write_text(text.replace(EDIT_FROM, EDIT_TO))
+            r = _process("one-tendon edit", build, env, "C2: a 25 → 24.5 mm")
+            rows.append((*r[:4], "; ".join(x for x in (r[4], _from_cache(r[5])) if x)))
+        rows.append(_process("hwgen check", ["check", str(params), "--out", str(out), "-q"], env,
+                             "on the built outputs")[:5])
+        rows.append(_process("hwgen routing", ["routing", str(params)], env)[:5])
+    t = Table(title=f"hwgen benchmark: {params_path} (whole processes, {os.cpu_count()} cores, "
+                    f"load {os.getloadavg()[0]:.1f})")
+    for col, right in (("command", False), ("wall s", True), ("CPU s", True), ("peak MB", True), ("note", False)):
+        t.add_column(col, justify="right" if right else "left")
+    for label, wall, cpu, peak, note in rows:
+        t.add_row(label, f"{wall:.2f}", f"{cpu:.2f}", f"{peak:.0f}", note)
+    Console().print(t)
+
+
+# ---------------------------------------------------------------- steps of one build
+
 def main(argv: list[str]) -> None:
+    if "--steps" not in argv:
+        processes(Path(argv[0]) if argv else Path("params/prototype.yaml"))
+        return
+    argv = [a for a in argv if a != "--steps"]
     params_path = Path(argv[0]) if argv else Path("params/prototype.yaml")
     with timed("import numpy, pydantic, yaml (schema, model)"):
         from hwgen import pipeline
@@ -94,10 +168,10 @@ def main(argv: list[str]) -> None:
             for p in disks:
                 write_step(p.solid, Path(tmp) / f"{p.name}.step")
         build = pipeline.build
-        with timed("hwgen build, parts and files only", "no post-build steps"):
-            build(loaded, Path(tmp) / "a", post_build=False)
-        with timed("hwgen build, everything", "with checks, bill of materials and pictures"):
-            res = build(loaded, Path(tmp) / "b")
+        with timed("hwgen build, parts and files only", "no post-build steps, no part cache"):
+            build(loaded, Path(tmp) / "a", post_build=False, cache_dir=None)
+        with timed("hwgen build, everything", "with checks, bill of materials and pictures, no part cache"):
+            res = build(loaded, Path(tmp) / "b", cache_dir=None)
         from hwgen.checks.gear_mesh import gear_checks
         from hwgen.checks.measure import read_manifest
         with timed("gear checks from the meshes", "axes, counts and sweeps per channel; backlash, loaded "

@@ -57,6 +57,14 @@ def _mm(v: float) -> str:
 
 PARAMS = typer.Argument(..., help="design parameter YAML", show_default=False)
 OUT = typer.Option(Path("out"), "--out", help="output root; the design goes to OUT/<design>/")
+CACHE_DIR = typer.Option(None, "--cache-dir", show_default=False,
+                         help="the part cache (default $HWGEN_CACHE_DIR, else $XDG_CACHE_HOME/hwgen or ~/.cache/hwgen)")
+NO_CACHE = typer.Option(False, "--no-cache", help="build every part afresh; read and keep nothing in the part cache")
+
+
+def _cache(cache_dir: Path | None, no_cache: bool):
+    """The pipeline's ``cache_dir``: False for none, True for the default folder, else the folder."""
+    return False if no_cache else (cache_dir if cache_dir is not None else True)
 
 
 def _file_label(file) -> str:
@@ -132,7 +140,14 @@ def _write_side_file(path: Path, option: str, write) -> None:
 
 @_command
 def build(params: Path = PARAMS, out_dir: Path = OUT,
-          quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar")) -> None:
+          quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+          cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE,
+          parts: str = typer.Option(None, "--parts", show_default=False,
+                                    help="write only the parts whose names match this pattern ('disk_*'); "
+                                         "no assembly, checks or pictures"),
+          jobs: int = typer.Option(1, "--jobs", "-j", min=1, help="worker processes for the parts not in the cache "
+                                                                  "(used when there are enough to pay their start-up)")
+          ) -> None:
     """Build every part (STL, STEP), assembly.step, the backbone DXF and manifest.json."""
     loaded = _load(params)
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
@@ -146,9 +161,15 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
         def progress(name: str, done: int, total: int) -> None:
             bar.update(task, total=total, completed=done, description=f"built {name}")
 
-        result = run_build(loaded, out_dir, progress)
+        result = run_build(loaded, out_dir, progress, cache_dir=_cache(cache_dir, no_cache), parts=parts, jobs=jobs)
     n = len(result.manifest["parts"])
-    out.print(f"{loaded.design.design}: {n} parts written to {printable(result.folder)}")
+    if parts is not None:
+        written = result.manifest["parts_written"]["names"]
+        out.print(f"{loaded.design.design}: {len(written)} of {n} parts written to {printable(result.folder)} "
+                  f"({n - len(result.built)} from the part cache); no assembly, checks or pictures")
+        return
+    reused = f" ({n - len(result.built)} from the part cache)" if len(result.built) < n else ""
+    out.print(f"{loaded.design.design}: {n} parts written to {printable(result.folder)}{reused}")
     failed = [c for c in result.manifest.get("checks", []) if not c.get("passed", True)
               and c.get("severity") == "error"]
     for f in result.plan.findings:
@@ -216,7 +237,8 @@ def check(params: Path = PARAMS, out_dir: Path = OUT,
           report: Path = typer.Option(None, "--report", help="also write the JSON report here"),
           junit: Path = typer.Option(None, "--junit", help="also write JUnit XML here (one test case per check)"),
           verbose: bool = typer.Option(False, "--verbose", "-v", help="list every check, not only findings"),
-          quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar")) -> None:
+          quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+          cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
     """Measure the built files: eyelets, tendon lengths over the bending sweep, clearances, parts.
 
     Builds first only when the outputs are missing or made from other parameters; part files edited since the build are measured as they are. Exit 1 when a check fails.
@@ -226,7 +248,8 @@ def check(params: Path = PARAMS, out_dir: Path = OUT,
     from .checks.report import print_report, write_junit
     from .pipeline import check as check_design
 
-    rep, folder = _on_outputs(f"checking {loaded.design.design}", quiet, lambda: check_design(loaded, out_dir))
+    rep, folder = _on_outputs(f"checking {loaded.design.design}", quiet,
+                              lambda: check_design(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache)))
     print_report(rep, out, verbose=verbose)
     if report is not None:
         _write_side_file(report, "--report", lambda: write_json(report, rep))
@@ -238,7 +261,8 @@ def check(params: Path = PARAMS, out_dir: Path = OUT,
 
 @_command
 def render(params: Path = PARAMS, out_dir: Path = OUT,
-           quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner")) -> None:
+           quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner"),
+           cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
     """Pictures (exploded, assembled, bent PNG), the exploded SVG drawing and the bill of materials.
 
     Builds first only when the outputs are missing or made from other parameters. Needs no display or GPU; exit 1 when no offscreen OpenGL backend works (the message says what to install).
@@ -246,7 +270,8 @@ def render(params: Path = PARAMS, out_dir: Path = OUT,
     loaded = _load(params)
     from .pipeline import render as render_design
 
-    entry, folder = _on_outputs(f"drawing {loaded.design.design}", quiet, lambda: render_design(loaded, out_dir))
+    entry, folder = _on_outputs(f"drawing {loaded.design.design}", quiet,
+                                lambda: render_design(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache)))
     out.print(f"{loaded.design.design}: bom.csv, bom.md written to {printable(folder)}")
     if entry.get("status") != "ok":
         say("warning:", "yellow", entry.get("message", "pictures not drawn"))

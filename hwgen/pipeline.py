@@ -16,19 +16,25 @@ naming ``--out`` (:class:`hwgen.errors.InputError`), like any other.
 from __future__ import annotations
 
 import errno
+import fnmatch
+import hashlib
 import json
 import os
+import tempfile
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
-from . import __version__, params
+import numpy as np
+
+from . import __version__, cache, params
 from .atomic import new_folder, snapshot, write_json
-from .cad import export
-from .cad.families import build_parts, kernel_errors, part_count
-from .errors import InputError
-from .cad.manifest import design_report, part_entry, sha256
+from .cad import Part, export
+from .cad.families import build_unit, kernel_errors, part_count, units
+from .errors import DesignError, InputError, clip
+from .cad.manifest import describe, design_report, entry, measure, sha256
+from .cad.memo import kept_in
 from .checks.measure import read_manifest
 from .checks.report import write_summary
 from .checks.run import run_checks
@@ -132,56 +138,354 @@ class BuildResult:
     manifest: dict
     plan: Plan
     report: dict | None = None        # the checks' report, when they ran
+    built: list[str] = field(default_factory=list)     # the parts made afresh (the others came from the cache)
+    reused: list[str] = field(default_factory=list)    # the stages after the files taken from the cache
 
 
 def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, int, int], None] | None = None,
-          post_build: bool = True) -> BuildResult:
+          post_build: bool = True, cache_dir: Path | None | bool = True, parts: str | None = None,
+          jobs: int = 1) -> BuildResult:
     """Build every part and file of the design into ``out_root/<design>/``, then (``post_build``)
-    run the stages after the files. ``progress(part_name, done, total)`` follows each part."""
+    run the stages after the files. ``progress(part_name, done, total)`` follows each part.
+    ``cache_dir``: the part cache's folder (True: :func:`hwgen.cache.default_dir`; None or False:
+    build everything afresh and keep nothing).
+
+    ``parts``: a shell pattern (``disk_*``); only the parts whose names match get their STL and
+    STEP written. The manifest still lists every part as a whole build would (the others' entries
+    from the cache, or built for it and not written); the assembly, the DXF and the stages after
+    the files describe the whole robot and are left out, so ``hwgen check`` sees the folder as
+    incomplete and builds it whole first. A pattern that matches no part is bad input.
+
+    ``jobs``: worker processes that build the parts not in the cache (1: all in this process)."""
     plan = design_plan(loaded)
     total = part_count(plan)
     out_root = Path(out_root)
     target = out_root / loaded.design.design
+    store = cache.Store(cache.default_dir() if cache_dir is True else (cache_dir or None))
+    select = None if parts is None else (lambda name: fnmatch.fnmatchcase(name, parts))
     with output_errors(out_root), new_folder(target) as tmp:
-        manifest = _write_files(loaded, plan, tmp, total, progress)
-        done = {}
+        manifest, built = _write_files(loaded, plan, tmp, total, progress, store, select, jobs)
+        if select is not None:
+            written = [p["name"] for p in manifest["parts"] if select(p["name"])]
+            if not written:
+                names = ", ".join(p["name"] for p in manifest["parts"])
+                raise InputError(loaded.source, "--parts", f"{clip(parts)!r} matches none of the parts: {clip(names, 200)}")
+            manifest["parts_written"] = {"pattern": parts, "names": written}
+            post_build = False
+        done, reused = {}, []
         if post_build:
             for name, stage in AFTER_FILES:
-                done[name] = stage(plan, tmp, manifest)
+                done[name] = _cached_stage(store, name, stage, plan, tmp, manifest, reused)
         write_json(tmp / "manifest.json", manifest)
-    return BuildResult(target, manifest, plan, done.get("checks"))
+    return BuildResult(target, manifest, plan, done.get("checks"), built, reused)
 
 
-def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: int, progress) -> dict:
+# ---------------------------------------------------------------- the stages after the files, through the cache
+
+# the stages the cache keeps, and what each reads besides the folder, the manifest and the design
+STAGE_ENV = {"checks": ("HWGEN_CHECK_SAMPLES",), "bom": (), "pictures": ("HWGEN_RENDER_BACKEND", "DISPLAY")}
+STAGE_RESULT = {"checks": REPORT}       # a stage whose return value is this file of its outputs
+
+
+def _files(folder: Path) -> dict[str, str]:
+    return {str(p.relative_to(folder)): sha256(p) for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _package_digest() -> str:
+    root = Path(__file__).resolve().parent
+    h = hashlib.sha256()
+    for f in sorted(root.rglob("*.py")):
+        h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+def _versions() -> dict:
+    from importlib.metadata import PackageNotFoundError, version
+    out = {}
+    for dist in ("numpy", "scipy", "numba", "trimesh", "manifold3d", "matplotlib", "vtk", "pillow", "ezdxf"):
+        try:
+            out[dist] = version(dist)
+        except PackageNotFoundError:
+            out[dist] = None
+    return out
+
+
+def _cached_stage(store: cache.Store, name: str, stage, plan: Plan, folder: Path, manifest: dict,
+                  reused: list[str]):
+    """Run a stage after the files, or take what it wrote last time from the cache: the files it
+    added to the folder and the manifest fields it set, keyed by every file in the folder, the
+    manifest, the design, the environment it reads and hwgen's code. Pictures that could not be
+    drawn are not kept (another try may find a renderer)."""
+    if not store.enabled or name not in STAGE_ENV:
+        return stage(plan, folder, manifest)
+    before = _files(folder)
+    key = cache.key("stage", name, before, manifest, plan.design, {e: os.environ.get(e) for e in STAGE_ENV[name]},
+                    __version__, _package_digest(), _versions())
+    rec = store.get_record(key)
+    if isinstance(rec, dict):
+        try:
+            blobs = {path: store.get_bytes(sha) for path, sha in rec["files"].items()}
+            if all(b is not None for b in blobs.values()):
+                for path, data in blobs.items():
+                    (folder / path).parent.mkdir(parents=True, exist_ok=True)
+                    (folder / path).write_bytes(data)
+                manifest.update(_json(rec["manifest"]))
+                reused.append(name)
+                result = STAGE_RESULT.get(name)
+                return json.loads((folder / result).read_text()) if result else None
+        except (KeyError, TypeError, AttributeError, ValueError):
+            pass
+    fields = {k: json.dumps(v, sort_keys=True) for k, v in manifest.items()}
+    out = stage(plan, folder, manifest)
+    after = _files(folder)
+    if any(after.get(path) != sha for path, sha in before.items()):
+        return out                              # it changed a file it was given: not kept
+    if name == "pictures" and manifest.get("render", {}).get("status") != "ok":
+        return out
+    files = {path: store.put_bytes((folder / path).read_bytes()) for path in after if path not in before}
+    changed = {k: v for k, v in manifest.items() if fields.get(k) != json.dumps(v, sort_keys=True)}
+    store.put_record(key, {"files": files, "manifest": changed})
+    return out
+
+
+# ---------------------------------------------------------------- the parts, through the cache
+
+def _sources_digest() -> str:
+    """The sha256 of the code that makes the solids (hwgen/cad and hwgen/model): a cached part
+    made by other code is not reused, even under the same version number."""
+    root = Path(__file__).resolve().parent
+    h = hashlib.sha256()
+    for f in sorted([*root.glob("cad/*.py"), *root.glob("model/**/*.py")]):
+        h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+def _kernel_version() -> dict:
+    from importlib.metadata import PackageNotFoundError, version
+    out = {}
+    for dist in ("cadquery", "cadquery-ocp"):
+        try:
+            out[dist] = version(dist)
+        except PackageNotFoundError:
+            out[dist] = None
+    return out
+
+
+def _salt() -> dict:
+    """What every cached file also depends on besides its unit's inputs."""
+    return {"hwgen": __version__, "kernel": _kernel_version(), "export": export.settings(), "code": _sources_digest()}
+
+
+def _json(obj):
+    """``obj`` as JSON gives it back: a part's entry is the same whether it was just built or
+    read from the cache."""
+    return json.loads(json.dumps(obj))
+
+
+def _unit_from_cache(store: cache.Store, key: str) -> dict | None:
+    """The cached record of a unit with every file of it present and sound, else None."""
+    rec = store.get_record(key)
+    if rec is None:
+        return None
+    try:
+        blobs = {}
+        for p in rec["parts"]:
+            for kind in ("stl", "step"):
+                data = store.get_bytes(p["files"][kind])
+                if data is None:
+                    return None
+                blobs[p["files"][kind]] = data
+        rec["blobs"] = blobs
+        return rec
+    except (KeyError, TypeError):
+        return None
+
+
+def _export_unit(plan: Plan, parts, where: Path, brep: bool) -> list[dict]:
+    """Each part of a freshly built unit: its description and measurements, its STL and STEP
+    (written under ``where``) as bytes, and (``brep``) its solid as BREP bytes, once per solid."""
+    out = []
+    for k, part in enumerate(parts):
+        stl, step = where / "stl" / f"{part.name}.stl", where / "step" / f"{part.name}.step"
+        with kernel_errors(plan, part, "write the files of"):
+            export.write_stl(part.solid, stl)
+            export.write_step(part.solid, step, part.name)
+            measured = _json(measure(part))
+            same = next((j for j in range(k) if parts[j].solid is part.solid), None)
+            solid = export.write_brep(part.solid) if brep and same is None else None
+        out.append({"part": _json(describe(part)), "measured": measured, "same_solid_as": same,
+                    "stl": stl.read_bytes(), "step": step.read_bytes(), "brep": solid})
+    return out
+
+
+def _keep_unit(store: cache.Store, key: str, exported: list[dict]) -> dict:
+    """The record of a freshly exported unit, kept in the cache with its files and solids; the
+    bytes stay with it in memory (``blobs``, ``breps``) for this build."""
+    records, blobs, breps = [], {}, {}
+    for e in exported:
+        files = {kind: store.put_bytes(e[kind]) for kind in ("stl", "step")}
+        blobs.update({files[kind]: e[kind] for kind in ("stl", "step")})
+        if e["brep"] is not None:
+            files["brep"] = store.put_bytes(e["brep"])
+            breps[files["brep"]] = e["brep"]
+        records.append({**e["part"], "measured": e["measured"], "files": files, "same_solid_as": e["same_solid_as"]})
+    rec = {"parts": records}
+    store.put_record(key, rec)
+    return {**rec, "blobs": blobs, "breps": breps}
+
+
+def _solids(store: cache.Store, rec: dict) -> list | None:
+    """The solids of a unit not built in this process, from their BREP (parts that shared a
+    solid share it again)."""
+    out = []
+    for p in rec["parts"]:
+        if p["same_solid_as"] is not None:
+            out.append(out[p["same_solid_as"]])
+            continue
+        sha = p["files"].get("brep", "")
+        data = rec.get("breps", {}).get(sha) or store.get_bytes(sha)
+        if data is None:
+            return None
+        out.append(export.read_brep(data))
+    return out
+
+
+# ---------------------------------------------------------------- parts built in worker processes
+
+MIN_PARALLEL_UNITS = 4     # fewer units to build than this are built here: a worker's start-up (importing
+#                            CadQuery, ~3 s) would cost more than it saves
+
+
+def _unit_in_worker(plan: Plan, index: int, store: cache.Store, salt: dict) -> tuple[str, object]:
+    """Build and export the ``index``-th unit of the plan in a worker process. A DesignError or
+    InputError comes back as its fields (they do not pickle as themselves)."""
+    try:
+        family, first, unit = list(units(plan))[index]
+        with kept_in(store, salt):
+            parts = list(build_unit(plan, family, first, unit))
+        with tempfile.TemporaryDirectory(prefix="hwgen-unit-") as tmp:
+            (Path(tmp) / "stl").mkdir()
+            (Path(tmp) / "step").mkdir()
+            return "ok", _export_unit(plan, parts, Path(tmp), brep=True)
+    except DesignError as e:
+        return "design", (e.path, e.message)
+    except InputError as e:
+        return "input", (e.file, e.path, e.message)
+
+
+def _build_in_workers(plan: Plan, indices: list[int], jobs: int, store: cache.Store, salt: dict) -> dict[int, list[dict]]:
+    """The exported units ``indices`` of the plan, built by ``jobs`` worker processes. The workers
+    come from a fork server that imported CadQuery and hwgen before any solid existed (a plain
+    fork of a process that has built CadQuery geometry hangs), so each pays no import."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload(["cadquery", "hwgen.pipeline"])
+    out = {}
+    with ProcessPoolExecutor(max_workers=min(jobs, len(indices)), mp_context=ctx) as pool:
+        futures = {i: pool.submit(_unit_in_worker, plan, i, store, salt) for i in indices}
+        for i, f in futures.items():
+            kind, value = f.result()
+            if kind == "design":
+                raise DesignError(*value)
+            if kind == "input":
+                raise InputError(*value)
+            out[i] = value
+    return out
+
+
+def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: int, progress,
+                 store: cache.Store, select: Callable[[str], bool] | None = None,
+                 jobs: int = 1) -> tuple[dict, list[str]]:
+    """Every part's STL and STEP, assembly.step, backbone_template.dxf and the manifest; a unit
+    whose key is in the cache is copied from it, the others are built (and kept). Returns the
+    manifest and the names of the parts built afresh. With ``select``, only the parts it takes
+    get their files, and the assembly and the DXF are not written. With ``jobs`` > 1 and enough
+    units to build, worker processes build them (:func:`_build_in_workers`)."""
     (folder / "stl").mkdir()
     (folder / "step").mkdir()
-    parts, entries = [], []
+    entries, built, units_done = [], [], []
     density, _ = printed_density(plan.design.process)
-    for part in build_parts(plan):
-        files = {"stl": folder / "stl" / f"{part.name}.stl", "step": folder / "step" / f"{part.name}.step"}
-        with kernel_errors(plan, part, "write the files of"):
-            export.write_stl(part.solid, files["stl"])
-            export.write_step(part.solid, files["step"], part.name)
-            entries.append(part_entry(part, files, folder, plan.design.process.material, density))
-        parts.append(part)
-        if progress:
-            progress(part.name, len(parts), total)
-    with kernel_errors(plan, None, "write assembly.step"):
-        export.write_assembly(parts, loaded.design.design, folder / "assembly.step")
-    export.write_backbone_dxf(plan.backbone, plan.stations, folder / "backbone_template.dxf")
+    salt = _salt()
+    todo = []
+    for family, first, unit in units(plan):
+        key = cache.key("unit", family.name, unit.inputs, salt)
+        todo.append((family, first, unit, key, _unit_from_cache(store, key)))
+    missing = [i for i, t in enumerate(todo) if t[4] is None]
+    elsewhere = _build_in_workers(plan, missing, jobs, store, salt) \
+        if jobs > 1 and len(missing) >= MIN_PARALLEL_UNITS else {}
+    with kept_in(store, salt):
+        _place_units(plan, folder, todo, elsewhere, store, select, entries, built, units_done, density, total,
+                     progress)
+    files = {}
+    if select is None:
+        _write_assembly(loaded, plan, folder, store, units_done, salt)
+        export.write_backbone_dxf(plan.backbone, plan.stations, folder / "backbone_template.dxf")
+        files = {"assembly": {"path": "assembly.step", "sha256": sha256(folder / "assembly.step")},
+                 "backbone_template": {"path": "backbone_template.dxf",
+                                       "sha256": sha256(folder / "backbone_template.dxf")}}
     return {
         "design": loaded.design.design,
         "hwgen_version": __version__,
         "params_file": loaded.source,
         "params_sha256": loaded.sha256,
-        "files": {
-            "assembly": {"path": "assembly.step", "sha256": sha256(folder / "assembly.step")},
-            "backbone_template": {"path": "backbone_template.dxf",
-                                  "sha256": sha256(folder / "backbone_template.dxf")},
-        },
+        "files": files,
         "parts": entries,
         "design_report": design_report(plan),
-    }
+    }, built
+
+
+def _place_units(plan: Plan, folder: Path, todo, elsewhere: dict, store: cache.Store, select, entries: list,
+                 built: list, units_done: list, density: float, total: int, progress) -> None:
+    """Each unit's files into the folder and its parts' entries, in build order: from the cache,
+    from a worker, or built here."""
+    for i, (family, first, unit, key, rec) in enumerate(todo):
+        parts = None
+        in_place = False                 # the files are in the folder already
+        if rec is None:
+            if i in elsewhere:
+                exported = elsewhere.pop(i)
+            else:
+                parts = list(build_unit(plan, family, first, unit))
+                exported = _export_unit(plan, parts, folder, brep=store.enabled)
+                in_place = True
+            rec = _keep_unit(store, key, exported)
+            built += [p["name"] for p in rec["parts"]]
+        for p in rec["parts"]:
+            files = {"stl": folder / "stl" / f"{p['name']}.stl", "step": folder / "step" / f"{p['name']}.step"}
+            hashes = {kind: p["files"][kind] for kind in files}
+            for kind, path in files.items():
+                if select is not None and not select(p["name"]):
+                    path.unlink(missing_ok=True)        # built for the manifest, not asked for
+                elif not in_place:
+                    path.write_bytes(rec["blobs"][hashes[kind]])
+            entries.append(entry(p, p["measured"], files, folder, plan.design.process.material, density, hashes))
+            if progress:
+                progress(p["name"], len(entries), total)
+        units_done.append((key, rec, parts))
+
+
+def _write_assembly(loaded, plan: Plan, folder: Path, store: cache.Store, units_done, salt) -> None:
+    """assembly.step: from the cache when every unit is what it was, else put together from the
+    solids (built now, or read back from the cache's BREP; built again if that is gone)."""
+    path = folder / "assembly.step"
+    key = cache.key("assembly", loaded.design.design, [k for k, _, _ in units_done], salt)
+    rec = store.get_record(key)
+    data = store.get_bytes(rec["step"]) if isinstance(rec, dict) and isinstance(rec.get("step"), str) else None
+    if data is not None:
+        path.write_bytes(data)
+        return
+    parts = []
+    for (family, first, unit), (_, rec, fresh) in zip(units(plan), units_done):
+        solids = [p.solid for p in fresh] if fresh is not None else _solids(store, rec)
+        if solids is None:
+            solids = [p.solid for p in build_unit(plan, family, first, unit)]
+        parts += [Part(p["name"], p["role"], s, np.asarray(p["placement"], float), tuple(p["color"]))
+                  for p, s in zip(rec["parts"], solids)]
+    with kernel_errors(plan, None, "write assembly.step"):
+        export.write_assembly(parts, loaded.design.design, path)
+    store.put_record(key, {"step": store.put_bytes(path.read_bytes())})
 
 
 # ---------------------------------------------------------------- on existing outputs
@@ -211,7 +515,8 @@ def stale_reason(folder: Path, loaded) -> str | None:
     return None
 
 
-def check(loaded: params.LoadedDesign, out_root: Path, progress=None) -> tuple[dict, Path, str | None]:
+def check(loaded: params.LoadedDesign, out_root: Path, progress=None,
+          cache_dir: Path | None | bool = True) -> tuple[dict, Path, str | None]:
     """`hwgen check`: build if needed, then measure. Returns (report, folder, why it was rebuilt or None)."""
     folder = Path(out_root) / loaded.design.design
     plan = design_plan(loaded)
@@ -219,10 +524,11 @@ def check(loaded: params.LoadedDesign, out_root: Path, progress=None) -> tuple[d
         why = stale_reason(view, loaded)
         if why is None:
             return run_checks(view, read_manifest(view), plan), folder, None
-    return build(loaded, Path(out_root), progress).report, folder, why
+    return build(loaded, Path(out_root), progress, cache_dir=cache_dir).report, folder, why
 
 
-def render(loaded: params.LoadedDesign, out_root: Path) -> tuple[dict, Path, str | None]:
+def render(loaded: params.LoadedDesign, out_root: Path,
+           cache_dir: Path | None | bool = True) -> tuple[dict, Path, str | None]:
     """`hwgen render`: the bill of materials, pictures and drawing of ``out_root/<design>/``.
 
     Builds first (which draws) when the outputs are missing or stale; otherwise draws into the
@@ -233,7 +539,7 @@ def render(loaded: params.LoadedDesign, out_root: Path) -> tuple[dict, Path, str
     plan = design_plan(loaded)
     why = stale_reason(folder, loaded)
     if why is not None:
-        result = build(loaded, Path(out_root))
+        result = build(loaded, Path(out_root), cache_dir=cache_dir)
         return result.manifest.get("render", {}), folder, why
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
         manifest = read_manifest(tmp)

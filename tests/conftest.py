@@ -1,7 +1,14 @@
-"""Shared fixtures: the shipped designs are built once per test session into a temp folder."""
+"""Shared fixtures: the shipped designs are built once per test session into a temp folder.
+
+Two tiers (``make test-fast`` and ``make test``): a test that builds parts with the CAD kernel is
+marked ``slow``; every test that asks for the session's :func:`built` designs (directly or through
+a fixture of its module) is marked here, the others that build by themselves carry the mark.
+"""
 from __future__ import annotations
 
 import os
+import shutil
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -10,9 +17,33 @@ import pytest
 # as-built Monte Carlo on this many samples, not the shipped 10 000: the suite tests the machinery
 # and the verdicts, `make bench` the default's cost.
 os.environ.setdefault("HWGEN_CHECK_SAMPLES", "64")
+# One part cache for the whole session (also for the CLI in child processes), in a temp folder:
+# a design's parts are built once however many tests build it; never the user's own cache.
+SESSION_CACHE = tempfile.mkdtemp(prefix="hwgen-test-cache-")
+os.environ["HWGEN_CACHE_DIR"] = SESSION_CACHE
 
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / "params"
+BUILDS = "built"          # the fixture that makes a test slow wherever it is asked for
+
+
+def pytest_sessionfinish(session, exitstatus):
+    shutil.rmtree(SESSION_CACHE, ignore_errors=True)
+
+
+@pytest.fixture
+def own_cache(tmp_path, monkeypatch):
+    """An empty part cache of the test's own, for a test that changes how parts are built (a
+    monkeypatched builder must run, and what it makes must not reach the session's cache)."""
+    path = tmp_path / "part-cache"
+    monkeypatch.setenv("HWGEN_CACHE_DIR", str(path))
+    return path
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        if BUILDS in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.slow)
 
 
 @pytest.fixture(scope="session")

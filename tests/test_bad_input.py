@@ -70,6 +70,7 @@ def _tree(folder: Path) -> dict:
             for p in sorted(folder.rglob("*")) if p.is_file()}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", sorted(CASES))
 def test_bad_input_exits_2_names_field_and_writes_nothing(case, tmp_path, previous_output):
     text, field_path, what = CASES[case]

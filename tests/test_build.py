@@ -156,6 +156,7 @@ def test_backbone_template_and_strip_have_every_crossing(built):
                                             + d.backbone.extra_tip), abs=1e-6)
 
 
+@pytest.mark.slow
 def test_failed_build_leaves_previous_outputs(tmp_path, monkeypatch):
     from hwgen import pipeline as build_mod
     loaded = load(PARAMS / "prototype.yaml")

@@ -316,6 +316,7 @@ def broken_walls(tmp_path_factory):
     return json.loads((folder / "report.json").read_text())
 
 
+@pytest.mark.slow
 def test_eyelet_near_edge_fails_and_names_it(broken_walls):
     bad = _failed(broken_walls, "eyelet.wall.edge")
     assert {c["where"]["part"] for c in bad} == {f"disk_{i:02d}" for i in range(13)}
@@ -325,6 +326,7 @@ def test_eyelet_near_edge_fails_and_names_it(broken_walls):
         assert 0.15 < c["measured"] < 0.2 and c["limit"] == 0.8
 
 
+@pytest.mark.slow
 def test_merging_eyelets_fail_and_are_named(broken_walls):
     bad = _failed(broken_walls, "eyelet.wall.eyelet")
     assert len(bad) == 13
@@ -338,6 +340,7 @@ def test_merging_eyelets_fail_and_are_named(broken_walls):
     assert not broken_walls["ok"]
 
 
+@pytest.mark.slow
 def test_tendons_passing_through_each_other(broken_walls):
     bad = {tuple(c["where"]["tendons"]): c for c in _failed(broken_walls, "tendon.clearance")}
     assert ("X", "V") in bad

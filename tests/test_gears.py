@@ -292,12 +292,14 @@ def _assert_meshes(case, r):
     assert r["moved"] > INTERFERENCE_TOL_MM3, (case, "moving the wheel in does not collide: check is blind")
 
 
+@pytest.mark.slow
 def test_other_modules_teeth_and_starts_mesh(stability_run):
     for case, r in stability_run[:len(FIXED_CASES)]:
         assert r["status"] == "built", (case, r)
         _assert_meshes(case, r)
 
 
+@pytest.mark.slow
 def test_random_gear_parameters_build_or_are_refused_clearly(stability_run):
     random_part = stability_run[len(FIXED_CASES):]
     kinds = {"built": 0, "rejected": 0}

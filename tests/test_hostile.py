@@ -406,7 +406,7 @@ def test_report_and_junit_that_cannot_be_written(built, tmp_path):
 
 # ---------------------------------------------------------------- the CAD kernel
 
-def test_a_kernel_failure_names_the_part_and_its_parameters(tmp_path, monkeypatch):
+def test_a_kernel_failure_names_the_part_and_its_parameters(tmp_path, monkeypatch, own_cache):
     """OCCT raising inside a part builder becomes a design error: exit 2, the part, its parameters."""
     from OCP.Standard import Standard_Failure
 
@@ -428,7 +428,7 @@ def test_a_kernel_failure_names_the_part_and_its_parameters(tmp_path, monkeypatc
     assert not (out / "prototype").exists() and not list(out.glob(".prototype.*"))
 
 
-def test_an_empty_solid_is_a_kernel_failure(tmp_path, monkeypatch):
+def test_an_empty_solid_is_a_kernel_failure(tmp_path, monkeypatch, own_cache):
     """A builder that returns a solid with no volume is refused before any file is written."""
     import cadquery as cq
 

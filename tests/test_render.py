@@ -222,6 +222,7 @@ def test_new_families_are_drawn_without_code_changes(proto, tmp_path):
     assert res["svg"]["balloons"] == res["svg"]["rows"] == len(table) == len(res["palette"])
 
 
+@pytest.mark.slow
 def test_no_backend_still_builds(tmp_path, monkeypatch):
     """With rendering forced off, the build succeeds, writes the BOM and says what to install."""
     from hwgen.pipeline import build

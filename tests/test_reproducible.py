@@ -33,8 +33,8 @@ def _env(**extra) -> dict:
     return env
 
 
-def _build(out: Path, **env) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "hwgen.cli", "build", PROTO, "--out", str(out), "-q"],
+def _build(out: Path, *args: str, **env) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "hwgen.cli", "build", PROTO, "--out", str(out), "-q", *args],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=_env(**env))
 
 
@@ -58,9 +58,11 @@ def _whole(folder: Path) -> str:
 def test_killed_concurrent_and_repeated_builds(built, tmp_path):
     """Over the session's build of the prototype: a build killed with SIGKILL and one stopped with
     SIGTERM leave it as it was; two builds at once (fresh processes, other string-hash seeds)
-    both finish (one of them compiling the numba kernels afresh), whenever one looks the folder is
+    both finish (one of them building every part afresh and compiling the numba kernels afresh,
+    the other taking its parts from the session's part cache), whenever one looks the folder is
     one whole build, and what they publish has the same bytes in every file (STEP, STL, DXF, PNG,
-    SVG, JSON, CSV) as the session's build, made in this process after other builds."""
+    SVG, JSON, CSV) as the session's build, made in this process after other builds. The killed
+    builds build afresh too (from the cache they would be done before the kill)."""
     first = built("prototype")
     out = tmp_path / "out"
     target = out / "prototype"
@@ -70,7 +72,7 @@ def test_killed_concurrent_and_repeated_builds(built, tmp_path):
     _whole(target)
 
     # SIGKILL while the parts are being written: the previous outputs stay, a leftover is there
-    a = _build(out, HWGEN_RENDER_BACKEND="none")
+    a = _build(out, "--no-cache", HWGEN_RENDER_BACKEND="none")
     deadline = time.time() + 300
     while time.time() < deadline and not any(len(list(p.glob("stl/*.stl"))) >= 3 for p in out.glob(".prototype.*.tmp")):
         time.sleep(0.05)
@@ -81,7 +83,7 @@ def test_killed_concurrent_and_repeated_builds(built, tmp_path):
     assert left, "the kill came too late to leave anything"
 
     # SIGTERM cleans up on its way out
-    t = _build(out, HWGEN_RENDER_BACKEND="none")
+    t = _build(out, "--no-cache", HWGEN_RENDER_BACKEND="none")
     while time.time() < deadline and not any(len(list(p.glob("stl/*.stl"))) >= 1
                                              for p in out.glob(".prototype.*.tmp") if p not in left):
         time.sleep(0.05)
@@ -95,7 +97,7 @@ def test_killed_concurrent_and_repeated_builds(built, tmp_path):
     # the second compiles the numba kernels afresh into its own cache: compiled or loaded from
     # disk, the Monte Carlo must give the same bits (with fastmath it did not, and CI caught it)
     runs = [_build(out, PYTHONHASHSEED="4"),
-            _build(out, PYTHONHASHSEED="5", NUMBA_CACHE_DIR=str(tmp_path / "numba-cache"))]
+            _build(out, "--no-cache", PYTHONHASHSEED="5", NUMBA_CACHE_DIR=str(tmp_path / "numba-cache"))]
     looks = 0
     while any(r.poll() is None for r in runs):
         with atomic.snapshot(target) as view:

@@ -112,6 +112,7 @@ def odd_build(request, tmp_path_factory):
     return doc, build(load(src), root / "out", post_build=False)
 
 
+@pytest.mark.slow
 def test_odd_tensioners_build_with_a_housing_in_one_piece(odd_build):
     from hwgen.checks.measure import load_mesh
     doc, res = odd_build
@@ -128,6 +129,7 @@ def test_odd_tensioners_build_with_a_housing_in_one_piece(odd_build):
         assert runs[t.name]["start"][2] == pytest.approx(t.points[-1][1])
 
 
+@pytest.mark.slow
 def test_two_tendons_of_different_x_wind_on_one_drum_in_their_own_grooves(odd_build):
     doc, res = odd_build
     if doc["design"] != "two-x":

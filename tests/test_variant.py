@@ -4,6 +4,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 import yaml
 
 from hwgen.pipeline import build
@@ -14,6 +15,7 @@ from hwgen.model.routing import tendon_paths
 from .conftest import PARAMS
 
 
+@pytest.mark.slow
 def test_nine_disk_robot_with_mirrored_tendon(tmp_path):
     doc = yaml.safe_load((PARAMS / "prototype.yaml").read_text())
     doc["design"] = "short9"

@@ -15,6 +15,10 @@ another, so CI can diff outputs and a cache can trust their sha256:
   CLASSES section in sorted order (ezdxf adds the classes in use from a set, whose order
   follows Python's per-process string hashing).
 * STL: OCCT's binary STL is already deterministic (a fixed header, the mesh as computed).
+* STEP, both kinds: a zero is written without its sign (OCCT writes ``-0.`` where a direction
+  was computed rather than given; the same solid read back from its BREP, as the part cache
+  does, writes ``0.`` there), so a part's STEP has the same bytes from a fresh solid and from
+  a cached one (:func:`unsigned_zeros`).
 """
 from __future__ import annotations
 
@@ -34,6 +38,13 @@ from . import Part, location
 STL_TOLERANCE_MM = 0.01
 STL_ANGULAR_RAD = 0.2
 STEP_AUTHOR = "hwgen"
+
+
+def settings() -> dict:
+    """Everything besides the solid that decides the bytes of a part's files (the part cache keys
+    them with it)."""
+    return {"stl_tolerance_mm": STL_TOLERANCE_MM, "stl_angular_rad": STL_ANGULAR_RAD, "step_author": STEP_AUTHOR,
+            "step_time": timestamp(), "step_zeros": "unsigned"}
 
 
 def timestamp() -> str:
@@ -88,7 +99,40 @@ def write_step(solid, path: Path, name: str | None = None) -> None:
             entity.SetId(TCollection_HAsciiString(name))
             entity.SetName(TCollection_HAsciiString(name))
     _set_header(model, name)
-    _written(writer.Write(str(path)) == IFSelect_ReturnStatus.IFSelect_RetDone, Path(path), "STEP")
+    path = Path(path)
+    _written(writer.Write(str(path)) == IFSelect_ReturnStatus.IFSelect_RetDone, path, "STEP")
+    path.write_bytes(unsigned_zeros(path.read_bytes()))
+
+
+_SIGNED_ZERO = re.compile(rb"(?<=[(,])-0\.(?=[,)])")
+
+
+def unsigned_zeros(data: bytes) -> bytes:
+    """STEP text with every ``-0.`` written as ``0.`` (see the module)."""
+    return _SIGNED_ZERO.sub(b"0.", data)
+
+
+def write_brep(solid) -> bytes:
+    """The solid in OCCT's binary BREP, exact: what the part cache keeps to put an assembly
+    together without building the part again."""
+    import io
+
+    from OCP.BinTools import BinTools
+    buf = io.BytesIO()
+    BinTools.Write_s(solid.wrapped, buf)
+    return buf.getvalue()
+
+
+def read_brep(data: bytes):
+    """A solid from :func:`write_brep`'s bytes."""
+    import io
+
+    import cadquery as cq
+    from OCP.BinTools import BinTools
+    from OCP.TopoDS import TopoDS_Shape
+    shape = TopoDS_Shape()
+    BinTools.Read_s(shape, io.BytesIO(data))
+    return cq.Solid(shape)
 
 
 def write_stl(solid, path: Path) -> None:
@@ -121,7 +165,7 @@ def write_assembly(parts: list[Part], name: str, path: Path) -> None:
     _set_header(model, name)
     path = Path(path)
     _written(writer.Write(str(path)) == IFSelect_ReturnStatus.IFSelect_RetDone, path, "assembly STEP")
-    path.write_bytes(canonical_styles(path.read_bytes()))
+    path.write_bytes(canonical_styles(unsigned_zeros(path.read_bytes())))
 
 
 def _number_occurrences(model) -> None:

@@ -1,5 +1,11 @@
 """Which parts a design has, in build order. Each family turns the plan into Parts.
 
+Each family is built in units (:class:`Unit`): a disk each, the strip, the whole tensioner (its
+parts share solids), each fixture. A unit names the frozen values its builder reads (its
+``inputs``), so the part cache (:mod:`hwgen.cache`, used by :mod:`hwgen.pipeline`) can key its
+files by them: a unit whose inputs did not change is not built again. A builder that starts to
+read something new must name it in its unit's inputs.
+
 The CAD kernel can fail on parameters that passed every earlier check (a boolean that leaves
 nothing, a sweep that does not close). :func:`build_parts` and :func:`kernel_errors` turn any
 such failure, and any solid that comes out empty or null, into a
@@ -13,7 +19,7 @@ from contextlib import contextmanager
 from typing import NamedTuple
 
 from ..errors import DesignError, InputError, clip
-from ..model.fixtures import jig_layout
+from ..model.fixtures import jig_layout, mount_layout
 from ..model.plan import Plan
 from . import Part
 
@@ -44,6 +50,48 @@ def _mount(plan: Plan) -> Iterator[Part]:
 def _jig(plan: Plan) -> Iterator[Part]:
     from .fixtures import build_jig
     yield from build_jig(plan)
+
+
+class Unit(NamedTuple):
+    """Parts built together: what they are made from (frozen values, hashed for the cache), how
+    many there are and the builder."""
+    inputs: tuple
+    count: int
+    build: Callable[[], Iterator[Part]]
+
+
+def _disk_units(plan: Plan) -> list[Unit]:
+    def one(spec):
+        def run():
+            from .disk import build_disk
+            yield build_disk(spec)
+        return Unit((spec,), 1, run)
+    return [one(spec) for spec in plan.disks]
+
+
+def _backbone_units(plan: Plan) -> list[Unit]:
+    return [Unit((plan.backbone,), 1, lambda: _backbone(plan))]
+
+
+def _tensioner_units(plan: Plan) -> list[Unit]:
+    d, tip = plan.design, plan.disks[-1]
+    # what build_tensioner reads: the layout (which holds the YAML's tensioner section), the
+    # printer's wall, the tendon, and the tip disk's screws and thickness
+    inputs = (plan.require_tensioner_layout(), d.process.min_wall, d.tendon_material.diameter,
+              len(tip.mount_holes), tip.thickness)
+    return [Unit(inputs, _tensioner_count(plan), lambda: _tensioner(plan))]
+
+
+def _mount_units(plan: Plan) -> list[Unit]:
+    d = plan.design
+    inputs = (mount_layout(d), d.disks.end_thickness, d.base_mount)      # what build_mount reads
+    return [Unit(inputs, 2, lambda: _mount(plan))]
+
+
+def _jig_units(plan: Plan) -> list[Unit]:
+    d = plan.design
+    inputs = (jig_layout(d), [s.name for s in plan.disks], plan.backbone.name, d.jig)   # what build_jig reads
+    return [Unit(inputs, _jig_count(plan), lambda: _jig(plan))]
 
 
 def _jig_count(plan: Plan) -> int:
@@ -96,14 +144,15 @@ class Family(NamedTuple):
     count: Callable[[Plan], int]                          # how many parts it yields
     build: Callable[[Plan], Iterator[Part]]               # the builder; imports CadQuery only when run
     made_from: Callable[[Plan, int], tuple[str, str]]     # (part name, its parameters) of the index-th part
+    units: Callable[[Plan], list[Unit]]                   # the same parts, in units the cache keys
 
 
 FAMILIES: list[Family] = [
-    Family("disks", "disks", lambda p: len(p.disks), _disks, _disk_made_from),
-    Family("backbone", "backbone", lambda p: 1, _backbone, _backbone_made_from),
-    Family("tensioner", "tensioner", _tensioner_count, _tensioner, _tensioner_made_from),
-    Family("base mount", "base_mount", lambda p: 2, _mount, _mount_made_from),
-    Family("jig", "jig", _jig_count, _jig, _jig_made_from),
+    Family("disks", "disks", lambda p: len(p.disks), _disks, _disk_made_from, _disk_units),
+    Family("backbone", "backbone", lambda p: 1, _backbone, _backbone_made_from, _backbone_units),
+    Family("tensioner", "tensioner", _tensioner_count, _tensioner, _tensioner_made_from, _tensioner_units),
+    Family("base mount", "base_mount", lambda p: 2, _mount, _mount_made_from, _mount_units),
+    Family("jig", "jig", _jig_count, _jig, _jig_made_from, _jig_units),
 ]
 
 
@@ -129,21 +178,42 @@ def _sound(part: Part) -> None:
 
 def build_parts(plan: Plan) -> Iterator[Part]:
     """Every part of the design, family by family; a failure of the kernel is a DesignError."""
+    for family, first, unit in units(plan):
+        yield from build_unit(plan, family, first, unit)
+
+
+def units(plan: Plan) -> Iterator[tuple[Family, int, Unit]]:
+    """Every unit of the design in build order, with its family and the index of its first part
+    in the family."""
     for family in FAMILIES:
-        parts = family.build(plan)
-        index = 0
-        while True:
-            try:
-                part = next(parts)
-                _sound(part)
-            except StopIteration:
-                break
-            except (DesignError, InputError):
-                raise
-            except Exception as e:     # OCCT's Standard_Failure, CadQuery's ValueError, ...
-                raise _failure(family, plan, index, f"{type(e).__name__}: {e}") from None
-            index += 1
-            yield part
+        first = 0
+        try:
+            family_units = family.units(plan)
+        except (DesignError, InputError):
+            raise
+        except Exception as e:     # a layout its builder would have failed on
+            raise _failure(family, plan, 0, f"{type(e).__name__}: {e}") from None
+        for unit in family_units:
+            yield family, first, unit
+            first += unit.count
+
+
+def build_unit(plan: Plan, family: Family, first: int, unit: Unit) -> Iterator[Part]:
+    """The parts of one unit; a failure of the kernel is a DesignError naming the part."""
+    parts = unit.build()
+    index = first
+    while True:
+        try:
+            part = next(parts)
+            _sound(part)
+        except StopIteration:
+            break
+        except (DesignError, InputError):
+            raise
+        except Exception as e:     # OCCT's Standard_Failure, CadQuery's ValueError, ...
+            raise _failure(family, plan, index, f"{type(e).__name__}: {e}") from None
+        index += 1
+        yield part
 
 
 @contextmanager

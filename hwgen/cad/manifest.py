@@ -5,6 +5,8 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
+import numpy as np
+
 from ..model.plan import Plan
 from . import Part, mass_properties
 
@@ -44,29 +46,52 @@ def design_report(plan: Plan) -> dict:
     }
 
 
+def measure(part: Part) -> dict:
+    """What the manifest needs from the solid itself: volume (mm³), centre of mass and bounding
+    box in file coordinates (mm). Plain JSON, so the part cache can keep it with the files."""
+    bb = part.solid.BoundingBox()
+    volume, com = mass_properties(part.solid)
+    return {"volume_mm3": volume, "center_of_mass_file_mm": list(com),
+            "bbox_mm": {"min": [bb.xmin, bb.ymin, bb.zmin], "max": [bb.xmax, bb.ymax, bb.zmax]}}
+
+
+def describe(part: Part) -> dict:
+    """The part without its solid, as plain JSON: everything its manifest entry holds besides
+    the measurements and the files."""
+    return {"name": part.name, "role": part.role, "placement": np.asarray(part.placement).tolist(),
+            "color": list(part.color), "station": part.station, "meta": part.meta, "material": part.material,
+            "density_g_cm3": part.density_g_cm3}
+
+
 def part_entry(part: Part, files: dict[str, Path], root: Path, material: str, density_g_cm3: float) -> dict:
     """The manifest entry of one part; ``material`` and ``density_g_cm3`` are the printed material's,
     used unless the part names its own. Mass and centre of mass come from the solid."""
-    bb = part.solid.BoundingBox()
-    if part.density_g_cm3 is not None:
-        material, density_g_cm3 = part.material, part.density_g_cm3
-    volume, com = mass_properties(part.solid)
-    com_robot = part.placement @ [*com, 1.0]
-    entry = {
-        "name": part.name,
-        "role": part.role,
-        "files": {kind: {"path": str(p.relative_to(root)), "sha256": sha256(p)} for kind, p in files.items()},
+    return entry(describe(part), measure(part), files, root, material, density_g_cm3)
+
+
+def entry(described: dict, measured: dict, files: dict[str, Path], root: Path, material: str,
+          density_g_cm3: float, hashes: dict[str, str] | None = None) -> dict:
+    """A manifest entry from :func:`describe` and :func:`measure` of a part (fresh, or as the part
+    cache kept them) and its files (their sha256 from ``hashes`` when given, else read)."""
+    if described["density_g_cm3"] is not None:
+        material, density_g_cm3 = described["material"], described["density_g_cm3"]
+    volume = measured["volume_mm3"]
+    com_robot = np.asarray(described["placement"], float) @ [*measured["center_of_mass_file_mm"], 1.0]
+    out = {
+        "name": described["name"],
+        "role": described["role"],
+        "files": {kind: {"path": str(p.relative_to(root)), "sha256": hashes[kind] if hashes else sha256(p)}
+                  for kind, p in files.items()},
         "volume_mm3": volume,
         "material": material,
         "density_g_cm3": density_g_cm3,
         "mass_g": volume / 1000 * density_g_cm3,
         "center_of_mass_mm": [float(v) for v in com_robot[:3]],
-        "bbox_mm": {"min": [bb.xmin, bb.ymin, bb.zmin], "max": [bb.xmax, bb.ymax, bb.zmax]},
-        "placement": part.placement.tolist(),
-        "color": list(part.color),
+        "bbox_mm": measured["bbox_mm"],
+        "placement": described["placement"],
+        "color": described["color"],
     }
-    if part.station is not None:
-        entry["station"] = part.station
-    entry.update(part.meta)
-    return entry
-
+    if described["station"] is not None:
+        out["station"] = described["station"]
+    out.update(described["meta"])
+    return out

@@ -45,6 +45,7 @@ from ..model.tensioner_layout.sizes import (ANCHOR_HOLE, AXIAL_PLAY, CAP, CLAMP_
                                             DRIVE_HEX, DRIVE_HEX_LENGTH, DRIVE_SHAFT, NUT, NUT_PLAY, PIN_ENGAGE, POST,
                                             WORM_END)
 from . import DISK_ROTATION, Part, location, placement
+from .memo import kept
 
 WORM_COLOR = (0.75, 0.76, 0.78, 1.0)
 WHEEL_COLOR = (0.30, 0.55, 0.85, 1.0)
@@ -453,7 +454,7 @@ def build_tensioner(plan: Plan) -> Iterator[Part]:
     # it snug; modelled without overlap so the parts' interference check stays meaningful
     worm = worm_solid(pair, lay.worm_near_end, DRIVE_HEX, running, lay.worm_pin - POST + 0.5)
     drive = drive_solid(lay)
-    gear = gear_solid(pair)
+    gear = kept("throated wheel gear", pair, lambda: gear_solid(pair))      # the costly boolean, kept between builds
     clamp = clamp_solid()
     wheels: dict[tuple, cq.Solid] = {}
     for u in lay.units:

@@ -57,7 +57,7 @@ def manifold(folder: Path, entry: dict, placement: np.ndarray | None = None):
 
 def placed_mesh(folder: Path, entry: dict, placement: np.ndarray | None = None):
     """The part's STL as a trimesh in robot coordinates (or under ``placement``)."""
-    mesh = load_mesh(Path(folder) / entry["files"]["stl"]["path"])
+    mesh = load_mesh(Path(folder) / entry["files"]["stl"]["path"]).copy()      # the loaded mesh is shared
     mesh.apply_transform(np.asarray(entry["placement"] if placement is None else placement, dtype=float))
     return mesh
 

@@ -7,6 +7,10 @@ from __future__ import annotations
 
 import json
 import math
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -32,9 +36,31 @@ class Loop:
         return float(2 * np.sqrt(self.area / np.pi))
 
 
+_SHELF: ContextVar[dict | None] = ContextVar("hwgen_mesh_shelf", default=None)
+
+
+@contextmanager
+def one_load_per_mesh() -> Iterator[None]:
+    """Within: every STL is read once (as long as its file is unchanged) and every mesh is turned
+    into a manifold once per placement; each check gets the same objects, so none may change a
+    mesh in place (copy it first). ``hwgen check`` runs all its checks inside one."""
+    token = _SHELF.set({"meshes": {}, "manifolds": {}})
+    try:
+        yield
+    finally:
+        _SHELF.reset(token)
+
+
 def load_mesh(path: str | Path):
     import trimesh
-    return trimesh.load_mesh(str(path), process=True)
+    shelf = _SHELF.get()
+    if shelf is None:
+        return trimesh.load_mesh(str(path), process=True)
+    st = os.stat(path)
+    key = (os.path.realpath(path), st.st_ino, st.st_size, st.st_mtime_ns)
+    if key not in shelf["meshes"]:
+        shelf["meshes"][key] = trimesh.load_mesh(str(path), process=True)
+    return shelf["meshes"][key]
 
 
 def chain_loops(segments: np.ndarray) -> list[np.ndarray]:
@@ -268,6 +294,16 @@ def section_moments(loops: list[np.ndarray]) -> dict:
 
 def to_manifold(mesh, placement=None):
     """A trimesh mesh (file coordinates) as a manifold3d solid, in robot coordinates under ``placement``."""
+    shelf = _SHELF.get()
+    if shelf is None:
+        return _to_manifold(mesh, placement)
+    key = (id(mesh), None if placement is None else np.asarray(placement, dtype=float).tobytes())
+    if key not in shelf["manifolds"]:
+        shelf["manifolds"][key] = (mesh, _to_manifold(mesh, placement))      # the mesh kept: its id stays its own
+    return shelf["manifolds"][key][1]
+
+
+def _to_manifold(mesh, placement=None):
     import manifold3d as m3d
     v = np.asarray(mesh.vertices, dtype=np.float64)
     if placement is not None:

@@ -21,6 +21,7 @@ from .eyelets import backbone_section, locate_eyelets, measure_disk
 from .gear_mesh import gear_checks
 from .gravity import gravity_checks
 from .lengths import length_checks, pair_take_up, sweep_angles, tendon_lengths
+from .measure import one_load_per_mesh
 from .parts import build_volume_checks, interference_checks, load_parts, mass_summary, mesh_checks
 from .printing import printing_checks
 from .seating import hub_checks, measure_fit, tilt_checks
@@ -83,6 +84,13 @@ def _strip_clamp_checks(manifest: dict) -> list[Check]:
 
 
 def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
+    """Measure the design in ``folder`` against the intent in its manifest; return the report
+    (see :func:`_run_checks`). Every STL is read once and handed to every check that needs it."""
+    with one_load_per_mesh():
+        return _run_checks(folder, manifest, plan)
+
+
+def _run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     """Measure the design in ``folder`` against the intent in its manifest; return the report.
 
     Keys: ``design``, ``ok`` (no failing error), ``checks`` (Check records as dicts),

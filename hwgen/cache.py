@@ -1,0 +1,184 @@
+"""A content-addressed store for what is expensive to make: part files, keyed by what made them.
+
+Two kinds of entry, both under one root (``--cache-dir``; default ``$HWGEN_CACHE_DIR``, else
+``$XDG_CACHE_HOME/hwgen``, else ``~/.cache/hwgen``, never inside ``out/``):
+
+* ``objects/ab/abcd…``: bytes (an STL, a STEP, a BREP), named by their own sha256. A read
+  hashes them again; bytes that do not match their name are a corrupt entry: it is deleted and
+  reported as missing, so the caller makes it afresh.
+* ``records/ab/abcd….json``: a JSON record, named by its key (:func:`key`, the sha256 of the
+  canonical form of everything that made it). The file holds the record and the sha256 of the
+  record's canonical text; one that does not parse or does not match is corrupt, as above.
+
+Every write goes to a temporary file in the entry's own folder and is renamed over the name
+(:func:`os.replace`), so two builds sharing a cache never see half an entry: the last writer of
+a record wins, and both wrote the same thing. Nothing here knows about parts or CAD; it only
+hashes plain data (frozen dataclasses, pydantic models, numpy arrays, JSON values) and stores
+bytes.
+"""
+from __future__ import annotations
+
+import dataclasses
+import enum
+import hashlib
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+ENV_DIR = "HWGEN_CACHE_DIR"
+LAYOUT = "v1"                 # the on-disk layout; a change of it starts a fresh store beside the old
+
+
+def default_dir() -> Path:
+    """Where the cache lives unless ``--cache-dir`` says otherwise."""
+    if os.environ.get(ENV_DIR):
+        return Path(os.environ[ENV_DIR])
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "hwgen"
+
+
+# ---------------------------------------------------------------- keys
+
+def canonical(obj) -> object:
+    """``obj`` as plain JSON values, the same for equal inputs in every process: a dataclass as
+    its class name and fields in order, a pydantic model as its JSON dump, an array as dtype,
+    shape and values, floats exactly (JSON's repr round-trips a double), dict keys sorted.
+    Anything else is a TypeError: a key must never depend on an object's address."""
+    if obj is None or isinstance(obj, (bool, str)):
+        return obj
+    if isinstance(obj, enum.Enum):
+        return canonical(obj.value)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        f = float(obj)
+        return f if np.isfinite(f) else repr(f)
+    if isinstance(obj, np.ndarray):
+        return {"ndarray": str(obj.dtype), "shape": list(obj.shape), "values": canonical(obj.tolist())}
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return {"dataclass": type(obj).__qualname__,
+                "fields": [[f.name, canonical(getattr(obj, f.name))] for f in dataclasses.fields(obj)]}
+    if hasattr(obj, "model_dump") and hasattr(type(obj), "model_fields"):      # pydantic
+        return {"model": type(obj).__qualname__, "fields": canonical(obj.model_dump(mode="json"))}
+    if isinstance(obj, dict):
+        return {"dict": sorted(([canonical(k), canonical(v)] for k, v in obj.items()), key=json.dumps)}
+    if isinstance(obj, (list, tuple)):
+        return [canonical(v) for v in obj]
+    if isinstance(obj, (set, frozenset)):
+        return {"set": sorted((canonical(v) for v in obj), key=json.dumps)}
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"cannot key a {type(obj).__name__}")
+
+
+def _text(obj) -> bytes:
+    return json.dumps(obj, sort_keys=True, separators=(",", ":"), ensure_ascii=True).encode()
+
+
+def key(*parts) -> str:
+    """The sha256 of the canonical form of ``parts``."""
+    return hashlib.sha256(_text(canonical(list(parts)))).hexdigest()
+
+
+def sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+# ---------------------------------------------------------------- the store
+
+class Store:
+    """The cache at ``root`` (None: no cache: every get misses, every put is dropped)."""
+
+    def __init__(self, root: Path | None):
+        self.root = None if root is None else Path(root) / LAYOUT
+        self.corrupt: list[str] = []          # entries found damaged (and removed) by this store
+        self.unwritable: str | None = None    # why the store turned itself off, if it did
+
+    @property
+    def enabled(self) -> bool:
+        return self.root is not None
+
+    def _path(self, kind: str, name: str, suffix: str = "") -> Path:
+        return self.root / kind / name[:2] / (name + suffix)
+
+    def _write(self, path: Path, data: bytes) -> None:
+        """Write an entry whole or not at all. A cache that cannot be written (no permission, a
+        full disk) costs the reuse, never the build: the store turns itself off and says why."""
+        try:
+            self._replace(path, data)
+        except OSError as e:
+            self.unwritable = f"{self.root}: {e.strerror or e}"
+            self.root = None
+
+    def _replace(self, path: Path, data: bytes) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-")
+        try:
+            with os.fdopen(fd, "wb") as f:
+                f.write(data)
+            os.replace(tmp, path)
+        except BaseException:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+            raise
+
+    def _drop(self, path: Path, what: str) -> None:
+        self.corrupt.append(what)
+        try:
+            path.unlink()
+        except OSError:
+            pass
+
+    # bytes, by their own hash
+    def put_bytes(self, data: bytes) -> str:
+        name = sha256(data)
+        if self.enabled:
+            path = self._path("objects", name)
+            if not path.exists():
+                self._write(path, data)
+        return name
+
+    def get_bytes(self, name: str) -> bytes | None:
+        if not self.enabled:
+            return None
+        path = self._path("objects", name)
+        try:
+            data = path.read_bytes()
+        except OSError:
+            return None
+        if sha256(data) != name:
+            self._drop(path, f"object {name[:12]}")
+            return None
+        return data
+
+    # records, by their key
+    def put_record(self, key_: str, record) -> None:
+        if not self.enabled:
+            return
+        body = json.loads(json.dumps(record))          # as it will read back, keys in their order
+        self._write(self._path("records", key_, ".json"),
+                    json.dumps({"record": body, "sha256": sha256(_text(body))}).encode())
+
+    def get_record(self, key_: str):
+        if not self.enabled:
+            return None
+        path = self._path("records", key_, ".json")
+        try:
+            text = path.read_bytes()
+        except OSError:
+            return None
+        try:
+            doc = json.loads(text)
+            body = doc["record"]
+            ok = doc["sha256"] == sha256(_text(body))
+        except (ValueError, TypeError, KeyError):
+            ok = False
+        if not ok:
+            self._drop(path, f"record {key_[:12]}")
+            return None
+        return body

@@ -1,0 +1,47 @@
+"""Solids kept between builds: an expensive solid read back from its exact BREP instead of being
+made again.
+
+The part cache (:mod:`hwgen.pipeline`) keeps whole units; when a unit has to be built again
+because one of its inputs changed, the costly solids inside it whose own inputs did not (the
+throated wheel's gear: one boolean of the blank and every tooth space, several seconds) come
+from here. A solid read back from BREP gives the same files, byte for byte, as the one it was
+written from (``tests/test_cache.py``). Without an active store (:func:`kept_in`) every solid is
+made as before.
+"""
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
+
+from .. import cache
+from .export import read_brep, write_brep
+
+_ACTIVE: ContextVar[tuple[cache.Store, object] | None] = ContextVar("hwgen_kept_solids", default=None)
+
+
+@contextmanager
+def kept_in(store: cache.Store, salt) -> Iterator[None]:
+    """Within: :func:`kept` solids are read from and written to ``store``, keyed with ``salt``
+    (what every file also depends on: versions, code, export settings)."""
+    token = _ACTIVE.set((store, salt))
+    try:
+        yield
+    finally:
+        _ACTIVE.reset(token)
+
+
+def kept(kind: str, inputs, make: Callable[[], object]):
+    """``make()``, or the solid it made last time for the same ``kind`` and ``inputs``."""
+    active = _ACTIVE.get()
+    if active is None or not active[0].enabled:
+        return make()
+    store, salt = active
+    key = cache.key("solid", kind, inputs, salt)
+    rec = store.get_record(key)
+    data = store.get_bytes(rec["brep"]) if isinstance(rec, dict) and isinstance(rec.get("brep"), str) else None
+    if data is not None:
+        return read_brep(data)
+    solid = make()
+    store.put_record(key, {"brep": store.put_bytes(write_brep(solid))})
+    return solid

@@ -1,0 +1,278 @@
+"""The part cache: files from it are the bytes a fresh build writes; a damaged entry is found and
+made again; an edit rebuilds exactly the parts whose specs changed; a cache that cannot be written
+costs the reuse, not the build."""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from hwgen import cache
+from hwgen.model.specs import Hole
+
+from .conftest import PARAMS
+
+
+# ---------------------------------------------------------------- the store (no CAD)
+
+def test_keys_are_canonical_and_refuse_what_has_no_value():
+    h = Hole(1.0, 2.0, (0.0, 1.0, 0.0), 0.8, ("A1",), 3.0, False)
+    assert cache.key(h) == cache.key(Hole(1.0, 2.0, (0.0, 1.0, 0.0), 0.8, ("A1",), 3.0, False))
+    assert cache.key(h) != cache.key(dataclasses.replace(h, x=1.0 + 1e-12))       # floats are exact
+    assert cache.key({"b": 1, "a": np.arange(3.0)}) == cache.key({"a": np.array([0.0, 1.0, 2.0]), "b": 1})
+    assert cache.key(np.arange(3.0)) != cache.key(np.arange(3))                     # dtype counts
+    assert cache.key(float("nan")) == cache.key(float("nan"))
+    from hwgen.pipeline import load
+    d = load(PARAMS / "prototype.yaml").design
+    assert cache.key(d.tensioner) == cache.key(d.tensioner.model_copy())
+    with pytest.raises(TypeError):
+        cache.key(object())
+
+
+def test_store_verifies_what_it_reads_and_writes_whole_entries(tmp_path):
+    store = cache.Store(tmp_path)
+    name = store.put_bytes(b"solid part\n")
+    assert name == hashlib.sha256(b"solid part\n").hexdigest()
+    assert store.get_bytes(name) == b"solid part\n"
+    store.put_record("k" * 64, {"parts": [{"name": "disk_00", "x": 0.1}]})
+    assert store.get_record("k" * 64) == {"parts": [{"name": "disk_00", "x": 0.1}]}
+    assert not [p for p in tmp_path.rglob(".tmp-*")]                  # no temp file left behind
+
+    obj = next(p for p in tmp_path.rglob("*") if p.is_file() and p.name == name)
+    obj.write_bytes(b"solid pbrt\n")                                  # one byte flipped
+    assert store.get_bytes(name) is None and not obj.exists()         # found, and removed
+    rec = next(tmp_path.rglob("*.json"))
+    text = rec.read_text()
+    rec.write_text(text.replace("0.1", "0.2"))                        # valid JSON, wrong content
+    assert store.get_record("k" * 64) is None and not rec.exists()
+    store.put_record("j" * 64, {"a": 1})
+    next(tmp_path.rglob("j*.json")).write_text('{"record": {"a"')     # cut short
+    assert store.get_record("j" * 64) is None
+    assert len(store.corrupt) == 3
+
+    off = cache.Store(None)
+    assert off.put_bytes(b"x") == hashlib.sha256(b"x").hexdigest() and off.get_bytes(off.put_bytes(b"x")) is None
+
+
+def test_a_cache_that_cannot_be_written_turns_itself_off(tmp_path):
+    a_file = tmp_path / "a_file"
+    a_file.write_text("not a folder")
+    store = cache.Store(a_file / "below")
+    store.put_bytes(b"x")
+    assert not store.enabled and "a_file" in store.unwritable
+
+
+def test_default_folder_is_outside_the_outputs(monkeypatch, tmp_path):
+    monkeypatch.delenv(cache.ENV_DIR, raising=False)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert cache.default_dir() == tmp_path / "xdg" / "hwgen"
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    assert cache.default_dir() == Path(os.path.expanduser("~")) / ".cache" / "hwgen"
+    monkeypatch.setenv(cache.ENV_DIR, str(tmp_path / "c"))
+    assert cache.default_dir() == tmp_path / "c"
+
+
+# ---------------------------------------------------------------- builds through the cache
+
+def _tree(folder: Path) -> dict[str, str]:
+    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _records(root: Path, what: str) -> list[Path]:
+    return [p for p in root.rglob("*.json") if what in json.loads(p.read_text())["record"]]
+
+
+@pytest.fixture(scope="module")
+def fresh(tmp_path_factory):
+    """The prototype's parts and files built with an empty cache of their own: every part is built
+    afresh (and kept)."""
+    from hwgen.pipeline import build, load
+    root = tmp_path_factory.mktemp("cache-test")
+    loaded = load(PARAMS / "prototype.yaml")
+    res = build(loaded, root / "fresh", post_build=False, cache_dir=root / "cache")
+    assert sorted(res.built) == sorted(p["name"] for p in res.manifest["parts"])
+    return loaded, root, _tree(res.folder)
+
+
+@pytest.mark.slow
+def test_cached_build_has_the_bytes_of_a_fresh_one(fresh):
+    from hwgen.pipeline import build
+    loaded, root, first = fresh
+    again = build(loaded, root / "again", post_build=False, cache_dir=root / "cache")
+    assert again.built == []
+    assert _tree(again.folder) == first                   # every STL, STEP, the assembly, DXF and manifest
+    # the assembly put together from the cached parts' BREP when its own entry is gone
+    for p in _records(root / "cache", "step"):
+        p.unlink()
+    third = build(loaded, root / "third", post_build=False, cache_dir=root / "cache")
+    assert third.built == [] and _tree(third.folder) == first
+    # the tensioner built again (its entry gone) around the throated gear kept from the first build
+    tensioner = next(p for p in _records(root / "cache", "parts")
+                     if json.loads(p.read_text())["record"]["parts"][0]["role"].startswith("tensioner"))
+    names = [q["name"] for q in json.loads(tensioner.read_text())["record"]["parts"]]
+    tensioner.unlink()
+    assert len(_records(root / "cache", "brep")) == 1                     # the gear
+    fourth = build(loaded, root / "fourth", post_build=False, cache_dir=root / "cache")
+    assert fourth.built == names and _tree(fourth.folder) == first
+
+
+@pytest.mark.slow
+def test_a_damaged_entry_is_found_and_rebuilt(fresh):
+    from hwgen.pipeline import build
+    loaded, root, first = fresh
+    store = root / "cache"
+    stl = next(p for p in store.rglob("*") if p.is_file() and p.name == first["stl/disk_03.stl"])
+    data = bytearray(stl.read_bytes())
+    data[200] ^= 0xFF
+    stl.write_bytes(bytes(data))
+    record = next(p for p in _records(store, "parts")
+                  if [q["name"] for q in json.loads(p.read_text())["record"]["parts"]] == ["disk_05"])
+    record.write_text(record.read_text()[:100])
+    res = build(loaded, root / "repaired", post_build=False, cache_dir=store)
+    assert sorted(res.built) == ["disk_03", "disk_05"]
+    assert _tree(res.folder) == first
+
+
+@pytest.mark.slow
+def test_editing_one_tendon_rebuilds_exactly_the_parts_whose_specs_changed(tmp_path):
+    """paper-table2's C1 is a table: moving one of its rows moves the eyelets near that station and
+    nothing else; the build makes those disks (and whatever else's spec the move changed) again."""
+    from hwgen.pipeline import build, design_plan, load
+    doc = yaml.safe_load((PARAMS / "paper-table2.yaml").read_text())
+    src = tmp_path / "paper-table2.yaml"
+    src.write_text(yaml.safe_dump(doc, sort_keys=False))
+    before = load(src)
+    first = build(before, tmp_path / "out", post_build=False, cache_dir=tmp_path / "cache")
+    c1 = next(t for t in doc["tendons"] if t["name"] == "C1")
+    c1["routing"]["table"][8][1] -= 0.5
+    src.write_text(yaml.safe_dump(doc, sort_keys=False))
+    after = load(src)
+    second = build(after, tmp_path / "out", post_build=False, cache_dir=tmp_path / "cache")
+
+    old, new = design_plan(before), design_plan(after)
+    changed = [b.name for a, b in zip(old.disks, new.disks) if a != b]
+    changed += [new.backbone.name] if old.backbone != new.backbone else []
+    if cache.key(old.tensioner_layout) != cache.key(new.tensioner_layout):     # holds arrays: compared by value
+        changed += [p["name"] for p in first.manifest["parts"] if p["role"].startswith("tensioner")]
+    assert "disk_08" in changed and len(changed) < len(new.disks)         # a local edit
+    assert second.built == changed
+    moved = {p["name"] for p, q in zip(first.manifest["parts"], second.manifest["parts"])
+             if p["files"]["stl"]["sha256"] != q["files"]["stl"]["sha256"]}
+    assert moved <= set(changed)
+
+
+def test_a_no_op_rebuild_reads_the_cache_without_the_cad_kernel(built, tmp_path):
+    """Once the session's cache holds every part of the prototype, building it again (in a fresh
+    process) builds nothing and never imports CadQuery or OCP."""
+    built("prototype")
+    code = ("import sys\nfrom hwgen.pipeline import build, load\n"
+            "r = build(load(sys.argv[1]), sys.argv[2], post_build=False)\n"
+            "print(len(r.built), 'cadquery' in sys.modules, 'OCP' in sys.modules)")
+    r = subprocess.run([sys.executable, "-c", code, str(PARAMS / "prototype.yaml"), str(tmp_path / "o")],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["0", "False", "False"]
+
+
+@pytest.mark.slow
+def test_the_stages_after_the_files_are_reused_with_the_same_bytes(built, tmp_path):
+    """With every part and stage of the prototype in the session's cache, a whole build (checks,
+    bill of materials, pictures) takes them all from it, and writes the session build's bytes;
+    another number of Monte Carlo samples is another key: the checks run again."""
+    from hwgen.pipeline import build, load
+    first = _tree(built("prototype"))
+    loaded = load(PARAMS / "prototype.yaml")
+    again = build(loaded, tmp_path / "again")
+    assert again.built == [] and again.reused == ["checks", "bom", "pictures"]
+    assert _tree(again.folder) == first
+    assert again.report == json.loads((again.folder / "report.json").read_text())
+
+
+def test_a_stage_is_reused_only_for_the_same_files_manifest_design_and_environment(tmp_path, monkeypatch):
+    """The stage memo on a stand-in stage: what it wrote and set comes back without running it;
+    another input file, manifest, design or $HWGEN_CHECK_SAMPLES runs it again."""
+    from hwgen import pipeline
+    from hwgen.pipeline import load
+
+    runs = []
+
+    def stage(plan, folder, manifest):
+        runs.append(1)
+        (folder / "report.json").write_text(json.dumps({"n": len(runs)}))
+        manifest["checks_ok"] = True
+        return {"n": len(runs)}
+
+    class P:
+        design = load(PARAMS / "prototype.yaml").design
+
+    store = cache.Store(tmp_path / "cache")
+
+    def run(files: dict, manifest: dict, plan=P):
+        folder = tmp_path / f"f{len(list(tmp_path.iterdir()))}"
+        folder.mkdir()
+        for name, text in files.items():
+            (folder / name).write_text(text)
+        reused = []
+        out = pipeline._cached_stage(store, "checks", stage, plan, folder, manifest, reused)
+        return out, manifest, (folder / "report.json").read_text(), reused
+
+    first = run({"a.stl": "x"}, {"design": "d"})
+    assert first[3] == [] and len(runs) == 1
+    again = run({"a.stl": "x"}, {"design": "d"})
+    assert again == (first[0], first[1], first[2], ["checks"]) and len(runs) == 1
+    run({"a.stl": "y"}, {"design": "d"})
+    run({"a.stl": "x"}, {"design": "e"})
+
+    class Q:
+        design = P.design.model_copy(update={"design": "other"})
+    run({"a.stl": "x"}, {"design": "d"}, Q)
+    monkeypatch.setenv("HWGEN_CHECK_SAMPLES", "32")
+    run({"a.stl": "x"}, {"design": "d"})
+    assert len(runs) == 5
+
+
+@pytest.mark.slow
+def test_parts_writes_only_the_parts_it_names_and_the_whole_manifest(built, tmp_path):
+    """--parts 'disk_*' (the session's cache holds the prototype): the disks' files and nothing
+    else, a manifest with every part as the whole build has it; a pattern that names no part is
+    bad input naming --parts."""
+    from hwgen.pipeline import build, load, stale_reason
+    from .test_hostile import run_cli
+    whole = json.loads((built("prototype") / "manifest.json").read_text())
+    loaded = load(PARAMS / "prototype.yaml")
+    res = build(loaded, tmp_path / "out", parts="disk_*")
+    disks = sorted(p["name"] for p in whole["parts"] if p["name"].startswith("disk_"))
+    assert sorted(_tree(res.folder)) == ["manifest.json"] + [f"step/{n}.step" for n in disks] + \
+        [f"stl/{n}.stl" for n in disks]
+    assert res.manifest["parts"] == whole["parts"] and res.manifest["parts_written"]["names"] == disks
+    for n in disks:
+        assert _tree(res.folder)[f"stl/{n}.stl"] == _tree(built("prototype"))[f"stl/{n}.stl"]
+    assert "missing" in stale_reason(res.folder, loaded)          # hwgen check builds it whole first
+    code, stdout, stderr, escaped = run_cli("build", str(PARAMS / "prototype.yaml"), "--out", str(tmp_path / "o2"),
+                                            "-q", "--parts", "tensioner_w*")
+    n = sum(p["name"].startswith(("tensioner_worm", "tensioner_wheel")) for p in whole["parts"])
+    assert escaped is None and code == 0 and f"{n} of {len(whole['parts'])} parts written" in stdout, stdout
+    code, _, stderr, escaped = run_cli("build", str(PARAMS / "prototype.yaml"), "--out", str(tmp_path / "o3"),
+                                       "-q", "--parts", "gear_*")
+    assert escaped is None and code == 2 and "--parts: 'gear_*' matches none of the parts: disk_00" in stderr
+    assert not (tmp_path / "o3" / "prototype").exists()
+
+
+@pytest.mark.slow
+def test_parts_built_in_worker_processes_have_the_bytes_of_a_serial_build(fresh, tmp_path):
+    """--jobs 2 without a cache: every unit is built in a forkserver worker, the assembly is put
+    together from their BREP; every file has the bytes of the serial build."""
+    from hwgen.pipeline import build
+    loaded, _, first = fresh
+    res = build(loaded, tmp_path / "out", post_build=False, cache_dir=None, jobs=2)
+    assert sorted(res.built) == sorted(p["name"] for p in res.manifest["parts"])
+    assert _tree(res.folder) == first
