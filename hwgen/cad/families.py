@@ -19,8 +19,8 @@ from contextlib import contextmanager
 from typing import NamedTuple
 
 from ..errors import DesignError, InputError, clip
-from ..model.fixtures import jig_layout, mount_layout
-from ..model.plan import Plan
+from ..model.fixtures import jig_layout
+from ..model.plan import Plan, base_mount
 from . import Part
 
 MIN_VOLUME_MM3 = 1e-6       # a solid with less than this is an empty result, not a part
@@ -84,7 +84,7 @@ def _tensioner_units(plan: Plan) -> list[Unit]:
 
 def _mount_units(plan: Plan) -> list[Unit]:
     d = plan.design
-    inputs = (mount_layout(d), d.disks.end_thickness, d.base_mount)      # what build_mount reads
+    inputs = (base_mount(plan), d.disks.end_thickness, d.base_mount)      # what build_mount reads
     return [Unit(inputs, 2, lambda: _mount(plan))]
 
 

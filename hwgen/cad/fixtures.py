@@ -11,9 +11,8 @@ from collections.abc import Iterator
 import cadquery as cq
 import numpy as np
 
-from ..model.fixtures import (NUT_AF, NUT_DEPTH, NUT_PLAY, NUT_THICK, JigLayout, MountLayout, jig_layout,
-                              mount_layout)
-from ..model.plan import Plan
+from ..model.fixtures import NUT_AF, NUT_DEPTH, NUT_PLAY, NUT_THICK, JigLayout, MountLayout, jig_layout
+from ..model.plan import Plan, base_mount
 from . import Part, placement
 
 MOUNT_COLOR = (0.35, 0.40, 0.48, 1.0)     # slate: it stays on the table
@@ -110,7 +109,7 @@ def _to_file(solid: cq.Solid, shift, along_x: bool = False) -> tuple[cq.Solid, n
 
 def build_mount(plan: Plan) -> Iterator[Part]:
     d = plan.design
-    lay = mount_layout(d, [(x, z) for x, z, _ in plan.disks[0].mount_holes])
+    lay = base_mount(plan)
     lower, upper = mount_solids(lay)
     t_disk = d.disks.end_thickness
     depth = lay.y_face - lay.y_back

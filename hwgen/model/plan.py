@@ -14,7 +14,7 @@ from ..params import Design
 from . import kinematics as kin
 from . import screws
 from .crossings import crossing_angles, in_strip_plane, strip_crossings
-from .fixtures import base_length, disk_screw_region
+from .fixtures import MountLayout, base_length, disk_screw_region, mount_layout
 from .fixing import disk_role, disk_thicknesses, hub_lengths, hub_spec, seats_for
 from .routing import TendonPath, tendon_paths
 from .specs import BackboneHole, BackboneSpec, DiskSpec, Hole, Merge
@@ -44,6 +44,11 @@ class Plan:
     @property
     def stations(self) -> tuple[float, ...]:
         return self.design.stations
+
+
+def base_mount(plan: Plan) -> MountLayout:
+    """The base mount laid out around the plan's base-disk screws."""
+    return mount_layout(plan.design, [(x, z) for x, z, _ in plan.disks[0].mount_holes])
 
 
 def hole_diameter(d: float, thickness: float, alpha: float, clearance: float, minimum: float) -> float:
