@@ -1,0 +1,141 @@
+"""The statics in newtons (hwgen.model.statics) against closed forms and independent computations:
+the cantilever's 3EI/L³, the large-deflection elastica from elliptic integrals, a routed tendon's
+constant curvature τd/EI and its shortening d·θ, the stiffening of a locked pair 4(1+β)/(4+β),
+a tendon crossing the strip at mid-length; then the prototype's states (hwgen.model.stiffness),
+built from the plan (numpy only, no CAD)."""
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+from scipy.special import ellipe, ellipeinc, ellipk, ellipkinc
+
+from hwgen.model import statics as st
+
+L = 270.0
+SECTION = st.Section(E=50e3, G=4e3, height=60.0, thickness=0.59)
+EI = SECTION.ei_flex
+UP = (0.0, 0.0, 1.0)
+
+
+def strip(tendons=(), **kw) -> st.Model:
+    return st.Model(st.Robot(L, SECTION, tendons=tuple(tendons), **kw))
+
+
+def routed(name, zs, k=1.0, n_disks=28):
+    """A tendon through n_disks equally spaced disks with z = zs(s) (x = 0)."""
+    s = np.linspace(0.0, L, n_disks)
+    pts = np.column_stack([np.zeros_like(s), zs(s)])
+    return st.TendonLine(name, name, tuple(s), pts, k)
+
+
+def elastica_tip_load(P):
+    """Cantilever under a dead tip force P (Bisshopp & Drucker 1945): tip drop, tip reach, tip angle.
+    With α the tip angle, p² = (1 + sin α)/2, sin φ₀ = 1/(p√2): L√(P/EI) = K(p) − F(φ₀, p),
+    drop = L − 2√(EI/P)(E(p) − E(φ₀, p)), reach = √(2 EI sin α / P)."""
+    lam = L * math.sqrt(P / EI)
+
+    def parts(a):
+        m = (1 + math.sin(a)) / 2
+        return m, math.asin(min(1.0, 1 / math.sqrt(2 * m)))
+
+    a = brentq(lambda a: ellipk(parts(a)[0]) - ellipkinc(parts(a)[1], parts(a)[0]) - lam, 1e-9, math.pi / 2 - 1e-12,
+               xtol=1e-15)
+    m, phi = parts(a)
+    drop = L - 2 * math.sqrt(EI / P) * (ellipe(m) - ellipeinc(phi, m))
+    return drop, math.sqrt(2 * EI * math.sin(a) / P), a
+
+
+# ------------------------------------------------------------------ the bare strip
+
+def test_tip_stiffness_is_3EI_over_L3():
+    eq = st.solve(strip(), st.Loads())
+    k = eq.point_stiffness(L, UP)
+    assert k == pytest.approx(3 * EI / L ** 3, rel=0.01)
+    # the same from a finite push: the Hessian's answer is the small-push limit
+    f = 1e-4
+    pushed = st.solve(eq.model, st.Loads(forces=((L, (0.0, 0.0, f)),)))
+    assert f / pushed.at(L)[2] == pytest.approx(k, rel=1e-3)
+
+
+@pytest.mark.parametrize("load_factor", [1.0, 3.0, 8.0])
+def test_large_deflection_tip_load_matches_the_elastica(load_factor):
+    P = load_factor * EI / L ** 2
+    eq = st.solve(strip(), st.Loads(forces=((L, (0.0, 0.0, -P)),)))
+    drop, reach, angle = elastica_tip_load(P)
+    tip = eq.at(L)
+    assert -tip[2] == pytest.approx(drop, rel=0.01)
+    assert tip[1] == pytest.approx(reach, rel=0.01)
+    assert -eq.tip_angle() == pytest.approx(angle, rel=0.01)
+    assert angle > math.radians(25)            # large deflection indeed
+
+
+def test_stiff_direction_and_torsion_follow_the_section():
+    eq = st.solve(strip(), st.Loads())
+    assert eq.point_stiffness(L, (1.0, 0.0, 0.0)) == pytest.approx(3 * SECTION.ei_stiff / L ** 3, rel=0.01)
+    assert eq.twist_stiffness() == pytest.approx(SECTION.gj / L, rel=0.01)
+
+
+def test_a_rigid_span_shortens_the_bending_length():
+    """Holding [100, 150] straight: the tip compliance is the bare one less ∫ over the span of (L−s)²/EI."""
+    from hwgen.model.sag import Span
+    held = st.Stiffening(flex=(Span(100.0, 150.0, math.inf),), torsion=(Span(100.0, 150.0, math.inf),),
+                         stiff=(Span(100.0, 150.0, math.inf),))
+    eq = st.solve(strip(stiffening=held), st.Loads())
+    c = (L ** 3 - ((L - 100) ** 3 - (L - 150) ** 3)) / (3 * EI)
+    assert eq.point_stiffness(L, UP) == pytest.approx(1 / c, rel=0.01)
+
+
+# ------------------------------------------------------------------ tendons
+
+def test_one_straight_tendon_bends_to_constant_curvature():
+    d, tau = 10.0, 2.0
+    model = strip([routed("T", lambda s: np.full_like(s, d))])
+    straight = st.straight_lengths(model)["T"]
+    eq = st.solve(model, st.Loads(tendons={"T": ("tension", tau)}))
+    kappa = tau * d / EI
+    # the tangent turns at the same rate everywhere: angle(s) = κ s
+    n = len(eq.s)
+    for k in (n // 4, n // 2, 3 * n // 4, n - 1):
+        t = eq.frames[k][:, 1]
+        assert math.atan2(t[2], t[1]) == pytest.approx(kappa * eq.s[k], rel=0.01)
+    theta = eq.tip_angle()
+    assert straight - eq.lengths["T"] == pytest.approx(d * theta, rel=0.01)
+
+
+def test_a_locked_pair_stiffens_by_4_1_plus_beta_over_4_plus_beta():
+    d, EA = 10.0, 510.0
+    beta = 2 * EA * d ** 2 / EI                       # ≈ 2; each tendon a spring of EA/L
+    k = EA / L
+    model = strip([routed("P", lambda s: np.full_like(s, d), k), routed("M", lambda s: np.full_like(s, -d), k)])
+    eq = st.solve(model, st.Loads(tendons=st.locked_at(model, {"P": 2.0, "M": 2.0})))
+    ratio = eq.point_stiffness(L, UP) / (3 * EI / L ** 3)
+    assert ratio == pytest.approx(4 * (1 + beta) / (4 + beta), rel=0.02)
+    assert ratio > 1.5                                # the pair does stiffen
+
+
+def test_a_tendon_crossing_at_mid_length_keeps_its_length_and_tension():
+    d, tau, k = 10.0, 3.0, 5.0
+    act = routed("A", lambda s: np.full_like(s, 30.0))
+    cross = routed("X", lambda s: d * (1 - 2 * s / L), k)
+    model = strip([act, cross])
+    lock = st.locked_at(model, {"X": 2.0})
+    free = st.solve(model, st.Loads(tendons={"A": ("tension", tau)}))
+    rest = st.solve(model, st.Loads(tendons=lock))          # locked, the actuator idle (X's own S-bend)
+    held = st.solve(model, st.Loads(tendons={"A": ("tension", tau), **lock}))
+    theta = free.tip_angle()
+    assert theta > math.radians(20)
+    straight = st.straight_lengths(model)["X"]
+    # a straight tendon at offset d would change by d·θ; the crossing one by a small part of it
+    assert abs(free.lengths["X"] - straight) < 0.02 * d * theta
+    assert abs(held.tensions["X"] - rest.tensions["X"]) < 0.02 * k * d * theta
+    assert held.tip_angle() - rest.tip_angle() == pytest.approx(theta, rel=0.02)   # no coupling through the holes
+
+
+def test_a_locked_tendon_never_pushes():
+    model = strip([routed("T", lambda s: np.full_like(s, 10.0), 5.0)])
+    # locked 1 mm longer than the straight path: slack, so the strip is as bare
+    lock = {"T": ("locked", st.straight_lengths(model)["T"] + 1.0)}
+    eq = st.solve(model, st.Loads(tendons=lock))
+    assert eq.tensions["T"] == 0.0
+    assert eq.point_stiffness(L, UP) == pytest.approx(3 * EI / L ** 3, rel=0.01)
