@@ -139,3 +139,67 @@ def test_a_locked_tendon_never_pushes():
     eq = st.solve(model, st.Loads(tendons=lock))
     assert eq.tensions["T"] == 0.0
     assert eq.point_stiffness(L, UP) == pytest.approx(3 * EI / L ** 3, rel=0.01)
+
+
+# ------------------------------------------------------------------ the prototype, from its plan
+
+COARSE_MM = 3.0          # segments of the prototype's strip in these tests: the relations, not the figures
+
+
+@pytest.fixture(scope="module")
+def prototype():
+    from hwgen import params
+    from hwgen.model import stiffness as sf
+    from hwgen.model.plan import plan
+    design = params.read("params/prototype.yaml").design
+    desc = sf.describe(plan(design))
+    model = st.Model(desc.robot, COARSE_MM)
+    return sf, design, desc, model
+
+
+def _state(prototype, channels):
+    sf, design, desc, model = prototype
+    name = "".join(channels) or "N"
+    res, _ = sf.state_result(desc, model, sf.State(name, tuple(channels)))
+    return np.array([d["stiffness_n_per_mm"] for d in res["disks"]])
+
+
+def test_the_nine_states_are_the_papers_and_follow_the_channels(prototype):
+    sf, design, _, _ = prototype
+    assert [s.name for s in sf.states(design)] == ["N", "A", "AC2", "AH", "AC2H", "AC1", "AC1C2", "AC1H", "AC1C2H"]
+    tendons = tuple(t.model_copy(update={"channel": "P"}) if t.channel == "A" else t for t in design.tendons)
+    renamed = design.model_copy(update={"tendons": tendons, "tensioner": design.tensioner.model_copy(
+        update={"channels": ("P", "Q", "C1", "C2", "H"), "actuating_channel": "P"})})
+    names = [s.name for s in sf.states(renamed)]
+    assert names[:3] == ["N", "P", "PC2"]               # no tendon on Q: no state with it
+    assert all("Q" not in n for n in names) and len(names) == 9
+
+
+def test_every_stiffening_state_is_stiffer_than_A_at_every_disk(prototype):
+    a = _state(prototype, ("A",))
+    full = _state(prototype, ("A", "C1", "C2", "H"))
+    assert np.all(full > a)
+
+
+@pytest.mark.parametrize("removed", ["C1", "C2", "H"])
+def test_removing_a_stiffening_tendon_never_raises_tip_stiffness(prototype, removed):
+    full = _state(prototype, ("A", "C1", "C2", "H"))
+    fewer = _state(prototype, tuple(c for c in ("A", "C1", "C2", "H") if c != removed))
+    assert fewer[-1] <= full[-1] * (1 + 1e-6)
+
+
+def test_the_hub_section_is_a_closed_tube_until_a_window_cuts_it(prototype):
+    sf, _, desc, _ = prototype
+    from hwgen.model.plan import plan
+    p = plan(prototype[1])
+    uncut = next(d for d in p.disks if d.hub is not None and not d.hub.windows)
+    cut = next(d for d in p.disks if d.hub is not None and d.hub.windows)
+    wall = prototype[1].disks.hub.wall
+    Ix, Iz, J, area = sf._hub_section(uncut, wall)
+    w, h = uncut.slot_width, uncut.slot_height
+    # the uncut hub: outer rectangle less the slot
+    assert Ix == pytest.approx(((w + 2 * wall) * (h + 2 * wall) ** 3 - w * h ** 3) / 12, rel=1e-9)
+    assert area == pytest.approx((w + 2 * wall) * (h + 2 * wall) - w * h, rel=1e-9)
+    am = (w + wall) * (h + wall)                      # Bredt's closed thin-walled tube
+    assert J == pytest.approx(4 * am ** 2 * wall / (2 * (w + wall) + 2 * (h + wall)), rel=1e-9)
+    assert sf._hub_section(cut, wall)[2] < J / 5      # an open section twists far more easily
