@@ -268,6 +268,40 @@ def _on_outputs(doing: str, quiet: bool, run):
 
 
 @_command
+def stiffness(params: Path = PARAMS, out_dir: Path = OUT,
+              states: str = typer.Option(None, "--states", help="comma-separated tendon states (default: all, "
+                                                                 "the nine of the paper's Fig. 8 for the prototype)"),
+              quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner")) -> None:
+    """Stiffness in newtons per tendon state: at every disk and in torsion at the tip, and the shape under gravity.
+
+    From the parameters alone (no CAD): stiffness.json, stiffness.png (Fig. 8 style) and gravity.png (Fig. 7 style) in OUT/<design>/.
+    """
+    loaded = _load(params)
+    from .pipeline import stiffness as run_stiffness
+
+    which = [s.strip() for s in states.split(",") if s.strip()] if states else None
+    with err.status(Text(f"solving {loaded.design.design}"), spinner="dots") if not quiet else nullcontext():
+        rep, folder = run_stiffness(loaded, out_dir, which)
+    ref = next((s for s in rep["states"] if s["state"] == rep["endpoint_ratio"]["states"][1]), None)
+    t = Table(title=f"{loaded.design.design}: stiffness per tendon state (robot horizontal, own weight)")
+    for col in ("state", "tip N/mm", "× " + (ref["state"] if ref else "-"), "least disk N/mm", "tip torsion N·mm/rad",
+                "tip sag mm"):
+        t.add_column(col, justify="right" if col != "state" else "left")
+    for s in rep["states"]:
+        least = min(d["stiffness_n_per_mm"] for d in s["disks"])
+        t.add_row(s["state"], f"{s['tip_stiffness_n_per_mm']:.4f}",
+                  f"{s['tip_stiffness_n_per_mm'] / ref['tip_stiffness_n_per_mm']:.2f}" if ref else "-",
+                  f"{least:.4f}", f"{s['tip_torsion_nmm_per_rad']:.0f}", f"{s['tip_sag_mm']:.1f}")
+    out.print(t)
+    r = rep["endpoint_ratio"]
+    if r["ratio"] is not None:
+        out.print(f"endpoint stiffness {r['states'][0]}/{r['states'][1]}: {r['ratio']:.2f}× (the paper measured "
+                  f"{r['paper']:g}× on its prototype); model: {rep['model']}")
+    for name in ("stiffness.json", "stiffness.png", "gravity.png"):
+        out.print(f"  {printable(folder / name)}")
+
+
+@_command
 def schema() -> None:
     """Print the JSON Schema of the parameter YAML (for editors)."""
     from .params import json_schema

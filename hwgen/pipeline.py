@@ -33,12 +33,15 @@ from .checks.measure import read_manifest
 from .checks.report import write_summary
 from .checks.run import run_checks
 from .model import feasibility
+from .model import stiffness as statics_study
 from .model.materials import printed_density
 from .model.plan import Plan, plan as make_plan
 from .outputs import bom, pictures
 from .outputs.plots import plot_lengths, plot_sag, plot_tolerance
+from .outputs.stiffness import plot_gravity, plot_stiffness
 
 REPORT, PLOT, SUMMARY, SAG, TOLERANCE = "report.json", "lengths.png", "summary.md", "sag.png", "tolerance.png"
+STIFFNESS, STIFFNESS_PLOT, GRAVITY_PLOT = "stiffness.json", "stiffness.png", "gravity.png"
 
 
 def load(path: str | Path) -> params.LoadedDesign:
@@ -240,3 +243,23 @@ def render(loaded: params.LoadedDesign, out_root: Path) -> tuple[dict, Path, str
         draw(plan, tmp, manifest)
         write_json(tmp / "manifest.json", manifest)
     return manifest["render"], folder, None
+
+
+def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | None = None) -> tuple[dict, Path]:
+    """`hwgen stiffness`: the statics of every tendon state (or those named) from the plan alone,
+    written as stiffness.json, stiffness.png and gravity.png into ``out_root/<design>/`` (added to
+    what is there; a later build replaces the folder and drops them). Returns (report, folder)."""
+    plan = design_plan(loaded)
+    if which:
+        known = [s.name for s in statics_study.states(plan.design)]
+        for name in which:
+            if name not in known:
+                raise InputError("--states", "--states", f"unknown state {name!r}; this design's are "
+                                                         f"{', '.join(known)}")
+    report = statics_study.study(plan, which)
+    folder = Path(out_root) / loaded.design.design
+    with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
+        write_json(tmp / STIFFNESS, report)
+        plot_stiffness(report, tmp / STIFFNESS_PLOT)
+        plot_gravity(report, tmp / GRAVITY_PLOT)
+    return report, folder
