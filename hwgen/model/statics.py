@@ -36,10 +36,11 @@ fixed to the tip frame; external forces act at nodes. The total potential
 
     V(θ) = U + Σ tendon energies + Σ m g·z − Σ F·p
 
-is minimised over every joint's rotation with scipy's trust-region method on the exact Hessian
+is minimised over every joint's rotation with scipy's trust-region method on the Hessian
 (``trust-krylov``): the gradient is analytic (each joint's generalised force is the moment, about
 the joint, of every force beyond it, through the rotation's right Jacobian); the Hessian is the
-central difference of that gradient, all perturbations evaluated in one vectorised pass. No
+difference of that gradient, all perturbations evaluated in one vectorised pass (forward while
+iterating, central at the equilibrium, where it gives the stiffness). No
 shooting: a locked tendon's length is a constraint shooting methods are known to converge badly
 on.
 
@@ -362,15 +363,22 @@ class Model:
         V = V + 0.5 * np.sum(self.dof_stiff * q * q, axis=1)
         return V, grad
 
-    def hessian(self, q: np.ndarray, loads: Loads, step: float = FD_STEP) -> np.ndarray:
-        """d²V/dq² by central differences of the analytic gradient, in one vectorised pass."""
+    def hessian(self, q: np.ndarray, loads: Loads, step: float = FD_STEP, central: bool = True) -> np.ndarray:
+        """d²V/dq² by differences of the analytic gradient, in one vectorised pass: central (error
+        ~step², for the stiffness) or forward (half the work, error ~step: the solver's steps)."""
         n = self.n_dof
-        Q = np.repeat(q[None, :], 2 * n, axis=0)
         idx = np.arange(n)
-        Q[idx, idx] += step
-        Q[n + idx, idx] -= step
-        _, g = self.energy_and_gradient(Q, loads)
-        H = (g[:n] - g[n:]) / (2 * step)
+        if central:
+            Q = np.repeat(q[None, :], 2 * n, axis=0)
+            Q[idx, idx] += step
+            Q[n + idx, idx] -= step
+            _, g = self.energy_and_gradient(Q, loads)
+            H = (g[:n] - g[n:]) / (2 * step)
+        else:
+            Q = np.repeat(q[None, :], n + 1, axis=0)
+            Q[idx, idx] += step
+            _, g = self.energy_and_gradient(Q, loads)
+            H = (g[:n] - g[n]) / step
         return 0.5 * (H + H.T)
 
     # -------------------------------------------------------------- Jacobians of outputs
@@ -478,7 +486,7 @@ def solve(model: Model, loads: Loads, q0: np.ndarray | None = None, gtol: float 
 
     if n:
         with threadpool_limits(BLAS_THREADS, user_api="blas"):
-            res = minimize(lambda x: fg(x)[0], x0, jac=lambda x: fg(x)[1], hess=lambda x: model.hessian(x, loads),
+            res = minimize(lambda x: fg(x)[0], x0, jac=lambda x: fg(x)[1], hess=lambda x: model.hessian(x, loads, central=False),
                            method="trust-krylov", options={"gtol": gtol, "maxiter": max_iter})
         x, its = res.x, int(res.nit)
     else:
@@ -501,6 +509,21 @@ def straight_lengths(model: Model) -> dict:
 
 def locked_at(model: Model, pretension: dict) -> dict:
     """Loads entries that lock each named tendon at the length its pre-tension gives in the straight
-    robot (ℓ₀ = ℓ_straight − τ/k): {name: ("locked", ℓ₀)}."""
+    robot (ℓ₀ = ℓ_straight − τ/k): {name: ("locked", ℓ₀)}. The robot held straight while they are
+    locked; let go, a tendon that bends the strip (one that is not straight) relaxes."""
     ls = straight_lengths(model)
     return {name: ("locked", ls[name] - tau / model.robot.tendon(name).stiffness) for name, tau in pretension.items()}
+
+
+def locked_settled(model: Model, pretension: dict, base: Loads | None = None) -> tuple[dict, Equilibrium]:
+    """Loads entries that lock each named tendon so that it carries its pre-tension in the robot as
+    it settles under them (and ``base``'s other loads): the tendons pulled with those tensions
+    (tension-controlled), the robot let find its shape, each then locked at ℓ₀ = ℓ − τ/k. The
+    locked robot is in the same equilibrium, so each tendon keeps exactly its pre-tension there.
+    Returns ({name: ("locked", ℓ₀)}, that equilibrium)."""
+    base = base or Loads()
+    pulled = Loads(tendons={**base.tendons, **{n: ("tension", t) for n, t in pretension.items()}},
+                   gravity=base.gravity, forces=base.forces)
+    eq = solve(model, pulled)
+    locks = {n: ("locked", eq.lengths[n] - t / model.robot.tendon(n).stiffness) for n, t in pretension.items()}
+    return locks, eq

@@ -249,11 +249,14 @@ def describe(plan) -> Described:
                      {p.name: p.channel for p in plan.paths}, stations, masses)
 
 
-def state_loads(desc: Described, model: st.Model, state: State, gravity=GRAVITY, forces=()) -> st.Loads:
-    """The loads of a tendon state: its channels' tendons locked at their pre-tension."""
+def state_loads(desc: Described, model: st.Model, state: State, gravity=GRAVITY,
+                forces=()) -> tuple[st.Loads, np.ndarray]:
+    """The loads of a tendon state: its channels' tendons locked where each carries its pre-tension
+    with the robot weightless (tensioned on the bench), then the weight and the forces; and the
+    weightless shape (a start for the solver)."""
     names = [t.name for t in desc.robot.tendons if t.channel in state.channels]
-    return st.Loads(tendons=st.locked_at(model, {n: desc.pretension[n] for n in names}), gravity=gravity,
-                    forces=tuple(forces))
+    locks, settled = st.locked_settled(model, {n: desc.pretension[n] for n in names})
+    return st.Loads(tendons=locks, gravity=gravity, forces=tuple(forces)), settled.q
 
 
 def _curve(eq: st.Equilibrium) -> dict:
@@ -265,7 +268,8 @@ def _curve(eq: st.Equilibrium) -> dict:
 
 def state_result(desc: Described, model: st.Model, state: State, q0=None) -> tuple[dict, st.Equilibrium]:
     """One state settled under its weight: shape, tensions, stiffness at every disk, tip torsion."""
-    eq = st.solve(model, state_loads(desc, model, state), q0)
+    loads, settled = state_loads(desc, model, state)
+    eq = st.solve(model, loads, settled if q0 is None else q0)
     k = eq.point_stiffnesses(desc.stations[1:], PUSH)
     disks = [{"disk": i, "s_mm": s, "stiffness_n_per_mm": float(v)}
              for i, (s, v) in enumerate(zip(desc.stations[1:], k), start=1)]
@@ -308,7 +312,8 @@ def study(plan, which: list[str] | None = None, h_max: float = st.H_MAX) -> dict
                  "pre-tension; energy minimisation (hwgen.model.statics)" % h_max,
         "assumptions": [
             "robot horizontal, its flexible direction (z) along gravity; pushes along gravity; tangent stiffness",
-            "locked lengths set with the robot held straight and weightless (ℓ0 = ℓ_straight − τ/k)",
+            "each locked tendon carries its pre-tension in the weightless robot as those tensions settle it "
+            "(tensioned on the bench, then locked: ℓ0 = ℓ − τ/k); then turned horizontal under its weight",
             "strip inextensible and unshearable; disks' plates rigid, hubs glued and as their sections say",
             "eyelets without play or friction (the taut-path study covers play); tendons weightless",
             "masses " + desc.masses["how"],
@@ -323,3 +328,63 @@ def study(plan, which: list[str] | None = None, h_max: float = st.H_MAX) -> dict
         "dof": model.n_dof,
         "seconds": time.perf_counter() - t0,
     }
+
+
+# ------------------------------------------------------------------ the bending sweep
+
+SWEEP_H_MAX = 3.0          # mm: the sweep's rod segments (its tensions move < 1 % from 1.5 mm; twice as fast)
+SWEEP_FIRST_DEG = 5.0      # the first haul-in aims at this angle; later ones at the sweep's step
+
+
+def _inner(desc: Described, model: st.Model, sign: int) -> str:
+    """The actuating tendon that shortens most when the robot bends toward sign·z."""
+    eq = st.solve(model, st.Loads(forces=((desc.robot.length, (0.0, 0.0, sign * 1e-3)),)))
+    base = st.straight_lengths(model)
+    return min(desc.actuating, key=lambda n: eq.lengths[n] - base[n])
+
+
+def sweep(desc: Described, model: st.Model, max_deg: float, step_deg: float, locked: bool = True) -> dict:
+    """Bend the weightless robot from straight to ±max_deg by hauling in the actuating tendon on the
+    inside of the bend (displacement-controlled, its drum turning), the other actuating tendons
+    held at their pre-tension by the drive, the stiffening tendons locked at theirs (``locked``) or
+    slack. At each angle of the sweep: every tendon's tension, N.
+
+    Each direction is a continuation: the haul-in grows by what the last step's angle per
+    millimetre predicts for the next angle, each solve starting from the last; the tensions are
+    then interpolated (linearly) at the sweep's angles."""
+    stiff = [n for n in desc.stiffening if locked]
+    angles = np.arange(0.0, max_deg + 1e-9, step_deg)
+    if angles[-1] < max_deg - 1e-9:
+        angles = np.r_[angles, max_deg]
+    out = {}
+    for sign in (1, -1):
+        inner = _inner(desc, model, sign)
+        others = [n for n in desc.actuating if n != inner]
+        base = {n: ("tension", desc.pretension[n]) for n in others}
+        held, _ = st.locked_settled(model, {n: desc.pretension[n] for n in [inner, *stiff]}, st.Loads(tendons=base))
+        ell0 = held[inner][1]
+        q = None
+        rows = []                     # (angle deg, tensions)
+        delta, per_mm = 0.0, None
+        target = 0.0
+        while True:
+            loads = st.Loads(tendons={**held, **base, inner: ("locked", ell0 - delta)})
+            eq = st.solve(model, loads, q)
+            q = eq.q
+            ang = sign * math.degrees(eq.tip_angle())
+            rows.append((ang, dict(eq.tensions)))
+            if ang >= max_deg - 1e-6 or len(rows) > 4 * len(angles) + 10:
+                break
+            if delta > 0:
+                per_mm = (ang - rows[0][0]) / delta
+            target = min(max_deg, (SWEEP_FIRST_DEG if per_mm is None else ang + step_deg))
+            if per_mm is None or per_mm <= 0:
+                delta += SWEEP_FIRST_DEG * math.pi / 180 * 30.0
+            else:
+                delta += (target - ang) / per_mm * (1.0 if target < max_deg else 1.02)
+        a = np.array([r[0] for r in rows])
+        names = list(rows[0][1])
+        table = {n: np.interp(angles, a, [r[1][n] for r in rows]).tolist() for n in names}
+        out["+" if sign > 0 else "-"] = {"inner": inner, "angles_deg": (sign * angles).tolist(), "tensions_n": table,
+                                         "reached_deg": float(a[-1]), "solves": len(rows)}
+    return out
