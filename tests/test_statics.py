@@ -214,3 +214,54 @@ def test_the_hub_section_is_a_closed_tube_until_a_window_cuts_it(prototype):
     am = (w + wall) * (h + wall)                      # Bredt's closed thin-walled tube
     assert J == pytest.approx(4 * am ** 2 * wall / (2 * (w + wall) + 2 * (h + wall)), rel=1e-9)
     assert sf._hub_section(cut, wall)[2] < J / 5      # an open section twists far more easily
+
+
+# ------------------------------------------------------------------ the verdict in newtons (checks)
+
+@pytest.fixture(scope="module")
+def swept():
+    from hwgen import params
+    from hwgen.checks.tension import sweeps
+    from hwgen.model.plan import plan
+    design = params.read("params/prototype.yaml").design
+    p = plan(design)
+    return design, p, sweeps(p)
+
+
+def test_the_prototype_keeps_its_stiffening_tendons_taut_without_coupling(swept):
+    from hwgen.checks.tension import tension_checks
+    design, p, sw = swept
+    rep, checks = tension_checks(p, {"tendons": []}, {}, sw)
+    by = {(c.id, c.where.get("tendon")): c for c in checks}
+    for name in ("C1", "C2", "H"):
+        assert by[("tendon.taut", name)].passed and by[("tendon.overload", name)].passed
+    coupling = next(c for c in checks if c.id == "actuation.coupling")
+    assert coupling.passed and abs(coupling.measured) < design.check.max_coupling
+    # the swing is what locking does: each starts at its pre-tension in the straight robot
+    for t in rep["tendons"]:
+        assert t["least_n"] <= t["pretension_n"] + 1e-6 <= t["greatest_n"] + 2e-6
+
+
+def test_the_as_built_excess_lowers_the_least_tension_at_the_spring_rate(swept):
+    from hwgen.checks.tension import tension_checks
+    design, p, sw = swept
+    nominal, _ = tension_checks(p, {"tendons": []}, {}, sw)
+    built, checks = tension_checks(p, {"tendons": [{"name": "H", "robust_mm": 0.3}, {"name": "C2", "robust_mm": 9.0}]},
+                                   {"H": 0.1}, sw)
+    h0 = next(t for t in nominal["tendons"] if t["name"] == "H")
+    h1 = next(t for t in built["tendons"] if t["name"] == "H")
+    assert h1["least_as_built_n"] == pytest.approx(h0["least_n"] - 0.2 * h0["spring_n_per_mm"], rel=1e-9)
+    c2 = next(c for c in checks if c.id == "tendon.taut" and c.where["tendon"] == "C2")
+    assert not c2.passed and c2.severity == design.check.robust_severity     # slack only as built
+
+
+def test_a_stiffening_tendon_locked_too_loose_goes_slack_and_fails():
+    from hwgen import params
+    from hwgen.checks.tension import tension_checks
+    from hwgen.model.plan import plan
+    design = params.read("params/prototype.yaml").design
+    tendons = tuple(t.model_copy(update={"pretension_n": 0.6}) if t.name == "C2" else t for t in design.tendons)
+    half = design.check.model_copy(update={"max_angle_deg": 45.0})          # it goes slack before 45°
+    _, checks = tension_checks(plan(design.model_copy(update={"tendons": tendons, "check": half})), {"tendons": []}, {})
+    c2 = next(c for c in checks if c.id == "tendon.taut" and c.where["tendon"] == "C2")
+    assert not c2.passed and c2.severity == "error" and "SLACK" in c2.message

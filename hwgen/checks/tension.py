@@ -1,0 +1,107 @@
+"""The verdict in newtons: each stiffening tendon's tension over the bending sweep, and what the
+locked stiffening tendons cost the actuating pair (:mod:`hwgen.model.stiffness`,
+:mod:`hwgen.model.statics`).
+
+Model. The weightless robot bent from straight to ±check angle by hauling in the actuating
+tendon on the inside of the bend (its drum turning), the other actuating tendons held at their
+pre-tension, every stiffening tendon locked where it carries ``pretension_n`` in the weightless
+robot those tensions settle (tensioned on the bench); tendons as eq. (2) chords through the plan's eyelet centres, one-way springs of
+``tendon_material.axial_stiffness_n`` in series with ``tie_off_compliance_mm_per_n``. Then the
+same sweep with the stiffening tendons slack: the actuating tension's rise between the two is the
+coupling.
+
+As built. The statics runs through the eyelets' centres; the taut path as built (this report's
+``as_built.taut``) changes length by more. Where it does, the least tension is lowered by that
+excess (its ``check.robust`` statistic less the centre-line figure) at the tendon's full spring
+rate, as if it all went the slack way: a first-order bound, not a second statics.
+
+Checks: ``tendon.taut`` (least tension as built over ``check.taut_floor_n``; severity
+``check.robust_severity``), ``tendon.overload`` (greatest tension under
+``tendon_material.break_load`` / ``check.tendon_safety_factor``), ``actuation.coupling`` (the rise
+under ``check.max_coupling``) and ``actuation.tension`` (a warning: the actuating tendon's own
+tension at the sweep's end against the same allowable).
+"""
+from __future__ import annotations
+
+from ..model import statics as st
+from ..model import stiffness as sf
+from .base import Check
+
+SWEEP_STEP_DEG = 15.0      # the statics sweep's step: tensions are smooth in the angle; 7 solves a side
+FREE_STEP_DEG = 30.0       # the sweep without stiffening tendons is needed only at its end
+
+
+def sweeps(plan) -> tuple[sf.Described, dict, dict]:
+    """The statics of the sweep (the expensive part): the robot, and the sweep with the stiffening
+    tendons locked and with them slack."""
+    desc = sf.describe(plan)
+    model = st.Model(desc.robot, sf.SWEEP_H_MAX)
+    ang = plan.design.check_angle_deg
+    return (desc, sf.sweep(desc, model, ang, SWEEP_STEP_DEG, locked=True),
+            sf.sweep(desc, model, ang, FREE_STEP_DEG, locked=False))
+
+
+def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict, list[Check]]:
+    """(report, checks). ``taut``: this report's as-built taut study; ``centre_mm``: each tendon's
+    largest |ΔL| through the hole centres (eq. (2), measured); ``swept``: :func:`sweeps` of this
+    plan, if already at hand."""
+    d = plan.design
+    desc, locked, free = swept or sweeps(plan)
+    ang = d.check_angle_deg
+    allow = d.tendon_material.break_load / d.check.tendon_safety_factor
+    floor = d.check.taut_floor_n
+    rows = {r["name"]: r for r in taut.get("tendons", [])}
+    springs = {t.name: t.stiffness for t in desc.robot.tendons}
+    checks, tendons = [], []
+    for name in desc.stiffening:
+        values = [v for side in locked.values() for v in side["tensions_n"][name]]
+        lo, hi = min(values), max(values)
+        row = rows.get(name, {})
+        robust = row.get("robust_mm", row.get("taut_max_abs_delta_mm"))
+        excess = max(0.0, robust - centre_mm.get(name, 0.0)) if robust is not None else 0.0
+        lo_built = lo - springs[name] * excess
+        tendons.append({"name": name, "spring_n_per_mm": springs[name], "pretension_n": desc.pretension[name],
+                        "least_n": lo, "greatest_n": hi, "as_built_excess_mm": excess, "least_as_built_n": lo_built})
+        ok = lo_built > floor
+        sev = "error" if lo <= floor else d.check.robust_severity   # slack even through the centres: an error
+        msg = (f"{name}: locked at {desc.pretension[name]:g} N, its tension runs {lo:.2f}-{hi:.2f} N over "
+               f"±{ang:g}° (statics through the eyelet centres, spring {springs[name]:.2f} N/mm); as built "
+               f"({d.check.robust}) its path shortens {excess:.3f} mm more, so at least {lo_built:.2f} N: "
+               + ("taut" if ok else "SLACK") + f" (floor {floor:g} N)")
+        checks.append(Check("tendon.taut", sev, ok, msg, lo_built, floor, {"tendon": name}))
+        ok = hi < allow
+        checks.append(Check("tendon.overload", "error", ok,
+                            f"{name}: greatest tension over the sweep {hi:.2f} N, "
+                            f"{'under' if ok else 'over'} {d.tendon_material.break_load:g} N / "
+                            f"{d.check.tendon_safety_factor:g} = {allow:.1f} N", hi, allow, {"tendon": name}))
+    sides = []
+    for key in locked:
+        inner = locked[key]["inner"]
+        with_ = locked[key]["tensions_n"][inner][-1]
+        without = free[key]["tensions_n"][inner][-1]
+        rise = with_ / without - 1.0 if without > 0 else 0.0
+        sides.append({"side": key, "inner": inner, "with_stiffening_n": with_, "without_n": without, "rise": rise,
+                      "angles_deg": locked[key]["angles_deg"], "tensions_n": locked[key]["tensions_n"]})
+    worst = max(sides, key=lambda s: s["rise"])
+    limit = d.check.max_coupling
+    ok = worst["rise"] <= limit
+    checks.append(Check("actuation.coupling", "error", ok,
+                        f"{worst['inner']} needs {worst['with_stiffening_n']:.2f} N to bend the robot {ang:g}° with "
+                        f"the stiffening tendons locked, {worst['without_n']:.2f} N with them slack: "
+                        f"{worst['rise'] * 100:+.1f} % ({'within' if ok else 'over'} the {limit * 100:g} % allowed)",
+                        worst["rise"], limit, {"tendon": worst["inner"]}))
+    top = max(sides, key=lambda s: s["with_stiffening_n"])
+    ok = top["with_stiffening_n"] < allow
+    checks.append(Check("actuation.tension", "warning", ok,
+                        f"{top['inner']}: {top['with_stiffening_n']:.1f} N at {ang:g}° of bending "
+                        f"({'under' if ok else 'over'} the {allow:.1f} N a tendon may carry: "
+                        f"{d.tendon_material.break_load:g} N / {d.check.tendon_safety_factor:g})",
+                        top["with_stiffening_n"], allow, {"tendon": top["inner"]}))
+    report = {
+        "model": "weightless robot bent by hauling in the inner actuating tendon, the others at pre-tension; "
+                 "stiffening tendons locked at pre-tension (and again slack); discrete elastic rod with eq. (2) "
+                 "tendons as one-way springs (hwgen.model.statics); as built: the taut path's excess length "
+                 "change at the tendon's spring rate, first order",
+        "allowable_n": allow, "floor_n": floor, "tendons": tendons, "actuation": sides,
+    }
+    return report, checks
