@@ -97,7 +97,7 @@ def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict,
         inner = side["inner"]
         if inner is None or free[key]["inner"] != inner:
             continue
-        at = min(abs(side["angles_deg"][-1]), abs(free[key]["angles_deg"][-1]))    # the end both reached
+        at = min(ang, abs(side["angles_deg"][-1]), abs(free[key]["angles_deg"][-1]))   # the end both reached
         with_ = float(np.interp(at, np.abs(side["angles_deg"]), side["tensions_n"][inner]))
         without = float(np.interp(at, np.abs(free[key]["angles_deg"]), free[key]["tensions_n"][inner]))
         rise = with_ / without - 1.0 if without > 0 else 0.0
