@@ -27,7 +27,7 @@ from . import __version__, params
 from .atomic import new_folder, snapshot, write_json
 from .cad import export
 from .cad.families import build_parts, kernel_errors, part_count
-from .errors import InputError
+from .errors import InputError, clip
 from .cad.manifest import design_report, part_entry, sha256
 from .checks.measure import read_manifest
 from .checks.report import write_summary
@@ -254,8 +254,8 @@ def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | No
         known = [s.name for s in statics_study.states(plan.design)]
         for name in which:
             if name not in known:
-                raise InputError("--states", "--states", f"unknown state {name!r}; this design's are "
-                                                         f"{', '.join(known)}")
+                raise InputError(loaded.source, "--states", f"unknown state {clip(name)!r}; this design's are "
+                                                            f"{', '.join(known)}")
     report = statics_study.study(plan, which)
     folder = Path(out_root) / loaded.design.design
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:

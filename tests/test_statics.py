@@ -265,3 +265,24 @@ def test_a_stiffening_tendon_locked_too_loose_goes_slack_and_fails():
     _, checks = tension_checks(plan(design.model_copy(update={"tendons": tendons, "check": half})), {"tendons": []}, {})
     c2 = next(c for c in checks if c.id == "tendon.taut" and c.where["tendon"] == "C2")
     assert not c2.passed and c2.severity == "error" and "SLACK" in c2.message
+
+
+# ------------------------------------------------------------------ the command
+
+def test_hwgen_stiffness_writes_its_files_and_refuses_an_unknown_state(tmp_path):
+    import json
+    import subprocess
+    import sys
+    run = [sys.executable, "-m", "hwgen.cli", "stiffness", "params/prototype.yaml", "--out", str(tmp_path), "-q"]
+    r = subprocess.run(run + ["--states", "A,AC1"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    folder = tmp_path / "prototype"
+    rep = json.loads((folder / "stiffness.json").read_text())
+    assert [s["state"] for s in rep["states"]] == ["A", "AC1"]
+    assert rep["endpoint_ratio"]["states"] == ["AC1", "A"] and rep["endpoint_ratio"]["ratio"] > 1
+    for png in ("stiffness.png", "gravity.png"):
+        assert (folder / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "AC1/A" in r.stdout
+    bad = subprocess.run(run + ["--states", "AX"], capture_output=True, text=True, timeout=300)
+    assert bad.returncode == 2 and "--states: unknown state 'AX'" in bad.stderr
+    assert "prototype.yaml" in bad.stderr and "Traceback" not in bad.stderr
