@@ -164,6 +164,23 @@ def _state(prototype, channels):
     return np.array([d["stiffness_n_per_mm"] for d in res["disks"]])
 
 
+def test_state_N_sags_as_the_own_weight_model_shoots_it(prototype):
+    """The same loads (disks, strip, tip assembly off its tip) and hubs through hwgen.model.sag's
+    shooting elastica, an independent solver: the same tip."""
+    from hwgen.model import sag
+    _, _, desc, model = prototype
+    r = desc.robot
+    eq = st.solve(model, st.Loads(gravity=(0.0, 0.0, -1.0)))
+    sec = r.section
+    shot = sag.solve_sag(r.length, [s for s, _ in r.point_masses], [m for _, m in r.point_masses], E=sec.E,
+                         I=sec.ei_flex / sec.E, thickness=sec.thickness, strip_lin_density=sec.lin_density,
+                         tip_mass=r.tip_mass, tip_offset=r.tip_offset, spans=r.stiffening.flex)
+    tip = eq.at(r.length)
+    assert shot.tip_sag > 100                          # a large deflection
+    assert tip[1] == pytest.approx(shot.tip_y, rel=1e-3) and tip[2] == pytest.approx(shot.tip_z, rel=1e-3)
+    assert math.degrees(eq.tip_angle()) == pytest.approx(shot.tip_angle_deg, rel=1e-3)
+
+
 def test_the_nine_states_are_the_papers_and_follow_the_channels(prototype):
     sf, design, _, _ = prototype
     assert [s.name for s in sf.states(design)] == ["N", "A", "AC2", "AH", "AC2H", "AC1", "AC1C2", "AC1H", "AC1C2H"]
