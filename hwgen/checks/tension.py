@@ -13,7 +13,8 @@ coupling.
 As built. The statics runs through the eyelets' centres; the taut path as built (this report's
 ``as_built.taut``) changes length by more. Where it does, the least tension is lowered by that
 excess (its ``check.robust`` statistic less the centre-line figure) at the tendon's full spring
-rate, as if it all went the slack way: a first-order bound, not a second statics.
+rate, as if it all went the slack way (and the greatest raised by as much, as if it all went
+the taut way): a first-order bound, not a second statics.
 
 Checks: ``tendon.taut`` (least tension as built over ``check.taut_floor_n``; severity
 ``check.robust_severity``), ``tendon.overload`` (greatest tension under
@@ -78,8 +79,10 @@ def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict,
         robust = row.get("robust_mm", row.get("taut_max_abs_delta_mm"))
         excess = max(0.0, robust - centre_mm.get(name, 0.0)) if robust is not None else 0.0
         lo_built = lo - springs[name] * excess
+        hi_built = hi + springs[name] * excess
         tendons.append({"name": name, "spring_n_per_mm": springs[name], "pretension_n": desc.pretension[name],
-                        "least_n": lo, "greatest_n": hi, "as_built_excess_mm": excess, "least_as_built_n": lo_built})
+                        "least_n": lo, "greatest_n": hi, "as_built_excess_mm": excess, "least_as_built_n": lo_built,
+                        "greatest_as_built_n": hi_built})
         ok = lo_built > floor
         sev = "error" if lo <= floor else d.check.robust_severity   # slack even through the centres: an error
         msg = (f"{name}: locked at {desc.pretension[name]:g} N, its tension runs {lo:.2f}-{hi:.2f} N over "
@@ -87,11 +90,12 @@ def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict,
                f"({d.check.robust}) its path shortens {excess:.3f} mm more, so at least {lo_built:.2f} N: "
                + ("taut" if ok else "SLACK") + f" (floor {floor:g} N)")
         checks.append(Check("tendon.taut", sev, ok, msg, lo_built, floor, {"tendon": name}))
-        ok = hi < allow
+        ok = hi_built < allow
         checks.append(Check("tendon.overload", "error", ok,
-                            f"{name}: greatest tension over the sweep {hi:.2f} N, "
-                            f"{'under' if ok else 'over'} {d.tendon_material.break_load:g} N / "
-                            f"{d.check.tendon_safety_factor:g} = {allow:.1f} N", hi, allow, {"tendon": name}))
+                            f"{name}: greatest tension over the sweep {hi:.2f} N, {hi_built:.2f} N as built if its "
+                            f"excess went the taut way, {'under' if ok else 'over'} "
+                            f"{d.tendon_material.break_load:g} N / {d.check.tendon_safety_factor:g} = {allow:.1f} N",
+                            hi_built, allow, {"tendon": name}))
     sides = []
     for key, side in locked.items():
         inner = side["inner"]
@@ -103,7 +107,8 @@ def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict,
         rise = with_ / without - 1.0 if without > 0 else 0.0
         sides.append({"side": key, "inner": inner, "at_deg": at, "with_stiffening_n": with_, "without_n": without,
                       "rise": rise, "reached_deg": side["reached_deg"], "angles_deg": side["angles_deg"],
-                      "tensions_n": side["tensions_n"]})
+                      "tensions_n": side["tensions_n"], "without_angles_deg": free[key]["angles_deg"],
+                      "without_tensions_n": free[key]["tensions_n"][inner]})
     limit = d.check.max_coupling
     if not sides:
         checks.append(Check("actuation.coupling", "info", True, "no actuating tendon bends the robot either way "
