@@ -421,6 +421,7 @@ class Equilibrium:
     residual: float               # largest |dV/dq| left, N·mm
     iterations: int
     solve_time: float
+    _factor: tuple | None = field(default=None, repr=False)   # the Hessian's Cholesky factor, () if not positive
 
     def at(self, s: float) -> np.ndarray:
         """Position of the node at arc length s."""
@@ -430,8 +431,6 @@ class Equilibrium:
         """Rotation of the tip's tangent about x from +y toward +z, rad (the bending angle)."""
         t = self.frames[-1][:, 1]
         return float(math.atan2(t[2], t[1]))
-
-    _factor: tuple | None = None
 
     def compliance(self, jac: np.ndarray) -> float | np.ndarray:
         """j H⁻¹ jᵀ: the response per unit load of the output whose Jacobian is j (inf if the state
