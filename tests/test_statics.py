@@ -132,6 +132,16 @@ def test_a_tendon_crossing_at_mid_length_keeps_its_length_and_tension():
     assert held.tip_angle() - rest.tip_angle() == pytest.approx(theta, rel=0.02)   # no coupling through the holes
 
 
+def test_a_routed_tendon_does_not_buckle_the_strip_where_an_end_load_would():
+    """3 × the Euler load π²EI/4L² pulled through the disks on the centre line leaves the strip
+    straight and stiff; the same force as a dead end load leaves it unstable (FIELD-NOTES)."""
+    P = 3 * math.pi ** 2 * EI / (4 * L ** 2)
+    routed_ = st.solve(strip([routed("T", np.zeros_like)]), st.Loads(tendons={"T": ("tension", P)}))
+    assert routed_.point_stiffness(L, UP) > 0.9 * 3 * EI / L ** 3
+    dead = st.solve(strip(), st.Loads(forces=((L, (0.0, -P, 0.0)),)))
+    assert dead.point_stiffness(L, UP) == 0.0                  # H not positive definite: it buckles
+
+
 def test_a_locked_tendon_never_pushes():
     model = strip([routed("T", lambda s: np.full_like(s, 10.0), 5.0)])
     # locked 1 mm longer than the straight path: slack, so the strip is as bare
