@@ -155,9 +155,23 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
         say("finding:", "yellow", f)
     if result.manifest.get("render", {}).get("status") in ("unavailable", "failed"):
         say("warning:", "yellow", result.manifest["render"]["message"])
+    if result.report is not None:
+        _verdict(result.report)
     if failed:
         say(f"{len(failed)} check(s) failed;", "red", f"see {result.folder}")
         raise typer.Exit(EXIT_FINDINGS)
+
+
+def _verdict(report: dict) -> None:
+    """What `hwgen check` ends with: every failing warning, then the verdict line."""
+    checks = report["checks"]
+    warns = [c for c in checks if not c["passed"] and c["severity"] == "warning"]
+    for c in warns:
+        say("warning:", "yellow", f"{c['id']}: {c['message']}")
+    n_fail = sum(1 for c in checks if not c["passed"] and c["severity"] == "error")
+    verdict = Text("PASS", style="bold green") if report["ok"] else Text("FAIL", style="bold red")
+    out.print(Text.assemble(f"{report['design']}: ", verdict, f": {len(checks)} checks, {n_fail} failed, "
+                            f"{len(warns)} warning(s)"))
 
 
 @_command
