@@ -246,9 +246,11 @@ def render(loaded: params.LoadedDesign, out_root: Path) -> tuple[dict, Path, str
 
 
 def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | None = None) -> tuple[dict, Path]:
-    """`hwgen stiffness`: the statics of every tendon state (or those named) from the plan alone,
-    written as stiffness.json, stiffness.png and gravity.png into ``out_root/<design>/`` (added to
-    what is there; a later build replaces the folder and drops them). Returns (report, folder)."""
+    """`hwgen stiffness`: the statics of every tendon state (or those named) from the plan, the
+    weights measured from the built files when ``out_root/<design>/`` holds a current build (its
+    report's gravity section), else estimated from the plan; written as stiffness.json,
+    stiffness.png and gravity.png into that folder (added to what is there; a later build replaces
+    the folder and drops them). Returns (report, folder)."""
     plan = design_plan(loaded)
     if which:
         known = [s.name for s in statics_study.states(plan.design)]
@@ -256,8 +258,15 @@ def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | No
             if name not in known:
                 raise InputError(loaded.source, "--states", f"unknown state {clip(name)!r}; this design's are "
                                                             f"{', '.join(known)}")
-    report = statics_study.study(plan, which)
     folder = Path(out_root) / loaded.design.design
+    measured = None
+    with output_errors(Path(out_root)), snapshot(folder) as view:
+        if stale_reason(view, loaded) is None and (view / REPORT).is_file():
+            try:
+                measured = json.loads((view / REPORT).read_text()).get("gravity")
+            except (OSError, ValueError):
+                measured = None
+    report = statics_study.study(plan, which, measured=measured)
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
         write_json(tmp / STIFFNESS, report)
         plot_stiffness(report, tmp / STIFFNESS_PLOT)

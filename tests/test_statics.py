@@ -191,6 +191,18 @@ def test_state_N_sags_as_the_own_weight_model_shoots_it(prototype):
     assert math.degrees(eq.tip_angle()) == pytest.approx(shot.tip_angle_deg, rel=1e-3)
 
 
+def test_measured_weights_replace_the_plans_estimate(prototype):
+    sf, design, desc, _ = prototype
+    from hwgen.model.plan import plan
+    gravity = {"disks": [{"part": "disk_06", "s_mm": 134.0, "mass_g": 10.0}],
+               "tip_assembly": {"mass_g": 100.0, "a_mm": 60.0, "z_mm": -2.0}, "strip": {"lambda_g_mm": 0.05}}
+    measured = sf.describe(plan(design), gravity)
+    r = measured.robot
+    assert r.point_masses == ((134.0, 10.0),) and r.tip_mass == 100.0 and r.tip_offset == (60.0, -2.0)
+    assert r.section.lin_density == 0.05 and "measured" in measured.masses["how"]
+    assert "estimated" in desc.masses["how"] and desc.robot.tip_mass != 100.0
+
+
 def test_the_nine_states_are_the_papers_and_follow_the_channels(prototype):
     sf, design, _, _ = prototype
     assert [s.name for s in sf.states(design)] == ["N", "A", "AC2", "AH", "AC2H", "AC1", "AC1C2", "AC1H", "AC1C2H"]

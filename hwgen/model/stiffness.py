@@ -27,6 +27,7 @@ one-way springs as they are there). Torsion: torque over twist at the tip, about
 """
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 import time
@@ -208,8 +209,10 @@ def _tip_assembly(plan, rho: float, lam: float) -> dict:
 
 # ------------------------------------------------------------------ the robot
 
-def describe(plan) -> Described:
-    """The plan's robot for :mod:`hwgen.model.statics` (see the module's docstring)."""
+def describe(plan, measured: dict | None = None) -> Described:
+    """The plan's robot for :mod:`hwgen.model.statics` (see the module's docstring). ``measured``:
+    the ``gravity`` section of a check report of this design (masses and centres of mass from
+    its STLs), used for the weights instead of the plan's estimate."""
     d = plan.design
     bb = d.backbone
     rho = printed_density(d.process)[0] * 1e-3          # g/mm³
@@ -222,6 +225,15 @@ def describe(plan) -> Described:
     stiffening = _stiffening(plan, section, e_print, g_print)
     disks = _disk_masses(plan, rho)
     tip = _tip_assembly(plan, rho, lam)
+    how = ("estimated from the plan (plate and hub volumes, the tensioner layout's members, wheels as flange "
+           "cylinders, worms as pitch cylinders) × densities: not measured from the files")
+    if measured and measured.get("tip_assembly") and measured.get("strip"):
+        disks = [(r["part"], min(float(r["s_mm"]), bb.length), float(r["mass_g"])) for r in measured["disks"]]
+        mt = measured["tip_assembly"]
+        tip = {"mass_g": float(mt["mass_g"]), "a_mm": float(mt["a_mm"]), "b_mm": float(mt["z_mm"])}
+        lam = float(measured["strip"]["lambda_g_mm"])
+        section = dataclasses.replace(section, lin_density=lam)
+        how = "measured from the built files' STLs (the check report's gravity section)"
     runs = {r.tendon: r.length for r in plan.tensioner_layout.runs} if plan.tensioner_layout else {}
     tm = d.tendon_material
     stations = tuple(float(s) for s in d.stations)
@@ -241,9 +253,7 @@ def describe(plan) -> Described:
                      tip["mass_g"], (tip["a_mm"], tip["b_mm"]))
     act = d.tensioner.actuating_channel
     masses = {"disks": [{"part": n, "s_mm": s, "mass_g": m} for n, s, m in disks], "tip_assembly": tip,
-              "strip_g_per_mm": lam, "printed_density_g_mm3": rho,
-              "how": "estimated from the plan (plate and hub volumes, the tensioner layout's members, wheels as "
-                     "flange cylinders, worms as pitch cylinders) × densities: not measured from the files"}
+              "strip_g_per_mm": lam, "printed_density_g_mm3": rho, "how": how}
     return Described(robot, pre, tuple(p.name for p in plan.paths if p.channel == act),
                      tuple(p.name for p in plan.paths if p.budget_mm is not None),
                      {p.name: p.channel for p in plan.paths}, stations, masses)
@@ -287,10 +297,11 @@ def state_result(desc: Described, model: st.Model, state: State, q0=None) -> tup
                                              "seconds": eq.solve_time, "dof": model.n_dof}}, eq)
 
 
-def study(plan, which: list[str] | None = None, h_max: float = st.H_MAX) -> dict:
-    """Every state (or those named) of a plan: the stiffness report (see the module's docstring)."""
+def study(plan, which: list[str] | None = None, h_max: float = st.H_MAX, measured: dict | None = None) -> dict:
+    """Every state (or those named) of a plan: the stiffness report (see the module's docstring);
+    ``measured``: as :func:`describe` takes it."""
     t0 = time.perf_counter()
-    desc = describe(plan)
+    desc = describe(plan, measured)
     model = st.Model(desc.robot, h_max)
     todo = states(plan.design)
     if which:
