@@ -192,8 +192,8 @@ def _tip_assembly(plan, rho: float, lam: float) -> dict:
             h = u.z_part[1] - u.z_part[0]
             parts.append((f"wheel {u.channel}", math.pi * lay.flange_radius ** 2 * h, u.center[1],
                           (u.z_part[0] + u.z_part[1]) / 2))
-            r = lay.pair.d1 / 2 if hasattr(lay.pair, "d1") else lay.params.worm_pitch_diameter / 2
-            parts.append((f"worm {u.channel}", math.pi * r ** 2 * lay.params.worm_length, u.worm_y, u.worm_z))
+            r = lay.pair.worm_pitch_diameter / 2
+            parts.append((f"worm {u.channel}", math.pi * r ** 2 * lay.pair.worm_length, u.worm_y, u.worm_z))
     vol = sum(v for _, v, _, _ in parts)
     m_t = rho * vol
     y_t = sum(v * y for _, v, y, _ in parts) / vol if vol else L
