@@ -5,13 +5,15 @@ locked stiffening tendons cost the actuating pair (:mod:`hwgen.model.stiffness`,
 Model. The weightless robot bent from straight to ±check angle by hauling in the actuating
 tendon on the inside of the bend (its drum turning), the other actuating tendons held at their
 pre-tension, every stiffening tendon locked where it carries ``pretension_n`` in the weightless
-robot those tensions settle (tensioned on the bench); tendons as eq. (2) chords through the plan's eyelet centres, one-way springs of
-``tendon_material.axial_stiffness_n`` in series with ``tie_off_compliance_mm_per_n``. Then the
-same sweep with the stiffening tendons slack: the actuating tension's rise between the two is the
-coupling.
+robot those tensions settle (tensioned on the bench); tendons as eq. (2) chords through the
+eyelet centres, one-way springs of ``tendon_material.axial_stiffness_n`` in series with
+``tie_off_compliance_mm_per_n``. Then the same sweep with the stiffening tendons slack: the
+actuating tension's rise between the two is the coupling. The statics is of the plan (the
+design's eyelet centres, which ``eyelet.position`` finds in the files within its tolerance); what
+the files add is the next paragraph's.
 
-As built. The statics runs through the eyelets' centres; the taut path as built (this report's
-``as_built.taut``) changes length by more. Where it does, the least tension is lowered by that
+As built. The taut path through the measured holes (this report's ``as_built.taut``) changes
+length by more than the centres do. Where it does, the least tension is lowered by that
 excess (its ``check.robust`` statistic less the centre-line figure) at the tendon's full spring
 rate, as if it all went the slack way (and the greatest raised by as much, as if it all went
 the taut way): a first-order bound, not a second statics.
