@@ -130,6 +130,23 @@ def processes(params_path: Path) -> None:
 
 # ---------------------------------------------------------------- steps of one build
 
+def _statics(plan) -> None:
+    """The statics in newtons: the nine tendon states (`hwgen stiffness`) and the bending sweep of
+    `hwgen check`'s tension checks, from the plan."""
+    import os
+
+    from hwgen.checks.tension import sweeps
+    from hwgen.model import stiffness as sf
+    n = len(sf.states(plan.design))
+    cpu = time.process_time()
+    with timed(f"statics: {n} tendon states", "settle, own weight, stiffness at every disk, tip torsion"):
+        rep = sf.study(plan)
+    ROWS[-1] = (*ROWS[-1][:2], ROWS[-1][2] + f"; {rep['dof']} DOF, {time.process_time() - cpu:.1f} s CPU, "
+                                            f"load {os.getloadavg()[0]:.1f}")
+    with timed("statics: bending sweep ±, stiffening tendons locked and slack", "the tension checks' statics"):
+        sweeps(plan)
+
+
 def main(argv: list[str]) -> None:
     if "--steps" not in argv:
         processes(Path(argv[0]) if argv else Path("params/prototype.yaml"))
@@ -145,6 +162,7 @@ def main(argv: list[str]) -> None:
         loaded = pipeline.load(params_path)
     with timed("plan: eyelets sized over the sweep", "numpy, all tendons and stations"):
         plan = make_plan(loaded.design)
+    _statics(plan)
     from hwgen.cad.disk import build_disk
     from hwgen.cad.export import write_step, write_stl
     disks = []

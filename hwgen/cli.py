@@ -176,9 +176,23 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
         say("finding:", "yellow", f)
     if result.manifest.get("render", {}).get("status") in ("unavailable", "failed"):
         say("warning:", "yellow", result.manifest["render"]["message"])
+    if result.report is not None:
+        _verdict(result.report)
     if failed:
         say(f"{len(failed)} check(s) failed;", "red", f"see {result.folder}")
         raise typer.Exit(EXIT_FINDINGS)
+
+
+def _verdict(report: dict) -> None:
+    """What `hwgen check` ends with: every failing warning, then the verdict line."""
+    checks = report["checks"]
+    warns = [c for c in checks if not c["passed"] and c["severity"] == "warning"]
+    for c in warns:
+        say("warning:", "yellow", f"{c['id']}: {c['message']}")
+    n_fail = sum(1 for c in checks if not c["passed"] and c["severity"] == "error")
+    verdict = Text("PASS", style="bold green") if report["ok"] else Text("FAIL", style="bold red")
+    out.print(Text.assemble(f"{report['design']}: ", verdict, f": {len(checks)} checks, {n_fail} failed, "
+                            f"{len(warns)} warning(s)"))
 
 
 @_command
@@ -290,6 +304,40 @@ def _on_outputs(doing: str, quiet: bool, run):
     if rebuilt:
         err.print(f"built {printable(folder)} first ({rebuilt})")
     return result, folder
+
+
+@_command
+def stiffness(params: Path = PARAMS, out_dir: Path = OUT,
+              states: str = typer.Option(None, "--states", help="comma-separated tendon states (default: all, "
+                                                                 "the nine of the paper's Fig. 8 for the prototype)"),
+              quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner")) -> None:
+    """Stiffness in newtons per tendon state: at every disk and in torsion at the tip, and the shape under gravity.
+
+    From the parameters alone (no CAD): stiffness.json, stiffness.png (Fig. 8 style) and gravity.png (Fig. 7 style) in OUT/<design>/.
+    """
+    loaded = _load(params)
+    from .pipeline import stiffness as run_stiffness
+
+    which = [s.strip() for s in states.split(",") if s.strip()] if states else None
+    with err.status(Text(f"solving {loaded.design.design}"), spinner="dots") if not quiet else nullcontext():
+        rep, folder = run_stiffness(loaded, out_dir, which)
+    ref = next((s for s in rep["states"] if s["state"] == rep["endpoint_ratio"]["states"][1]), None)
+    t = Table(title=f"{loaded.design.design}: stiffness per tendon state (robot horizontal, own weight)")
+    for col in ("state", "tip N/mm", "× " + (ref["state"] if ref else "-"), "least disk N/mm", "tip torsion N·mm/rad",
+                "tip sag mm"):
+        t.add_column(col, justify="right" if col != "state" else "left")
+    for s in rep["states"]:
+        least = min(d["stiffness_n_per_mm"] for d in s["disks"])
+        t.add_row(s["state"], f"{s['tip_stiffness_n_per_mm']:.4f}",
+                  f"{s['tip_stiffness_n_per_mm'] / ref['tip_stiffness_n_per_mm']:.2f}" if ref else "-",
+                  f"{least:.4f}", f"{s['tip_torsion_nmm_per_rad']:.0f}", f"{s['tip_sag_mm']:.1f}")
+    out.print(t)
+    r = rep["endpoint_ratio"]
+    if r["ratio"] is not None:
+        out.print(f"endpoint stiffness {r['states'][0]}/{r['states'][1]}: {r['ratio']:.2f}× (the paper measured "
+                  f"{r['paper']:g}× on its prototype); model: {rep['model']}")
+    for name in ("stiffness.json", "stiffness.png", "gravity.png"):
+        out.print(f"  {printable(folder / name)}")
 
 
 @_command

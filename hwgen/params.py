@@ -72,6 +72,9 @@ class Backbone(_Model):
                                 description="E: the laminate's modulus in bending (thin direction), GPa")
     allowable_stress_mpa: Finite = Field(167.0, gt=0, le=3000,
                                          description="largest bending stress allowed in the strip, MPa")
+    shear_modulus_gpa: Finite = Field(4.0, gt=0.1, le=200,
+                                      description="G: the laminate's in-plane shear modulus, for the strip's "
+                                                  "torsion (G·h·t³/3), GPa")
 
 
 class Eyelets(_Model):
@@ -178,6 +181,9 @@ class Tendon(_Model):
         None, description="allowed length change over the sweep, mm (default: 0.2 unless on the actuating channel)")
     termination: Termination | None = Field(
         None, description="how this tendon ends at the base disk (default: tendon_material.termination)")
+    pretension_n: Finite = Field(5.0, ge=0, le=10_000,
+                                 description="tension the tendon is locked at, robot straight and unloaded, N "
+                                             "(a mirrored tendon gets the same)")
 
 
 class Termination(_Model):
@@ -202,6 +208,13 @@ class TendonMaterial(_Model):
     break_load: Length = Field(description="break load, N")
     termination: Termination = Field(default_factory=Termination,
                                      description="how every tendon ends at the base disk (a tendon may override it)")
+    axial_stiffness_n: Finite = Field(2000.0, gt=1, le=1e7,
+                                      description="EA: the line's effective axial stiffness at working loads "
+                                                  "(force per unit strain), N")
+    tie_off_compliance_mm_per_n: Finite = Field(0.05, ge=0, le=10,
+                                                description="stretch per newton of a tendon's two ends together: "
+                                                            "its knot in its seat and its wraps on the drum, "
+                                                            "with the drive behind it, mm/N")
 
 
 class Process(_Model):
@@ -310,6 +323,16 @@ class CheckSettings(_Model):
         "p95", description="statistic of the as-built samples' largest length change a budgeted tendon is judged on")
     robust_severity: Literal["error", "warning"] = Field(
         "error", description="what a budgeted tendon over its budget at that statistic is")
+    taut_floor_n: Finite = Field(0.5, ge=0, le=1000,
+                                 description="least tension a locked stiffening tendon may fall to over the "
+                                             "bending sweep and still count as taut, N")
+    tendon_safety_factor: Finite = Field(3.0, ge=1, le=20,
+                                         description="required ratio of tendon_material.break_load to the "
+                                                     "greatest tension a tendon reaches over the sweep")
+    max_coupling: Finite = Field(0.2, ge=0, le=100,
+                                 description="largest rise, as a share, of the actuating tension needed at the "
+                                             "sweep's end when the stiffening tendons are locked, over the "
+                                             "tension needed with them slack")
 
 
 class Render(_Model):

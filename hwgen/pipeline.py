@@ -39,12 +39,15 @@ from .checks.measure import read_manifest
 from .checks.report import write_summary
 from .checks.run import run_checks
 from .model import feasibility
+from .model import stiffness as statics_study
 from .model.materials import printed_density
 from .model.plan import Plan, plan as make_plan
 from .outputs import bom, pictures
 from .outputs.plots import plot_lengths, plot_sag, plot_tolerance
+from .outputs.stiffness import plot_gravity, plot_stiffness
 
 REPORT, PLOT, SUMMARY, SAG, TOLERANCE = "report.json", "lengths.png", "summary.md", "sag.png", "tolerance.png"
+STIFFNESS, STIFFNESS_PLOT, GRAVITY_PLOT = "stiffness.json", "stiffness.png", "gravity.png"
 
 
 def load(path: str | Path) -> params.LoadedDesign:
@@ -546,3 +549,32 @@ def render(loaded: params.LoadedDesign, out_root: Path,
         draw(plan, tmp, manifest)
         write_json(tmp / "manifest.json", manifest)
     return manifest["render"], folder, None
+
+
+def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | None = None) -> tuple[dict, Path]:
+    """`hwgen stiffness`: the statics of every tendon state (or those named) from the plan, the
+    weights measured from the built files when ``out_root/<design>/`` holds a current build (its
+    report's gravity section), else estimated from the plan; written as stiffness.json,
+    stiffness.png and gravity.png into that folder (added to what is there; a later build replaces
+    the folder and drops them). Returns (report, folder)."""
+    plan = design_plan(loaded)
+    if which:
+        known = [s.name for s in statics_study.states(plan.design)]
+        for name in which:
+            if name not in known:
+                raise InputError(loaded.source, "--states", f"unknown state {clip(name)!r}; this design's are "
+                                                            f"{', '.join(known)}")
+    folder = Path(out_root) / loaded.design.design
+    measured = None
+    with output_errors(Path(out_root)), snapshot(folder) as view:
+        if stale_reason(view, loaded) is None and (view / REPORT).is_file():
+            try:
+                measured = json.loads((view / REPORT).read_text()).get("gravity")
+            except (OSError, ValueError):
+                measured = None
+    report = statics_study.study(plan, which, measured=measured)
+    with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
+        write_json(tmp / STIFFNESS, report)
+        plot_stiffness(report, tmp / STIFFNESS_PLOT)
+        plot_gravity(report, tmp / GRAVITY_PLOT)
+    return report, folder

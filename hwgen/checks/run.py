@@ -26,6 +26,7 @@ from .parts import build_volume_checks, interference_checks, load_parts, mass_su
 from .printing import printing_checks
 from .seating import hub_checks, measure_fit, tilt_checks
 from .taut import as_built
+from .tension import tension_checks
 
 TABLE_MATCH_MM = 0.1   # Table II gives one decimal: a table within this of its function samples it
 
@@ -142,6 +143,8 @@ def _run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     checks += c
     taut, c = as_built(emap, rep_in, manifest, d, fits, angles, devs, {t.name: t.max_abs_delta for t in tls})
     checks += c
+    tension, c = tension_checks(plan, taut, {t.name: t.max_abs_delta for t in tls})
+    checks += c
     gravity, c = gravity_checks(parts, manifest, d, fits, None if bb_outline is None else bb_outline.extent[0],
                                 strip_t, L)
     checks += c
@@ -156,6 +159,7 @@ def _run_checks(folder: str | Path, manifest: dict, plan) -> dict:
         "taut": taut})
     report["seats"] = _plain(seats)
     report["gravity"] = _plain(gravity)
+    report["tension"] = _plain(tension)
     return report
 
 

@@ -1,0 +1,327 @@
+"""The statics in newtons (hwgen.model.statics) against closed forms and independent computations:
+the cantilever's 3EI/L³, the large-deflection elastica from elliptic integrals, a routed tendon's
+constant curvature τd/EI and its shortening d·θ, the stiffening of a locked pair 4(1+β)/(4+β),
+a tendon crossing the strip at mid-length; then the prototype's states (hwgen.model.stiffness),
+built from the plan (numpy only, no CAD)."""
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+from scipy.special import ellipe, ellipeinc, ellipk, ellipkinc
+
+from hwgen.model import statics as st
+
+L = 270.0
+SECTION = st.Section(E=50e3, G=4e3, height=60.0, thickness=0.59)
+EI = SECTION.ei_flex
+UP = (0.0, 0.0, 1.0)
+
+
+def strip(tendons=(), **kw) -> st.Model:
+    return st.Model(st.Robot(L, SECTION, tendons=tuple(tendons), **kw))
+
+
+def routed(name, zs, k=1.0, n_disks=28):
+    """A tendon through n_disks equally spaced disks with z = zs(s) (x = 0)."""
+    s = np.linspace(0.0, L, n_disks)
+    pts = np.column_stack([np.zeros_like(s), zs(s)])
+    return st.TendonLine(name, name, tuple(s), pts, k)
+
+
+def elastica_tip_load(P):
+    """Cantilever under a dead tip force P (Bisshopp & Drucker 1945): tip drop, tip reach, tip angle.
+    With α the tip angle, p² = (1 + sin α)/2, sin φ₀ = 1/(p√2): L√(P/EI) = K(p) − F(φ₀, p),
+    drop = L − 2√(EI/P)(E(p) − E(φ₀, p)), reach = √(2 EI sin α / P)."""
+    lam = L * math.sqrt(P / EI)
+
+    def parts(a):
+        m = (1 + math.sin(a)) / 2
+        return m, math.asin(min(1.0, 1 / math.sqrt(2 * m)))
+
+    a = brentq(lambda a: ellipk(parts(a)[0]) - ellipkinc(parts(a)[1], parts(a)[0]) - lam, 1e-9, math.pi / 2 - 1e-12,
+               xtol=1e-15)
+    m, phi = parts(a)
+    drop = L - 2 * math.sqrt(EI / P) * (ellipe(m) - ellipeinc(phi, m))
+    return drop, math.sqrt(2 * EI * math.sin(a) / P), a
+
+
+# ------------------------------------------------------------------ the bare strip
+
+def test_tip_stiffness_is_3EI_over_L3():
+    eq = st.solve(strip(), st.Loads())
+    k = eq.point_stiffness(L, UP)
+    assert k == pytest.approx(3 * EI / L ** 3, rel=0.01)
+    # the same from a finite push: the Hessian's answer is the small-push limit
+    f = 1e-4
+    pushed = st.solve(eq.model, st.Loads(forces=((L, (0.0, 0.0, f)),)))
+    assert f / pushed.at(L)[2] == pytest.approx(k, rel=1e-3)
+
+
+@pytest.mark.parametrize("load_factor", [1.0, 3.0, 8.0])
+def test_large_deflection_tip_load_matches_the_elastica(load_factor):
+    P = load_factor * EI / L ** 2
+    eq = st.solve(strip(), st.Loads(forces=((L, (0.0, 0.0, -P)),)))
+    drop, reach, angle = elastica_tip_load(P)
+    tip = eq.at(L)
+    assert -tip[2] == pytest.approx(drop, rel=0.01)
+    assert tip[1] == pytest.approx(reach, rel=0.01)
+    assert -eq.tip_angle() == pytest.approx(angle, rel=0.01)
+    assert angle > math.radians(25)            # large deflection indeed
+
+
+def test_stiff_direction_and_torsion_follow_the_section():
+    eq = st.solve(strip(), st.Loads())
+    assert eq.point_stiffness(L, (1.0, 0.0, 0.0)) == pytest.approx(3 * SECTION.ei_stiff / L ** 3, rel=0.01)
+    assert eq.twist_stiffness() == pytest.approx(SECTION.gj / L, rel=0.01)
+
+
+def test_a_rigid_span_shortens_the_bending_length():
+    """Holding [100, 150] straight: the tip compliance is the bare one less ∫ over the span of (L−s)²/EI."""
+    from hwgen.model.sag import Span
+    held = st.Stiffening(flex=(Span(100.0, 150.0, math.inf),), torsion=(Span(100.0, 150.0, math.inf),),
+                         stiff=(Span(100.0, 150.0, math.inf),))
+    eq = st.solve(strip(stiffening=held), st.Loads())
+    c = (L ** 3 - ((L - 100) ** 3 - (L - 150) ** 3)) / (3 * EI)
+    assert eq.point_stiffness(L, UP) == pytest.approx(1 / c, rel=0.01)
+
+
+# ------------------------------------------------------------------ tendons
+
+def test_one_straight_tendon_bends_to_constant_curvature():
+    d, tau = 10.0, 2.0
+    model = strip([routed("T", lambda s: np.full_like(s, d))])
+    straight = st.straight_lengths(model)["T"]
+    eq = st.solve(model, st.Loads(tendons={"T": ("tension", tau)}))
+    kappa = tau * d / EI
+    # the tangent turns at the same rate everywhere: angle(s) = κ s
+    n = len(eq.s)
+    for k in (n // 4, n // 2, 3 * n // 4, n - 1):
+        t = eq.frames[k][:, 1]
+        assert math.atan2(t[2], t[1]) == pytest.approx(kappa * eq.s[k], rel=0.01)
+    theta = eq.tip_angle()
+    assert straight - eq.lengths["T"] == pytest.approx(d * theta, rel=0.01)
+
+
+def test_a_locked_pair_stiffens_by_4_1_plus_beta_over_4_plus_beta():
+    d, EA = 10.0, 510.0
+    beta = 2 * EA * d ** 2 / EI                       # ≈ 2; each tendon a spring of EA/L
+    k = EA / L
+    model = strip([routed("P", lambda s: np.full_like(s, d), k), routed("M", lambda s: np.full_like(s, -d), k)])
+    eq = st.solve(model, st.Loads(tendons=st.locked_at(model, {"P": 2.0, "M": 2.0})))
+    ratio = eq.point_stiffness(L, UP) / (3 * EI / L ** 3)
+    assert ratio == pytest.approx(4 * (1 + beta) / (4 + beta), rel=0.02)
+    assert ratio > 1.5                                # the pair does stiffen
+
+
+def test_a_tendon_crossing_at_mid_length_keeps_its_length_and_tension():
+    d, tau, k = 10.0, 3.0, 5.0
+    act = routed("A", lambda s: np.full_like(s, 30.0))
+    cross = routed("X", lambda s: d * (1 - 2 * s / L), k)
+    model = strip([act, cross])
+    lock = st.locked_at(model, {"X": 2.0})
+    free = st.solve(model, st.Loads(tendons={"A": ("tension", tau)}))
+    rest = st.solve(model, st.Loads(tendons=lock))          # locked, the actuator idle (X's own S-bend)
+    held = st.solve(model, st.Loads(tendons={"A": ("tension", tau), **lock}))
+    theta = free.tip_angle()
+    assert theta > math.radians(20)
+    straight = st.straight_lengths(model)["X"]
+    # a straight tendon at offset d would change by d·θ; the crossing one by a small part of it
+    assert abs(free.lengths["X"] - straight) < 0.02 * d * theta
+    assert abs(held.tensions["X"] - rest.tensions["X"]) < 0.02 * k * d * theta
+    assert held.tip_angle() - rest.tip_angle() == pytest.approx(theta, rel=0.02)   # no coupling through the holes
+
+
+def test_a_routed_tendon_does_not_buckle_the_strip_where_an_end_load_would():
+    """3 × the Euler load π²EI/4L² pulled through the disks on the centre line leaves the strip
+    straight and stiff; the same force as a dead end load leaves it unstable (FIELD-NOTES)."""
+    P = 3 * math.pi ** 2 * EI / (4 * L ** 2)
+    routed_ = st.solve(strip([routed("T", np.zeros_like)]), st.Loads(tendons={"T": ("tension", P)}))
+    assert routed_.point_stiffness(L, UP) > 0.9 * 3 * EI / L ** 3
+    dead = st.solve(strip(), st.Loads(forces=((L, (0.0, -P, 0.0)),)))
+    assert dead.point_stiffness(L, UP) == 0.0                  # H not positive definite: it buckles
+
+
+def test_a_locked_tendon_never_pushes():
+    model = strip([routed("T", lambda s: np.full_like(s, 10.0), 5.0)])
+    # locked 1 mm longer than the straight path: slack, so the strip is as bare
+    lock = {"T": ("locked", st.straight_lengths(model)["T"] + 1.0)}
+    eq = st.solve(model, st.Loads(tendons=lock))
+    assert eq.tensions["T"] == 0.0
+    assert eq.point_stiffness(L, UP) == pytest.approx(3 * EI / L ** 3, rel=0.01)
+
+
+# ------------------------------------------------------------------ the prototype, from its plan
+
+COARSE_MM = 3.0          # segments of the prototype's strip in these tests: the relations, not the figures
+
+
+@pytest.fixture(scope="module")
+def prototype():
+    from hwgen import params
+    from hwgen.model import stiffness as sf
+    from hwgen.model.plan import plan
+    design = params.read("params/prototype.yaml").design
+    desc = sf.describe(plan(design))
+    model = st.Model(desc.robot, COARSE_MM)
+    return sf, design, desc, model
+
+
+def _state(prototype, channels):
+    sf, design, desc, model = prototype
+    name = "".join(channels) or "N"
+    res, _ = sf.state_result(desc, model, sf.State(name, tuple(channels)))
+    return np.array([d["stiffness_n_per_mm"] for d in res["disks"]])
+
+
+def test_state_N_sags_as_the_own_weight_model_shoots_it(prototype):
+    """The same loads (disks, strip, tip assembly off its tip) and hubs through hwgen.model.sag's
+    shooting elastica, an independent solver: the same tip."""
+    from hwgen.model import sag
+    _, _, desc, model = prototype
+    r = desc.robot
+    eq = st.solve(model, st.Loads(gravity=(0.0, 0.0, -1.0)))
+    sec = r.section
+    shot = sag.solve_sag(r.length, [s for s, _ in r.point_masses], [m for _, m in r.point_masses], E=sec.E,
+                         I=sec.ei_flex / sec.E, thickness=sec.thickness, strip_lin_density=sec.lin_density,
+                         tip_mass=r.tip_mass, tip_offset=r.tip_offset, spans=r.stiffening.flex)
+    tip = eq.at(r.length)
+    assert shot.tip_sag > 100                          # a large deflection
+    assert tip[1] == pytest.approx(shot.tip_y, rel=1e-3) and tip[2] == pytest.approx(shot.tip_z, rel=1e-3)
+    assert math.degrees(eq.tip_angle()) == pytest.approx(shot.tip_angle_deg, rel=1e-3)
+
+
+def test_measured_weights_replace_the_plans_estimate(prototype):
+    sf, design, desc, _ = prototype
+    from hwgen.model.plan import plan
+    gravity = {"disks": [{"part": "disk_06", "s_mm": 134.0, "mass_g": 10.0}],
+               "tip_assembly": {"mass_g": 100.0, "a_mm": 60.0, "z_mm": -2.0}, "strip": {"lambda_g_mm": 0.05}}
+    measured = sf.describe(plan(design), gravity)
+    r = measured.robot
+    assert r.point_masses == ((134.0, 10.0),) and r.tip_mass == 100.0 and r.tip_offset == (60.0, -2.0)
+    assert r.section.lin_density == 0.05 and "measured" in measured.masses["how"]
+    assert "estimated" in desc.masses["how"] and desc.robot.tip_mass != 100.0
+
+
+def test_the_nine_states_are_the_papers_and_follow_the_channels(prototype):
+    sf, design, _, _ = prototype
+    assert [s.name for s in sf.states(design)] == ["N", "A", "AC2", "AH", "AC2H", "AC1", "AC1C2", "AC1H", "AC1C2H"]
+    tendons = tuple(t.model_copy(update={"channel": "P"}) if t.channel == "A" else t for t in design.tendons)
+    renamed = design.model_copy(update={"tendons": tendons, "tensioner": design.tensioner.model_copy(
+        update={"channels": ("P", "Q", "C1", "C2", "H"), "actuating_channel": "P"})})
+    names = [s.name for s in sf.states(renamed)]
+    assert names[:3] == ["N", "P", "PC2"]               # no tendon on Q: no state with it
+    assert all("Q" not in n for n in names) and len(names) == 9
+
+
+def test_every_stiffening_state_is_stiffer_than_A_at_every_disk(prototype):
+    a = _state(prototype, ("A",))
+    full = _state(prototype, ("A", "C1", "C2", "H"))
+    assert np.all(full > a)
+
+
+@pytest.mark.parametrize("removed", ["C1", "C2"])
+def test_removing_a_bending_stiffener_never_raises_tip_stiffness(prototype, removed):
+    full = _state(prototype, ("A", "C1", "C2", "H"))
+    fewer = _state(prototype, tuple(c for c in ("A", "C1", "C2", "H") if c != removed))
+    assert fewer[-1] <= full[-1] * (1 + 1e-6)
+
+
+def test_the_helix_stiffens_torsion_and_leaves_bending_at_the_tip_as_it_was(prototype):
+    """Not "never raises": without H the model's tip is 0.18 % stiffer in bending (H's pre-tension
+    loads the strip more than its path holds it there; the paper saw such falls at disks 3 and 5,
+    Sect. V). What H is for is torsion."""
+    sf, _, desc, model = prototype
+    full, _ = sf.state_result(desc, model, sf.State("AC1C2H", ("A", "C1", "C2", "H")))
+    fewer, _ = sf.state_result(desc, model, sf.State("AC1C2", ("A", "C1", "C2")))
+    assert fewer["tip_stiffness_n_per_mm"] == pytest.approx(full["tip_stiffness_n_per_mm"], rel=0.01)
+    assert full["tip_torsion_nmm_per_rad"] > 3 * fewer["tip_torsion_nmm_per_rad"]
+
+
+def test_the_hub_section_is_a_closed_tube_until_a_window_cuts_it(prototype):
+    sf, _, desc, _ = prototype
+    from hwgen.model.plan import plan
+    p = plan(prototype[1])
+    uncut = next(d for d in p.disks if d.hub is not None and not d.hub.windows)
+    cut = next(d for d in p.disks if d.hub is not None and d.hub.windows)
+    wall = prototype[1].disks.hub.wall
+    Ix, Iz, J, area = sf._hub_section(uncut, wall)
+    w, h = uncut.slot_width, uncut.slot_height
+    # the uncut hub: outer rectangle less the slot
+    assert Ix == pytest.approx(((w + 2 * wall) * (h + 2 * wall) ** 3 - w * h ** 3) / 12, rel=1e-9)
+    assert area == pytest.approx((w + 2 * wall) * (h + 2 * wall) - w * h, rel=1e-9)
+    am = (w + wall) * (h + wall)                      # Bredt's closed thin-walled tube
+    assert J == pytest.approx(4 * am ** 2 * wall / (2 * (w + wall) + 2 * (h + wall)), rel=1e-9)
+    assert sf._hub_section(cut, wall)[2] < J / 5      # an open section twists far more easily
+
+
+# ------------------------------------------------------------------ the verdict in newtons (checks)
+
+@pytest.fixture(scope="module")
+def swept():
+    from hwgen import params
+    from hwgen.checks.tension import sweeps
+    from hwgen.model.plan import plan
+    design = params.read("params/prototype.yaml").design
+    p = plan(design)
+    return design, p, sweeps(p)
+
+
+def test_the_prototype_keeps_its_stiffening_tendons_taut_without_coupling(swept):
+    from hwgen.checks.tension import tension_checks
+    design, p, sw = swept
+    rep, checks = tension_checks(p, {"tendons": []}, {}, sw)
+    by = {(c.id, c.where.get("tendon")): c for c in checks}
+    for name in ("C1", "C2", "H"):
+        assert by[("tendon.taut", name)].passed and by[("tendon.overload", name)].passed
+    coupling = next(c for c in checks if c.id == "actuation.coupling")
+    assert coupling.passed and abs(coupling.measured) < design.check.max_coupling
+    # the swing is what locking does: each starts at its pre-tension in the straight robot
+    for t in rep["tendons"]:
+        assert t["least_n"] <= t["pretension_n"] + 1e-6 <= t["greatest_n"] + 2e-6
+
+
+def test_the_as_built_excess_lowers_the_least_tension_at_the_spring_rate(swept):
+    from hwgen.checks.tension import tension_checks
+    design, p, sw = swept
+    nominal, _ = tension_checks(p, {"tendons": []}, {}, sw)
+    built, checks = tension_checks(p, {"tendons": [{"name": "H", "robust_mm": 0.3}, {"name": "C2", "robust_mm": 9.0}]},
+                                   {"H": 0.1}, sw)
+    h0 = next(t for t in nominal["tendons"] if t["name"] == "H")
+    h1 = next(t for t in built["tendons"] if t["name"] == "H")
+    assert h1["least_as_built_n"] == pytest.approx(h0["least_n"] - 0.2 * h0["spring_n_per_mm"], rel=1e-9)
+    c2 = next(c for c in checks if c.id == "tendon.taut" and c.where["tendon"] == "C2")
+    assert not c2.passed and c2.severity == design.check.robust_severity     # slack only as built
+
+
+def test_a_stiffening_tendon_locked_too_loose_goes_slack_and_fails():
+    from hwgen import params
+    from hwgen.checks.tension import tension_checks
+    from hwgen.model.plan import plan
+    design = params.read("params/prototype.yaml").design
+    tendons = tuple(t.model_copy(update={"pretension_n": 0.6}) if t.name == "C2" else t for t in design.tendons)
+    half = design.check.model_copy(update={"max_angle_deg": 45.0})          # it goes slack before 45°
+    _, checks = tension_checks(plan(design.model_copy(update={"tendons": tendons, "check": half})), {"tendons": []}, {})
+    c2 = next(c for c in checks if c.id == "tendon.taut" and c.where["tendon"] == "C2")
+    assert not c2.passed and c2.severity == "error" and "SLACK" in c2.message
+
+
+# ------------------------------------------------------------------ the command
+
+def test_hwgen_stiffness_writes_its_files_and_refuses_an_unknown_state(tmp_path):
+    import json
+    import subprocess
+    import sys
+    run = [sys.executable, "-m", "hwgen.cli", "stiffness", "params/prototype.yaml", "--out", str(tmp_path), "-q"]
+    r = subprocess.run(run + ["--states", "A,AC1"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    folder = tmp_path / "prototype"
+    rep = json.loads((folder / "stiffness.json").read_text())
+    assert [s["state"] for s in rep["states"]] == ["A", "AC1"]
+    assert rep["endpoint_ratio"]["states"] == ["AC1", "A"] and rep["endpoint_ratio"]["ratio"] > 1
+    for png in ("stiffness.png", "gravity.png"):
+        assert (folder / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "AC1/A" in r.stdout
+    bad = subprocess.run(run + ["--states", "AX"], capture_output=True, text=True, timeout=300)
+    assert bad.returncode == 2 and "--states: unknown state 'AX'" in bad.stderr
+    assert "prototype.yaml" in bad.stderr and "Traceback" not in bad.stderr
