@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import dataclasses
 import functools
 import json
 import os
@@ -88,18 +89,23 @@ def build_one(index: int, doc: dict, root: Path) -> Outcome:
 
 
 def run(robots: int = ROBOTS, seed: int = SEED, jobs: int = 2, keep: Path | None = None,
-        echo=functools.partial(print, flush=True)) -> list[Outcome]:
+        echo=functools.partial(print, flush=True), first: int = 0, results: Path | None = None) -> list[Outcome]:
+    """Robots ``first`` to ``robots - 1`` of the seeded draw (the same robots whatever ``first``),
+    each outcome appended to ``results`` (JSON lines) as it comes."""
     rng = np.random.default_rng(seed)
     docs = [random_robot(rng, f"robot{i:03d}") for i in range(robots)]
     with tempfile.TemporaryDirectory() as tmp:
         root = keep or Path(tmp)
         root.mkdir(parents=True, exist_ok=True)
         with ThreadPoolExecutor(max_workers=jobs) as pool:
-            futures = [pool.submit(build_one, i, d, root) for i, d in enumerate(docs)]
+            futures = [pool.submit(build_one, i, d, root) for i, d in enumerate(docs) if i >= first]
             outcomes = []
             for f in futures:
                 o = f.result()
                 outcomes.append(o)
+                if results:
+                    with open(results, "a") as fh:
+                        fh.write(json.dumps(dataclasses.asdict(o)) + "\n")
                 echo(f"  {o.index:3d}  exit {o.exit!s:9}  {o.seconds:5.0f} s  {o.robot}"
                      + (f"\n        failed: {', '.join(o.failed)}" if o.failed else "")
                      + (f"\n        {o.message}" if o.message else ""))
@@ -131,8 +137,14 @@ def main() -> int:
     ap.add_argument("--seed", type=int, default=SEED)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--keep", type=Path, help="build into this folder and keep it")
+    ap.add_argument("--first", type=int, default=0, help="start at this robot of the draw (resume a run)")
+    ap.add_argument("--results", type=Path, help="append each outcome to this JSON-lines file; the table "
+                                                 "is of every outcome in it")
     a = ap.parse_args()
-    outcomes = run(a.robots, a.seed, a.jobs, a.keep)
+    outcomes = run(a.robots, a.seed, a.jobs, a.keep, first=a.first, results=a.results)
+    if a.results:
+        outcomes = sorted((Outcome(**json.loads(line)) for line in a.results.read_text().splitlines() if line.strip()),
+                          key=lambda o: o.index)
     print()
     print(table(outcomes, a.seed))
     return 1 if any(o.broken for o in outcomes) else 0

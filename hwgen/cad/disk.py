@@ -141,9 +141,14 @@ def blank_and_tools(spec: DiskSpec) -> tuple[cq.Solid, list[cq.Solid]]:
 
 def build_disk(spec: DiskSpec) -> Part:
     T = spec.thickness
-    body, tools = blank_and_tools(spec)
-    if tools:
-        body = body.cut(*tools)  # one boolean with every tool
+    blank, tools = blank_and_tools(spec)
+    body = blank.cut(*tools) if tools else blank  # one boolean with every tool
+    if tools and not _sound_cut(body, blank):
+        # two slanted bores that nearly coincide (tendons routed almost together) can make OCCT's
+        # one multi-tool cut come out inverted (a negative volume): cut them one at a time instead
+        body = blank
+        for tool in tools:
+            body = body.cut(tool)
     solid = body if isinstance(body, cq.Solid) else body.Solids()[0]
     place = disk_placement(spec.y, T)
     if spec.hub is not None and spec.hub.side < 0:
@@ -152,6 +157,11 @@ def build_disk(spec: DiskSpec) -> Part:
         place = place @ flip_about_x(T)
     meta = {"disk_role": spec.role, "thickness_mm": T, "engagement_mm": spec.engagement}
     return Part(spec.name, "disk", solid, place, COLOR, station=spec.index, meta=meta)
+
+
+def _sound_cut(body: cq.Shape, blank: cq.Shape) -> bool:
+    """Whether a cut came out a valid solid with no more than the blank's volume and some of it left."""
+    return body.isValid() and 0 < body.Volume() <= blank.Volume() + 1e-6
 
 
 def flip_about_x(thickness: float) -> np.ndarray:

@@ -9,8 +9,8 @@ whose tip-side face carries the tensioner, so that each disk prints on its flat 
 
 Each hub is sized to the gap it stands in (:func:`hub_lengths`): as long as the tilt allowance
 asks, or, where the next disk is closer than that, the longest that leaves HUB_GAP_MM before it
-(the last gap holds two hubs, the tip disk's and its neighbour's, and they share it in
-proportion to what each asks). A hub cut short is not a refusal: the disk is built with it, and
+(the last gap holds two hubs, the tip disk's and its neighbour's, and they share it so that both
+disks are held over the same length). A hub cut short is not a refusal: the disk is built with it, and
 ``hwgen check`` measures the tilt its slot then allows and fails ``disk.tilt`` naming what to
 change. One-sided hubs were kept rather than splitting each hub over both faces: a split hub
 holds the same length in the same gaps (every gap still holds one hub's worth), but the disk
@@ -101,8 +101,8 @@ def hub_lengths(design: Design) -> tuple[float, ...]:
 
     ``disks.hub.length`` given: honoured on every disk as given (the checks measure what it does).
     Otherwise each hub is :func:`hub_extension` long, cut to the gap it stands in less HUB_GAP_MM;
-    two hubs in one gap (the tip disk's, facing the base, and its neighbour's) share it in
-    proportion to their wanted lengths. A hub thinner than a wall is left off.
+    two hubs in one gap (the tip disk's, facing the base, and its neighbour's) share it so that
+    both disks are held over the same length. A hub thinner than a wall is left off.
     """
     th = disk_thicknesses(design)
     n = len(th)
@@ -113,12 +113,24 @@ def hub_lengths(design: Design) -> tuple[float, ...]:
     for g, gap in enumerate(disk_gaps(design)):
         room = max(gap - HUB_GAP_MM, 0.0)
         here = [i for i in (g, g + 1) if (i == g) == (hub_side(disk_role(i, n)) > 0)]
-        asked = sum(want[i] for i in here)
-        if asked > room:
-            for i in here:
-                out[i] = min(out[i], room * want[i] / asked)
+        if sum(want[i] for i in here) <= room:
+            continue
+        if len(here) == 1:
+            out[g] = min(out[g], room)
+            continue
+        # two hubs share the gap: split it so both disks are held over the same length (the worse
+        # tilt of the two is then as small as the gap allows), neither beyond what it asks
+        a, b = here
+        share = min(max((room + th[b] - th[a]) / 2, room - want[b], 0.0), want[a], room)
+        wall = design.process.min_wall
+        if room - share < wall:               # the other's share would be left off: this one takes the gap
+            share = min(want[a], room)
+        elif share < wall:
+            share = 0.0
+        out[a], out[b] = share, min(room - share, want[b])
     wall = design.process.min_wall
-    return tuple(math.floor(v / LENGTH_STEP_MM + 1e-9) * LENGTH_STEP_MM if v >= wall else 0.0 for v in out)
+    return tuple(round(math.floor(v / LENGTH_STEP_MM + 1e-9) * LENGTH_STEP_MM, 6) if v >= wall else 0.0
+                 for v in out)
 
 
 def hub_spec(design: Design, role: str, ext: float, thickness: float, slot_w: float, slot_h: float,
