@@ -89,7 +89,8 @@ def build_one(index: int, doc: dict, root: Path) -> Outcome:
 
 
 def run(robots: int = ROBOTS, seed: int = SEED, jobs: int = 2, keep: Path | None = None,
-        echo=functools.partial(print, flush=True), first: int = 0, results: Path | None = None) -> list[Outcome]:
+        echo=functools.partial(print, flush=True), first: int = 0, results: Path | None = None,
+        only: set[int] | None = None) -> list[Outcome]:
     """Robots ``first`` to ``robots - 1`` of the seeded draw (the same robots whatever ``first``),
     each outcome appended to ``results`` (JSON lines) as it comes."""
     rng = np.random.default_rng(seed)
@@ -98,7 +99,8 @@ def run(robots: int = ROBOTS, seed: int = SEED, jobs: int = 2, keep: Path | None
         root = keep or Path(tmp)
         root.mkdir(parents=True, exist_ok=True)
         with ThreadPoolExecutor(max_workers=jobs) as pool:
-            futures = [pool.submit(build_one, i, d, root) for i, d in enumerate(docs) if i >= first]
+            futures = [pool.submit(build_one, i, d, root) for i, d in enumerate(docs)
+                       if i >= first and (only is None or i in only)]
             outcomes = []
             for f in futures:
                 o = f.result()
@@ -138,13 +140,15 @@ def main() -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--keep", type=Path, help="build into this folder and keep it")
     ap.add_argument("--first", type=int, default=0, help="start at this robot of the draw (resume a run)")
+    ap.add_argument("--only", type=lambda v: {int(i) for i in v.split(",")}, help="just these robots, e.g. 3,17")
     ap.add_argument("--results", type=Path, help="append each outcome to this JSON-lines file; the table "
                                                  "is of every outcome in it")
     a = ap.parse_args()
-    outcomes = run(a.robots, a.seed, a.jobs, a.keep, first=a.first, results=a.results)
-    if a.results:
-        outcomes = sorted((Outcome(**json.loads(line)) for line in a.results.read_text().splitlines() if line.strip()),
-                          key=lambda o: o.index)
+    outcomes = run(a.robots, a.seed, a.jobs, a.keep, first=a.first, results=a.results, only=a.only)
+    if a.results:       # every robot's latest outcome in the file
+        latest = {o.index: o for o in (Outcome(**json.loads(line)) for line in a.results.read_text().splitlines()
+                                       if line.strip())}
+        outcomes = [latest[i] for i in sorted(latest)]
     print()
     print(table(outcomes, a.seed))
     return 1 if any(o.broken for o in outcomes) else 0
