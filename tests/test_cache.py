@@ -276,3 +276,28 @@ def test_parts_built_in_worker_processes_have_the_bytes_of_a_serial_build(fresh,
     res = build(loaded, tmp_path / "out", post_build=False, cache_dir=None, jobs=2)
     assert sorted(res.built) == sorted(p["name"] for p in res.manifest["parts"])
     assert _tree(res.folder) == first
+
+
+@pytest.mark.slow
+def test_hwgen_check_of_files_it_measured_before_answers_from_the_cache(built, tmp_path, monkeypatch):
+    """The same files, manifest, design and environment: the report from the cache, not measured
+    again; a file edited since: measured again (and the edit is reported)."""
+    import shutil
+
+    from hwgen import pipeline
+    from hwgen.pipeline import load
+    shutil.copytree(built("prototype"), tmp_path / "out" / "prototype")
+    loaded = load(PARAMS / "prototype.yaml")
+    runs = []
+    real = pipeline.run_checks
+    monkeypatch.setattr(pipeline, "run_checks", lambda *a: runs.append(1) or real(*a))
+    first, _, why = pipeline.check(loaded, tmp_path / "out", cache_dir=tmp_path / "cache")
+    again, _, _ = pipeline.check(loaded, tmp_path / "out", cache_dir=tmp_path / "cache")
+    assert why is None and len(runs) == 1 and again == first
+    stl = tmp_path / "out" / "prototype" / "stl" / "jig_2.stl"
+    data = bytearray(stl.read_bytes())
+    data[10] ^= 1                                         # in the STL's free-text header: the same mesh
+    stl.write_bytes(bytes(data))
+    edited, _, _ = pipeline.check(loaded, tmp_path / "out", cache_dir=tmp_path / "cache")
+    assert len(runs) == 2
+    assert any(c["id"] == "files.unchanged" and not c["passed"] for c in edited["checks"])
