@@ -168,6 +168,10 @@ def test_editing_one_tendon_rebuilds_exactly_the_parts_whose_specs_changed(tmp_p
     moved = {p["name"] for p, q in zip(first.manifest["parts"], second.manifest["parts"])
              if p["files"]["stl"]["sha256"] != q["files"]["stl"]["sha256"]}
     assert moved <= set(changed)
+    # what was reused is what a fresh build of the edited design makes: no unit's inputs miss
+    # something its builder reads (for this edit)
+    fresh = build(after, tmp_path / "fresh", post_build=False, cache_dir=None)
+    assert _tree(second.folder) == _tree(fresh.folder)
 
 
 def test_a_no_op_rebuild_reads_the_cache_without_the_cad_kernel(built, tmp_path):
