@@ -140,6 +140,7 @@ class BuildResult:
     report: dict | None = None        # the checks' report, when they ran
     built: list[str] = field(default_factory=list)     # the parts made afresh (the others came from the cache)
     reused: list[str] = field(default_factory=list)    # the stages after the files taken from the cache
+    cache_notes: list[str] = field(default_factory=list)   # damaged entries found (and rebuilt), a cache turned off
 
 
 def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, int, int], None] | None = None,
@@ -177,7 +178,9 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
             for name, stage in AFTER_FILES:
                 done[name] = _cached_stage(store, name, stage, plan, tmp, manifest, reused)
         write_json(tmp / "manifest.json", manifest)
-    return BuildResult(target, manifest, plan, done.get("checks"), built, reused)
+    notes = [f"damaged entries rebuilt: {', '.join(store.corrupt)}"] if store.corrupt else []
+    notes += [f"not written, so not used: {store.unwritable}"] if store.unwritable else []
+    return BuildResult(target, manifest, plan, done.get("checks"), built, reused, notes)
 
 
 # ---------------------------------------------------------------- the stages after the files, through the cache

@@ -305,3 +305,26 @@ def test_hwgen_check_of_files_it_measured_before_answers_from_the_cache(built, t
     edited, _, _ = pipeline.check(loaded, tmp_path / "out", cache_dir=tmp_path / "cache")
     assert len(runs) == 2
     assert any(c["id"] == "files.unchanged" and not c["passed"] for c in edited["checks"])
+
+
+@pytest.mark.slow
+def test_two_builds_sharing_one_empty_cache_at_once_both_finish_whole(tmp_path):
+    """Two processes build the prototype at once into one empty cache (each writes every entry,
+    the same bytes, renamed over each other): both finish, with the same files; a third build
+    then takes everything from the cache and writes those bytes again."""
+    code = ("import sys\nfrom hwgen.pipeline import build, load\n"
+            "if __name__ == '__main__':\n"
+            "    r = build(load(sys.argv[1]), sys.argv[2], post_build=False, cache_dir=sys.argv[3])\n"
+            "    print(len(r.built))")
+    runs = [subprocess.Popen([sys.executable, "-c", code, str(PARAMS / "prototype.yaml"), str(tmp_path / out),
+                              str(tmp_path / "cache")], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            for out in ("a", "b")]
+    for r in runs:
+        stdout, stderr = r.communicate(timeout=600)
+        assert r.returncode == 0, stderr
+    a, b = _tree(tmp_path / "a" / "prototype"), _tree(tmp_path / "b" / "prototype")
+    assert a == b
+    assert not list((tmp_path / "cache").rglob(".tmp-*"))
+    from hwgen.pipeline import build, load
+    third = build(load(PARAMS / "prototype.yaml"), tmp_path / "c", post_build=False, cache_dir=tmp_path / "cache")
+    assert third.built == [] and _tree(third.folder) == a
