@@ -175,8 +175,9 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
             post_build = False
         done, reused = {}, []
         if post_build:
-            for name, stage in AFTER_FILES:
-                done[name] = _cached_stage(store, name, stage, plan, tmp, manifest, reused)
+            with cache.using(store):
+                for name, stage in AFTER_FILES:
+                    done[name] = _cached_stage(store, name, stage, plan, tmp, manifest, reused)
         write_json(tmp / "manifest.json", manifest)
     notes = [f"damaged entries rebuilt: {', '.join(store.corrupt)}"] if store.corrupt else []
     notes += [f"not written, so not used: {store.unwritable}"] if store.unwritable else []
@@ -194,25 +195,6 @@ def _files(folder: Path) -> dict[str, str]:
     return {str(p.relative_to(folder)): sha256(p) for p in sorted(folder.rglob("*")) if p.is_file()}
 
 
-def _package_digest() -> str:
-    root = Path(__file__).resolve().parent
-    h = hashlib.sha256()
-    for f in sorted(root.rglob("*.py")):
-        h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes() + b"\0")
-    return h.hexdigest()
-
-
-def _versions() -> dict:
-    from importlib.metadata import PackageNotFoundError, version
-    out = {}
-    for dist in ("numpy", "scipy", "numba", "trimesh", "manifold3d", "matplotlib", "vtk", "pillow", "ezdxf"):
-        try:
-            out[dist] = version(dist)
-        except PackageNotFoundError:
-            out[dist] = None
-    return out
-
-
 def _cached_stage(store: cache.Store, name: str, stage, plan: Plan, folder: Path, manifest: dict,
                   reused: list[str]):
     """Run a stage after the files, or take what it wrote last time from the cache: the files it
@@ -223,7 +205,7 @@ def _cached_stage(store: cache.Store, name: str, stage, plan: Plan, folder: Path
         return stage(plan, folder, manifest)
     before = _files(folder)
     key = cache.key("stage", name, before, manifest, plan.design, {e: os.environ.get(e) for e in STAGE_ENV[name]},
-                    __version__, _package_digest(), _versions())
+                    __version__, cache.code())
     rec = store.get_record(key)
     if isinstance(rec, dict):
         try:
@@ -539,7 +521,7 @@ def _measured(store: cache.Store, folder: Path, manifest: dict, plan: Plan) -> d
     if not store.enabled:
         return run_checks(folder, manifest, plan)
     key = cache.key("check", _files(folder), manifest, plan.design, {e: os.environ.get(e) for e in STAGE_ENV["checks"]},
-                    __version__, _package_digest(), _versions())
+                    __version__, cache.code())
     rec = store.get_record(key)
     data = store.get_bytes(rec["report"]) if isinstance(rec, dict) and isinstance(rec.get("report"), str) else None
     if data is not None:
@@ -547,7 +529,8 @@ def _measured(store: cache.Store, folder: Path, manifest: dict, plan: Plan) -> d
             return json.loads(data)
         except ValueError:
             pass
-    report = _json(run_checks(folder, manifest, plan))
+    with cache.using(store):
+        report = _json(run_checks(folder, manifest, plan))
     store.put_record(key, {"report": store.put_bytes(json.dumps(report).encode())})
     return report
 
