@@ -10,6 +10,12 @@ once both finish, and the last to finish is what the folder holds. ``hwgen check
 outputs as they are; ``hwgen render`` draws into a copy of them and swaps it in the same way;
 both build first only when the outputs are missing or made from other parameters.
 
+Every build goes through the cache (:mod:`hwgen.cache`, ``--cache-dir``, ``--no-cache``): each
+unit of parts (:mod:`hwgen.cad.families`) is keyed by the frozen values its builder reads and
+copied from the cache when they did not change; assembly.step by its units' keys; each stage
+after the files by every file it reads, the manifest, the design, the environment it reads and
+hwgen's code. What comes from the cache has the bytes a fresh build writes.
+
 An output root that cannot be written (not a folder, no permission, a full disk) is bad input
 naming ``--out`` (:class:`hwgen.errors.InputError`), like any other.
 """
@@ -170,7 +176,8 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
             written = [p["name"] for p in manifest["parts"] if select(p["name"])]
             if not written:
                 names = ", ".join(p["name"] for p in manifest["parts"])
-                raise InputError(loaded.source, "--parts", f"{clip(parts)!r} matches none of the parts: {clip(names, 200)}")
+                raise InputError(loaded.source, "--parts",
+                                 f"{clip(parts)!r} matches none of the parts: {clip(names, 200)}")
             manifest["parts_written"] = {"pattern": parts, "names": written}
             post_build = False
         done, reused = {}, []
