@@ -116,7 +116,8 @@ def processes(params_path: Path) -> None:
             params.write_text(text.replace(EDIT_FROM, EDIT_TO))
             r = _process("one-tendon edit", build, env, "C2: a 25 → 24.5 mm")
             rows.append((*r[:4], "; ".join(x for x in (r[4], _from_cache(r[5])) if x)))
-        rows.append(_process("hwgen check", ["check", str(params), "--out", str(out), "-q"], env,
+        check = ["check", str(params), "--out", str(out), "--cache-dir", str(store), "-q"]
+        rows.append(_process("hwgen check", check, env,
                              "on the built outputs")[:5])
         rows.append(_process("hwgen routing", ["routing", str(params)], env)[:5])
     t = Table(title=f"hwgen benchmark: {params_path} (whole processes, {os.cpu_count()} cores, "

@@ -24,6 +24,10 @@ import hashlib
 import json
 import os
 import tempfile
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -182,3 +186,62 @@ class Store:
             self._drop(path, f"record {key_[:12]}")
             return None
         return body
+
+
+# ---------------------------------------------------------------- values remembered between runs
+
+_ACTIVE: ContextVar[Store | None] = ContextVar("hwgen_active_store", default=None)
+LIBRARIES = ("numpy", "scipy", "numba", "trimesh", "manifold3d", "matplotlib", "vtk", "pillow", "ezdxf",
+             "cadquery", "cadquery-ocp")
+
+
+@contextmanager
+def using(store: Store) -> Iterator[None]:
+    """Within: :func:`remembered` values are read from and kept in ``store``."""
+    token = _ACTIVE.set(store)
+    try:
+        yield
+    finally:
+        _ACTIVE.reset(token)
+
+
+@lru_cache(maxsize=1)
+def code() -> dict:
+    """hwgen's code and data (the sha256 of every file of the package) and the versions of the
+    libraries its results depend on: what every remembered result also depends on."""
+    from importlib.metadata import PackageNotFoundError, version
+    root = Path(__file__).resolve().parent
+    h = hashlib.sha256()
+    for f in sorted([*root.rglob("*.py"), *root.glob("data/*")]):
+        h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes() + b"\0")
+    versions = {}
+    for dist in LIBRARIES:
+        try:
+            versions[dist] = version(dist)
+        except PackageNotFoundError:
+            versions[dist] = None
+    return {"package": h.hexdigest(), "libraries": versions}
+
+
+def _plain(obj):
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    raise TypeError(f"{type(obj).__name__} is not JSON")
+
+
+def remembered(kind: str, inputs, compute: Callable[[], object]):
+    """``compute()`` as JSON gives it back, or what it gave last time for ``kind`` and ``inputs``
+    (and this code, :func:`code`) when a store is active (:func:`using`). The value is the same
+    either way: a fresh one goes through JSON too."""
+    store = _ACTIVE.get()
+    if store is None or not store.enabled:
+        return json.loads(json.dumps(compute(), default=_plain))
+    k = key("remembered", kind, inputs, code())
+    rec = store.get_record(k)
+    if isinstance(rec, dict) and "value" in rec:
+        return rec["value"]
+    value = json.loads(json.dumps(compute(), default=_plain))
+    store.put_record(k, {"value": value})
+    return value

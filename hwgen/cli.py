@@ -163,6 +163,8 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
 
         result = run_build(loaded, out_dir, progress, cache_dir=_cache(cache_dir, no_cache), parts=parts, jobs=jobs)
     n = len(result.manifest["parts"])
+    for note in result.cache_notes:
+        say("warning:", "yellow", f"part cache: {note}")
     if parts is not None:
         written = result.manifest["parts_written"]["names"]
         out.print(f"{loaded.design.design}: {len(written)} of {n} parts written to {printable(result.folder)} "

@@ -10,6 +10,12 @@ once both finish, and the last to finish is what the folder holds. ``hwgen check
 outputs as they are; ``hwgen render`` draws into a copy of them and swaps it in the same way;
 both build first only when the outputs are missing or made from other parameters.
 
+Every build goes through the cache (:mod:`hwgen.cache`, ``--cache-dir``, ``--no-cache``): each
+unit of parts (:mod:`hwgen.cad.families`) is keyed by the frozen values its builder reads and
+copied from the cache when they did not change; assembly.step by its units' keys; each stage
+after the files by every file it reads, the manifest, the design, the environment it reads and
+hwgen's code. What comes from the cache has the bytes a fresh build writes.
+
 An output root that cannot be written (not a folder, no permission, a full disk) is bad input
 naming ``--out`` (:class:`hwgen.errors.InputError`), like any other.
 """
@@ -143,6 +149,7 @@ class BuildResult:
     report: dict | None = None        # the checks' report, when they ran
     built: list[str] = field(default_factory=list)     # the parts made afresh (the others came from the cache)
     reused: list[str] = field(default_factory=list)    # the stages after the files taken from the cache
+    cache_notes: list[str] = field(default_factory=list)   # damaged entries found (and rebuilt), a cache turned off
 
 
 def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, int, int], None] | None = None,
@@ -172,15 +179,19 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
             written = [p["name"] for p in manifest["parts"] if select(p["name"])]
             if not written:
                 names = ", ".join(p["name"] for p in manifest["parts"])
-                raise InputError(loaded.source, "--parts", f"{clip(parts)!r} matches none of the parts: {clip(names, 200)}")
+                raise InputError(loaded.source, "--parts",
+                                 f"{clip(parts)!r} matches none of the parts: {clip(names, 200)}")
             manifest["parts_written"] = {"pattern": parts, "names": written}
             post_build = False
         done, reused = {}, []
         if post_build:
-            for name, stage in AFTER_FILES:
-                done[name] = _cached_stage(store, name, stage, plan, tmp, manifest, reused)
+            with cache.using(store):
+                for name, stage in AFTER_FILES:
+                    done[name] = _cached_stage(store, name, stage, plan, tmp, manifest, reused)
         write_json(tmp / "manifest.json", manifest)
-    return BuildResult(target, manifest, plan, done.get("checks"), built, reused)
+    notes = [f"damaged entries rebuilt: {', '.join(store.corrupt)}"] if store.corrupt else []
+    notes += [f"not written, so not used: {store.unwritable}"] if store.unwritable else []
+    return BuildResult(target, manifest, plan, done.get("checks"), built, reused, notes)
 
 
 # ---------------------------------------------------------------- the stages after the files, through the cache
@@ -194,25 +205,6 @@ def _files(folder: Path) -> dict[str, str]:
     return {str(p.relative_to(folder)): sha256(p) for p in sorted(folder.rglob("*")) if p.is_file()}
 
 
-def _package_digest() -> str:
-    root = Path(__file__).resolve().parent
-    h = hashlib.sha256()
-    for f in sorted(root.rglob("*.py")):
-        h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes() + b"\0")
-    return h.hexdigest()
-
-
-def _versions() -> dict:
-    from importlib.metadata import PackageNotFoundError, version
-    out = {}
-    for dist in ("numpy", "scipy", "numba", "trimesh", "manifold3d", "matplotlib", "vtk", "pillow", "ezdxf"):
-        try:
-            out[dist] = version(dist)
-        except PackageNotFoundError:
-            out[dist] = None
-    return out
-
-
 def _cached_stage(store: cache.Store, name: str, stage, plan: Plan, folder: Path, manifest: dict,
                   reused: list[str]):
     """Run a stage after the files, or take what it wrote last time from the cache: the files it
@@ -223,7 +215,7 @@ def _cached_stage(store: cache.Store, name: str, stage, plan: Plan, folder: Path
         return stage(plan, folder, manifest)
     before = _files(folder)
     key = cache.key("stage", name, before, manifest, plan.design, {e: os.environ.get(e) for e in STAGE_ENV[name]},
-                    __version__, _package_digest(), _versions())
+                    __version__, cache.code())
     rec = store.get_record(key)
     if isinstance(rec, dict):
         try:
@@ -520,14 +512,37 @@ def stale_reason(folder: Path, loaded) -> str | None:
 
 def check(loaded: params.LoadedDesign, out_root: Path, progress=None,
           cache_dir: Path | None | bool = True) -> tuple[dict, Path, str | None]:
-    """`hwgen check`: build if needed, then measure. Returns (report, folder, why it was rebuilt or None)."""
+    """`hwgen check`: build if needed, then measure. Returns (report, folder, why it was rebuilt or None).
+
+    Outputs measured before, with every file as it was then (same bytes, same manifest, design,
+    environment and code), get that report back from the cache instead of being measured again."""
     folder = Path(out_root) / loaded.design.design
     plan = design_plan(loaded)
     with output_errors(Path(out_root)), snapshot(folder) as view:
         why = stale_reason(view, loaded)
         if why is None:
-            return run_checks(view, read_manifest(view), plan), folder, None
+            store = cache.Store(cache.default_dir() if cache_dir is True else (cache_dir or None))
+            return _measured(store, view, read_manifest(view), plan), folder, None
     return build(loaded, Path(out_root), progress, cache_dir=cache_dir).report, folder, why
+
+
+def _measured(store: cache.Store, folder: Path, manifest: dict, plan: Plan) -> dict:
+    """run_checks on the folder, or its report from the last time these very files were measured."""
+    if not store.enabled:
+        return run_checks(folder, manifest, plan)
+    key = cache.key("check", _files(folder), manifest, plan.design, {e: os.environ.get(e) for e in STAGE_ENV["checks"]},
+                    __version__, cache.code())
+    rec = store.get_record(key)
+    data = store.get_bytes(rec["report"]) if isinstance(rec, dict) and isinstance(rec.get("report"), str) else None
+    if data is not None:
+        try:
+            return json.loads(data)
+        except ValueError:
+            pass
+    with cache.using(store):
+        report = _json(run_checks(folder, manifest, plan))
+    store.put_record(key, {"report": store.put_bytes(json.dumps(report).encode())})
+    return report
 
 
 def render(loaded: params.LoadedDesign, out_root: Path,

@@ -27,6 +27,16 @@ PARAMS = ROOT / "params"
 BUILDS = "built"          # the fixture that makes a test slow wherever it is asked for
 
 
+@pytest.fixture(scope="session", autouse=True)
+def remembered_in_the_session_cache():
+    """Checks run directly by tests (run_checks on copies of a built design) remember what they
+    may (the gear measurements, keyed by the worm and wheel files' bytes, their entries and the
+    design) in the session's cache, as `hwgen check` does in the user's."""
+    from hwgen import cache
+    with cache.using(cache.Store(Path(SESSION_CACHE))):
+        yield
+
+
 def pytest_sessionfinish(session, exitstatus):
     shutil.rmtree(SESSION_CACHE, ignore_errors=True)
 

@@ -168,6 +168,10 @@ def test_editing_one_tendon_rebuilds_exactly_the_parts_whose_specs_changed(tmp_p
     moved = {p["name"] for p, q in zip(first.manifest["parts"], second.manifest["parts"])
              if p["files"]["stl"]["sha256"] != q["files"]["stl"]["sha256"]}
     assert moved <= set(changed)
+    # what was reused is what a fresh build of the edited design makes: no unit's inputs miss
+    # something its builder reads (for this edit)
+    fresh = build(after, tmp_path / "fresh", post_build=False, cache_dir=None)
+    assert _tree(second.folder) == _tree(fresh.folder)
 
 
 def test_a_no_op_rebuild_reads_the_cache_without_the_cad_kernel(built, tmp_path):
@@ -276,3 +280,51 @@ def test_parts_built_in_worker_processes_have_the_bytes_of_a_serial_build(fresh,
     res = build(loaded, tmp_path / "out", post_build=False, cache_dir=None, jobs=2)
     assert sorted(res.built) == sorted(p["name"] for p in res.manifest["parts"])
     assert _tree(res.folder) == first
+
+
+@pytest.mark.slow
+def test_hwgen_check_of_files_it_measured_before_answers_from_the_cache(built, tmp_path, monkeypatch):
+    """The same files, manifest, design and environment: the report from the cache, not measured
+    again; a file edited since: measured again (and the edit is reported)."""
+    import shutil
+
+    from hwgen import pipeline
+    from hwgen.pipeline import load
+    shutil.copytree(built("prototype"), tmp_path / "out" / "prototype")
+    loaded = load(PARAMS / "prototype.yaml")
+    runs = []
+    real = pipeline.run_checks
+    monkeypatch.setattr(pipeline, "run_checks", lambda *a: runs.append(1) or real(*a))
+    first, _, why = pipeline.check(loaded, tmp_path / "out", cache_dir=tmp_path / "cache")
+    again, _, _ = pipeline.check(loaded, tmp_path / "out", cache_dir=tmp_path / "cache")
+    assert why is None and len(runs) == 1 and again == first
+    stl = tmp_path / "out" / "prototype" / "stl" / "jig_2.stl"
+    data = bytearray(stl.read_bytes())
+    data[10] ^= 1                                         # in the STL's free-text header: the same mesh
+    stl.write_bytes(bytes(data))
+    edited, _, _ = pipeline.check(loaded, tmp_path / "out", cache_dir=tmp_path / "cache")
+    assert len(runs) == 2
+    assert any(c["id"] == "files.unchanged" and not c["passed"] for c in edited["checks"])
+
+
+@pytest.mark.slow
+def test_two_builds_sharing_one_empty_cache_at_once_both_finish_whole(tmp_path):
+    """Two processes build the prototype at once into one empty cache (each writes every entry,
+    the same bytes, renamed over each other): both finish, with the same files; a third build
+    then takes everything from the cache and writes those bytes again."""
+    code = ("import sys\nfrom hwgen.pipeline import build, load\n"
+            "if __name__ == '__main__':\n"
+            "    r = build(load(sys.argv[1]), sys.argv[2], post_build=False, cache_dir=sys.argv[3])\n"
+            "    print(len(r.built))")
+    runs = [subprocess.Popen([sys.executable, "-c", code, str(PARAMS / "prototype.yaml"), str(tmp_path / out),
+                              str(tmp_path / "cache")], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            for out in ("a", "b")]
+    for r in runs:
+        stdout, stderr = r.communicate(timeout=600)
+        assert r.returncode == 0, stderr
+    a, b = _tree(tmp_path / "a" / "prototype"), _tree(tmp_path / "b" / "prototype")
+    assert a == b
+    assert not list((tmp_path / "cache").rglob(".tmp-*"))
+    from hwgen.pipeline import build, load
+    third = build(load(PARAMS / "prototype.yaml"), tmp_path / "c", post_build=False, cache_dir=tmp_path / "cache")
+    assert third.built == [] and _tree(third.folder) == a

@@ -18,11 +18,13 @@ again here: a design that breaks them is never built.
 """
 from __future__ import annotations
 
+import hashlib
 import math
 from pathlib import Path
 
 import numpy as np
 
+from ..cache import remembered
 from ..model.gearing import hertz_allowable, worm_pair
 from ..model.materials import contact_elasticity
 from .base import Check
@@ -263,13 +265,31 @@ def measure_pair(folder: Path, worm: dict, wheel: dict) -> dict:
 
 
 def gear_checks(folder: Path, manifest: dict, plan) -> list[Check]:
+    """Every worm and wheel measured from its file, then the tendon runs. The first part (most
+    of a check's time) is remembered (:func:`hwgen.cache.remembered`) under the bytes of the
+    worm and wheel files, their manifest entries and the design."""
     folder = Path(folder)
-    d = plan.design
-    ts = d.tensioner
-    pair = worm_pair(ts, d.process.min_wall)
     pairs = _pairs(manifest)
     if not pairs:
         return [Check("gear.parts", "error", False, "no tensioner worm/wheel parts in the manifest")]
+    entries = [p for pw in pairs.values() for p in pw.values()]
+    files = [_file_sha(folder / p["files"]["stl"]["path"]) for p in entries]
+    found = remembered("gear checks", (files, entries, plan.design),
+                       lambda: [c.to_json() for c in _pair_checks(folder, manifest, plan, pairs)])
+    return [Check(**c) for c in found] + tendon_checks(folder, manifest, plan)
+
+
+def _file_sha(path: Path) -> str | None:
+    try:
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:
+        return None
+
+
+def _pair_checks(folder: Path, manifest: dict, plan, pairs: dict) -> list[Check]:
+    d = plan.design
+    ts = d.tensioner
+    pair = worm_pair(ts, d.process.min_wall)
     out: list[Check] = []
     measured = {}
     flank_gap = pair.backlash()["normal_mm"] / 2
@@ -306,7 +326,6 @@ def gear_checks(folder: Path, manifest: dict, plan) -> list[Check]:
                          f"(from {lo:.4f} to {hi:.4f} mm wanted: the design's center_offset {pair.center_offset:g} mm "
                          f"leaves {flank_gap:.4f} mm per flank by the rack formula)", gap, lo, where))
     out += _strength_checks(measured, manifest, plan, pair)
-    out += tendon_checks(folder, manifest, plan)
     return out
 
 
