@@ -122,7 +122,8 @@ def table(outcomes: list[Outcome], seed: int = SEED) -> str:
              f"built (exit 0 or 1): {by_exit['0'] + by_exit['1']} of {n}", "", "| failed check | robots |", "|---|---:|"]
     kinds = collections.Counter(f for o in outcomes for f in o.failed)
     lines += [f"| {k} | {v} |" for k, v in kinds.most_common()]
-    refused = collections.Counter(o.message.split(": ")[1] if o.message.count(": ") >= 1 else o.message
+    # "error: FILE: FIELD: what is wrong": by the field
+    refused = collections.Counter(o.message.split(": ")[2] if o.message.count(": ") >= 2 else o.message
                                   for o in outcomes if o.exit == 2)
     if refused:
         lines += ["", "| refused (exit 2) at | robots |", "|---|---:|"] + [f"| {k} | {v} |" for k, v in
