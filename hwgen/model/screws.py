@@ -22,8 +22,8 @@ import numpy as np
 
 GRID_MM = 0.5            # the search grid on the disk face
 MARGIN_CAP_MM = 1.0      # clearance beyond what is required that still counts toward a better place
+MARGIN_STEP_MM = 0.05    # clearances this close count as equal, and the wider stance decides
 WASHER_OD = 7.0          # ISO 7089 M3 washer under each head: what must clear the eyelets and the hub
-M3_HEAD = 5.5            # ISO 4762 M3 head
 
 
 @dataclass(frozen=True)
@@ -67,7 +67,7 @@ def place(keep: Keepout, bands: tuple[tuple[float, float], tuple[float, float]],
             score = np.minimum(margin, MARGIN_CAP_MM)
             mid = (z0 + z1) / 2
             # lexicographic: clearance (to the grid's resolution), then the widest x, then nearest mid-band
-            key = np.round(score / 0.05) * 1e6 + np.abs(X) * 1e2 - np.abs(Z - mid)
+            key = np.round(score / MARGIN_STEP_MM) * 1e6 + np.abs(X) * 1e2 - np.abs(Z - mid)
             k = np.unravel_index(int(np.argmax(key)), key.shape)
             out.append((float(X[k]), float(Z[k])))
     return tuple(out)
