@@ -166,7 +166,7 @@ def test_lab_robots_screws_keep_clear(lab_plans):
             _screws_clear(p)
 
 
-@pytest.mark.parametrize("count, length", [(13, 270.0), (4, 385.0), (10, 445.0), (25, 450.0)])
+@pytest.mark.parametrize("count, length", [(13, 270.0), (4, 385.0), (10, 445.0), (25, 450.0), (17, 285.0)])
 def test_jig_pieces_fit_the_printer_and_cut_clear_of_the_slots(count, length):
     """Disks far apart are cut between where the printer needs it, not only at a gap's middle."""
     from hwgen.model.fixtures import DOVETAIL, JIG_CUT_CLEAR, PRINT_MARGIN

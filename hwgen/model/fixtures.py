@@ -208,9 +208,10 @@ def _free_cuts(y0: float, y1: float, longest: float, slots) -> list[float]:
         for a, b in sorted(slots, reverse=True):
             if a - JIG_CUT_CLEAR < cut < b + JIG_CUT_CLEAR:
                 cut = a - JIG_CUT_CLEAR
-        if cut <= start:            # slots too close to cut clear of them: the nearest gap's middle
-            cut = min(((b + a2) / 2 for (_, b), (a2, _) in zip(slots, slots[1:]) if (b + a2) / 2 > start),
-                      key=lambda g: abs(g - (start + longest)), default=y1)
+        if cut <= start:            # slots too close to cut clear of them: the furthest gap middle that fits
+            mids = [(b + a2) / 2 for (_, b), (a2, _) in zip(slots, slots[1:]) if (b + a2) / 2 > start + 1e-9]
+            fits = [g for g in mids if g <= start + longest]
+            cut = max(fits) if fits else min(mids, default=y1)
         ends.append(cut)
     return ends + [y1] if ends[-1] < y1 else ends
 
