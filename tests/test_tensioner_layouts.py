@@ -54,12 +54,14 @@ def stability_run():
     return robots, out
 
 
+@pytest.mark.slow          # 24 robots' layouts, three ways each: about a minute
 def test_random_robots_never_crash_or_hang(stability_run):
     _, out = stability_run
     bad = {(i, k): v for i, r in out.items() for k, v in r.items() if v[0] in ("crash", "timed out")}
     assert not bad, bad
 
 
+@pytest.mark.slow          # 24 robots' layouts, three ways each: about a minute
 def test_a_refusal_does_not_depend_on_channel_order_or_which_way_up(stability_run):
     robots, out = stability_run
     for i, r in out.items():
