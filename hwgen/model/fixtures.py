@@ -197,7 +197,7 @@ def jig_engagement(d: Design) -> float:
     return d.disks.outer_diameter / 2 - jig_layout(d).x_inner
 
 
-def _free_cuts(y0: float, y1: float, longest: float, slots) -> list[float]:
+def _free_cuts(y0: float, y1: float, longest: float, slots, gaps: list[float]) -> list[float]:
     """Piece ends from y0 to y1, none longer than ``longest``, each cut JIG_CUT_CLEAR clear of every
     slot: the remaining length shared equally among the pieces it needs, each cut moved back
     toward the base out of any slot's reach."""
@@ -209,7 +209,7 @@ def _free_cuts(y0: float, y1: float, longest: float, slots) -> list[float]:
             if a - JIG_CUT_CLEAR < cut < b + JIG_CUT_CLEAR:
                 cut = a - JIG_CUT_CLEAR
         if cut <= start:            # slots too close to cut clear of them: the furthest gap middle that fits
-            mids = [(b + a2) / 2 for (_, b), (a2, _) in zip(slots, slots[1:]) if (b + a2) / 2 > start + 1e-9]
+            mids = [g for g in gaps if g > start + 1e-9]
             fits = [g for g in mids if g <= start + longest]
             cut = max(fits) if fits else min(mids, default=y1)
         ends.append(cut)
@@ -232,7 +232,7 @@ def jig_layout(d: Design) -> JigLayout:
     targets = [y0 + k * (y1 - y0) / n for k in range(1, n)]
     ends = [y0, *sorted({min(gaps, key=lambda g: abs(g - t)) for t in targets}), y1]
     if max(b - a for a, b in zip(ends, ends[1:])) > longest:
-        ends = _free_cuts(y0, y1, longest, slots)
+        ends = _free_cuts(y0, y1, longest, slots, gaps)
     pieces = tuple(JigPiece(k, a, b, k < len(ends) - 2, k > 0) for k, (a, b) in enumerate(zip(ends, ends[1:])))
     x_in = max(r - JIG_ENGAGE, jig_inner_floor(d))
     z_floor_top = -r - jg.clearance
