@@ -121,14 +121,13 @@ def layout(design: Design, paths: list[TendonPath], tip: DiskSpec) -> TensionerL
             best = _Best(c.arrangement, x_u, fr, c.clamp, sz, members, cuts, load)
     if best is None:
         raise NoFit(_explain(failures, len(candidates), ts))
-    lay = _assemble(best, ts, fast, len(candidates), solved)
+    note = None
     if best.clamp is None and blockers:
         n, x, z = blockers[0]
-        lay.search["strip_clamp"] = (f"left off: tendon {n} leaves the tip at x = {x:g}, z = {z:g} mm, where the "
-                                     f"block that clamps the strip's tip would stand either side; the tensioner is "
-                                     f"held by its screws into the tip disk alone (backbone.extra_tip of strip runs "
-                                     f"into the housing unclamped)")
-    return lay
+        note = (f"left off: tendon {n} leaves the tip at x = {x:g}, z = {z:g} mm, where the block that clamps the "
+                f"strip's tip would stand either side; the tensioner is held by its screws into the tip disk alone "
+                f"(backbone.extra_tip of strip runs into the housing unclamped)")
+    return _assemble(best, ts, fast, len(candidates), solved, note)
 
 
 def _load(members: list[Member], fr: Frame, sz: Sizes, length: float) -> float:
@@ -160,7 +159,8 @@ def _explain(failures: list[Failure], tried: int, ts: Tensioner) -> str:
             f"tensioner.worm_pitch_diameter), a smaller tendon_clearance or fewer channels would free it")
 
 
-def _assemble(b: _Best, ts: Tensioner, fast: str, tried: int, solved: int) -> TensionerLayout:
+def _assemble(b: _Best, ts: Tensioner, fast: str, tried: int, solved: int,
+              clamp_note: str | None = None) -> TensionerLayout:
     sz, fr, arr = b.sz, b.frame, b.arrangement
     turn = np.diag([float(arr.turn), 1.0, float(arr.turn), 1.0])
     runs = tuple(TendonRun(r.tendon, r.channel, tuple(float(v) for v in turn[:3, :3] @ r.start),
@@ -170,6 +170,8 @@ def _assemble(b: _Best, ts: Tensioner, fast: str, tried: int, solved: int) -> Te
               "set_screws_from": "+z" if arr.turn * arr.clamp_up > 0 else "-z", "gear_rule": arr.gear_rule,
               "order": list(arr.order), "columns": list(arr.sides),
               "housing_members_mm3": round(sum(m.volume for m in b.members), 1), "load_estimate": round(b.load)}
+    if clamp_note:
+        search["strip_clamp"] = clamp_note
     return TensionerLayout(sz.pair, sz.y_face, b.x_u, fr.spine, fr.post, fr.worm_x, fr.worm_file_to_mesh,
                            fr.near_end, sz.spine_hole, pin_length(POST),
                            fr.units, runs, sz.r_s, sz.r_w, sz.r_f, sz.hub_r,
