@@ -314,6 +314,8 @@ def _position_checks(report: dict, eyelets: list[Eyelet], tol: float) -> list[Ch
     """One check per disk: every eyelet found, none further than ``tol`` from design intent."""
     out = []
     overlapping = {(m["station"], t) for m in report.get("merges", []) if m["kind"] == "overlap" for t in m["tendons"]}
+    # the plan gave eyelets whose holes would run into each other one opening around them all
+    joined = {(m["station"], tuple(m["tendons"])) for m in report.get("merges", []) if m["kind"] == "overlap"}
     for rd in report["disks"]:
         i = rd["index"]
         mine = [e for e in eyelets if e.station == i and e.status != "in_slot"]
@@ -323,6 +325,9 @@ def _position_checks(report: dict, eyelets: list[Eyelet], tol: float) -> list[Ch
         for e in mine:
             name = "+".join(e.tendons)
             x, z = e.design_xz
+            if (i, e.tendons) in joined:
+                overlaps.append(f"{' and '.join(e.tendons)} share one opening at x={num(x)}, z={num(z)} "
+                                f"(Ø{e.design_diameter:.2f}): their routings put their holes into each other")
             if e.status == "merged" and (all((i, t) in overlapping for t in e.tendons) or _crowded(rd, e.tendons)):
                 overlaps.append(f"{name} at x={num(x)}, z={num(z)} runs into another eyelet")
             elif e.status == "into_slot" and _reaches_slot(rd, e.tendons):

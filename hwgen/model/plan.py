@@ -117,8 +117,8 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
                 break
         else:
             groups.append([p])
-    holes, merges = [], []
-    for g in groups:
+
+    def hole(g: list[TendonPath]) -> Hole:
         own = [rest_axes[p.name][i] + exits.get(p.name, 0.0) for p in g]
         ax = np.sum([v / np.linalg.norm(v) for v in own], axis=0)
         ax /= np.linalg.norm(ax)
@@ -126,18 +126,33 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
         for p in g:
             if p.name in exits:
                 alpha = max(alpha, float(np.arccos(np.clip(abs(exits[p.name] @ ax), 0, 1))))
-        x, z = (float(v) for v in g[0].points[i])
-        dia = hole_diameter(d.tendon_material.diameter, thick, alpha, proc.hole_clearance, proc.min_hole)
+        pts = np.array([p.points[i] for p in g], dtype=float)
+        centre = (pts.min(axis=0) + pts.max(axis=0)) / 2
+        spread = float(np.max(np.linalg.norm(pts - centre, axis=1)))
+        x, z = (float(v) for v in (centre if spread >= SAME_POSITION_MM else pts[0]))
+        dia = hole_diameter(d.tendon_material.diameter, thick, alpha, proc.hole_clearance, proc.min_hole) + 2 * spread
         in_slot = abs(x) <= slot_w / 2 and abs(z) <= slot_h / 2
-        holes.append(Hole(x, z, tuple(float(a) for a in ax), float(dia), tuple(p.name for p in g),
-                          float(np.degrees(alpha)), in_slot))
-        if len(g) > 1:
-            merges.append(Merge(i, tuple(p.name for p in g), "shared"))
-    for a in range(len(holes)):
-        for b in range(a + 1, len(holes)):
-            ha, hb = holes[a], holes[b]
-            if np.hypot(ha.x - hb.x, ha.z - hb.z) < (ha.diameter + hb.diameter) / 2:
-                merges.append(Merge(i, ha.tendons + hb.tendons, "overlap"))
+        return Hole(x, z, tuple(float(a) for a in ax), float(dia), tuple(p.name for p in g),
+                    float(np.degrees(alpha)), in_slot)
+
+    # Holes that would run into each other become one opening around all their tendons: two bores
+    # that nearly coincide leave slivers no mesh closes, and the tendons could not be held apart anyway
+    # (``eyelet.overlap`` reports it as the routing's fault, from the "overlap" merge recorded here).
+    holes = [hole(g) for g in groups]
+    overlapped: set[int] = set()
+    while True:
+        pair = next(((a, b) for a in range(len(holes)) for b in range(a + 1, len(holes))
+                     if np.hypot(holes[a].x - holes[b].x, holes[a].z - holes[b].z)
+                     < (holes[a].diameter + holes[b].diameter) / 2), None)
+        if pair is None:
+            break
+        a, b = pair
+        groups[a] += groups.pop(b)
+        overlapped = {k - (k > b) for k in overlapped if k != b} | {a}
+        holes[a] = hole(groups[a])
+        holes.pop(b)
+    merges = [Merge(i, h.tendons, "overlap" if k in overlapped else "shared")
+              for k, h in enumerate(holes) if len(h.tendons) > 1]
     seats, chambers = (), ()
     if role == "base":
         leaving = {p.name: rest_axes[p.name][i] for p in paths}
