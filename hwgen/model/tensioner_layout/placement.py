@@ -239,8 +239,10 @@ def _widen(arr, centers_y, stacks, eyelets, winding, clamp, sz: Sizes) -> tuple[
     def ok(x_u):
         fr = _frame(x_u, arr, centers_y, stacks, eyelets, winding, sz)
         fail = _clearance(fr, clamp, sz)
-        # the far posts stay on their own side of x = 0, clear of the other column
-        good = fail.clearance >= 0 and fr.post[0] >= UNIT_GAP / 2
+        # the far posts stay on their own side of x = 0, clear of the other column; the spines
+        # leave room at the strip clamp's ends for its nuts to go in
+        good = (fail.clearance >= 0 and fr.post[0] >= UNIT_GAP / 2
+                and (clamp is None or fr.spine[0] >= clamp[1] + sz.clamp_room))
         return good, fr, fail
     best_fail = None
     x = x_min

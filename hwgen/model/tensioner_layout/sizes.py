@@ -139,6 +139,17 @@ class Sizes:
     strip_half_x: float
     strip_half_z: float
     y_end: float             # the strip's tip end
+    fast: str                # "nut" or "insert": what the housing's screws go into
+
+    @property
+    def clamp_room(self) -> float:
+        """The least x from the strip clamp's end to a spine's inner face. With nuts, the set
+        screws' nuts slide into the clamp from its ends, flat, corners first along their slots:
+        a nut's width across corners, with its play. With inserts the spine only stays clear."""
+        if self.fast == "nut":
+            af, _ = NUT["M3"]
+            return af / math.cos(math.radians(30)) + NUT_PLAY
+        return GAP
 
     @staticmethod
     def of(d: Design, tip: DiskSpec) -> Sizes:
@@ -155,7 +166,7 @@ class Sizes:
                      max(ts.shaft_diameter / 2 + ts.running_fit / 2 + HUB_WALL, r_s),
                      DRIVE_SHAFT + ts.running_fit,
                      SPINE, BASE[fast], tip.thickness, d.backbone.height / 2, d.backbone.thickness / 2,
-                     d.backbone.length + d.backbone.extra_tip)
+                     d.backbone.length + d.backbone.extra_tip, fast)
 
 
 def standard_screw(kind: str, reach: float) -> float:
