@@ -207,17 +207,55 @@ def test_lab_robots_build_without_breaking_their_own_parts(index, tmp_path):
 
 
 @pytest.mark.slow
-def test_a_disk_whose_slanted_bores_nearly_coincide_is_still_built():
-    """Robot 25 of the stability draw routes two helical tendons 0.8 mm apart through disk 13: one
-    multi-tool cut came out inverted (-4.6 mm³) and the robot was refused (exit 2); the disk is cut
-    a tool at a time then, and the overlap is the eyelet checks' finding."""
-    from hwgen.cad.disk import blank_and_tools, build_disk
+@pytest.mark.parametrize("index, station", [(25, 13), (72, 1)])
+def test_eyelets_routed_into_each_other_share_one_opening_in_a_closed_disk(index, station, tmp_path):
+    """Robot 25 of the stability draw routes two helical tendons 0.8 mm apart through its disks,
+    robot 72 two cosine tendons 0.3 mm apart: their near-coincident slanted bores left the disks'
+    meshes open. The plan gives them one opening; measured from the exported STL, the disk is a
+    closed mesh and one hole, where the plan put it, holds both tendons' routed positions; the
+    overlap is the routing's fault, recorded as an "overlap" merge for eyelet.overlap."""
+    import trimesh
+
+    from hwgen.cad.disk import build_disk
+    from hwgen.cad.export import write_stl
+    from hwgen.checks.eyelets import measure_disk
+    from hwgen.checks.measure import inside
+
     rng = np.random.default_rng(SEED)
-    doc = [random_robot(rng, f"robot{i:03d}") for i in range(26)][25]
-    spec = make_plan(_design(doc)).disks[13]
-    slanted = [h for h in spec.holes if abs(h.axis[1]) < 0.9]
-    assert len(slanted) == 2 and math.hypot(slanted[0].x - slanted[1].x, slanted[0].z - slanted[1].z) < 1.0
-    solid = build_disk(spec).solid
-    blank, tools = blank_and_tools(spec)
-    removed = blank.Volume() - solid.Volume()     # the bores, chamfers and glue port: a few tens of mm³
-    assert solid.isValid() and 0 < removed < sum(t.Volume() for t in tools)
+    doc = [random_robot(rng, f"robot{i:03d}") for i in range(index + 1)][index]
+    p = make_plan(_design(doc))
+    spec = p.disks[station]
+    merged = [m for m in p.merges if m.station == station and m.kind == "overlap"]
+    assert len(merged) == 1 and len(merged[0].tendons) == 2
+    routed = {q.name: q.points[station] for q in p.paths if q.name in merged[0].tendons}
+    assert math.dist(*routed.values()) < 1.0
+    part = build_disk(spec)
+    stl = tmp_path / f"{part.name}.stl"
+    write_stl(part.solid, stl)
+    mesh = trimesh.load(stl)
+    assert mesh.is_watertight and mesh.is_winding_consistent
+    m = measure_disk(stl, part.placement, part.name, station, mesh)
+    assert len(m.holes) == sum(not h.in_slot for h in spec.holes)
+    for xz in routed.values():
+        holding = [h for h in m.holes if inside(h.loop.points, np.asarray(xz))]
+        assert len(holding) == 1
+    (hole,) = [h for h in spec.holes if set(h.tendons) == set(merged[0].tendons)]
+    assert math.dist(holding[0].centre, (hole.x, hole.z)) < 0.01
+
+
+@pytest.mark.parametrize("index", [None, 64])
+def test_the_spines_leave_room_at_the_strip_clamps_ends_for_its_nuts(index):
+    """The clamp's set-screw nuts slide in from its ends, corners first: a spine's inner face stands
+    at least an M3 nut's width across corners (5.5 / cos 30° = 6.35 mm) and its play beyond the clamp.
+    Robot 64 of the stability draw (a 75.5 mm strip) had its clamp run 1.8 mm into the spines; the
+    prototype left 5.97 mm."""
+    from hwgen.model.tensioner_layout.sizes import NUT, NUT_PLAY
+    if index is None:
+        d = load(PARAMS / "prototype.yaml").design
+    else:
+        rng = np.random.default_rng(SEED)
+        d = _design([random_robot(rng, f"robot{i:03d}") for i in range(index + 1)][index])
+    lay = make_plan(d).tensioner_layout
+    assert lay is not None and lay.clamp_block is not None and lay.fastening == "nut"
+    corners = NUT["M3"][0] / math.cos(math.radians(30))
+    assert lay.spine[0] - lay.clamp_block[1] >= corners + NUT_PLAY - 1e-9
