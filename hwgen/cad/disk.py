@@ -19,6 +19,9 @@ from . import DISK_ROTATION, Part, disk_placement
 COLOR = (0.93, 0.86, 0.62, 1.0)     # resin yellow
 NORMAL_AXIS_TOL = 1e-9              # an eyelet this close to the disk normal is drilled in the 2D face
 TOOL_OVERRUN = 1.0                  # tools run this far past the faces, mm
+CONE_HALF_ANGLE_DEG = 45.0          # the chamfer cones around the eyelet axes
+CONE_FLOOR_DEG = 5.0                # ... are narrowed on axes steeper than 90° - this - 45°, so their lowest line rises
+CONE_MIN_DEG = 10.0                 # narrower than this, a slanted eyelet gets no chamfer
 SEAT_OVERLAP = 0.3                  # a seat hole runs this far past the plate into the bore above it, mm
 
 
@@ -59,6 +62,16 @@ def _eyelet_tool(h: Hole, thickness: float, edge: float, base_side: bool, tip_si
     u_cone = u_face - edge - r * tan_t                  # where the chamfer cone starts
     u_end = u_face + r * tan_t + TOOL_OVERRUN
     r_end = r + edge + (u_end - u_face) + r * tan_t     # 45° cone
+    tilt = math.degrees(math.acos(min(1.0, cos_t)))
+    if tilt + CONE_HALF_ANGLE_DEG > 90.0 - CONE_FLOOR_DEG:
+        # a 45° cone around a steeper axis reaches below its own start on the downhill side: a
+        # pocket closed below as the disk prints face down. Narrow it so its lowest line still
+        # rises CONE_FLOOR_DEG; past CONE_MIN_DEG no chamfer is worth it.
+        half = 90.0 - tilt - CONE_FLOOR_DEG
+        if half < CONE_MIN_DEG:
+            edge = 0.0
+        else:
+            r_end = r + (u_end - u_cone) * math.tan(math.radians(half))
     prof_top = [(r, u_cone), (r_end, u_end)] if (tip_side and edge > 0) else [(r, u_end)]
     prof_bot = [(r_end, -u_end), (r, -u_cone)] if (base_side and edge > 0) else [(r, -u_end)]
     x, y = _to_file(h.x, h.z)
