@@ -5,7 +5,8 @@ one parameter path of the design (``tendons[1].routing.function.k``, ``disks.cou
 ``backbone.length``) with a list of ``values``, a ``range`` (start, stop included, step) or seeded
 ``random`` draws. ``mode: grid`` takes every combination of the axes' values; ``mode: samples``
 draws ``samples`` variants, each axis independently (a list or range: one of its values; random:
-one uniform draw). Expansion (:func:`variants`) is numpy and the standard library only.
+one uniform draw); ``mode: zip`` takes the axes side by side (variant i has the i-th value of
+every axis; they must have as many values each), for parameters that change together. Expansion (:func:`variants`) is numpy and the standard library only.
 
 Bad sweep input is an :class:`hwgen.errors.InputError` naming the sweep file, the field path and
 what is wrong, like a bad design file; a variant that is bad input is not: it becomes a row of
@@ -111,7 +112,7 @@ class Sweep(_Model):
     sweep: str = Field(min_length=1, max_length=64, description="name; the results go to OUT/sweeps/<name>/")
     base: str = Field(min_length=1, description="the design file every variant starts from (relative to this file)")
     level: Literal["lengths", "robust", "coupling", "build"] = "lengths"
-    mode: Literal["grid", "samples"] = "grid"
+    mode: Literal["grid", "samples", "zip"] = "grid"
     samples: int | None = Field(None, ge=1, le=MAX_VARIANTS, description="mode samples: how many variants")
     seed: int = Field(0, ge=0, le=2**32 - 1, description="seed of the random axes and of samples mode")
     axes: list[Axis] = Field(min_length=1, max_length=32)
@@ -126,8 +127,8 @@ class Sweep(_Model):
     def _mode(self):
         if self.mode == "samples" and self.samples is None:
             raise ValueError("mode samples needs 'samples' (how many variants)")
-        if self.mode == "grid" and self.samples is not None:
-            raise ValueError("'samples' is for mode samples; a grid takes every combination")
+        if self.mode != "samples" and self.samples is not None:
+            raise ValueError(f"'samples' is for mode samples; mode {self.mode} takes the axes' values")
         return self
 
 
@@ -273,6 +274,11 @@ def load(path: str | Path) -> Loaded:
         for j, a in enumerate(spec.summary.axes):
             if a not in names:
                 raise InputError(path, f"summary.axes[{j}]", f"{echo(a)} is not one of the axes")
+    if spec.mode == "zip":
+        sizes = [len(v) for v in _axis_values(spec)]
+        for i, k in enumerate(sizes):
+            if k != sizes[0]:
+                raise InputError(path, f"axes[{i}]", f"{k} values; mode zip needs as many as axes[0] has ({sizes[0]})")
     n = count(spec)
     if n > MAX_VARIANTS:
         raise InputError(path, "axes", f"{n:,} variants; at most {MAX_VARIANTS:,} in one sweep")
@@ -312,6 +318,8 @@ def _axis_values(spec: Sweep) -> list[list]:
 def count(spec: Sweep) -> int:
     if spec.mode == "samples":
         return spec.samples
+    if spec.mode == "zip":
+        return len(_axis_values(spec)[0])
     n = 1
     for ax in spec.axes:
         if ax.values is not None:
@@ -328,6 +336,8 @@ def variants(spec: Sweep) -> list[Variant]:
     ``samples`` draws (one seeded stream per axis, so adding an axis leaves the others' draws)."""
     if spec.mode == "grid":
         return [Variant(i, tuple(v)) for i, v in enumerate(itertools.product(*_axis_values(spec)))]
+    if spec.mode == "zip":
+        return [Variant(i, tuple(v)) for i, v in enumerate(zip(*_axis_values(spec)))]
     cols = []
     for i, ax in enumerate(spec.axes):
         rng = np.random.default_rng([spec.seed, i])
