@@ -3,7 +3,7 @@
 Imported by a worker the first time it is given a build-level variant, so CadQuery is imported
 once per worker process and stays loaded for every later variant. The files are written into a
 temporary folder and removed, except for the variants the sweep file lists under ``keep``: those
-go to ``OUT/sweeps/<name>/build/<variant>-<hash>/<design>/``, with their pictures.
+go to ``OUT/sweeps/<name>/kept/<variant>-<hash>/<design>/``, with their pictures.
 """
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ def build_and_check(r: Resolved, options: dict) -> tuple[list[dict], str | None]
     keep = r.index in set(options.get("keep", ()))
     cache = options.get("cache", True)            # the pipeline's cache_dir: True (default folder), a folder, False
     if keep:
-        root = Path(options["out"]) / "build" / f"{r.index:06d}-{r.hash[:12]}"
+        root = Path(options["out"]) / "kept" / f"{r.index:06d}-{r.hash[:12]}"
         result = pipeline.build(loaded, root, cache_dir=cache)
         kept = str(result.folder)
     else:

@@ -275,5 +275,5 @@ def verdict(row: dict) -> tuple[str, str, dict]:
                "taut_mm": max((t["taut_mm"] for t in budgeted), default=None),
                "decoupled": all(t["centre_mm"] <= t["budget_mm"] for t in budgeted),
                "clearance_mm": row["clearance_mm"], "mass_g": row["mass_g"],
-               "tendons": json.dumps(row["tendons"])}
+               "per_tendon": json.dumps(row["tendons"])}
     return ("fail" if fails else "pass"), "; ".join(fails), figures

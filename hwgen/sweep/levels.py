@@ -74,7 +74,7 @@ def warm() -> None:
 def _row(r: Resolved, level: str) -> dict:
     row = {"variant": r.index, "hash": r.hash, "level": level, "values": r.values,
            "verdict": "bad input" if r.design is None else "pass", "message": r.message, "decoupled": None,
-           "checks_failed": None, "tendons": None, "kept": None, "cpu_s": 0.0}
+           "checks_failed": None, "per_tendon": None, "kept": None, "cpu_s": 0.0}
     row.update({m: None for m in METRICS})
     return row
 
@@ -100,7 +100,7 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
     d = r.design
     plan = make_plan(d)
     feasibility.check_plan(plan)
-    centre = {t["name"]: t["centre_mm"] for t in json.loads(row["tendons"])}
+    centre = {t["name"]: t["centre_mm"] for t in json.loads(row["per_tendon"])}
     taut_rows = robust(plan, options.get("robust_samples", 200))
     fails = [row["message"]] if row["message"] else []
     warns = []
@@ -110,7 +110,7 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
             text = (f"{t['name']} changes {t['robust_mm']:.3f} mm at {d.check.robust} as built, "
                     f"budget {t['budget_mm']:g} mm")
             (fails if d.check.robust_severity == "error" else warns).append(text)
-    tendons = json.loads(row["tendons"])
+    tendons = json.loads(row["per_tendon"])
     for t in tendons:
         t.update({k: v for k, v in next(x for x in taut_rows if x["name"] == t["name"]).items()
                   if k in ("robust_mm", "taut_built_mm")})
@@ -131,7 +131,7 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
         fails = [f for f in fails if f] + [f"{c['id']}: {c['message']}" for c in failed[:3]]
         if len(failed) > 3:
             fails.append(f"and {len(failed) - 3} more failed checks")
-    row["tendons"] = json.dumps(tendons)
+    row["per_tendon"] = json.dumps(tendons)
     row["verdict"] = "fail" if any(fails) else "pass"
     row["message"] = "; ".join([f for f in fails if f] + [f"warning: {w}" for w in warns])[:2000]
 

@@ -59,7 +59,7 @@ def schema(loaded: Loaded) -> pa.Schema:
     fields += [pa.field(name, kinds[loaded.columns[name]]) for name in loaded.names]
     fields += [pa.field("verdict", pa.string()), pa.field("message", pa.string()), pa.field("decoupled", pa.bool_())]
     fields += [pa.field(m, pa.float64()) for m in FLOAT_COLUMNS]
-    fields += [pa.field("checks_failed", pa.int64()), pa.field("tendons", pa.string()), pa.field("kept", pa.string())]
+    fields += [pa.field("checks_failed", pa.int64()), pa.field("per_tendon", pa.string()), pa.field("kept", pa.string())]
     return pa.schema(fields)
 
 

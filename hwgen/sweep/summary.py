@@ -121,7 +121,7 @@ def _region(loaded: Loaded, t: pa.Table, path: Path) -> bool:
         order = np.argsort(x)
         ax.plot(x[order], worst[order], "-o", color="tab:blue", markersize=4)
         ax.scatter(x[dec & known], worst[dec & known], color="tab:green", zorder=3, label="decoupled")
-        budgets = {b for r in t.column("tendons").to_pylist() if r for b in _budgets(r)}
+        budgets = {b for r in t.column("per_tendon").to_pylist() if r for b in _budgets(r)}
         for b in sorted(budgets):
             ax.axhline(b, color="grey", linestyle=":", linewidth=0.8)
         if np.nanmin(worst) > 0:
