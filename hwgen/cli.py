@@ -364,7 +364,9 @@ def sweep(sweep_file: Path = typer.Argument(..., help="sweep YAML: a base design
     if scheduler is not None and scheduler != "inline" and not scheduler.startswith(("tcp://", "tls://")):
         raise InputError(scheduler, "--scheduler", "give tcp://HOST:PORT of a Dask scheduler, or 'inline'")
     loaded = spec.load(sweep_file)
-    o = sweep_run.run(loaded, out_dir, scheduler, workers, progress=not quiet, cache=_cache(cache_dir, no_cache))
+    # Dask's progress bar redraws one line: on a terminal only (a log would get a line per redraw)
+    o = sweep_run.run(loaded, out_dir, scheduler, workers, progress=not quiet and sys.stdout.isatty(),
+                      cache=_cache(cache_dir, no_cache))
     table = sweep_run.read(o.folder)
     files = summary.write(loaded, table, o.folder.parent / loaded.spec.level) if table is not None else []
     rate = f"{o.evaluated / o.seconds:,.1f} variants/s" if o.seconds > 0 and o.evaluated else "nothing to evaluate"
@@ -378,12 +380,13 @@ def sweep(sweep_file: Path = typer.Argument(..., help="sweep YAML: a base design
             counts[v] = counts.get(v, 0) + 1
         out.print("verdicts: " + ", ".join(f"{k} {n}" for k, n in sorted(counts.items())))
         col, label = summary.figure_column(table)
+        figs = [col] + [c for c in ("robust_mm", "centre_mm") if c != col] + ["clearance_mm", "mass_g"]
         t = Table(title=f"best variants (by {label})")
-        for c in ("variant", *loaded.names, "verdict", col, "clearance mm", "mass g"):
+        for c in ("variant", *loaded.names, "verdict", *figs):
             t.add_column(c, justify="left" if c == "verdict" else "right")
         for r in summary.best(loaded, table, min(loaded.spec.summary.best, 10)):
             t.add_row(str(r["variant"]), *(printable(str(r[n])) for n in loaded.names), r["verdict"],
-                      *("-" if r.get(c) is None else f"{r[c]:.4g}" for c in (col, "clearance_mm", "mass_g")))
+                      *("-" if r.get(c) is None else f"{r[c]:.4g}" for c in figs))
         out.print(t)
     out.print(f"  {printable(o.folder)}/ (Parquet)")
     for f in files:

@@ -34,6 +34,10 @@ def evaluate_batch(batch: list[tuple[int, tuple]], base: dict, names: tuple[str,
                    done: frozenset | set = frozenset(), options: dict | None = None) -> list[dict]:
     """Rows for the variants of ``batch`` ((index, values) pairs) whose hash is not in ``done``."""
     options = options or {}
+    if options.get("numba_threads"):
+        # a Dask worker already has a core of its own: the taut kernel's threads would only contend
+        import numba
+        numba.set_num_threads(options["numba_threads"])
     t0 = time.process_time()
     todo = [r for r in (resolve(base, names, Variant(i, tuple(v))) for i, v in batch) if r.hash not in done]
     rows = {r.index: _row(r, level) for r in todo}

@@ -154,6 +154,7 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
         client.run(levels.warm)           # imports and the compiled taut kernel, before the clock starts
         start = time.perf_counter() - t_start
         t0 = time.perf_counter()
+        options = dict(options, numba_threads=1)
         # the base design and the hashes already done go to every worker once, not with every task
         base, seen = client.scatter([loaded.base, frozenset(done)], broadcast=True)
         futures = [client.submit(levels.evaluate_batch, b, base, loaded.names, loaded.spec.level, seen, options,
