@@ -365,8 +365,13 @@ def sweep(sweep_file: Path = typer.Argument(..., help="sweep YAML: a base design
         raise InputError(scheduler, "--scheduler", "give tcp://HOST:PORT of a Dask scheduler, or 'inline'")
     loaded = spec.load(sweep_file)
     # Dask's progress bar redraws one line: on a terminal only (a log would get a line per redraw)
-    o = sweep_run.run(loaded, out_dir, scheduler, workers, progress=not quiet and sys.stdout.isatty(),
-                      cache=_cache(cache_dir, no_cache))
+    try:
+        o = sweep_run.run(loaded, out_dir, scheduler, workers, progress=not quiet and sys.stdout.isatty(),
+                          cache=_cache(cache_dir, no_cache))
+    except KeyboardInterrupt:
+        say("interrupted:", "yellow", f"the batches finished so far are kept in "
+                                      f"{sweep_run.results_folder(loaded, out_dir)}; the same command goes on from them")
+        raise typer.Exit(130) from None
     table = sweep_run.read(o.folder)
     files = summary.write(loaded, table, o.folder.parent / loaded.spec.level) if table is not None else []
     rate = f"{o.evaluated / o.seconds:,.1f} variants/s" if o.seconds > 0 and o.evaluated else "nothing to evaluate"

@@ -365,10 +365,11 @@ def test_sweep_on_a_real_dask_cluster_matches_the_local_run(tmp_path):
 
 @pytest.mark.slow
 def test_build_level_keeps_the_files_asked_for_and_records_refusals(tmp_path):
-    """Two variants through the whole pipeline: the prototype's own C1 (kept, with hwgen check's
-    report) and one the plan refuses (a row, nothing built)."""
-    f = _sweep_file(tmp_path, {"level": "build", "keep": [0], "robust_samples": 50,
-                               "axes": [{"path": "tendons[1].routing.function.a", "values": [25, 80]}]})
+    """Two variants of a small robot (the prototype on 5 disks) through the whole pipeline: C1 as
+    shipped (kept, with hwgen check's report) and C1 beyond the disks' rim (a row, nothing built)."""
+    f = _sweep_file(tmp_path, {"level": "build", "keep": [0], "robust_samples": 50, "mode": "zip", "axes": [
+        {"path": "disks.count", "values": [5, 5]}, {"path": "disks.spacing", "values": [67.5, 67.5]},
+        {"path": "tendons[1].routing.function.a", "values": [25, 80]}]})
     r = _cli("sweep", str(f), "--out", str(tmp_path / "out"), "--scheduler", "inline", "-q",
              "--cache-dir", str(tmp_path / "cache"), timeout=900)
     assert r.returncode == 0, r.stderr
