@@ -5,8 +5,9 @@
   above), else the worst budgeted tendon's length change as built (robust), else by eq. (2)
   through the hole centres (lengths).
 - ``region.png``: the decoupled region over two axes (the sweep file's ``summary.axes``, else the
-  first two numeric axes): each variant a point, filled where every budgeted tendon keeps its
-  budget, with the worst length change as its colour (log scale). One numeric axis: that change
+  first two numeric axes): a point per pair of their values, the best over any other axes, circled
+  where every budgeted tendon keeps its budget, with the worst length change as its colour (log
+  scale). One numeric axis: that change
   against the axis with the budget drawn in.
 
 "Best": passing variants first, then the smallest coupling figure, then the lightest.
@@ -130,7 +131,7 @@ def _region(loaded: Loaded, t: pa.Table, path: Path) -> bool:
         ax.set_ylabel("worst budgeted ΔL by eq. (2) (mm)")
         ax.legend(fontsize="small")
     else:
-        x, y = _values(t, axes[0]), _values(t, axes[1])
+        x, y, dec, known, worst = _cells(_values(t, axes[0]), _values(t, axes[1]), dec, known, worst)
         pos = worst[np.isfinite(worst) & (worst > 0)]
         norm = None
         if pos.size:
@@ -141,7 +142,7 @@ def _region(loaded: Loaded, t: pa.Table, path: Path) -> bool:
                         label="coupled")
         ax.scatter(x[sel & dec], y[sel & dec], c=worst[sel & dec], norm=norm, cmap="magma_r", marker="o", s=30,
                    edgecolors="tab:green", label="decoupled")
-        ax.scatter(x[~known], y[~known], color="lightgrey", marker=".", s=8, label="bad input")
+        ax.scatter(x[~known], y[~known], color="lightgrey", marker=".", s=8, label="bad input only")
         fig.colorbar(sc, ax=ax, label="worst budgeted ΔL by eq. (2) (mm)")
         ax.set_xlabel(axes[0])
         ax.set_ylabel(axes[1])
@@ -150,6 +151,23 @@ def _region(loaded: Loaded, t: pa.Table, path: Path) -> bool:
     ax.grid(True, alpha=0.3)
     _save(plt, fig, path)
     return True
+
+
+def _cells(x, y, dec, known, worst):
+    """One point per (x, y): the best over every other axis (the smallest worst change; decoupled
+    if any variant there is; bad input only if every one is)."""
+    cells: dict[tuple, list[int]] = {}
+    for i, key in enumerate(zip(x, y)):
+        cells.setdefault(key, []).append(i)
+    out = []
+    for (cx, cy), idx in cells.items():
+        idx = np.asarray(idx)
+        w = worst[idx][known[idx]]
+        w = w[np.isfinite(w)]
+        out.append((cx, cy, bool((dec[idx] & known[idx]).any()), bool(known[idx].any()),
+                    float(w.min()) if w.size else np.nan))
+    cx, cy, cd, ck, cw = (np.array(c) for c in zip(*out))
+    return cx.astype(float), cy.astype(float), cd.astype(bool), ck.astype(bool), cw.astype(float)
 
 
 def _budgets(tendons_json: str) -> list[float]:
