@@ -137,7 +137,7 @@ def processes(params_path: Path) -> None:
 SWEEP_AXES = ("  - path: tendons[1].routing.function.k\n    range: {start: 0.5, stop: 4, step: 0.25}\n"
               "  - path: tendons[1].routing.function.a\n    range: {start: 10, stop: 29, step: 1}\n"
               "  - path: tendons[1].routing.function.phase_deg\n    range: {start: 0, stop: 45, step: 5}\n")
-SWEEP_RATE = re.compile(r"(\d+) evaluated in ([\d.]+) s on (\d+) worker\(s\): ([\d,.]+) variants/s, ([\d.]+) ms CPU")
+SWEEP_RATE = re.compile(r"(\d+) evaluated in ([\d.]+) s on (\d+) worker\(s\): ([\d,.]+) variants/s(?: \([^)]*\))?, ([\d.]+) ms CPU")
 
 
 def _sweep_note(stdout: str) -> str:

@@ -374,7 +374,11 @@ def sweep(sweep_file: Path = typer.Argument(..., help="sweep YAML: a base design
         raise typer.Exit(130) from None
     table = sweep_run.read(o.folder)
     files = summary.write(loaded, table, o.folder.parent / loaded.spec.level) if table is not None else []
-    rate = f"{o.evaluated / o.seconds:,.1f} variants/s" if o.seconds > 0 and o.evaluated else "nothing to evaluate"
+    if o.seconds > 0 and o.evaluated:
+        per_s = o.evaluated / o.seconds
+        rate = f"{per_s:,.1f} variants/s" if per_s >= 10 else f"{per_s:.3g} variants/s ({1 / per_s:.1f} s a variant)"
+    else:
+        rate = "nothing to evaluate"
     cpu = f", {1000 * o.cpu_s / o.evaluated:.2f} ms CPU per variant" if o.evaluated else ""
     start = f"; local cluster started in {o.start_seconds:.1f} s" if o.start_seconds else ""
     out.print(f"{loaded.spec.sweep} ({loaded.spec.level}): {o.total} variants, {o.done_before} already in the results, "
