@@ -2,6 +2,8 @@
 
 Run: python -m hwgen.bench [PARAMS]          each command as a whole process: wall time, CPU, peak memory
      python -m hwgen.bench --steps [PARAMS]  where one process's build goes, step by step
+     python -m hwgen.bench --sweep-build     the build level of hwgen sweep: 2 designs on 2 workers
+                                             against the same 2 built one after the other (minutes)
 """
 from __future__ import annotations
 
@@ -120,8 +122,56 @@ def processes(params_path: Path) -> None:
         rows.append(_process("hwgen check", check, env,
                              "on the built outputs")[:5])
         rows.append(_process("hwgen routing", ["routing", str(params)], env)[:5])
+        rows += sweep_rows(params, tmp)
     t = Table(title=f"hwgen benchmark: {params_path} (whole processes, {os.cpu_count()} cores, "
                     f"load {os.getloadavg()[0]:.1f})")
+    for col, right in (("command", False), ("wall s", True), ("CPU s", True), ("peak MB", True), ("note", False)):
+        t.add_column(col, justify="right" if right else "left")
+    for label, wall, cpu, peak, note in rows:
+        t.add_row(label, f"{wall:.2f}", f"{cpu:.2f}", f"{peak:.0f}", note)
+    Console().print(t)
+
+
+# ---------------------------------------------------------------- hwgen sweep
+
+SWEEP_AXES = ("  - path: tendons[1].routing.function.k\n    range: {start: 0.5, stop: 4, step: 0.25}\n"
+              "  - path: tendons[1].routing.function.a\n    range: {start: 10, stop: 29, step: 1}\n"
+              "  - path: tendons[1].routing.function.phase_deg\n    range: {start: 0, stop: 45, step: 5}\n")
+SWEEP_RATE = re.compile(r"(\d+) evaluated in ([\d.]+) s on (\d+) worker\(s\): ([\d,.]+) variants/s(?: \([^)]*\))?, ([\d.]+) ms CPU")
+
+
+def _sweep_note(stdout: str) -> str:
+    m = SWEEP_RATE.search(stdout)
+    if not m:
+        return "no throughput line"
+    n, sec, workers, rate, cpu = m.groups()
+    return (f"{rate} variants/s over {n} variants on {workers} worker(s) ({sec} s, {cpu} ms CPU per variant; "
+            f"the whole process includes starting it and the cluster)")
+
+
+def sweep_rows(params_path: Path, tmp: Path, level: str = "lengths", axes: str = SWEEP_AXES,
+               extra: tuple[str, ...] = ()) -> list[tuple]:
+    """hwgen sweep over C1's k, amplitude and phase (3 000 variants): on a local cluster of 2
+    workers, and inline in one process; the note is the sweep's own throughput line."""
+    sweep = tmp / f"bench-sweep-{level}.yaml"
+    sweep.write_text(f"sweep: bench\nbase: {params_path.resolve()}\nlevel: {level}\nkeep: []\naxes:\n{axes}")
+    env = {k: v for k, v in os.environ.items() if k not in ("HWGEN_CHECK_SAMPLES", "HWGEN_CACHE_DIR")}
+    rows = []
+    for label, args in ((f"hwgen sweep, {level}, local cluster", ["--workers", "2"]),
+                        (f"hwgen sweep, {level}, inline", ["--scheduler", "inline"])):
+        out = tmp / f"sweep-{level}-{args[-1]}"
+        r = _process(label, ["sweep", str(sweep), "--out", str(out), "-q", *args, *extra], env)
+        rows.append((*r[:4], "; ".join(x for x in (r[4], _sweep_note(r[5])) if x)))
+    return rows
+
+
+def sweep_build() -> None:
+    """The build level: two designs (C1's amplitude 24 and 26 mm) built with --no-cache on 2 workers, and
+    inline one after the other; the target is the serial time per design / workers, within 20 %."""
+    axes = "  - path: tendons[1].routing.function.a\n    values: [24, 26]\n"
+    with tempfile.TemporaryDirectory() as tmp:
+        rows = sweep_rows(Path("params/prototype.yaml"), Path(tmp), "build", axes, ("--no-cache",))
+    t = Table(title=f"hwgen sweep, build level ({os.cpu_count()} cores, load {os.getloadavg()[0]:.1f})")
     for col, right in (("command", False), ("wall s", True), ("CPU s", True), ("peak MB", True), ("note", False)):
         t.add_column(col, justify="right" if right else "left")
     for label, wall, cpu, peak, note in rows:
@@ -149,6 +199,9 @@ def _statics(plan) -> None:
 
 
 def main(argv: list[str]) -> None:
+    if "--sweep-build" in argv:
+        sweep_build()
+        return
     if "--steps" not in argv:
         processes(Path(argv[0]) if argv else Path("params/prototype.yaml"))
         return

@@ -1,4 +1,4 @@
-"""The `hwgen` command line: build, check, render, routing, schema.
+"""The `hwgen` command line: build, check, render, routing, stiffness, sweep, schema.
 
 Exit codes: 0 success, 1 design findings that fail, 2 bad input or usage, 3 a bug in hwgen.
 
@@ -340,6 +340,66 @@ def stiffness(params: Path = PARAMS, out_dir: Path = OUT,
                   f"{r['paper']:g}× on its prototype); model: {rep['model']}")
     for name in ("stiffness.json", "stiffness.png", "gravity.png"):
         out.print(f"  {printable(folder / name)}")
+
+
+@_command
+def sweep(sweep_file: Path = typer.Argument(..., help="sweep YAML: a base design and axes over its parameters",
+                                            show_default=False),
+          out_dir: Path = typer.Option(Path("out"), "--out", help="output root; results go to OUT/sweeps/<name>/<level>/"),
+          scheduler: str = typer.Option(None, "--scheduler", show_default=False,
+                                        help="tcp://HOST:PORT of a running Dask scheduler; 'inline' to run in this "
+                                             "process without Dask (default: a local Dask cluster, one worker "
+                                             "process per core)"),
+          workers: int = typer.Option(None, "--workers", min=1, show_default=False,
+                                      help="worker processes of the local cluster (default: the number of cores)"),
+          quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+          cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
+    """Evaluate every variant of a design sweep on Dask: Parquet results, a summary and plots.
+
+    Levels: lengths (the plan, eq. (2) and the taut path; no CAD), robust (the as-built Monte Carlo), coupling (tendon tensions and the actuating tension's rise), build (every file and hwgen check). A rerun skips the variants already in the results. Bad or failing variants are rows with their message; exit 2 only for a bad sweep file.
+    """
+    from .sweep import run as sweep_run
+    from .sweep import spec, summary
+
+    if scheduler is not None and scheduler != "inline" and not scheduler.startswith(("tcp://", "tls://")):
+        raise InputError(scheduler, "--scheduler", "give tcp://HOST:PORT of a Dask scheduler, or 'inline'")
+    loaded = spec.load(sweep_file)
+    # Dask's progress bar redraws one line: on a terminal only (a log would get a line per redraw)
+    try:
+        o = sweep_run.run(loaded, out_dir, scheduler, workers, progress=not quiet and sys.stdout.isatty(),
+                          cache=_cache(cache_dir, no_cache))
+    except KeyboardInterrupt:
+        say("interrupted:", "yellow", f"the batches finished so far are kept in "
+                                      f"{sweep_run.results_folder(loaded, out_dir)}; the same command goes on from them")
+        raise typer.Exit(130) from None
+    table = sweep_run.read(o.folder)
+    files = summary.write(loaded, table, o.folder.parent / loaded.spec.level) if table is not None else []
+    if o.seconds > 0 and o.evaluated:
+        per_s = o.evaluated / o.seconds
+        rate = f"{per_s:,.1f} variants/s" if per_s >= 10 else f"{per_s:.3g} variants/s ({1 / per_s:.1f} s a variant)"
+    else:
+        rate = "nothing to evaluate"
+    cpu = f", {1000 * o.cpu_s / o.evaluated:.2f} ms CPU per variant" if o.evaluated else ""
+    start = f"; local cluster started in {o.start_seconds:.1f} s" if o.start_seconds else ""
+    out.print(f"{loaded.spec.sweep} ({loaded.spec.level}): {o.total} variants, {o.done_before} already in the results, "
+              f"{o.evaluated} evaluated in {o.seconds:.2f} s on {o.workers} worker(s): {rate}{cpu}{start}")
+    if table is not None:
+        counts = {}
+        for v in table.column("verdict").to_pylist():
+            counts[v] = counts.get(v, 0) + 1
+        out.print("verdicts: " + ", ".join(f"{k} {n}" for k, n in sorted(counts.items())))
+        col, label = summary.figure_column(table)
+        figs = [col] + [c for c in ("robust_mm", "centre_mm") if c != col] + ["clearance_mm", "mass_g"]
+        t = Table(title=f"best variants (by {label})")
+        for c in ("variant", *loaded.names, "verdict", *figs):
+            t.add_column(c, justify="left" if c == "verdict" else "right")
+        for r in summary.best(loaded, table, min(loaded.spec.summary.best, 10)):
+            t.add_row(str(r["variant"]), *(printable(str(r[n])) for n in loaded.names), r["verdict"],
+                      *("-" if r.get(c) is None else f"{r[c]:.4g}" for c in figs))
+        out.print(t)
+    out.print(f"  {printable(o.folder)}/ (Parquet)")
+    for f in files:
+        out.print(f"  {printable(f)}")
 
 
 @_command

@@ -426,6 +426,16 @@ def read(path: str | Path) -> LoadedDesign:
     """Read a design YAML and check it against the schema; raise :class:`InputError` on any fault."""
     path = Path(path)
     raw = _read_bytes(path)
+    data, warnings = document(raw, path)
+    design = validate(data, path)
+    return LoadedDesign(design=design, source=str(path), sha256=hashlib.sha256(raw).hexdigest(),
+                        warnings=tuple(warnings))
+
+
+def document(raw: bytes, path: str | Path) -> tuple[dict, list[str]]:
+    """A design file's bytes as its mapping of sections (deprecated keys moved to their new place),
+    and the warnings about those keys; raise :class:`InputError` when it is no such mapping."""
+    path = Path(path)
     try:
         data = yamlfile.load(raw.decode("utf-8"))
     except UnicodeDecodeError:
@@ -443,22 +453,31 @@ def read(path: str | Path) -> LoadedDesign:
         raise InputError(path, "", f"a value YAML cannot read: {clip(str(e), 80)}") from None
     if not isinstance(data, dict):
         raise InputError(path, "", "the document must be a mapping of sections (design, backbone, disks, ...)")
-    warnings = _move_deprecated(data, path)
+    return data, _move_deprecated(data, path)
+
+
+def validation_error(e: ValidationError, path: str | Path) -> InputError:
+    """Pydantic's first error as one :class:`InputError`: the field path and what is wrong."""
+    err = e.errors()[0]
+    loc = [p for p in err["loc"] if not (isinstance(p, str) and p.startswith("function-"))]
+    msg = err["msg"].removeprefix("Value error, ")
+    if err["type"] == "extra_forbidden":
+        msg = "unknown key"
+    elif "input" in err and err["type"] not in ("missing", "value_error"):
+        msg += f" (got {echo(err['input'])})"
+    extra = f" (and {e.error_count() - 1} more)" if e.error_count() > 1 else ""
+    return InputError(path, _path(loc), msg + extra)
+
+
+def validate(data: dict, path: str | Path) -> Design:
+    """A design document (as read from YAML) checked against the schema and the checks that span
+    fields, exactly as a design file is; ``path`` names it in the :class:`InputError`."""
     try:
         design = Design.model_validate(data)
     except ValidationError as e:
-        err = e.errors()[0]
-        loc = [p for p in err["loc"] if not (isinstance(p, str) and p.startswith("function-"))]
-        msg = err["msg"].removeprefix("Value error, ")
-        if err["type"] == "extra_forbidden":
-            msg = "unknown key"
-        elif "input" in err and err["type"] not in ("missing", "value_error"):
-            msg += f" (got {echo(err['input'])})"
-        extra = f" (and {e.error_count() - 1} more)" if e.error_count() > 1 else ""
-        raise InputError(path, _path(loc), msg + extra) from None
-    _check_design(design, path)
-    return LoadedDesign(design=design, source=str(path), sha256=hashlib.sha256(raw).hexdigest(),
-                        warnings=tuple(warnings))
+        raise validation_error(e, path) from None
+    _check_design(design, Path(path))
+    return design
 
 
 def _read_bytes(path: Path) -> bytes:

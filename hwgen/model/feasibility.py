@@ -6,6 +6,7 @@ sized holes tell (a tendon that crosses the strip or a disk so obliquely that no
 """
 from __future__ import annotations
 
+import functools
 import math
 from pathlib import Path
 
@@ -31,8 +32,8 @@ def problems(d: Design) -> list[tuple[str, str]]:
         out.append(("process.material", material))
     out += _slot_problems(d) + _tendon_size_problems(d) + _mount_problems(d)
     ts = d.tensioner
-    pair = worm_pair(ts, d.process.min_wall)
-    out += [(f"tensioner.{f}", m) for f, m in pair.problems(ts.friction_coefficient, d.process.min_wall)]
+    out += [(f"tensioner.{f}", m) for f, m in _gear_problems(worm_pair(ts, d.process.min_wall),
+                                                             ts.friction_coefficient, d.process.min_wall)]
     wall = spool_wall_problem(ts, d.process.min_wall)
     if wall:
         out.append(("tensioner.spool_diameter", wall))
@@ -45,6 +46,13 @@ def problems(d: Design) -> list[tuple[str, str]]:
     out += _anchor_problems(d)
     out += mount_problems(d)
     return out
+
+
+@functools.lru_cache(maxsize=256)
+def _gear_problems(pair, mu: float, min_wall: float) -> tuple[tuple[str, str], ...]:
+    """The worm pair's problems, remembered per pair: they take most of :func:`problems`' time
+    (the wheel's tooth-space sweep), and a design sweep asks them of the same pair thousands of times."""
+    return tuple(pair.problems(mu, min_wall))
 
 
 def _spacing_problems(d: Design) -> list[tuple[str, str]]:

@@ -1,0 +1,234 @@
+"""What each level of a sweep computes for a batch of variants, on a worker: one row per variant.
+
+``lengths`` (:mod:`.lengths`): the plan's eyelets, eq. (2) and the nominal taut path, many
+variants at once. ``robust``: the full plan (:func:`hwgen.model.plan.plan`) and the as-built Monte
+Carlo of :mod:`hwgen.model.scatter` on the plan's holes, seats and tensioner runs, judged at
+``check.robust`` like ``hwgen check``'s ``tendon.robust``. ``coupling``: the tendon statics of
+:mod:`hwgen.checks.tension` on that plan (tautness, overload, the actuating tension's rise).
+``build``: the whole pipeline (:mod:`.build`), with ``hwgen check``'s report. Each level includes
+the ones before it.
+
+A variant that is bad input, or whose plan is refused, is a row with verdict ``bad input`` and
+the message ``hwgen build`` would print; one that makes hwgen fail is a row with verdict
+``error``; neither stops the batch.
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+
+import numpy as np
+
+from ..errors import DesignError, InputError
+from ..model import feasibility, scatter as mc
+from ..model.plan import Plan, plan as make_plan
+from . import lengths
+from .spec import Resolved, Variant, resolve
+
+LEVELS = ("lengths", "robust", "coupling", "build")
+METRICS = ("centre_mm", "taut_mm", "robust_mm", "clearance_mm", "mass_g", "coupling", "least_tension_n")
+
+
+def evaluate_batch(batch: list[tuple[int, tuple]], base: dict, names: tuple[str, ...], level: str,
+                   done: frozenset | set = frozenset(), options: dict | None = None) -> list[dict]:
+    """Rows for the variants of ``batch`` ((index, values) pairs) whose hash is not in ``done``."""
+    options = options or {}
+    if options.get("numba_threads"):
+        # a Dask worker already has a core of its own: the taut kernel's threads would only contend
+        import numba
+        numba.set_num_threads(options["numba_threads"])
+    t0 = time.process_time()
+    todo = [r for r in (resolve(base, names, Variant(i, tuple(v))) for i, v in batch) if r.hash not in done]
+    rows = {r.index: _row(r, level) for r in todo}
+    good = [r for r in todo if r.design is not None]
+    figures = _lengths(good)
+    for r in good:
+        row = rows[r.index]
+        fig = figures[r.index]
+        if isinstance(fig, str):
+            row.update(verdict="error", message=fig)
+            continue
+        row["verdict"], row["message"], f = lengths.verdict(fig)
+        row.update(f)
+    share = (time.process_time() - t0) / max(len(todo), 1)
+    for r in todo:
+        rows[r.index]["cpu_s"] = share
+    if level != "lengths":
+        for r in good:
+            row = rows[r.index]
+            if row["verdict"] == "error":
+                continue
+            t1 = time.process_time()
+            try:
+                _deeper(r, row, level, options)
+            except (InputError, DesignError) as e:
+                row.update(verdict="bad input", message=f"{e.path or '<document>'}: {e.message}")
+            except Exception as e:      # a variant that makes hwgen fail is a row, never the end of the sweep
+                row.update(verdict="error", message=f"internal error: {type(e).__name__}: {e}"[:400])
+            row["cpu_s"] += time.process_time() - t1
+    return [rows[r.index] for r in todo]
+
+
+def warm() -> None:
+    """Load what every batch needs (the taut kernel compiled on disk, numba's import) in this worker."""
+    from ..model import taut_kernels  # noqa: F401
+
+
+def _row(r: Resolved, level: str) -> dict:
+    row = {"variant": r.index, "hash": r.hash, "level": level, "values": r.values,
+           "verdict": "bad input" if r.design is None else "pass", "message": r.message, "decoupled": None,
+           "checks_failed": None, "per_tendon": None, "kept": None, "cpu_s": 0.0}
+    row.update({m: None for m in METRICS})
+    return row
+
+
+def _lengths(good: list[Resolved]) -> dict[int, dict | str]:
+    """The lengths level for the batch at once; should that fail, one at a time, so that only the
+    variant that makes it fail is an error row."""
+    try:
+        return {r.index: f for r, f in zip(good, lengths.evaluate([r.design for r in good]))}
+    except Exception:
+        out: dict[int, dict | str] = {}
+        for r in good:
+            try:
+                out[r.index] = lengths.evaluate([r.design])[0]
+            except Exception as e:
+                out[r.index] = f"internal error: {type(e).__name__}: {e}"[:400]
+        return out
+
+
+# ---------------------------------------------------------------- robust, coupling, build
+
+def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
+    d = r.design
+    plan = make_plan(d)
+    feasibility.check_plan(plan)
+    centre = {t["name"]: t["centre_mm"] for t in json.loads(row["per_tendon"])}
+    taut_rows = robust(plan, options.get("robust_samples", 200))
+    fails = [row["message"]] if row["message"] else []
+    warns = []
+    budgeted = [t for t in taut_rows if t["budget_mm"] is not None]
+    for t in budgeted:
+        if t["robust_mm"] > t["budget_mm"]:
+            text = (f"{t['name']} changes {t['robust_mm']:.3f} mm at {d.check.robust} as built, "
+                    f"budget {t['budget_mm']:g} mm")
+            (fails if d.check.robust_severity == "error" else warns).append(text)
+    tendons = json.loads(row["per_tendon"])
+    for t in tendons:
+        t.update({k: v for k, v in next(x for x in taut_rows if x["name"] == t["name"]).items()
+                  if k in ("robust_mm", "taut_built_mm")})
+    row["robust_mm"] = max((t["robust_mm"] for t in budgeted), default=None)
+    if level in ("coupling", "build"):
+        report = coupling(plan, taut_rows, centre)
+        if "skipped" in report:
+            warns.append(f"statics skipped: {report['skipped']}")
+        for c in report.get("failed", []):
+            (fails if c["severity"] == "error" else warns).append(f"{c['id']}: {c['message']}")
+        row["coupling"] = report.get("coupling")
+        row["least_tension_n"] = report.get("least_tension_n")
+    if level == "build":
+        from .build import build_and_check       # CadQuery: only a build-level worker imports it, once
+        failed, kept = build_and_check(r, options)
+        row["checks_failed"] = len(failed)
+        row["kept"] = kept
+        fails = [f for f in fails if f] + [f"{c['id']}: {c['message']}" for c in failed[:3]]
+        if len(failed) > 3:
+            fails.append(f"and {len(failed) - 3} more failed checks")
+    row["per_tendon"] = json.dumps(tendons)
+    row["verdict"] = "fail" if any(fails) else "pass"
+    row["message"] = "; ".join([f for f in fails if f] + [f"warning: {w}" for w in warns])[:2000]
+
+
+def robot(plan: Plan) -> mc.Robot:
+    """The robot the plan describes, as the taut-path model sees it: one hole per physical hole,
+    each tendon from its seat on the base disk to its drum's tangent point (or, without a tensioner
+    layout, straight on beyond the tip disk)."""
+    d = plan.design
+    names = [p.name for p in plan.paths]
+    ND = len(plan.disks)
+    chain = np.full((len(names), ND), -1)
+    disk, xz, axis, dia = [], [], [], []
+    for spec in plan.disks:
+        for h in spec.holes:
+            for t in h.tendons:
+                chain[names.index(t), spec.index] = len(disk)
+            disk.append(spec.index)
+            xz.append((h.x, h.z))
+            axis.append(h.axis)
+            dia.append(h.diameter)
+    base, tip = plan.disks[0], plan.disks[-1]
+    seats = {s.tendon: s for s in base.seats}
+    runs = {r.tendon: r for r in plan.tensioner_layout.runs} if plan.tensioner_layout else {}
+    anchor, end = [], []
+    for k, t in enumerate(names):
+        if t in seats:
+            anchor.append([seats[t].x, -base.thickness / 2 + base.seat_plate, seats[t].z])
+        else:
+            x, z = xz[chain[k, 0]]
+            anchor.append([x, -base.thickness / 2, z])
+        if t in runs:
+            x, y, z = runs[t].end
+            end.append([x, y - plan.stations[-1], z])
+        else:
+            x, z = xz[chain[k, -1]]
+            end.append([x, tip.thickness / 2 + lengths.END_RUN_MM, z])
+    return mc.Robot(np.asarray(plan.stations, float), np.asarray(disk), np.asarray(xz, float),
+                    np.asarray(axis, float), np.asarray(dia, float), chain, np.asarray(anchor, float),
+                    np.asarray(end, float), d.tendon_material.diameter, d.backbone.length)
+
+
+def slot_scatter(plan: Plan) -> mc.Scatter:
+    """The process's stated scatter and the play each disk's slot is designed with: the strip may
+    shift ``slot_clearance`` each way in x and z, and tilt by the clearance across the length that
+    holds it (pitch and yaw: 2c over the disk and its hub; roll: 2c over the strip's width).
+    ``hwgen check`` measures that play in each disk's STL instead."""
+    d = plan.design
+    c = d.disks.slot_clearance
+    tilt = np.array([[math.degrees(math.atan2(2 * c, s.engagement)), math.degrees(math.atan2(2 * c, d.backbone.height)),
+                      math.degrees(math.atan2(2 * c, s.engagement))] for s in plan.disks])
+    play = np.full((len(plan.disks), 2), c)
+    p = d.process
+    return mc.Scatter(p.position_sigma, p.diameter_sigma, d.jig.station_tolerance_mm, tilt, play)
+
+
+def robust(plan: Plan, samples: int) -> list[dict]:
+    """Each tendon's taut path (nominal print) and its ``check.robust`` statistic over ``samples``
+    as-built samples (seeded with ``check.seed``), over hwgen check's sweep."""
+    d = plan.design
+    ang = lengths.check_angles(d.check_angle_deg, d.check.step_deg)
+    res = mc.run(robot(plan), slot_scatter(plan), ang, samples, d.check.seed)
+    out = []
+    for k, p in enumerate(plan.paths):
+        nominal = float(np.abs(res.nominal[k]).max())
+        at = mc.percentile(res.worst[:, k], d.check.robust) if samples else nominal
+        out.append({"name": p.name, "budget_mm": p.budget_mm, "taut_built_mm": nominal, "robust_mm": at})
+    return out
+
+
+def coupling(plan: Plan, taut_rows: list[dict], centre: dict[str, float]) -> dict:
+    """The tension checks of ``hwgen check`` on the plan: the coupling (the actuating tension's
+    rise with the stiffening tendons locked), the least stiffening tension as built, and the
+    checks that fail."""
+    from ..checks.tension import tension_checks        # numpy and scipy; deferred: only this level needs it
+    report, checks = tension_checks(plan, {"tendons": [{"name": t["name"], "robust_mm": t["robust_mm"],
+                                                        "taut_max_abs_delta_mm": t["taut_built_mm"]}
+                                                       for t in taut_rows]}, centre)
+    out: dict = {"failed": [c.to_json() if hasattr(c, "to_json") else _check(c) for c in checks if not c.passed
+                            and c.severity in ("error", "warning")]}
+    if "skipped" in report:
+        out["skipped"] = report["skipped"]
+        return out
+    rises = [s["rise"] for s in report.get("actuation", [])]
+    out["coupling"] = max(rises) if rises else None
+    least = [t["least_as_built_n"] for t in report.get("tendons", [])]
+    out["least_tension_n"] = min(least) if least else None
+    return out
+
+
+def _check(c) -> dict:
+    return {"id": c.id, "severity": c.severity, "message": c.message}
+
+
+def finite(v):
+    return None if v is None or (isinstance(v, float) and not math.isfinite(v)) else v

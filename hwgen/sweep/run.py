@@ -1,0 +1,178 @@
+"""Running a sweep on Dask, and its results as Parquet.
+
+The variants are cut into batches (:data:`BATCH` per level, or the sweep file's ``batch``); each
+batch is one Dask task (:func:`hwgen.sweep.levels.evaluate_batch`) that resolves, validates and
+evaluates its variants on a worker and returns their rows. The base design is sent to the
+workers once. By default a local cluster of worker processes (one per core, one thread each) is
+started for the sweep and stopped after it; ``scheduler="tcp://HOST:PORT"`` uses a running Dask
+cluster instead; ``scheduler="inline"`` runs the batches in this process, without Dask.
+
+Results: ``OUT/sweeps/<name>/<level>/part-*.parquet``, one file per finished batch, each written
+whole or not at all (:func:`hwgen.atomic.atomic_path`): an interrupted sweep keeps every batch it
+finished. A rerun reads the hashes already there and the workers skip those variants, so a sweep
+run twice, or interrupted and run again, has every design exactly once. Read them with
+``pyarrow.parquet.read_table(folder)`` (or pandas, polars, DuckDB).
+"""
+from __future__ import annotations
+
+import json
+import os
+import threading
+import time
+import uuid
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from ..atomic import atomic_path
+from ..errors import InputError
+from . import levels
+from .spec import Loaded, variants
+
+BATCH = {"lengths": 256, "robust": 4, "coupling": 1, "build": 1}
+PART_GLOB = "part-*.parquet"
+FLOAT_COLUMNS = levels.METRICS + ("cpu_s",)
+
+
+@dataclass
+class Outcome:
+    folder: Path                   # the level's results folder
+    total: int                     # variants in the sweep
+    done_before: int               # rows already in the results when this run started
+    evaluated: int                 # rows this run added
+    seconds: float                 # wall time from the first task sent to the last row written
+    workers: int
+    start_seconds: float           # starting the local cluster (0 for an existing one or inline)
+    cpu_s: float                   # the workers' CPU time for this run's rows
+    verdicts: dict = field(default_factory=dict)
+
+
+def results_folder(loaded: Loaded, out_root: Path) -> Path:
+    return Path(out_root) / "sweeps" / loaded.spec.sweep / loaded.spec.level
+
+
+def schema(loaded: Loaded) -> pa.Schema:
+    kinds = {"float": pa.float64(), "int": pa.int64(), "json": pa.string()}
+    fields = [pa.field("variant", pa.int64()), pa.field("hash", pa.string()), pa.field("level", pa.string())]
+    fields += [pa.field(name, kinds[loaded.columns[name]]) for name in loaded.names]
+    fields += [pa.field("verdict", pa.string()), pa.field("message", pa.string()), pa.field("decoupled", pa.bool_())]
+    fields += [pa.field(m, pa.float64()) for m in FLOAT_COLUMNS]
+    fields += [pa.field("checks_failed", pa.int64()), pa.field("per_tendon", pa.string()), pa.field("kept", pa.string())]
+    return pa.schema(fields)
+
+
+def table(loaded: Loaded, rows: list[dict]) -> pa.Table:
+    """Rows as a table of :func:`schema`; an axis whose values are not numbers is stored as JSON."""
+    sch = schema(loaded)
+    cols: dict[str, list] = {f.name: [] for f in sch}
+    for row in rows:
+        for name, v in zip(loaded.names, row["values"]):
+            kind = loaded.columns[name]
+            cols[name].append(json.dumps(v, sort_keys=True) if kind == "json" else v)
+        for f in sch:
+            if f.name not in loaded.names:
+                cols[f.name].append(levels.finite(row.get(f.name)))
+    return pa.table(cols, schema=sch)
+
+
+def read(folder: Path) -> pa.Table | None:
+    """Every row in a results folder (None when there is none yet)."""
+    parts = sorted(Path(folder).glob(PART_GLOB))
+    if not parts:
+        return None
+    return pa.concat_tables([pq.read_table(p) for p in parts], promote_options="default")
+
+
+def _done(folder: Path) -> set[str]:
+    t = read(folder)
+    return set() if t is None else set(t.column("hash").to_pylist())
+
+
+def _batches(loaded: Loaded) -> list[list[tuple[int, tuple]]]:
+    size = loaded.spec.batch or BATCH[loaded.spec.level]
+    vs = [(v.index, v.values) for v in variants(loaded.spec)]
+    return [vs[i:i + size] for i in range(0, len(vs), size)]
+
+
+def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: int | None = None,
+        progress: bool = True, cache=True) -> Outcome:
+    """Run the sweep (see the module's docstring); rows already in the results are not evaluated again."""
+    folder = results_folder(loaded, out_root)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise InputError(out_root, "--out", f"cannot write the results here ({e.strerror or e})") from None
+    done = _done(folder)
+    batches = _batches(loaded)
+    total = sum(len(b) for b in batches)
+    options = {"robust_samples": loaded.spec.robust_samples, "keep": list(loaded.spec.keep),
+               "out": str(folder.parent), "cache": cache}
+    args = (loaded.base, loaded.names, loaded.spec.level)
+    written, cpu, verdicts = set(done), 0.0, {}
+
+    def write(rows: list[dict]) -> None:
+        nonlocal cpu
+        rows = [r for r in rows if r["hash"] not in written]     # two variants of one design: one row
+        if not rows:
+            return
+        with atomic_path(folder / f"part-{rows[0]['variant']:09d}-{uuid.uuid4().hex[:8]}.parquet") as tmp:
+            pq.write_table(table(loaded, rows), tmp)
+        for r in rows:
+            written.add(r["hash"])
+            cpu += r["cpu_s"]
+            verdicts[r["verdict"]] = verdicts.get(r["verdict"], 0) + 1
+
+    if scheduler == "inline":
+        t0 = time.perf_counter()
+        for b in batches:
+            write(levels.evaluate_batch(b, *args, done, options))
+        return Outcome(folder, total, len(done), len(written) - len(done), time.perf_counter() - t0, 1, 0.0,
+                       cpu, verdicts)
+
+    from distributed import Client, LocalCluster, as_completed
+    from distributed import progress as dask_progress
+
+    t_start = time.perf_counter()
+    cluster = None
+    if scheduler is None:
+        n = workers or os.cpu_count() or 1
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
+                               silence_logs=40)
+        client = Client(cluster)
+    else:
+        try:
+            client = Client(scheduler, timeout=30)
+        except (OSError, TimeoutError, ValueError) as e:
+            raise InputError(scheduler, "--scheduler", f"cannot reach the Dask scheduler ({e})") from None
+    try:
+        n_workers = len(client.scheduler_info()["workers"])
+        if n_workers == 0:
+            client.wait_for_workers(1, timeout=60)
+            n_workers = len(client.scheduler_info()["workers"])
+        client.run(levels.warm)           # imports and the compiled taut kernel, before the clock starts
+        start = time.perf_counter() - t_start
+        t0 = time.perf_counter()
+        options = dict(options, numba_threads=1)
+        # the base design and the hashes already done go to every worker once, not with every task
+        base, seen = client.scatter([loaded.base, frozenset(done)], broadcast=True)
+        futures = [client.submit(levels.evaluate_batch, b, base, loaded.names, loaded.spec.level, seen, options,
+                                 key=f"sweep-{loaded.spec.sweep}-{b[0][0]}-{uuid.uuid4().hex[:6]}", pure=False)
+                   for b in batches]
+        bar = None
+        if progress and futures:
+            bar = threading.Thread(target=dask_progress, args=futures, kwargs={"notebook": False}, daemon=True)
+            bar.start()
+        for fut in as_completed(futures):
+            write(fut.result())
+            fut.release()
+        if bar is not None:
+            bar.join(timeout=5)
+            print()
+        seconds = time.perf_counter() - t0
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    return Outcome(folder, total, len(done), len(written) - len(done), seconds, n_workers, start, cpu, verdicts)
