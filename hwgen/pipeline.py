@@ -2,7 +2,7 @@
 
     read (params) → feasibility (model) → plan (model) → parts (cad) → files and manifest (cad)
     → checks (report.json, summary.md) → plots (lengths.png, tolerance.png, sag.png) → bill of materials
-    → print plates (plates/) → pictures
+    → print plates (plates/) → pictures → assembly guide (guide/)
 
 Every build writes into a fresh staging folder beside the target; only when every file is
 complete is it swapped in for ``out/<design>/`` in one step (:func:`hwgen.atomic.new_folder`).
@@ -50,7 +50,7 @@ from .model import feasibility
 from .model import stiffness as statics_study
 from .model.materials import printed_density
 from .model.plan import Plan, plan as make_plan
-from .outputs import bom, pictures, plates as print_plates
+from .outputs import bom, guide, pictures, plates as print_plates
 from .outputs.plots import plot_lengths, plot_sag, plot_tolerance
 from .outputs.stiffness import plot_gravity, plot_stiffness
 
@@ -129,14 +129,22 @@ def plates_stage(plan: Plan, folder: Path, manifest: dict) -> dict:
 
 
 def pictures_stage(plan: Plan, folder: Path, manifest: dict) -> None:
-    """exploded.png, assembled.png, bent.png and exploded.svg; a missing backend is recorded, not raised."""
-    pictures.draw(folder, manifest, plan.design, bom.family_table(manifest, plan.design))
+    """exploded.png, assembled.png, bent.png, exploded.svg and the guide's step pictures; a missing
+    backend is recorded, not raised."""
+    pictures.draw(folder, manifest, plan.design, bom.family_table(manifest, plan.design),
+                  guide.picture_jobs(folder, manifest, plan.design))
+
+
+def guide_stage(plan: Plan, folder: Path, manifest: dict) -> dict:
+    """guide/assembly.md and guide/assembly.html, from bom.csv, the manifest and the step pictures."""
+    return guide.write_guide(folder, manifest, plan.design)
 
 
 # (name, stage(plan, folder, manifest)) in the order a build runs them on its fresh files
 AFTER_FILES: list[tuple[str, Callable[[Plan, Path, dict], object]]] = [
-    ("checks", checks_stage), ("bom", bom_stage), ("plates", plates_stage), ("pictures", pictures_stage)]
-DRAWING_STAGES = ("bom", "pictures")     # what `hwgen render` runs on existing outputs
+    ("checks", checks_stage), ("bom", bom_stage), ("plates", plates_stage), ("pictures", pictures_stage),
+    ("guide", guide_stage)]
+DRAWING_STAGES = ("bom", "pictures", "guide")     # what `hwgen render` runs on existing outputs
 
 
 def draw(plan: Plan, folder: Path, manifest: dict) -> None:
@@ -204,7 +212,7 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
 # ---------------------------------------------------------------- the stages after the files, through the cache
 
 # the stages the cache keeps, and what each reads besides the folder, the manifest and the design
-STAGE_ENV = {"checks": ("HWGEN_CHECK_SAMPLES",), "bom": (), "plates": (), "pictures": ("HWGEN_RENDER_BACKEND", "DISPLAY")}
+STAGE_ENV = {"checks": ("HWGEN_CHECK_SAMPLES",), "bom": (), "plates": (), "guide": (), "pictures": ("HWGEN_RENDER_BACKEND", "DISPLAY")}
 STAGE_RESULT = {"checks": REPORT}       # a stage whose return value is this file of its outputs
 
 

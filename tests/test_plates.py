@@ -173,3 +173,18 @@ def test_plates_open_and_slice_in_prusaslicer(laid_out, tmp_path):
     gcode = clients.fdm_slice(folder / cheapest["file"], summary["bed_mm"], tmp_path / "plate.gcode")
     labelled = {line.split()[3] for line in gcode.splitlines() if line.startswith("; printing object ")}
     assert labelled == set(cheapest["parts"])
+
+
+def test_plates_and_coupon_report_bad_input_like_every_command(tmp_path):
+    """One clear line, exit 2, the same as `hwgen routing` gives, and nothing written."""
+    from tests.test_hostile import CASES, _write, assert_one_clear_line, run_cli
+    case = CASES["value-bool-disks.thickness"]
+    f = _write(tmp_path, case)
+    out = tmp_path / "out"
+    lines = set()
+    for cmd in (["routing"], ["plates", "-q", "--out", str(out)], ["coupon", "-q", "--out", str(out)]):
+        code, stdout, stderr, escaped = run_cli(cmd[0], str(f), *cmd[1:])
+        assert_one_clear_line(code, stdout, stderr, escaped, case, f)
+        lines.add(stderr.strip())
+    assert len(lines) == 1, lines
+    assert not out.exists()
