@@ -25,7 +25,6 @@ A part larger than the plate in every orientation tried goes on no plate and is 
 from __future__ import annotations
 
 import ctypes
-import json
 import locale
 import math
 import uuid
@@ -318,7 +317,3 @@ def summary_markdown(manifest: dict, s: dict) -> str:
     for name, o in s["parts"].items():
         L.append(f"| {name} | {o['orientation']} | {o['reason']} |")
     return "\n".join(L) + "\n"
-
-
-def summary_json(summary: dict) -> str:
-    return json.dumps(summary, indent=2, sort_keys=True)
