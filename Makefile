@@ -7,7 +7,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: build test test-fast bench stability docs-images clean venv
+.PHONY: build test test-fast bench stability docs-images clean venv clients slicer-check
 
 venv: $(STAMP)
 
@@ -20,8 +20,26 @@ $(STAMP): pyproject.toml
 build: $(STAMP)
 	$(BIN)/hwgen build params/prototype.yaml --out out
 
-test: $(STAMP)
+# The programs the tests open the files in (PrusaSlicer: the plates; FreeCAD: assembly.step's
+# names). Installed from Debian's packages where they are missing and apt-get can (as root);
+# elsewhere install prusa-slicer and freecad yourself, or their tests skip (never with CI=true).
+CLIENTS := prusa-slicer freecadcmd
+clients:
+	@missing=""; for c in $(CLIENTS); do command -v $$c >/dev/null || missing="$$missing $$c"; done; \
+	if [ -n "$$missing" ]; then \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	    echo "installing prusa-slicer and freecad (missing:$$missing)"; \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
+	      prusa-slicer freecad >/dev/null; \
+	  else echo "not installed:$$missing (apt-get install prusa-slicer freecad); their tests will skip"; fi; fi
+
+test: $(STAMP) clients
 	$(BIN)/python -m pytest -q
+
+# every print plate sliced in PrusaSlicer as the process prints it (SLA: minutes per plate); not in make test
+slicer-check: $(STAMP) clients
+	$(BIN)/hwgen plates params/prototype.yaml --out out -q
+	$(BIN)/python -m tests.slicer_check out/prototype
 
 test-fast: $(STAMP)
 	$(BIN)/python -m pytest -q -m "not slow"

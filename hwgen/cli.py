@@ -1,4 +1,4 @@
-"""The `hwgen` command line: build, check, render, routing, stiffness, sweep, schema.
+"""The `hwgen` command line: build, check, render, plates, coupon, routing, stiffness, sweep, schema.
 
 Exit codes: 0 success, 1 design findings that fail, 2 bad input or usage, 3 a bug in hwgen.
 
@@ -295,6 +295,55 @@ def render(params: Path = PARAMS, out_dir: Path = OUT,
     for name, f in entry["files"].items():
         size = f" ({f['width']} × {f['height']} px)" if "width" in f else ""
         out.print(f"  {printable(folder / name)}{size}")
+
+
+@_command
+def coupon(params: Path = PARAMS, out_dir: Path = OUT,
+           quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner")) -> None:
+    """The calibration coupon: the design's eyelet hole and strip slot in steps around their values, each labelled.
+
+    Writes OUT/<design>/coupon/coupon.stl, coupon.step and coupon.json (added to what is there; a later build replaces the folder and drops them). Print it first; the README says how to read it.
+    """
+    loaded = _load(params)
+    from .pipeline import coupon as make_coupon
+
+    with err.status(Text(f"building the coupon of {loaded.design.design}"), spinner="dots") if not quiet \
+            else nullcontext():
+        info, folder = make_coupon(loaded, out_dir)
+    holes = [f["label"] for f in info["features"] if f["kind"] == "hole"]
+    slots = [f["label"] for f in info["features"] if f["kind"] == "slot"]
+    out.print(f"{loaded.design.design}: coupon {' × '.join(f'{v:g}' for v in info['size_mm'])} mm; holes Ø "
+              f"{', '.join(holes)} mm (design {info['design_hole_mm']:g}); slots {', '.join(slots)} mm a side "
+              f"(design {info['design_slot_clearance_mm']:g})")
+    for name in ("coupon.stl", "coupon.step", "coupon.json"):
+        out.print(f"  {printable(folder / 'coupon' / name)}")
+
+
+@_command
+def plates(params: Path = PARAMS, out_dir: Path = OUT,
+           quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner"),
+           cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
+    """Print plates: every printed part oriented for the process and packed onto the printer's plates, a 3MF per plate.
+
+    Writes OUT/<design>/plates/plate_NN.3mf (one named object per part) and plates.md (parts per plate, resin or filament, the tallest part, each part's orientation and why). Builds first when the outputs are missing or made from other parameters.
+    """
+    loaded = _load(params)
+    from .pipeline import plates as lay_out
+
+    summary, folder = _on_outputs(f"laying out {loaded.design.design}", quiet,
+                                  lambda: lay_out(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache)))
+    what = "resin" if summary["technology"] == "SLA" else "filament"
+    t = Table(title=f"{loaded.design.design}: {len(summary['plates'])} plate(s) on {printable(summary['printer'])}")
+    for col in ("plate", "parts", f"{what}, ml", "tallest part", "height, mm"):
+        t.add_column(col, justify="right" if col.endswith(("ml", "mm")) else "left")
+    for p in summary["plates"]:
+        t.add_row(p["file"], str(len(p["parts"])), f"{p['volume_ml']:.2f}", p["tallest"]["part"],
+                  f"{p['tallest']['height_mm']:.1f}")
+    out.print(t)
+    out.print(f"  {printable(folder / 'plates' / 'plates.md')}")
+    if summary["not_placed"]:
+        say("warning:", "yellow", f"too large for the printer, on no plate: {', '.join(summary['not_placed'])}")
+        raise typer.Exit(EXIT_FINDINGS)
 
 
 def _on_outputs(doing: str, quiet: bool, run):

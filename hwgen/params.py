@@ -352,6 +352,34 @@ class Bom(_Model):
     spool_mm: NonNegLength = Field(150.0, description="tendon added at the tip to reach and wrap the tensioner, mm")
 
 
+class Plates(_Model):
+    """Print plates (`hwgen plates`): how the printed parts are laid out on the printer's plate."""
+
+    gap_mm: NonNegLength = Field(3.0, description="clear space between two parts on a plate, mm")
+    edge_margin_mm: NonNegLength = Field(2.0, description="clear space between a part and the plate's edge, mm")
+    sla_tilt_deg: Annotated[float, Field(ge=0, le=60, allow_inf_nan=False)] = Field(
+        30.0, description="SLA: tilt of a part printed angled on supports, deg")
+    flat_contact_fraction: Annotated[float, Field(gt=0, le=1, allow_inf_nan=False)] = Field(
+        0.5, description="SLA: a part whose face on the plate covers at least this share of its footprint "
+                         "prints flat on the plate; a smaller one prints tilted on supports")
+
+
+class Coupon(_Model):
+    """The calibration coupon: the design's eyelet hole and strip slot in steps around their values."""
+
+    steps: int = Field(2, ge=1, le=5, description="steps on each side of the design value (2: five sizes)")
+    hole_step_mm: Annotated[float, Field(gt=0, le=0.5, allow_inf_nan=False)] = Field(
+        0.05, description="change of the hole diameter from one step to the next, mm")
+    slot_step_mm: Annotated[float, Field(gt=0, le=0.5, allow_inf_nan=False)] = Field(
+        0.025, description="change of the slot's clearance a side from one step to the next, mm")
+    slot_length_mm: Annotated[float, Field(ge=3, le=60, allow_inf_nan=False)] = Field(
+        10.0, description="length of each test slot (the strip's edge goes in), mm")
+    text_mm: Annotated[float, Field(ge=1.5, le=10, allow_inf_nan=False)] = Field(
+        2.5, description="height of the engraved labels, mm")
+    engrave_mm: Annotated[float, Field(gt=0, le=2, allow_inf_nan=False)] = Field(
+        0.4, description="depth of the engraved labels, mm")
+
+
 class Design(_Model):
     design: Name = Field(description="design name; names the output folder")
     backbone: Backbone
@@ -365,6 +393,8 @@ class Design(_Model):
     check: CheckSettings = Field(default_factory=CheckSettings, description="validation sweep and tolerances")
     render: Render = Field(default_factory=Render, description="pictures and drawing")
     bom: Bom = Field(default_factory=Bom, description="bill of materials: tendon cut allowances")
+    plates: Plates = Field(default_factory=Plates, description="print plates: spacing and SLA orientation")
+    coupon: Coupon = Field(default_factory=Coupon, description="the calibration coupon's steps and labels")
 
     @property
     def stations(self) -> tuple[float, ...]:

@@ -1,7 +1,8 @@
 """The order of the stages, and the one place that knows it.
 
     read (params) → feasibility (model) → plan (model) → parts (cad) → files and manifest (cad)
-    → checks (report.json, summary.md) → plots (lengths.png, tolerance.png, sag.png) → bill of materials → pictures
+    → checks (report.json, summary.md) → plots (lengths.png, tolerance.png, sag.png) → bill of materials
+    → print plates (plates/) → pictures → assembly guide (guide/)
 
 Every build writes into a fresh staging folder beside the target; only when every file is
 complete is it swapped in for ``out/<design>/`` in one step (:func:`hwgen.atomic.new_folder`).
@@ -26,6 +27,7 @@ import fnmatch
 import hashlib
 import json
 import os
+import shutil
 import tempfile
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -48,7 +50,7 @@ from .model import feasibility
 from .model import stiffness as statics_study
 from .model.materials import printed_density
 from .model.plan import Plan, plan as make_plan
-from .outputs import bom, pictures
+from .outputs import bom, guide, pictures, plates as print_plates
 from .outputs.plots import plot_lengths, plot_sag, plot_tolerance
 from .outputs.stiffness import plot_gravity, plot_stiffness
 
@@ -121,15 +123,28 @@ def bom_stage(plan: Plan, folder: Path, manifest: dict) -> None:
     bom.write_bom(folder, manifest, plan.design)
 
 
+def plates_stage(plan: Plan, folder: Path, manifest: dict) -> dict:
+    """plates/plate_NN.3mf and plates/plates.md: the printed parts on the printer's plates."""
+    return print_plates.write_plates(folder, manifest, plan.design)
+
+
 def pictures_stage(plan: Plan, folder: Path, manifest: dict) -> None:
-    """exploded.png, assembled.png, bent.png and exploded.svg; a missing backend is recorded, not raised."""
-    pictures.draw(folder, manifest, plan.design, bom.family_table(manifest, plan.design))
+    """exploded.png, assembled.png, bent.png, exploded.svg and the guide's step pictures; a missing
+    backend is recorded, not raised."""
+    pictures.draw(folder, manifest, plan.design, bom.family_table(manifest, plan.design),
+                  guide.picture_jobs(folder, manifest, plan.design))
+
+
+def guide_stage(plan: Plan, folder: Path, manifest: dict) -> dict:
+    """guide/assembly.md and guide/assembly.html, from bom.csv, the manifest and the step pictures."""
+    return guide.write_guide(folder, manifest, plan.design)
 
 
 # (name, stage(plan, folder, manifest)) in the order a build runs them on its fresh files
 AFTER_FILES: list[tuple[str, Callable[[Plan, Path, dict], object]]] = [
-    ("checks", checks_stage), ("bom", bom_stage), ("pictures", pictures_stage)]
-DRAWING_STAGES = ("bom", "pictures")     # what `hwgen render` runs on existing outputs
+    ("checks", checks_stage), ("bom", bom_stage), ("plates", plates_stage), ("pictures", pictures_stage),
+    ("guide", guide_stage)]
+DRAWING_STAGES = ("bom", "pictures", "guide")     # what `hwgen render` runs on existing outputs
 
 
 def draw(plan: Plan, folder: Path, manifest: dict) -> None:
@@ -197,7 +212,7 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
 # ---------------------------------------------------------------- the stages after the files, through the cache
 
 # the stages the cache keeps, and what each reads besides the folder, the manifest and the design
-STAGE_ENV = {"checks": ("HWGEN_CHECK_SAMPLES",), "bom": (), "pictures": ("HWGEN_RENDER_BACKEND", "DISPLAY")}
+STAGE_ENV = {"checks": ("HWGEN_CHECK_SAMPLES",), "bom": (), "plates": (), "guide": (), "pictures": ("HWGEN_RENDER_BACKEND", "DISPLAY")}
 STAGE_RESULT = {"checks": REPORT}       # a stage whose return value is this file of its outputs
 
 
@@ -564,6 +579,56 @@ def render(loaded: params.LoadedDesign, out_root: Path,
         draw(plan, tmp, manifest)
         write_json(tmp / "manifest.json", manifest)
     return manifest["render"], folder, None
+
+
+def plates(loaded: params.LoadedDesign, out_root: Path,
+           cache_dir: Path | None | bool = True) -> tuple[dict, Path, str | None]:
+    """`hwgen plates`: the print plates of ``out_root/<design>/``, laid out again into the
+    existing outputs (a build lays them out too; builds first when the outputs are missing or
+    stale). Returns (the plate summary, the folder, why it was rebuilt or None)."""
+    folder = Path(out_root) / loaded.design.design
+    plan = design_plan(loaded)
+    why = stale_reason(folder, loaded)
+    if why is not None:
+        result = build(loaded, Path(out_root), cache_dir=cache_dir)
+        return result.manifest["plates"], folder, why
+    with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
+        manifest = read_manifest(tmp)
+        shutil.rmtree(tmp / print_plates.FOLDER, ignore_errors=True)
+        summary = plates_stage(plan, tmp, manifest)
+        write_json(tmp / "manifest.json", manifest)
+    return summary, folder, None
+
+
+COUPON = "coupon"          # the folder of `hwgen coupon`'s files inside out/<design>/
+
+
+def coupon(loaded: params.LoadedDesign, out_root: Path) -> tuple[dict, Path]:
+    """`hwgen coupon`: the calibration coupon of the design (:mod:`hwgen.model.coupon`), written
+    as coupon/coupon.stl, coupon.step and coupon.json (each feature, its label and where it is)
+    into ``out_root/<design>/``, added to what is there (a later build replaces the folder and
+    drops it, as it does the stiffness files). Returns (coupon.json's content, the folder)."""
+    from .cad.coupon import build_coupon
+    from .model.coupon import coupon_spec
+
+    plan = design_plan(loaded)
+    spec = coupon_spec(plan)
+    with kernel_errors(plan, None, "build the calibration coupon"):
+        solid = build_coupon(spec)
+    folder = Path(out_root) / loaded.design.design
+    with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
+        where = tmp / COUPON
+        shutil.rmtree(where, ignore_errors=True)
+        where.mkdir()
+        export.write_stl(solid, where / "coupon.stl")
+        export.write_step(solid, where / "coupon.step", f"{loaded.design.design}_coupon")
+        info = {"design": loaded.design.design, "params_sha256": loaded.sha256, "size_mm": list(spec.size),
+                "design_hole_mm": spec.design_hole, "design_slot_clearance_mm": spec.design_clearance,
+                "strip_thickness_mm": spec.strip_thickness, "text_mm": spec.text_mm, "engrave_mm": spec.engrave_mm,
+                "volume_mm3": solid.Volume(),
+                "features": [f.__dict__ for f in spec.features]}
+        write_json(where / "coupon.json", info)
+    return info, folder
 
 
 def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | None = None) -> tuple[dict, Path]:

@@ -7,7 +7,8 @@ another, so CI can diff outputs and a cache can trust their sha256:
   "Open CASCADE STEP translator 7.9 <n>", n counting the exports of the process. The header
   is set through ``APIHeaderSection_MakeHeader`` on the writer's model after the transfer
   (time stamp :func:`timestamp`, the part's name), and the product is named after the part.
-* assembly STEP: besides the header, the id of each part's occurrence counts on through the
+* assembly STEP: a product shared by several instances gets a blank id and name, so FreeCAD shows each
+  instance under its own name (:func:`_blank_shared_products`). Besides the header, the id of each part's occurrence counts on through the
   process (renumbered 1, 2, ... in file order), and OCCT writes the colour styles in the order of a hash
   map keyed by shape addresses, which differ from run to run; :func:`canonical_styles`
   renumbers that trailing block in an order fixed by its content.
@@ -162,6 +163,7 @@ def write_assembly(parts: list[Part], name: str, path: Path) -> None:
     writer.Transfer(doc, STEPControl_StepModelType.STEPControl_AsIs)
     model = writer.ChangeWriter().Model()
     _number_occurrences(model)
+    _blank_shared_products(model)
     _set_header(model, name)
     path = Path(path)
     _written(writer.Write(str(path)) == IFSelect_ReturnStatus.IFSelect_RetDone, path, "assembly STEP")
@@ -179,6 +181,34 @@ def _number_occurrences(model) -> None:
         if isinstance(entity, StepRepr_NextAssemblyUsageOccurrence):
             k += 1
             entity.SetId(TCollection_HAsciiString(str(k)))
+
+
+SHARED_PRODUCT_NAME = " "    # a blank id and name (OCCT replaces an empty one with its translator's banner)
+
+
+def _blank_shared_products(model) -> None:
+    """A product that several placements share (identical parts: one definition, several
+    instances) gets a blank id and name. FreeCAD names each instance after its product (its
+    name, else its id) and falls back to the instance's own name (the part's) only when both are
+    blank, so every instance then shows its own name; the geometry stays shared."""
+    from OCP.StepRepr import StepRepr_NextAssemblyUsageOccurrence
+    from OCP.TCollection import TCollection_HAsciiString
+    products: list = []      # distinct products, in file order (OCP hands back one wrapper per entity)
+    uses: list[int] = []
+    for i in range(1, model.NbEntities() + 1):
+        entity = model.Value(i)
+        if isinstance(entity, StepRepr_NextAssemblyUsageOccurrence):
+            product = entity.RelatedProductDefinition().Formation().OfProduct()
+            k = next((j for j, p in enumerate(products) if p is product), None)
+            if k is None:
+                products.append(product)
+                uses.append(0)
+                k = len(products) - 1
+            uses[k] += 1
+    for product, n in zip(products, uses):
+        if n > 1:
+            product.SetId(TCollection_HAsciiString(SHARED_PRODUCT_NAME))
+            product.SetName(TCollection_HAsciiString(SHARED_PRODUCT_NAME))
 
 
 # ---------------------------------------------------------------- STEP style block
@@ -294,4 +324,22 @@ def write_backbone_dxf(spec: BackboneSpec, stations, path: Path) -> None:
                          ).set_placement((x + dia / 2 + 1, y + 1), align=TextEntityAlignment.BOTTOM_LEFT)
         for dxftype in sorted(doc.entitydb.dxf_types_in_use()):   # fixed CLASSES order (see the module)
             doc.classes.add_class(dxftype)
+        set_extents(doc)
         doc.saveas(path)
+
+
+EXTENT_TYPES = "LINE LWPOLYLINE CIRCLE"   # the drawing's geometry; text is left out (its width depends on the font)
+
+
+def set_extents(doc):
+    """$EXTMIN/$EXTMAX from the geometry (ezdxf's bounding boxes of the lines, the outline and the
+    holes), in the header and in the modelspace (ezdxf copies the modelspace's over the header's on
+    saving), so a viewer's zoom-to-extents shows the strip. Labels are left out: their width comes
+    from whatever font the machine has, and the file must have the same bytes on every machine."""
+    from ezdxf import bbox
+    msp = doc.modelspace()
+    box = bbox.extents(msp.query(EXTENT_TYPES))
+    if box.has_data:
+        msp.dxf.extmin, msp.dxf.extmax = box.extmin, box.extmax
+        doc.header["$EXTMIN"], doc.header["$EXTMAX"] = box.extmin, box.extmax
+    return box

@@ -21,7 +21,7 @@ import os
 import subprocess
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -78,9 +78,10 @@ def station_labels(posed: list[Posed], view: View) -> list[tuple[str, np.ndarray
 
 
 def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table: list[dict] | None = None,
-                    renderer: Renderer | None = None) -> dict:
+                    renderer: Renderer | None = None, steps: list[dict] | None = None) -> dict:
     """exploded.png, assembled.png, bent.png, jig.png when the design has an assembly jig (and
-    exploded.svg when a parts table is given)."""
+    exploded.svg when a parts table is given; the assembly guide's step pictures when ``steps``
+    are given, see :func:`hwgen.outputs.guide.picture_jobs`)."""
     folder = Path(folder)
     timings = {}
     t0 = time.perf_counter()
@@ -144,12 +145,43 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
               "palette": {k: list(v) for k, v in colours.items()},
               "tendon_colours": {k: list(v) for k, v in tcol.items()},
               "explode_mm": settings.explode_mm, "bend_deg": settings.bend_deg}
+    if steps:
+        t = time.perf_counter()
+        for job in steps:
+            images[job["file"]] = draw_step(r, folder, manifest, job, parts + (aids or []), tcol)
+        timings["guide_s"] = time.perf_counter() - t
     if svg_table is not None:
         t = time.perf_counter()
         result["svg"] = write_exploded_svg(r, parts, ex, colours, svg_table, folder / "exploded.svg",
                                            title=f"{manifest['design']}: exploded assembly")
         timings["svg_s"] = time.perf_counter() - t
     return result
+
+
+CONTEXT_ROLE, CONTEXT_GREY = "(context)", (0.86, 0.86, 0.86)   # a guide picture's parts not of its step
+
+
+def draw_step(r: Renderer, folder: Path, manifest: dict, job: dict, parts: list, tcol: dict) -> dict:
+    """One step of the assembly guide: the parts it shows, assembled, those of the step in their
+    family's colour and the others light grey, the tendons when it says so."""
+    by_name = {p.name: p for p in parts}
+    colours = family_colours(manifest, fixtures=True) | {CONTEXT_ROLE: CONTEXT_GREY}
+    d = np.asarray(ISOMETRIC.toward_camera, float)
+    d /= np.linalg.norm(d)
+    posed = []
+    for name in job["shown"]:
+        p = by_name.get(name)
+        if p is not None:
+            posed.append(pose_rigid(p if name in job["highlight"] else replace(p, role=CONTEXT_ROLE), p.placement, d))
+    tubes = {n: (pts, tcol[n]) for n, pts in tendon_polylines(manifest["design_report"], 0.0).items()} \
+        if job["tendons"] else None
+    (Path(folder) / job["file"]).parent.mkdir(parents=True, exist_ok=True)
+    _, W, H = r.draw(posed, colours, ISOMETRIC, Path(folder) / job["file"], tubes=tubes,
+                     texts=[(job["title"], TEXT_COLOUR, (0.015, 0.95), 40, None)], width=GUIDE_WIDTH_PX)
+    return {"width": W, "height": H}
+
+
+GUIDE_WIDTH_PX = 1000        # a guide step's picture: the parts tell apart on a page, the HTML stays small
 
 
 def reachable_note(manifest: dict) -> str:
@@ -168,12 +200,13 @@ def reachable_note(manifest: dict) -> str:
 
 # --------------------------------------------------------------------------- in a child process
 
-def run_child(folder: Path, manifest: dict, settings: Settings, svg_table: list[dict] | None) -> dict:
+def run_child(folder: Path, manifest: dict, settings: Settings, svg_table: list[dict] | None,
+              steps: list[dict] | None = None) -> dict:
     """Draw the pictures in a fresh Python process; raise RenderUnavailable if it cannot."""
     if os.environ.get(BACKEND_ENV, "").lower() == "none":
         raise RenderUnavailable(f"{BACKEND_ENV}=none: offscreen rendering switched off")
     job = json.dumps({"folder": str(folder), "manifest": manifest, "settings": settings.__dict__,
-                      "svg_table": svg_table})
+                      "svg_table": svg_table, "steps": steps})
     attempts = [dict(os.environ)]
     attempts[0].pop("DISPLAY", None)            # offscreen: EGL first, never a stale X display
     if os.environ.get("DISPLAY"):
@@ -202,7 +235,7 @@ def _child_main() -> int:
     job = json.loads(sys.stdin.read())
     try:
         result = render_pictures(Path(job["folder"]), job["manifest"], Settings(**job["settings"]),
-                                 job.get("svg_table"))
+                                 job.get("svg_table"), steps=job.get("steps"))
     except RenderUnavailable as e:
         print(f"RenderUnavailable: {e}", file=sys.stderr)
         return EXIT_NO_BACKEND
@@ -210,16 +243,19 @@ def _child_main() -> int:
     return 0
 
 
-def draw(folder: Path, manifest: dict, design, svg_table: list[dict]) -> None:
-    """The pictures and the drawing (``svg_table``: the parts table of the bill of materials);
-    a missing or crashing backend is recorded in ``manifest["render"]``, never raised."""
+def draw(folder: Path, manifest: dict, design, svg_table: list[dict], steps: list[dict] | None = None) -> None:
+    """The pictures and the drawing (``svg_table``: the parts table of the bill of materials),
+    and the assembly guide's step pictures (``steps``); a missing or crashing backend is
+    recorded in ``manifest["render"]``, never raised."""
     folder = Path(folder)
     settings = Settings(design.render.width_px, design.render.explode_mm, design.render.bend_deg)
     entry: dict = {"settings": settings.__dict__}
     for name in OUTPUTS:                 # never leave pictures of an earlier design beside this one
         (folder / name).unlink(missing_ok=True)
+    for job in steps or []:
+        (folder / job["file"]).unlink(missing_ok=True)
     try:
-        result = run_child(folder, manifest, settings, svg_table)
+        result = run_child(folder, manifest, settings, svg_table, steps)
     except RenderUnavailable as e:
         entry |= {"status": "unavailable", "message": f"pictures not drawn: {e}. {INSTALL_HINT}"}
     except RenderFailed as e:
