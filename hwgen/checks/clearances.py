@@ -18,7 +18,7 @@ from ..cad.export import STL_TOLERANCE_MM
 from ..model import kinematics as kin
 from ..model.crossings import crossing_angles, strip_crossings
 from .base import Check
-from .eyelets import EyeletMap
+from .eyelets import EyeletMap, joined_holes
 from .measure import inside, loop_gap, num, points_to_polyline
 
 SAG_MM = STL_TOLERANCE_MM      # chordal deviation of the STL: section polygons sit this far inside holes
@@ -195,8 +195,11 @@ def tendon_pair_checks(emap: EyeletMap, report: dict, tendon_d: float, angles_de
     kappa = kin.kappas_for_angles(angles_deg, length)
     pts = {n: kin.points_in_space(emap.stations_y, xz, kappa) for n, xz in emap.positions.items()}
     shared: dict[tuple[str, str], list[int]] = {}
+    joined = joined_holes(report)
     for rd in report["disks"]:
         for h in rd["holes"]:
+            if (rd["index"], tuple(h["tendons"])) in joined:
+                continue            # one opening around eyelets routed into each other: not shared by design
             for a, b in combinations(h["tendons"], 2):
                 shared.setdefault(tuple(sorted((a, b))), []).append(rd["index"])
     out = []

@@ -12,6 +12,7 @@ cannot be seen in the disk; their x is read from the matching hole of the backbo
 from __future__ import annotations
 
 import math
+from itertools import combinations
 
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -180,6 +181,14 @@ def locate_eyelets(disks: list[DiskSections], report: dict, backbone_holes: list
                                     merged_pairs)
             extra += [(disk, mh) for mh in unmatched]
     via_backbone = _read_from_strip(eyelets, ys, backbone_holes, [t["name"] for t in report["tendons"]])
+    # An opening the plan made around eyelets the routing ran into each other is found like any
+    # hole, but says nothing of where each tendon lies in it: those stay at their routing, and
+    # there is no wall between them.
+    for e in eyelets:
+        if len(e.tendons) > 1 and (e.station, e.tendons) in joined_holes(report):
+            if e.measured_xz is not None:
+                merged_pairs += [(e.station, e.part, (a,), (b,), "eyelet") for a, b in combinations(e.tendons, 2)]
+            e.measured_xz = None
     positions, unmeasured = _positions(eyelets, report)
     checks = _position_checks(report, eyelets, tol) + [_unexpected(disk, mh) for disk, mh in extra]
     return EyeletMap(ys, eyelets, positions, unmeasured, via_backbone, disks, extra, merged_pairs), checks
@@ -274,6 +283,12 @@ def _positions(eyelets: list[Eyelet], report: dict) -> tuple[dict[str, np.ndarra
     return positions, unmeasured
 
 
+def joined_holes(report: dict) -> set[tuple[int, tuple[str, ...]]]:
+    """(station, tendons) of each opening the plan made around eyelets whose holes ran into each
+    other (its "overlap" merges): one hole, but not shared by design."""
+    return {(m["station"], tuple(m["tendons"])) for m in report.get("merges", []) if m["kind"] == "overlap"}
+
+
 def _unexpected(disk: DiskSections, mh: MeasuredHole) -> Check:
     x, z = mh.centre
     return Check("eyelet.unexpected", "warning", False,
@@ -314,8 +329,7 @@ def _position_checks(report: dict, eyelets: list[Eyelet], tol: float) -> list[Ch
     """One check per disk: every eyelet found, none further than ``tol`` from design intent."""
     out = []
     overlapping = {(m["station"], t) for m in report.get("merges", []) if m["kind"] == "overlap" for t in m["tendons"]}
-    # the plan gave eyelets whose holes would run into each other one opening around them all
-    joined = {(m["station"], tuple(m["tendons"])) for m in report.get("merges", []) if m["kind"] == "overlap"}
+    joined = joined_holes(report)
     for rd in report["disks"]:
         i = rd["index"]
         mine = [e for e in eyelets if e.station == i and e.status != "in_slot"]
