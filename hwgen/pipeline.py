@@ -21,6 +21,7 @@ naming ``--out`` (:class:`hwgen.errors.InputError`), like any other.
 """
 from __future__ import annotations
 
+import contextvars
 import errno
 import fnmatch
 import hashlib
@@ -28,14 +29,15 @@ import json
 import os
 import tempfile
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from . import __version__, cache, params
-from .atomic import new_folder, snapshot, write_json
+from .atomic import new_folder, side_folder, snapshot, write_json
 from .cad import Part, export
 from .cad.families import build_unit, kernel_errors, part_count, units
 from .errors import DesignError, InputError, clip
@@ -186,8 +188,7 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
         done, reused = {}, []
         if post_build:
             with cache.using(store):
-                for name, stage in AFTER_FILES:
-                    done[name] = _cached_stage(store, name, stage, plan, tmp, manifest, reused)
+                _after_files(store, plan, tmp, target, manifest, done, reused)
         write_json(tmp / "manifest.json", manifest)
     notes = [f"damaged entries rebuilt: {', '.join(store.corrupt)}"] if store.corrupt else []
     notes += [f"not written, so not used: {store.unwritable}"] if store.unwritable else []
@@ -195,6 +196,39 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
 
 
 # ---------------------------------------------------------------- the stages after the files, through the cache
+
+BESIDE = ("pictures",)     # stages that read only the parts' files and the manifest's parts and design report:
+#                            run in a thread beside the others (the renderer is a child process of its own)
+
+
+def _after_files(store: cache.Store, plan: Plan, folder: Path, target: Path, manifest: dict, done: dict,
+                 reused: list[str]) -> None:
+    """The stages after the files, in the order of :data:`AFTER_FILES`; those in :data:`BESIDE`
+    start first, each in a folder of hard links to the part files with a copy of the manifest,
+    and their new files and manifest fields join ``folder`` and ``manifest`` at their place in
+    the order, so the outputs are those of the stages run one after the other."""
+    side: dict[str, tuple] = {}
+    with ExitStack() as stack, ThreadPoolExecutor(max_workers=max(1, len(BESIDE))) as pool:
+        for name, stage in AFTER_FILES:
+            if name in BESIDE:
+                where = stack.enter_context(side_folder(folder, target))
+                m, got = _json(manifest), []
+                job = contextvars.copy_context().run
+                side[name] = (where, _files(where), _json(m), m, got,
+                              pool.submit(job, _cached_stage, store, name, stage, plan, where, m, got))
+        for name, stage in AFTER_FILES:
+            if name not in side:
+                done[name] = _cached_stage(store, name, stage, plan, folder, manifest, reused)
+                continue
+            where, before, original, m, got, future = side[name]
+            done[name] = future.result()
+            for path in _files(where):
+                if path not in before:
+                    (folder / path).parent.mkdir(parents=True, exist_ok=True)
+                    os.replace(where / path, folder / path)
+            manifest.update({k: v for k, v in m.items() if k not in original or original[k] != v})
+            reused += got
+
 
 # the stages the cache keeps, and what each reads besides the folder, the manifest and the design
 STAGE_ENV = {"checks": ("HWGEN_CHECK_SAMPLES",), "bom": (), "pictures": ("HWGEN_RENDER_BACKEND", "DISPLAY")}
