@@ -88,8 +88,8 @@ def _process(label: str, args: list[str], env: dict, note: str = "") -> tuple[st
 
 
 def _from_cache(stdout: str) -> str:
-    m = re.search(r"(\d+) parts written.*?(?:\((\d+) from the part cache\))?$", stdout.strip().splitlines()[-1]
-                  if stdout.strip() else "")
+    line = next((ln for ln in stdout.splitlines() if " parts written" in ln), "")
+    m = re.search(r"(\d+) parts written.*?(?:\((\d+) from the part cache\))?$", line.strip())
     if not m:
         return ""
     return f"{int(m.group(1)) - int(m.group(2) or 0)} of {m.group(1)} parts built"
@@ -123,7 +123,7 @@ def processes(params_path: Path) -> None:
         check = ["check", str(params), "--out", str(out), "--cache-dir", str(store), "-q"]
         rows.append(_process("hwgen check", check, env,
                              "on the built outputs")[:5])
-        rows.append(_process("hwgen check, empty cache", [*check[:-2], "--cache-dir", str(tmp / "empty"), "-q"], env,
+        rows.append(_process("hwgen check, empty cache", [*check[:-3], "--cache-dir", str(tmp / "empty"), "-q"], env,
                              "nothing remembered: Monte Carlo, statics, gears measured")[:5])
         if EDIT_FROM in text:
             params.write_text(text.replace(EDIT_FROM, EDIT_KEEPS_TIP))
