@@ -25,6 +25,9 @@ os.environ.setdefault("HWGEN_JOBS", "0")
 # a design's parts are built once however many tests build it; never the user's own cache.
 SESSION_CACHE = tempfile.mkdtemp(prefix="hwgen-test-cache-")
 os.environ["HWGEN_CACHE_DIR"] = SESSION_CACHE
+# with no size bound to speak of: a test that expects the session's parts to be there finds them
+# (the folder goes at the end of the session; tests/test_cache.py tests the bound)
+os.environ["HWGEN_CACHE_SIZE"] = "1T"
 
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / "params"
