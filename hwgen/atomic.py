@@ -245,6 +245,16 @@ def snapshot(target: Path) -> Iterator[Path]:
         yield staging
 
 
+@contextmanager
+def side_folder(folder: Path, target: Path) -> Iterator[Path]:
+    """A private staging folder beside ``target`` holding hard links to ``folder``'s files, for
+    work that runs beside other work on ``folder`` and whose new files are moved into it after;
+    removed at the end (or by the next writer, if this process dies)."""
+    with _staging(Path(target)) as staging:
+        shutil.copytree(folder, staging, dirs_exist_ok=True, copy_function=_link_or_copy)
+        yield staging
+
+
 def _link_or_copy(src: str, dst: str) -> None:
     try:
         os.link(src, dst)

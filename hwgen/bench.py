@@ -70,6 +70,8 @@ def _monte_carlo(report: dict) -> None:
 # ---------------------------------------------------------------- whole processes
 
 EDIT_FROM, EDIT_TO = "function: {kind: cosine, a: 25, k: 3, axis: z}", "function: {kind: cosine, a: 24.5, k: 3, axis: z}"
+# the same tendon's wave count: cos(5π) = cos(3π), so its tip eyelet (and the tensioner) stays where it was
+EDIT_KEEPS_TIP = "function: {kind: cosine, a: 25, k: 5, axis: z}"
 
 
 def _process(label: str, args: list[str], env: dict, note: str = "") -> tuple[str, float, float, float, str, str]:
@@ -88,8 +90,8 @@ def _process(label: str, args: list[str], env: dict, note: str = "") -> tuple[st
 
 
 def _from_cache(stdout: str) -> str:
-    m = re.search(r"(\d+) parts written.*?(?:\((\d+) from the part cache\))?$", stdout.strip().splitlines()[-1]
-                  if stdout.strip() else "")
+    line = next((ln for ln in stdout.splitlines() if " parts written" in ln), "")
+    m = re.search(r"(\d+) parts written.*?(?:\((\d+) from the part cache\))?$", line.strip())
     if not m:
         return ""
     return f"{int(m.group(1)) - int(m.group(2) or 0)} of {m.group(1)} parts built"
@@ -112,15 +114,23 @@ def processes(params_path: Path) -> None:
         rows.append(_process("cold build, --no-cache", [*build, "--no-cache"], env,
                              "every part and stage afresh")[:5])
         rows.append(_process("cold build, --no-cache --jobs 2", [*build, "--no-cache", "--jobs", "2"], env,
-                             "parts in 2 forkserver workers")[:5])
+                             "parts in 2 spawned workers")[:5])
+        rows.append(_process("cold build, --no-cache --jobs 0", [*build, "--no-cache", "--jobs", "0"], env,
+                             "parts in the process that runs the checks")[:5])
         text = params.read_text()
         if EDIT_FROM in text:
             params.write_text(text.replace(EDIT_FROM, EDIT_TO))
-            r = _process("one-tendon edit", build, env, "C2: a 25 → 24.5 mm")
+            r = _process("one-tendon edit", build, env, "C2: a 25 → 24.5 mm (its tip eyelet moves)")
             rows.append((*r[:4], "; ".join(x for x in (r[4], _from_cache(r[5])) if x)))
         check = ["check", str(params), "--out", str(out), "--cache-dir", str(store), "-q"]
         rows.append(_process("hwgen check", check, env,
                              "on the built outputs")[:5])
+        rows.append(_process("hwgen check, empty cache", [*check[:-3], "--cache-dir", str(tmp / "empty"), "-q"], env,
+                             "nothing remembered: Monte Carlo, statics, gears measured")[:5])
+        if EDIT_FROM in text:
+            params.write_text(text.replace(EDIT_FROM, EDIT_KEEPS_TIP))
+            r = _process("one-tendon edit, tip kept", build, env, "C2: k 3 → 5 from the prototype")
+            rows.append((*r[:4], "; ".join(x for x in (r[4], _from_cache(r[5])) if x)))
         rows.append(_process("hwgen routing", ["routing", str(params)], env)[:5])
         rows += sweep_rows(params, tmp)
     t = Table(title=f"hwgen benchmark: {params_path} (whole processes, {os.cpu_count()} cores, "

@@ -10,6 +10,10 @@ Two kinds of entry, both under one root (``--cache-dir``; default ``$HWGEN_CACHE
   canonical form of everything that made it). The file holds the record and the sha256 of the
   record's canonical text; one that does not parse or does not match is corrupt, as above.
 
+Every read or write of an entry marks it used (its modification time); :meth:`Store.trim` removes
+the least recently used until the store is within its size (``--cache-size``, ``$HWGEN_CACHE_SIZE``,
+default :data:`DEFAULT_SIZE`); every build and check trims it when it ends.
+
 Every write goes to a temporary file in the entry's own folder and is renamed over the name
 (:func:`os.replace`), so two builds sharing a cache never see half an entry: the last writer of
 a record wins, and both wrote the same thing. Nothing here knows about parts or CAD; it only
@@ -33,7 +37,10 @@ from pathlib import Path
 import numpy as np
 
 ENV_DIR = "HWGEN_CACHE_DIR"
+ENV_SIZE = "HWGEN_CACHE_SIZE"
+DEFAULT_SIZE = 2 * 1024 ** 3  # bytes: about 25 builds of the prototype (75 MB each, files, solids and stages)
 LAYOUT = "v1"                 # the on-disk layout; a change of it starts a fresh store beside the old
+_UNITS = {"": 1, "K": 1024, "M": 1024 ** 2, "G": 1024 ** 3, "T": 1024 ** 4}
 
 
 def default_dir() -> Path:
@@ -42,6 +49,22 @@ def default_dir() -> Path:
         return Path(os.environ[ENV_DIR])
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     return Path(base) / "hwgen"
+
+
+def parse_size(text: str) -> int:
+    """``2G``, ``500M``, ``1.5GB``, ``300000`` (bytes) as a count of bytes; ValueError if it is none."""
+    t = str(text).strip().upper().removesuffix("IB").removesuffix("B")
+    unit = t[-1:] if t[-1:] in _UNITS and t[-1:] else ""
+    number = float(t[:-1] if unit else t)
+    if not number >= 0 or number == float("inf"):
+        raise ValueError(f"{text!r} is not a size")
+    return int(number * _UNITS[unit])
+
+
+def size_limit() -> int:
+    """How large the cache may grow: ``$HWGEN_CACHE_SIZE`` (``2G``, ``500M``), else :data:`DEFAULT_SIZE`."""
+    v = os.environ.get(ENV_SIZE, "").strip()
+    return parse_size(v) if v else DEFAULT_SIZE
 
 
 # ---------------------------------------------------------------- keys
@@ -131,6 +154,41 @@ class Store:
                 pass
             raise
 
+    @staticmethod
+    def _used(path: Path) -> None:
+        """Mark an entry as just used (its modification time; access times are often not kept)."""
+        try:
+            os.utime(path)
+        except OSError:
+            pass
+
+    def trim(self, limit: int) -> tuple[int, int]:
+        """Remove the least recently used entries (records and bytes alike) until the store holds
+        at most ``limit`` bytes. Returns (entries removed, bytes freed). An entry removed under a
+        build that shares the store is a miss for it, made again: never a wrong file."""
+        if not self.enabled or not self.root.is_dir():
+            return 0, 0
+        entries, total = [], 0
+        for kind in ("objects", "records"):
+            for sub in os.scandir(self.root / kind) if (self.root / kind).is_dir() else ():
+                for e in os.scandir(sub.path) if sub.is_dir() else ():
+                    try:
+                        st = e.stat()
+                    except OSError:
+                        continue
+                    entries.append((st.st_mtime_ns, st.st_size, e.path))
+                    total += st.st_size
+        removed = freed = 0
+        for _, size, path in sorted(entries):
+            if total - freed <= limit:
+                break
+            try:
+                os.unlink(path)
+            except OSError:
+                continue
+            removed, freed = removed + 1, freed + size
+        return removed, freed
+
     def _drop(self, path: Path, what: str) -> None:
         self.corrupt.append(what)
         try:
@@ -145,6 +203,8 @@ class Store:
             path = self._path("objects", name)
             if not path.exists():
                 self._write(path, data)
+            else:
+                self._used(path)
         return name
 
     def get_bytes(self, name: str) -> bytes | None:
@@ -158,6 +218,7 @@ class Store:
         if sha256(data) != name:
             self._drop(path, f"object {name[:12]}")
             return None
+        self._used(path)
         return data
 
     # records, by their key
@@ -185,6 +246,7 @@ class Store:
         if not ok:
             self._drop(path, f"record {key_[:12]}")
             return None
+        self._used(path)
         return body
 
 

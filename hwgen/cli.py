@@ -60,10 +60,22 @@ OUT = typer.Option(Path("out"), "--out", help="output root; the design goes to O
 CACHE_DIR = typer.Option(None, "--cache-dir", show_default=False,
                          help="the part cache (default $HWGEN_CACHE_DIR, else $XDG_CACHE_HOME/hwgen or ~/.cache/hwgen)")
 NO_CACHE = typer.Option(False, "--no-cache", help="build every part afresh; read and keep nothing in the part cache")
+CACHE_SIZE = typer.Option(None, "--cache-size", show_default=False,
+                          help="the most the cache may hold (2G, 500M); the least recently used entries go first "
+                               "(default $HWGEN_CACHE_SIZE, else 2G)")
 
 
-def _cache(cache_dir: Path | None, no_cache: bool):
-    """The pipeline's ``cache_dir``: False for none, True for the default folder, else the folder."""
+def _cache(cache_dir: Path | None, no_cache: bool, cache_size: str | None = None):
+    """The pipeline's ``cache_dir``: False for none, True for the default folder, else the folder.
+    ``cache_size`` (--cache-size) becomes $HWGEN_CACHE_SIZE, which the pipeline trims the cache to."""
+    if cache_size is not None:
+        from .cache import ENV_SIZE, parse_size
+        try:
+            parse_size(cache_size)
+        except ValueError:
+            raise InputError("command line", "--cache-size", f"{clip(cache_size)} is not a size (2G, 500M, bytes)") \
+                from None
+        os.environ[ENV_SIZE] = cache_size
     return False if no_cache else (cache_dir if cache_dir is not None else True)
 
 
@@ -141,12 +153,14 @@ def _write_side_file(path: Path, option: str, write) -> None:
 @_command
 def build(params: Path = PARAMS, out_dir: Path = OUT,
           quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
-          cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE,
+          cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE, cache_size: str = CACHE_SIZE,
           parts: str = typer.Option(None, "--parts", show_default=False,
                                     help="write only the parts whose names match this pattern ('disk_*'); "
                                          "no assembly, checks or pictures"),
-          jobs: int = typer.Option(1, "--jobs", "-j", min=1, help="worker processes for the parts not in the cache "
-                                                                  "(used when there are enough to pay their start-up)")
+          jobs: int = typer.Option(1, "--jobs", "-j", min=0, envvar="HWGEN_JOBS", help="worker processes that build the parts not in "
+                                                                  "the cache and the assembly (0: in this process, "
+                                                                  "which then holds the CAD kernel's memory through "
+                                                                  "the checks)")
           ) -> None:
     """Build every part (STL, STEP), assembly.step, the backbone DXF and manifest.json."""
     loaded = _load(params)
@@ -161,7 +175,8 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
         def progress(name: str, done: int, total: int) -> None:
             bar.update(task, total=total, completed=done, description=f"built {name}")
 
-        result = run_build(loaded, out_dir, progress, cache_dir=_cache(cache_dir, no_cache), parts=parts, jobs=jobs)
+        result = run_build(loaded, out_dir, progress, cache_dir=_cache(cache_dir, no_cache, cache_size), parts=parts,
+                           jobs=jobs)
     n = len(result.manifest["parts"])
     for note in result.cache_notes:
         say("warning:", "yellow", f"part cache: {note}")
@@ -254,7 +269,7 @@ def check(params: Path = PARAMS, out_dir: Path = OUT,
           junit: Path = typer.Option(None, "--junit", help="also write JUnit XML here (one test case per check)"),
           verbose: bool = typer.Option(False, "--verbose", "-v", help="list every check, not only findings"),
           quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
-          cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
+          cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE, cache_size: str = CACHE_SIZE) -> None:
     """Measure the built files: eyelets, tendon lengths over the bending sweep, clearances, parts.
 
     Builds first only when the outputs are missing or made from other parameters; part files edited since the build are measured as they are. Exit 1 when a check fails.
@@ -265,7 +280,7 @@ def check(params: Path = PARAMS, out_dir: Path = OUT,
     from .pipeline import check as check_design
 
     rep, folder = _on_outputs(f"checking {loaded.design.design}", quiet,
-                              lambda: check_design(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache)))
+                              lambda: check_design(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache, cache_size)))
     print_report(rep, out, verbose=verbose)
     if report is not None:
         _write_side_file(report, "--report", lambda: write_json(report, rep))
@@ -278,7 +293,7 @@ def check(params: Path = PARAMS, out_dir: Path = OUT,
 @_command
 def render(params: Path = PARAMS, out_dir: Path = OUT,
            quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner"),
-           cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
+           cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE, cache_size: str = CACHE_SIZE) -> None:
     """Pictures (exploded, assembled, bent PNG), the exploded SVG drawing and the bill of materials.
 
     Builds first only when the outputs are missing or made from other parameters. Needs no display or GPU; exit 1 when no offscreen OpenGL backend works (the message says what to install).
@@ -287,7 +302,7 @@ def render(params: Path = PARAMS, out_dir: Path = OUT,
     from .pipeline import render as render_design
 
     entry, folder = _on_outputs(f"drawing {loaded.design.design}", quiet,
-                                lambda: render_design(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache)))
+                                lambda: render_design(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache, cache_size)))
     out.print(f"{loaded.design.design}: bom.csv, bom.md written to {printable(folder)}")
     if entry.get("status") != "ok":
         say("warning:", "yellow", entry.get("message", "pictures not drawn"))

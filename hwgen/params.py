@@ -317,10 +317,18 @@ class CheckSettings(_Model):
     overstress: Literal["error", "warning"] = Field(
         "error", description="what a strip stress over backbone.allowable_stress_mpa in the own-weight state is")
     samples: int = Field(10_000, ge=0, le=100_000,
-                         description="as-built samples of the tendon-length Monte Carlo (0: the nominal print only)")
+                         description="most as-built samples of the tendon-length Monte Carlo (0: the nominal print "
+                                     "only); it stops sooner when every budgeted tendon's statistic is known well "
+                                     "enough (robust_confidence, robust_precision_mm)")
     seed: int = Field(0, ge=0, le=2**32 - 1, description="seed of the Monte Carlo")
     robust: Literal["p50", "p90", "p95", "p99", "max"] = Field(
         "p95", description="statistic of the as-built samples' largest length change a budgeted tendon is judged on")
+    robust_confidence: Annotated[float, Field(gt=0.5, lt=1, allow_inf_nan=False)] = Field(
+        0.95, description="confidence of the interval on each budgeted tendon's statistic (order statistics, no "
+                          "assumed distribution) that decides when the Monte Carlo has drawn enough samples")
+    robust_precision_mm: NonNegLength = Field(
+        0.01, description="the Monte Carlo stops once every budgeted tendon's interval lies clear of its budget "
+                          "or is no wider than this, mm (0: only clear of the budget)")
     robust_severity: Literal["error", "warning"] = Field(
         "error", description="what a budgeted tendon over its budget at that statistic is")
     taut_floor_n: Finite = Field(0.5, ge=0, le=1000,

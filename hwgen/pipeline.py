@@ -22,6 +22,7 @@ naming ``--out`` (:class:`hwgen.errors.InputError`), like any other.
 """
 from __future__ import annotations
 
+import contextvars
 import errno
 import fnmatch
 import hashlib
@@ -30,14 +31,15 @@ import os
 import shutil
 import tempfile
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from . import __version__, cache, params
-from .atomic import new_folder, snapshot, write_json
+from .atomic import new_folder, side_folder, snapshot, write_json
 from .cad import Part, export
 from .cad.families import build_unit, kernel_errors, part_count, units
 from .errors import DesignError, InputError, clip
@@ -169,7 +171,7 @@ class BuildResult:
 
 def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, int, int], None] | None = None,
           post_build: bool = True, cache_dir: Path | None | bool = True, parts: str | None = None,
-          jobs: int = 1) -> BuildResult:
+          jobs: int = 0) -> BuildResult:
     """Build every part and file of the design into ``out_root/<design>/``, then (``post_build``)
     run the stages after the files. ``progress(part_name, done, total)`` follows each part.
     ``cache_dir``: the part cache's folder (True: :func:`hwgen.cache.default_dir`; None or False:
@@ -181,12 +183,14 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
     the files describe the whole robot and are left out, so ``hwgen check`` sees the folder as
     incomplete and builds it whole first. A pattern that matches no part is bad input.
 
-    ``jobs``: worker processes that build the parts not in the cache (1: all in this process)."""
+    ``jobs``: worker processes that build the parts not in the cache and the assembly (0: all in
+    this process, which then holds the CAD kernel's memory through the checks)."""
     plan = design_plan(loaded)
     total = part_count(plan)
     out_root = Path(out_root)
     target = out_root / loaded.design.design
     store = cache.Store(cache.default_dir() if cache_dir is True else (cache_dir or None))
+    limit = _limit()                    # bad input before anything is written
     select = None if parts is None else (lambda name: fnmatch.fnmatchcase(name, parts))
     with output_errors(out_root), new_folder(target) as tmp:
         manifest, built = _write_files(loaded, plan, tmp, total, progress, store, select, jobs)
@@ -201,15 +205,61 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
         done, reused = {}, []
         if post_build:
             with cache.using(store):
-                for name, stage in AFTER_FILES:
-                    done[name] = _cached_stage(store, name, stage, plan, tmp, manifest, reused)
+                _after_files(store, plan, tmp, target, manifest, done, reused)
         write_json(tmp / "manifest.json", manifest)
+    _trim(store, limit)
     notes = [f"damaged entries rebuilt: {', '.join(store.corrupt)}"] if store.corrupt else []
     notes += [f"not written, so not used: {store.unwritable}"] if store.unwritable else []
     return BuildResult(target, manifest, plan, done.get("checks"), built, reused, notes)
 
 
+def _limit() -> int:
+    try:
+        return cache.size_limit()
+    except ValueError:
+        raise InputError("environment", cache.ENV_SIZE, f"{clip(os.environ.get(cache.ENV_SIZE, ''))} is not a size "
+                                                        f"(2G, 500M, bytes)") from None
+
+
+def _trim(store: cache.Store, limit: int) -> None:
+    """The cache back within ``limit`` bytes (:func:`_limit`), least recently used first."""
+    store.trim(limit)
+
+
 # ---------------------------------------------------------------- the stages after the files, through the cache
+
+BESIDE = ("pictures",)     # stages that read only the parts' files and the manifest's parts and design report:
+#                            run in a thread beside the others (the renderer is a child process of its own)
+
+
+def _after_files(store: cache.Store, plan: Plan, folder: Path, target: Path, manifest: dict, done: dict,
+                 reused: list[str]) -> None:
+    """The stages after the files, in the order of :data:`AFTER_FILES`; those in :data:`BESIDE`
+    start first, each in a folder of hard links to the part files with a copy of the manifest,
+    and their new files and manifest fields join ``folder`` and ``manifest`` at their place in
+    the order, so the outputs are those of the stages run one after the other."""
+    side: dict[str, tuple] = {}
+    with ExitStack() as stack, ThreadPoolExecutor(max_workers=max(1, len(BESIDE))) as pool:
+        for name, stage in AFTER_FILES:
+            if name in BESIDE:
+                where = stack.enter_context(side_folder(folder, target))
+                m, got = _json(manifest), []
+                job = contextvars.copy_context().run
+                side[name] = (where, _files(where), _json(m), m, got,
+                              pool.submit(job, _cached_stage, store, name, stage, plan, where, m, got))
+        for name, stage in AFTER_FILES:
+            if name not in side:
+                done[name] = _cached_stage(store, name, stage, plan, folder, manifest, reused)
+                continue
+            where, before, original, m, got, future = side[name]
+            done[name] = future.result()
+            for path in _files(where):
+                if path not in before:
+                    (folder / path).parent.mkdir(parents=True, exist_ok=True)
+                    os.replace(where / path, folder / path)
+            manifest.update({k: v for k, v in m.items() if k not in original or original[k] != v})
+            reused += got
+
 
 # the stages the cache keeps, and what each reads besides the folder, the manifest and the design
 STAGE_ENV = {"checks": ("HWGEN_CHECK_SAMPLES",), "bom": (), "plates": (), "guide": (), "pictures": ("HWGEN_RENDER_BACKEND", "DISPLAY")}
@@ -362,17 +412,18 @@ def _solids(store: cache.Store, rec: dict) -> list | None:
 
 # ---------------------------------------------------------------- parts built in worker processes
 
-MIN_PARALLEL_UNITS = 4     # fewer units to build than this are built here: a worker's start-up (importing
-#                            CadQuery, ~3 s) would cost more than it saves
+_BUILT_HERE: dict[str, list] = {}     # in a worker process: the solids of the units it built, by unit key
 
 
-def _unit_in_worker(plan: Plan, index: int, store: cache.Store, salt: dict) -> tuple[str, object]:
-    """Build and export the ``index``-th unit of the plan in a worker process. A DesignError or
-    InputError comes back as its fields (they do not pickle as themselves)."""
+def _unit_in_worker(plan: Plan, index: int, key: str, store: cache.Store, salt: dict) -> tuple[str, object]:
+    """Build and export the ``index``-th unit of the plan in a worker process (its solids stay
+    there for :func:`_assembly_in_worker`). A DesignError or InputError comes back as its fields
+    (they do not pickle as themselves)."""
     try:
         family, first, unit = list(units(plan))[index]
         with kept_in(store, salt):
             parts = list(build_unit(plan, family, first, unit))
+        _BUILT_HERE[key] = [p.solid for p in parts]
         with tempfile.TemporaryDirectory(prefix="hwgen-unit-") as tmp:
             (Path(tmp) / "stl").mkdir()
             (Path(tmp) / "step").mkdir()
@@ -383,36 +434,63 @@ def _unit_in_worker(plan: Plan, index: int, store: cache.Store, salt: dict) -> t
         return "input", (e.file, e.path, e.message)
 
 
-def _build_in_workers(plan: Plan, indices: list[int], jobs: int, store: cache.Store, salt: dict) -> dict[int, list[dict]]:
-    """The exported units ``indices`` of the plan, built by ``jobs`` worker processes. The workers
-    come from a fork server that imported CadQuery and hwgen before any solid existed (a plain
-    fork of a process that has built CadQuery geometry hangs), so each pays no import."""
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
+def _assembly_in_worker(loaded, plan: Plan, done: list[tuple[str, dict]], breps: dict[str, bytes], store: cache.Store,
+                        salt: dict) -> tuple[str, object]:
+    """assembly.step's bytes, written in a worker from the units ``done`` ((key, record) in build
+    order): the solids this worker built, else read back from their BREP (``breps`` or the
+    cache), else built again."""
+    try:
+        with tempfile.TemporaryDirectory(prefix="hwgen-assembly-") as tmp:
+            path = Path(tmp) / "assembly.step"
+            with kept_in(store, salt):
+                _assemble(loaded, plan, path, store, [(k, {**r, "breps": breps}, _BUILT_HERE.get(k)) for k, r in done])
+            return "ok", path.read_bytes()
+    except DesignError as e:
+        return "design", (e.path, e.message)
 
-    ctx = multiprocessing.get_context("forkserver")
-    ctx.set_forkserver_preload(["cadquery", "hwgen.pipeline"])
-    out = {}
-    with ProcessPoolExecutor(max_workers=min(jobs, len(indices)), mp_context=ctx) as pool:
-        futures = {i: pool.submit(_unit_in_worker, plan, i, store, salt) for i in indices}
-        for i, f in futures.items():
-            kind, value = f.result()
-            if kind == "design":
-                raise DesignError(*value)
-            if kind == "input":
-                raise InputError(*value)
-            out[i] = value
-    return out
+
+def _result(kind_value):
+    kind, value = kind_value
+    if kind == "design":
+        raise DesignError(*value)
+    if kind == "input":
+        raise InputError(*value)
+    return value
+
+
+class _Workers:
+    """Worker processes for the CAD kernel (``jobs`` of them, spawned: a fork of a process that
+    has built CadQuery geometry hangs). This process then never imports CadQuery: its memory
+    holds the checks alone, and the workers' memory is returned when they end, before the checks
+    start. Each worker pays the CadQuery import (2-4 s) that this process would have paid."""
+
+    def __init__(self, jobs: int):
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+        self.pool = ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"))
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.pool.shutdown(wait=True, cancel_futures=True)
+
+    def unit(self, plan: Plan, index: int, key: str, store: cache.Store, salt: dict):
+        return self.pool.submit(_unit_in_worker, plan, index, key, store, salt)
+
+    def assembly(self, loaded, plan: Plan, done, breps, store: cache.Store, salt: dict) -> bytes:
+        return _result(self.pool.submit(_assembly_in_worker, loaded, plan, done, breps, store, salt).result())
 
 
 def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: int, progress,
                  store: cache.Store, select: Callable[[str], bool] | None = None,
-                 jobs: int = 1) -> tuple[dict, list[str]]:
+                 jobs: int = 0) -> tuple[dict, list[str]]:
     """Every part's STL and STEP, assembly.step, backbone_template.dxf and the manifest; a unit
     whose key is in the cache is copied from it, the others are built (and kept). Returns the
     manifest and the names of the parts built afresh. With ``select``, only the parts it takes
-    get their files, and the assembly and the DXF are not written. With ``jobs`` > 1 and enough
-    units to build, worker processes build them (:func:`_build_in_workers`)."""
+    get their files, and the assembly and the DXF are not written. With ``jobs`` ≥ 1, the units
+    to build and the assembly are made in that many worker processes (:class:`_Workers`), started
+    only when there is something to make; 0: in this process."""
     (folder / "stl").mkdir()
     (folder / "step").mkdir()
     entries, built, units_done = [], [], []
@@ -422,15 +500,32 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
     for family, first, unit in units(plan):
         key = cache.key("unit", family.name, unit.inputs, salt)
         todo.append((family, first, unit, key, _unit_from_cache(store, key)))
-    missing = [i for i, t in enumerate(todo) if t[4] is None]
-    elsewhere = _build_in_workers(plan, missing, jobs, store, salt) \
-        if jobs > 1 and len(missing) >= MIN_PARALLEL_UNITS else {}
-    with kept_in(store, salt):
-        _place_units(plan, folder, todo, elsewhere, store, select, entries, built, units_done, density, total,
-                     progress)
+    asm_key = cache.key("assembly", loaded.design.design, [t[3] for t in todo], salt)
+    assembly = None if select is not None else _assembly_from_cache(store, asm_key)
+    with ExitStack() as stack:
+        workers = None
+        if jobs >= 1 and (any(t[4] is None for t in todo) or (select is None and assembly is None)):
+            workers = stack.enter_context(_Workers(jobs))
+        elsewhere = {i: workers.unit(plan, i, t[3], store, salt) for i, t in enumerate(todo)
+                     if t[4] is None} if workers else {}
+        with kept_in(store, salt):
+            _place_units(plan, folder, todo, elsewhere, store, select, entries, built, units_done, density, total,
+                         progress)
+        if select is None and assembly is None:
+            if workers is not None:
+                breps = {sha: rec["breps"][sha] for _, rec, _ in units_done for sha in rec.get("breps", {})}
+                assembly = workers.assembly(loaded, plan, [(k, _record(r)) for k, r, _ in units_done], breps, store,
+                                            salt)
+            else:
+                with kept_in(store, salt):
+                    _assemble(loaded, plan, folder / "assembly.step", store,
+                              [(k, r, None if ps is None else [p.solid for p in ps]) for k, r, ps in units_done])
+                assembly = (folder / "assembly.step").read_bytes()
+            store.put_record(asm_key, {"step": store.put_bytes(assembly)})
+        if select is None:
+            (folder / "assembly.step").write_bytes(assembly)
     files = {}
     if select is None:
-        _write_assembly(loaded, plan, folder, store, units_done, salt)
         export.write_backbone_dxf(plan.backbone, plan.stations, folder / "backbone_template.dxf")
         files = {"assembly": {"path": "assembly.step", "sha256": sha256(folder / "assembly.step")},
                  "backbone_template": {"path": "backbone_template.dxf",
@@ -446,6 +541,11 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
     }, built
 
 
+def _record(rec: dict) -> dict:
+    """A unit's record without the bytes it carries in this process."""
+    return {k: v for k, v in rec.items() if k not in ("blobs", "breps")}
+
+
 def _place_units(plan: Plan, folder: Path, todo, elsewhere: dict, store: cache.Store, select, entries: list,
                  built: list, units_done: list, density: float, total: int, progress) -> None:
     """Each unit's files into the folder and its parts' entries, in build order: from the cache,
@@ -455,7 +555,7 @@ def _place_units(plan: Plan, folder: Path, todo, elsewhere: dict, store: cache.S
         in_place = False                 # the files are in the folder already
         if rec is None:
             if i in elsewhere:
-                exported = elsewhere.pop(i)
+                exported = _result(elsewhere.pop(i).result())
             else:
                 parts = list(build_unit(plan, family, first, unit))
                 exported = _export_unit(plan, parts, folder, brep=store.enabled)
@@ -476,26 +576,23 @@ def _place_units(plan: Plan, folder: Path, todo, elsewhere: dict, store: cache.S
         units_done.append((key, rec, parts))
 
 
-def _write_assembly(loaded, plan: Plan, folder: Path, store: cache.Store, units_done, salt) -> None:
-    """assembly.step: from the cache when every unit is what it was, else put together from the
-    solids (built now, or read back from the cache's BREP; built again if that is gone)."""
-    path = folder / "assembly.step"
-    key = cache.key("assembly", loaded.design.design, [k for k, _, _ in units_done], salt)
+def _assembly_from_cache(store: cache.Store, key: str) -> bytes | None:
     rec = store.get_record(key)
-    data = store.get_bytes(rec["step"]) if isinstance(rec, dict) and isinstance(rec.get("step"), str) else None
-    if data is not None:
-        path.write_bytes(data)
-        return
+    return store.get_bytes(rec["step"]) if isinstance(rec, dict) and isinstance(rec.get("step"), str) else None
+
+
+def _assemble(loaded, plan: Plan, path: Path, store: cache.Store, units_done) -> None:
+    """assembly.step put together from the units' solids (built now, or read back from the
+    cache's BREP; built again if that is gone)."""
     parts = []
-    for (family, first, unit), (_, rec, fresh) in zip(units(plan), units_done):
-        solids = [p.solid for p in fresh] if fresh is not None else _solids(store, rec)
+    for (family, first, unit), (_, rec, solids) in zip(units(plan), units_done):
+        solids = solids if solids is not None else _solids(store, rec)
         if solids is None:
             solids = [p.solid for p in build_unit(plan, family, first, unit)]
         parts += [Part(p["name"], p["role"], s, np.asarray(p["placement"], float), tuple(p["color"]))
                   for p, s in zip(rec["parts"], solids)]
     with kernel_errors(plan, None, "write assembly.step"):
         export.write_assembly(parts, loaded.design.design, path)
-    store.put_record(key, {"step": store.put_bytes(path.read_bytes())})
 
 
 # ---------------------------------------------------------------- on existing outputs
@@ -533,11 +630,14 @@ def check(loaded: params.LoadedDesign, out_root: Path, progress=None,
     environment and code), get that report back from the cache instead of being measured again."""
     folder = Path(out_root) / loaded.design.design
     plan = design_plan(loaded)
+    limit = _limit()
     with output_errors(Path(out_root)), snapshot(folder) as view:
         why = stale_reason(view, loaded)
         if why is None:
             store = cache.Store(cache.default_dir() if cache_dir is True else (cache_dir or None))
-            return _measured(store, view, read_manifest(view), plan), folder, None
+            report = _measured(store, view, read_manifest(view), plan)
+            _trim(store, limit)
+            return report, folder, None
     return build(loaded, Path(out_root), progress, cache_dir=cache_dir).report, folder, why
 
 

@@ -17,10 +17,17 @@ import pytest
 # as-built Monte Carlo on this many samples, not the shipped 10 000: the suite tests the machinery
 # and the verdicts, `make bench` the default's cost.
 os.environ.setdefault("HWGEN_CHECK_SAMPLES", "64")
+# `hwgen build` through the CLI (in this process or a child) builds its parts in the process itself,
+# not in a worker (the CLI's default): CadQuery is imported once per process, and a builder a test
+# monkeypatches is the one that runs. The workers have tests of their own (tests/test_cache.py).
+os.environ.setdefault("HWGEN_JOBS", "0")
 # One part cache for the whole session (also for the CLI in child processes), in a temp folder:
 # a design's parts are built once however many tests build it; never the user's own cache.
 SESSION_CACHE = tempfile.mkdtemp(prefix="hwgen-test-cache-")
 os.environ["HWGEN_CACHE_DIR"] = SESSION_CACHE
+# with no size bound to speak of: a test that expects the session's parts to be there finds them
+# (the folder goes at the end of the session; tests/test_cache.py tests the bound)
+os.environ["HWGEN_CACHE_SIZE"] = "1T"
 
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / "params"

@@ -151,12 +151,14 @@ def test_editing_one_tendon_rebuilds_exactly_the_parts_whose_specs_changed(tmp_p
     src = tmp_path / "paper-table2.yaml"
     src.write_text(yaml.safe_dump(doc, sort_keys=False))
     before = load(src)
-    first = build(before, tmp_path / "out", post_build=False, cache_dir=tmp_path / "cache")
+    # through the session's cache: paper-table2's parts are in it once any test built the design
+    # (the same specs, whatever the file), the edited design's never are
+    first = build(before, tmp_path / "out", post_build=False)
     c1 = next(t for t in doc["tendons"] if t["name"] == "C1")
     c1["routing"]["table"][8][1] -= 0.5
     src.write_text(yaml.safe_dump(doc, sort_keys=False))
     after = load(src)
-    second = build(after, tmp_path / "out", post_build=False, cache_dir=tmp_path / "cache")
+    second = build(after, tmp_path / "out", post_build=False)
 
     old, new = design_plan(before), design_plan(after)
     changed = [b.name for a, b in zip(old.disks, new.disks) if a != b]
@@ -165,6 +167,10 @@ def test_editing_one_tendon_rebuilds_exactly_the_parts_whose_specs_changed(tmp_p
         changed += [p["name"] for p in first.manifest["parts"] if p["role"].startswith("tensioner")]
     assert "disk_08" in changed and len(changed) < len(new.disks)         # a local edit
     assert second.built == changed
+    # the row is in the middle: the tip eyelets, the tendons' runs and the tensioner's layout stay,
+    # so none of the tensioner's parts is made again
+    assert old.disks[-1] == new.disks[-1] and cache.key(old.tensioner_layout) == cache.key(new.tensioner_layout)
+    assert not [n for n in second.built if n.startswith("tensioner")]
     moved = {p["name"] for p, q in zip(first.manifest["parts"], second.manifest["parts"])
              if p["files"]["stl"]["sha256"] != q["files"]["stl"]["sha256"]}
     assert moved <= set(changed)
@@ -273,8 +279,9 @@ def test_parts_writes_only_the_parts_it_names_and_the_whole_manifest(built, tmp_
 
 @pytest.mark.slow
 def test_parts_built_in_worker_processes_have_the_bytes_of_a_serial_build(fresh, tmp_path):
-    """--jobs 2 without a cache: every unit is built in a forkserver worker, the assembly is put
-    together from their BREP; every file has the bytes of the serial build."""
+    """--jobs 2 without a cache: every unit is built in a spawned worker, the assembly is put
+    together in one of them (from its own solids and the other's BREP); every file has the bytes
+    of the build in one process."""
     from hwgen.pipeline import build
     loaded, _, first = fresh
     res = build(loaded, tmp_path / "out", post_build=False, cache_dir=None, jobs=2)
@@ -310,21 +317,56 @@ def test_hwgen_check_of_files_it_measured_before_answers_from_the_cache(built, t
 @pytest.mark.slow
 def test_two_builds_sharing_one_empty_cache_at_once_both_finish_whole(tmp_path):
     """Two processes build the prototype at once into one empty cache (each writes every entry,
-    the same bytes, renamed over each other): both finish, with the same files; a third build
-    then takes everything from the cache and writes those bytes again."""
+    the same bytes, renamed over each other), one in itself, one in a worker process (``jobs=1``,
+    as the CLI does: it never imports CadQuery itself): both finish, with the same files; a third
+    build then takes everything from the cache and writes those bytes again."""
     code = ("import sys\nfrom hwgen.pipeline import build, load\n"
             "if __name__ == '__main__':\n"
-            "    r = build(load(sys.argv[1]), sys.argv[2], post_build=False, cache_dir=sys.argv[3])\n"
-            "    print(len(r.built))")
+            "    r = build(load(sys.argv[1]), sys.argv[2], post_build=False, cache_dir=sys.argv[3], jobs=int(sys.argv[4]))\n"
+            "    print(len(r.built), 'cadquery' in sys.modules)")
     runs = [subprocess.Popen([sys.executable, "-c", code, str(PARAMS / "prototype.yaml"), str(tmp_path / out),
-                              str(tmp_path / "cache")], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-            for out in ("a", "b")]
+                              str(tmp_path / "cache"), jobs], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            for out, jobs in (("a", "0"), ("b", "1"))]
+    imported = []
     for r in runs:
         stdout, stderr = r.communicate(timeout=600)
         assert r.returncode == 0, stderr
+        imported.append(stdout.split()[-1])
+    assert imported == ["True", "False"]
     a, b = _tree(tmp_path / "a" / "prototype"), _tree(tmp_path / "b" / "prototype")
     assert a == b
     assert not list((tmp_path / "cache").rglob(".tmp-*"))
     from hwgen.pipeline import build, load
     third = build(load(PARAMS / "prototype.yaml"), tmp_path / "c", post_build=False, cache_dir=tmp_path / "cache")
     assert third.built == [] and _tree(third.folder) == a
+
+
+def test_the_cache_keeps_to_its_size_dropping_the_least_recently_used(tmp_path, monkeypatch):
+    """trim() removes the entries used longest ago (a read counts as a use) until the store fits;
+    sizes read as a person writes them; a bad size is bad input naming the flag or the variable."""
+    store = cache.Store(tmp_path)
+    names = [store.put_bytes(bytes([k]) * 1000) for k in range(5)]
+    store.put_record("r" * 64, {"a": 1})
+    paths = {n: next(p for p in tmp_path.rglob(n)) for n in names}
+    for k, n in enumerate(names):                      # written in order, a second apart
+        os.utime(paths[n], (1000 + k, 1000 + k))
+    os.utime(next(tmp_path.rglob("r*.json")), (999, 999))
+    assert store.get_bytes(names[0]) is not None      # read: now the most recently used
+    removed, freed = store.trim(3000)
+    assert removed == 3 and freed >= 2000
+    assert [store.get_bytes(n) is not None for n in names] == [True, False, False, True, True]
+    assert store.get_record("r" * 64) is None          # the oldest of all went first
+    assert store.trim(10 ** 9) == (0, 0) and cache.Store(None).trim(0) == (0, 0)
+    assert [cache.parse_size(t) for t in ("2G", "500M", "1.5GB", "300000", "64KiB")] == \
+        [2 * 1024 ** 3, 500 * 1024 ** 2, int(1.5 * 1024 ** 3), 300000, 64 * 1024]
+    monkeypatch.setenv(cache.ENV_SIZE, "100M")
+    assert cache.size_limit() == 100 * 1024 ** 2
+    monkeypatch.delenv(cache.ENV_SIZE)
+    assert cache.size_limit() == cache.DEFAULT_SIZE
+    from .test_hostile import run_cli
+    code, _, stderr, escaped = run_cli("build", str(PARAMS / "prototype.yaml"), "--out", str(tmp_path / "o"),
+                                       "--cache-size", "lots")
+    assert escaped is None and code == 2 and "--cache-size: lots is not a size" in stderr
+    monkeypatch.setenv(cache.ENV_SIZE, "-3G")
+    code, _, stderr, escaped = run_cli("build", str(PARAMS / "prototype.yaml"), "--out", str(tmp_path / "o"))
+    assert escaped is None and code == 2 and "HWGEN_CACHE_SIZE" in stderr and not (tmp_path / "o").exists()

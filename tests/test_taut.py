@@ -118,3 +118,54 @@ def test_paper_table2_fails_on_c2(built):
     assert not rep["ok"] and any(c["where"]["tendon"] == "C2" and c["severity"] == "error" for c in bad)
     c2 = next(c for c in bad if c["where"]["tendon"] == "C2")
     assert "does not sample the eq. (3) function" in c2["message"]
+
+
+# ---------------------------------------------------------------- the stop rule (issue 18)
+
+def test_quantile_interval_is_the_binomial_order_statistics_and_covers():
+    """The interval's ends are the order statistics the binomial count puts on either side of the
+    quantile with the stated confidence; over many draws from a known law it holds the true p95
+    at least that often."""
+    from scipy.stats import binom
+    x = np.arange(1.0, 1001.0)                       # sorted: X(i) = i
+    lo, hi = mc.quantile_interval(x[::-1], 0.95, 0.95)
+    assert binom.cdf(lo - 1, 1000, 0.95) <= 0.025 < binom.cdf(lo, 1000, 0.95)           # P(count < lo) ≤ 2.5 %
+    assert 1 - binom.cdf(hi - 1, 1000, 0.95) <= 0.025 < 1 - binom.cdf(hi - 2, 1000, 0.95)
+    assert mc.quantile_interval(x[:10], 0.95, 0.95)[1] == np.inf        # ten samples cannot bound a p95 above
+    rng = np.random.default_rng(1)
+    true = -np.log(0.05)                             # the p95 of an exponential of mean 1
+    hits = sum(lo <= true <= hi for lo, hi in (mc.quantile_interval(rng.exponential(size=500), 0.95, 0.9)
+                                               for _ in range(400)))
+    assert hits >= 0.9 * 400 - 2 * np.sqrt(400 * 0.09)
+
+
+def test_stop_rule_stops_when_clear_of_the_budget_or_precise_enough():
+    from hwgen.checks.taut import enough_samples
+    from hwgen.params import CheckSettings
+    s = CheckSettings(robust_precision_mm=0.01)
+    rng = np.random.default_rng(0)
+    spread = rng.uniform(0.0, 1.0, 1000)
+    clear = np.c_[0.5 + 0.1 * spread, 0.01 * spread]            # p95 far above 0.2, and far below
+    assert enough_samples([0.2, 0.2], s)(clear, 5)
+    straddles = np.c_[0.15 + spread]                      # p95 ≈ 1.1 against a budget of its own p95: known ±0.014
+    p95 = np.percentile(straddles, 95)
+    assert not enough_samples([p95], s)(straddles, 5)
+    assert enough_samples([p95], CheckSettings(robust_precision_mm=0.05))(straddles, 5)   # wide tolerance
+    assert enough_samples([None], s)(straddles, 5)             # no budget, nothing to judge
+    assert not enough_samples([0.2], CheckSettings(robust="max"))(clear, 5)
+
+
+def test_an_early_stop_keeps_the_samples_a_longer_run_draws(proto, monkeypatch):
+    """Samples come in batches of their own seeds: a run that stops at its second look has drawn
+    exactly the first samples of one that draws them all; one that stops at once, the first batch."""
+    rb, sc = proto
+    monkeypatch.setattr(mc, "FIRST_LOOK", 40)
+    assert mc.looks(150) == [40, 80, 150]
+    every = mc.run(rb, sc, ANGLES, 150, 5, enough=lambda w, k: False)
+    second = mc.run(rb, sc, ANGLES, 150, 5, enough=lambda w, k: len(w) >= 80)
+    first = mc.run(rb, sc, ANGLES, 150, 5, enough=lambda w, k: True)
+    assert len(every.worst) == 150 and len(second.worst) == 80 and len(first.worst) == 40
+    assert np.array_equal(second.worst, every.worst[:80]) and np.array_equal(first.worst, every.worst[:40])
+    assert np.array_equal(first.worst, mc.run(rb, sc, ANGLES, 40, 5).worst)     # the first batch is seed 5's
+    back = mc.from_json(json.loads(json.dumps(mc.to_json(second))))
+    assert all(np.array_equal(getattr(back, f), getattr(second, f)) for f in ("worst", "band", "envelope", "rest"))

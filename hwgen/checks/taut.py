@@ -13,9 +13,11 @@ is ``check.robust_severity``.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 
 import numpy as np
 
+from .. import cache
 from ..errors import InputError, clip
 from ..model import scatter as mc
 from .base import Check
@@ -104,7 +106,8 @@ def as_built(emap: EyeletMap, rep: dict, manifest: dict, design, fits, angles: n
     sc = process_scatter(design, fits)
     names = [t["name"] for t in rep["tendons"]]
     act = [k for k, t in enumerate(rep["tendons"]) if t["channel"] == design.tensioner.actuating_channel]
-    res = mc.run(rb, sc, angles, samples(s.samples), s.seed, tuple(act) if len(act) == 2 else None)
+    budgets = [t["budget_mm"] for t in rep["tendons"]]
+    res = monte_carlo(rb, sc, angles, samples(s.samples), s, tuple(act) if len(act) == 2 else None, budgets)
     checks, rows = [], []
     for k, t in enumerate(rep["tendons"]):
         budget = t["budget_mm"]
@@ -121,12 +124,16 @@ def as_built(emap: EyeletMap, rep: dict, manifest: dict, design, fits, angles: n
         if budget is not None:
             at = mc.percentile(worst, s.robust) if len(worst) else row["taut_max_abs_delta_mm"]
             row.update(robust_mm=at, passed=at <= budget)
+            if len(worst) and s.robust != "max":
+                row["robust_interval_mm"] = list(mc.quantile_interval(
+                    worst, _quantile(s.robust), _look_confidence(s, len(mc.looks(samples(s.samples))))))
             checks.append(_verdict(row, s, len(worst), deviations.get(t["name"], [])))
         rows.append(row)
     out = {"about": "taut path through each measured hole's free aperture ((D - d)/2 in its own plane), from the "
                     "tendon's seat to its drum's tangent point; as built: print scatter, disk slip within the jig's "
                     "tolerance, tilt and offset within the play measured in each disk's STL",
            "samples": len(res.worst), "seed": s.seed, "tendon_diameter_mm": rb.tendon_diameter,
+           "stop": stop_rule(s, samples(s.samples), len(res.worst)),
            "length_mm": rb.length, "robust": s.robust,
            "unconverged_solves": res.unconverged,
            "process": {"position_sigma_mm": sc.sigma_pos, "diameter_sigma_mm": sc.sigma_dia,
@@ -155,6 +162,55 @@ def as_built(emap: EyeletMap, rep: dict, manifest: dict, design, fits, angles: n
     return out, checks
 
 
+def _quantile(robust: str) -> float:
+    return float(robust[1:]) / 100
+
+
+def _look_confidence(s, looks: int) -> float:
+    """The confidence of each look's interval that keeps ``check.robust_confidence`` over ``looks`` looks."""
+    return 1.0 - (1.0 - s.robust_confidence) / looks
+
+
+def enough_samples(budgets: list[float | None], s) -> Callable[[np.ndarray, int], bool]:
+    """The Monte Carlo's stop rule: at each look, every budgeted tendon's ``check.robust`` statistic
+    has an interval from order statistics (:func:`hwgen.model.scatter.quantile_interval`) at
+    confidence 1 − (1 − ``check.robust_confidence``) / looks (Bonferroni over the looks the run may
+    take, so stopping at any of them keeps the stated confidence); the run stops when every such
+    interval lies wholly above or wholly at or below its budget, or is no wider than
+    ``check.robust_precision_mm``. "max" has no such interval: that run draws every sample."""
+    judged = [(k, b) for k, b in enumerate(budgets) if b is not None]
+
+    def enough(worst: np.ndarray, looks: int) -> bool:
+        if s.robust == "max":
+            return False
+        conf = _look_confidence(s, looks)
+        for k, budget in judged:
+            lo, hi = mc.quantile_interval(worst[:, k], _quantile(s.robust), conf)
+            if not (lo > budget or hi <= budget or hi - lo <= s.robust_precision_mm):
+                return False
+        return True
+    return enough
+
+
+def stop_rule(s, most: int, drawn: int) -> dict:
+    """The report's account of the stop rule and where the run stopped."""
+    return {"rule": "stop at a look (samples " + ", ".join(map(str, mc.looks(most))) + ") once every budgeted "
+                    f"tendon's {s.robust} interval (order statistics, {s.robust_confidence:g} confidence over all "
+                    f"looks) lies clear of its budget or within {s.robust_precision_mm:g} mm" if most else "no samples",
+            "most_samples": most, "samples": drawn, "confidence": s.robust_confidence,
+            "precision_mm": s.robust_precision_mm}
+
+
+def monte_carlo(rb: mc.Robot, sc: mc.Scatter, angles: np.ndarray, n: int, s, pair, budgets) -> mc.Result:
+    """:func:`hwgen.model.scatter.run` with the stop rule, or what it gave last time for this very
+    robot (every measured hole, disk play, anchor and end), scatter, sweep and rule (remembered in
+    the active cache; the same result either way)."""
+    inputs = (rb, sc, angles, n, s.seed, pair, budgets, s.robust, s.robust_confidence, s.robust_precision_mm)
+    doc = cache.remembered("as-built monte carlo", inputs, lambda: mc.to_json(
+        mc.run(rb, sc, angles, n, s.seed, pair, enough_samples(budgets, s))))
+    return mc.from_json(doc)
+
+
 def from_report(report: dict) -> tuple[mc.Robot, mc.Scatter]:
     """The measured robot and the stated scatter back from a report.json (for what-ifs and tests)."""
     tb, fits = report["as_built"]["taut"], report["as_built"]["disks"]
@@ -175,7 +231,9 @@ def _verdict(row: dict, s, n: int, devs: list) -> Check:
     msg = (f"{row['name']}: {row['centreline_max_abs_delta_mm']:.3f} mm through the hole centres, "
            f"{row['taut_max_abs_delta_mm']:.3f} mm taut (nominal print)")
     if n:
-        msg += (f", {row['robust_mm']:.3f} mm at {s.robust} of {n} as-built samples (p50 {row['p50_mm']:.3f}, "
+        iv = row.get("robust_interval_mm")
+        iv = f" ({s.robust_confidence:.0%} interval {iv[0]:.3f}-{iv[1]:.3f})" if iv and np.all(np.isfinite(iv)) else ""
+        msg += (f", {row['robust_mm']:.3f} mm at {s.robust}{iv} of {n} as-built samples (p50 {row['p50_mm']:.3f}, "
                 f"max {row['max_mm']:.3f}; {100 * row['p_within']:.0f} % within)")
     msg += f", budget {row['budget_mm']:g} mm — {'passes' if ok else 'fails'}"
     big = [(j, d) for j, d in devs if d > 1e-3]

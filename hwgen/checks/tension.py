@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import cache
 from ..model import statics as st
 from ..model import stiffness as sf
 from .base import Check
@@ -41,14 +42,16 @@ MAX_DOF = 1500             # a longer robot or more disks than this resolves: th
 
 def sweeps(plan) -> tuple[sf.Described, dict, dict]:
     """The statics of the sweep (the expensive part): the robot, and the sweep with the stiffening
-    tendons locked and with them slack."""
+    tendons locked and with them slack. The sweeps are of the plan alone: what they gave last time
+    for this design (and this code) is remembered in the active cache (the same values either way)."""
     desc = sf.describe(plan)
     model = st.Model(desc.robot, sf.SWEEP_H_MAX)
     if model.n_dof > MAX_DOF:
         raise ValueError(f"{model.n_dof} joint coordinates, more than the {MAX_DOF} the sweep is run with")
     ang = plan.design.check_angle_deg
-    return (desc, sf.sweep(desc, model, ang, SWEEP_STEP_DEG, locked=True),
-            sf.sweep(desc, model, ang, FREE_STEP_DEG, locked=False))
+    locked, free = cache.remembered("tension sweeps", plan.design, lambda: (
+        sf.sweep(desc, model, ang, SWEEP_STEP_DEG, locked=True), sf.sweep(desc, model, ang, FREE_STEP_DEG, locked=False)))
+    return desc, locked, free
 
 
 def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict, list[Check]]:

@@ -15,7 +15,8 @@ less (the distribution narrows sample by sample) and zero scatter is the nominal
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from collections.abc import Callable
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -135,8 +136,26 @@ class Result:
     unconverged: int
 
 
-def run(rb: Robot, sc: Scatter, angles_deg, n: int, seed: int, pair: tuple[int, int] | None = None) -> Result:
-    """Nominal taut path, centre line and ``n`` samples; ``pair``: tendon indices of the actuating pair."""
+FIRST_LOOK = 1000      # samples drawn before the first look of a run that may stop early (then doubling)
+
+
+def looks(n: int) -> list[int]:
+    """The sample counts at which a run of at most ``n`` samples may stop: 1000, 2000, 4000, … and ``n``."""
+    out, m = [], FIRST_LOOK
+    while m < n:
+        out.append(m)
+        m *= 2
+    return out + [n]
+
+
+def run(rb: Robot, sc: Scatter, angles_deg, n: int, seed: int, pair: tuple[int, int] | None = None,
+        enough: Callable[[np.ndarray, int], bool] | None = None) -> Result:
+    """Nominal taut path, centre line and ``n`` samples; ``pair``: tendon indices of the actuating pair.
+
+    ``enough(worst, looks)``: a run may stop at each of :func:`looks` ``(n)`` once it says so of the
+    samples' largest |ΔL| so far ((S, T), as :attr:`Result.worst`; ``looks``: how many looks the run
+    may take). The samples then come in batches, the first from ``seed``, batch ``j`` from
+    ``(seed, j)``: the first m samples are the same whatever ``n`` and wherever the run stops."""
     ang = np.asarray(angles_deg, float)
     k0 = int(np.flatnonzero(ang == 0)[0])
     Lc = centreline(rb, ang)
@@ -145,7 +164,17 @@ def run(rb: Robot, sc: Scatter, angles_deg, n: int, seed: int, pair: tuple[int, 
                                                   play=None), 1, 0), ang, rb.length)
     dn = Ln[0] - Ln0[0][:, None]
     bad = 0
-    if n:
+    if n and enough is not None:
+        parts, done, marks = [], 0, looks(n)
+        for j, m in enumerate(marks):
+            L, L0, b = taut.sweep(chains(rb, sc, m - done, seed if j == 0 else [seed, j]), ang, rb.length)
+            parts.append(L - L0[:, :, None])
+            bad, done = bad + b, m
+            if m < n and enough(np.abs(np.concatenate(parts)).max(axis=2), len(marks)):
+                break
+        dL = np.concatenate(parts)
+        n = done
+    elif n:
         L, L0, bad = taut.sweep(chains(rb, sc, n, seed), ang, rb.length)
         dL = L - L0[:, :, None]
     else:                   # no samples: the band and envelope are the nominal print's curve
@@ -158,6 +187,34 @@ def run(rb: Robot, sc: Scatter, angles_deg, n: int, seed: int, pair: tuple[int, 
         pair_nominal = (float(-(dc[i] + dc[j]).min()), float(-(dn[i] + dn[j]).min()))
     return Result(ang, dc, dn, Ln0[0], band, np.stack([dL.min(axis=0), dL.max(axis=0)]),
                   np.abs(dL).max(axis=2)[:n], take_up, pair_nominal, bad0 + bad)
+
+
+def to_json(res: Result) -> dict:
+    """A result as plain JSON values (:func:`from_json` gives it back, floats exactly)."""
+    return {f.name: (v.tolist() if isinstance(v, np.ndarray) else v) for f in fields(res)
+            for v in [getattr(res, f.name)]}
+
+
+def from_json(doc: dict) -> Result:
+    T = len(doc["rest"])
+    arr = {k: np.asarray(doc[k], float) for k in ("angles", "centreline", "nominal", "rest", "band", "envelope")}
+    return Result(**arr, worst=np.asarray(doc["worst"], float).reshape(-1, T),
+                  take_up=None if doc["take_up"] is None else np.asarray(doc["take_up"], float),
+                  pair_nominal=None if doc["pair_nominal"] is None else tuple(doc["pair_nominal"]),
+                  unconverged=int(doc["unconverged"]))
+
+
+def quantile_interval(values: np.ndarray, q: float, confidence: float) -> tuple[float, float]:
+    """A distribution-free confidence interval on the ``q``-quantile (0 < q < 1) of what ``values``
+    sample: the order statistics X(l) ≤ X(u) between which the quantile lies with probability at
+    least ``confidence``, since the count of samples below it is binomial(n, q). (-inf, inf)
+    where the samples are too few to bound it on a side."""
+    from scipy.stats import binom
+    x = np.sort(np.asarray(values, float))
+    n, a = len(x), (1.0 - confidence) / 2
+    lo = int(binom.ppf(a, n, q))              # P(count < lo) ≤ a: X(lo), 1-based, lies below the quantile
+    hi = int(binom.ppf(1.0 - a, n, q)) + 1    # P(count ≥ hi) ≤ a: X(hi) lies above it
+    return (float(x[lo - 1]) if lo >= 1 else -np.inf, float(x[hi - 1]) if hi <= n else np.inf)
 
 
 def statistics(values: np.ndarray, budget: float | None = None) -> dict:
