@@ -27,26 +27,19 @@ from collections import defaultdict
 
 import numpy as np
 
+from ..checks.lengths import sweep_angles
+from ..checks.taut import END_RUN_MM
 from ..model import kinematics as kin
 from ..model import taut
 from ..model.fixing import disk_thicknesses
 from ..model.materials import printed_density
 from ..model.routing import tendon_paths
 from ..model.scatter import _basis
+from ..model.plan import SAME_POSITION_MM, SWEEP_STEP_DEG as SIZING_STEP_DEG
 from ..params import Design
 
-END_RUN_MM = 20.0          # as hwgen check's taut path without a tensioner run (hwgen.checks.taut.END_RUN_MM)
-SIZING_STEP_DEG = 1.0      # the plan's eyelet-sizing sweep step (hwgen.model.plan.SWEEP_STEP_DEG)
-SAME_POSITION_MM = 1e-6    # eyelets closer than this share one hole (hwgen.model.plan.SAME_POSITION_MM)
-
-
-def check_angles(max_deg: float, step_deg: float) -> np.ndarray:
-    """hwgen check's sweep: -max .. +max in steps of ``step``, 0 and both ends included."""
-    k = int(np.floor(max_deg / step_deg + 1e-9))
-    half = np.arange(1, k + 1) * step_deg
-    if half.size == 0 or half[-1] < max_deg - 1e-9:
-        half = np.append(half, max_deg)
-    return np.concatenate([-half[::-1], [0.0], half])
+# what hwgen check and the plan use, so a variant's figures are theirs
+check_angles = sweep_angles
 
 
 def _skeleton(d: Design) -> tuple:
