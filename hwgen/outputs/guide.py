@@ -97,9 +97,10 @@ def take_up(manifest: dict) -> dict | None:
     return out or None
 
 
-def steps(folder: Path, manifest: dict, design) -> list[Step]:
-    """The assembly in order, each step's words (numbers from bom.csv) and what its picture shows."""
-    bom = read_bom(folder)
+def steps(folder: Path, manifest: dict, design, bom: list[dict] | None = None) -> list[Step]:
+    """The assembly in order, each step's words (numbers from bom.csv, or the rows in ``bom``) and
+    what its picture shows (from the manifest alone)."""
+    bom = read_bom(folder) if bom is None else bom
     parts = [p for p in manifest["parts"]]
     names = lambda pred: [p["name"] for p in parts if pred(p)]          # noqa: E731
     disks = names(lambda p: p["role"] == "disk")
@@ -197,9 +198,11 @@ def steps(folder: Path, manifest: dict, design) -> list[Step]:
 
 
 def picture_jobs(folder: Path, manifest: dict, design) -> list[dict]:
-    """What the pictures stage draws for the guide: per step its file, title, parts shown and highlighted."""
+    """What the pictures stage draws for the guide: per step its file, title, parts shown and highlighted.
+    Those come from the manifest alone, not the bill of materials: the pictures stage runs beside
+    the checks, before bom.csv is written."""
     return [{"file": s.picture, "title": f"{i}. {s.title}", "shown": s.shown, "highlight": s.highlight,
-             "tendons": s.tendons} for i, s in enumerate(steps(folder, manifest, design), start=1)]
+             "tendons": s.tendons} for i, s in enumerate(steps(folder, manifest, design, bom=[]), start=1)]
 
 
 # --------------------------------------------------------------------------- the documents
