@@ -41,8 +41,9 @@ slicer-check: $(STAMP) clients
 	$(BIN)/hwgen plates params/prototype.yaml --out out -q
 	$(BIN)/python -m tests.slicer_check out/prototype
 
+# one pytest worker per core (pytest-xdist): the CAD-free tier is many small tests that do not share a build
 test-fast: $(STAMP)
-	$(BIN)/python -m pytest -q -m "not slow"
+	$(BIN)/python -m pytest -q -m "not slow" -n auto
 
 bench: $(STAMP)
 	$(BIN)/python -m hwgen.bench
