@@ -184,8 +184,9 @@ def locate_eyelets(disks: list[DiskSections], report: dict, backbone_holes: list
     # An opening the plan made around eyelets the routing ran into each other is found like any
     # hole, but says nothing of where each tendon lies in it: those stay at their routing, and
     # there is no wall between them.
+    joined = joined_holes(report)
     for e in eyelets:
-        if len(e.tendons) > 1 and (e.station, e.tendons) in joined_holes(report):
+        if (e.station, e.tendons) in joined:
             if e.measured_xz is not None:
                 merged_pairs += [(e.station, e.part, (a,), (b,), "eyelet") for a, b in combinations(e.tendons, 2)]
             e.measured_xz = None
@@ -328,7 +329,6 @@ def _reaches_slot(rd: dict, tendons) -> bool:
 def _position_checks(report: dict, eyelets: list[Eyelet], tol: float) -> list[Check]:
     """One check per disk: every eyelet found, none further than ``tol`` from design intent."""
     out = []
-    overlapping = {(m["station"], t) for m in report.get("merges", []) if m["kind"] == "overlap" for t in m["tendons"]}
     joined = joined_holes(report)
     for rd in report["disks"]:
         i = rd["index"]
@@ -342,7 +342,7 @@ def _position_checks(report: dict, eyelets: list[Eyelet], tol: float) -> list[Ch
             if (i, e.tendons) in joined:
                 overlaps.append(f"{' and '.join(e.tendons)} share one opening at x={num(x)}, z={num(z)} "
                                 f"(Ø{e.design_diameter:.2f}): their routings put their holes into each other")
-            if e.status == "merged" and (all((i, t) in overlapping for t in e.tendons) or _crowded(rd, e.tendons)):
+            if e.status == "merged" and _crowded(rd, e.tendons):     # (overlapping mid-plane circles are crowded too)
                 overlaps.append(f"{name} at x={num(x)}, z={num(z)} runs into another eyelet")
             elif e.status == "into_slot" and _reaches_slot(rd, e.tendons):
                 overlaps.append(f"{name} at x={num(x)}, z={num(z)} opens into the backbone slot")

@@ -126,10 +126,7 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
         for p in g:
             if p.name in exits:
                 alpha = max(alpha, float(np.arccos(np.clip(abs(exits[p.name] @ ax), 0, 1))))
-        pts = np.array([p.points[i] for p in g], dtype=float)
-        centre = (pts.min(axis=0) + pts.max(axis=0)) / 2
-        spread = float(np.max(np.linalg.norm(pts - centre, axis=1)))
-        x, z = (float(v) for v in (centre if spread >= SAME_POSITION_MM else pts[0]))
+        (x, z), spread = _centre(g, i)
         dia = hole_diameter(d.tendon_material.diameter, thick, alpha, proc.hole_clearance, proc.min_hole) + 2 * spread
         in_slot = abs(x) <= slot_w / 2 and abs(z) <= slot_h / 2
         return Hole(x, z, tuple(float(a) for a in ax), float(dia), tuple(p.name for p in g),
@@ -139,7 +136,6 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
     # that nearly coincide leave slivers no mesh closes, and the tendons could not be held apart anyway
     # (``eyelet.overlap`` reports it as the routing's fault, from the "overlap" merge recorded here).
     holes = [hole(g) for g in groups]
-    overlapped: set[int] = set()
     while True:
         pair = next(((a, b) for a in range(len(holes)) for b in range(a + 1, len(holes))
                      if np.hypot(holes[a].x - holes[b].x, holes[a].z - holes[b].z)
@@ -148,11 +144,11 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
             break
         a, b = pair
         groups[a] += groups.pop(b)
-        overlapped = {k - (k > b) for k in overlapped if k != b} | {a}
         holes[a] = hole(groups[a])
         holes.pop(b)
-    merges = [Merge(i, h.tendons, "overlap" if k in overlapped else "shared")
-              for k, h in enumerate(holes) if len(h.tendons) > 1]
+    # a hole around tendons at one position is shared by design; one around several, an overlap
+    merges = [Merge(i, h.tendons, "overlap" if _centre(g, i)[1] >= SAME_POSITION_MM else "shared")
+              for g, h in zip(groups, holes) if len(g) > 1]
     seats, chambers = (), ()
     if role == "base":
         leaving = {p.name: rest_axes[p.name][i] for p in paths}
@@ -166,6 +162,16 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
                     dk.eyelets.edge_size if dk.eyelets.edge == "chamfer" else 0.0, mounts, hub, seats,
                     dk.anchors.plate if seats else 0.0, chambers)
     return spec, merges
+
+
+def _centre(group: list[TendonPath], i: int) -> tuple[tuple[float, float], float]:
+    """Where one hole for these tendons goes at station i, and how far the farthest tendon lies from
+    it: the middle of their positions, or the first's when they all stand within SAME_POSITION_MM."""
+    pts = np.array([p.points[i] for p in group], dtype=float)
+    centre = (pts.min(axis=0) + pts.max(axis=0)) / 2
+    spread = float(np.max(np.linalg.norm(pts - centre, axis=1)))
+    x, z = (float(v) for v in (centre if spread >= SAME_POSITION_MM else pts[0]))
+    return (x, z), spread
 
 
 def _mount_holes(d: Design, role: str, holes, seats, chambers, slot: tuple[float, float],
