@@ -52,8 +52,9 @@ def base_mount(plan: Plan) -> MountLayout:
 
 
 def hole_diameter(d: float, thickness: float, alpha: float, clearance: float, minimum: float) -> float:
-    """Smallest hole a tendon of diameter d passes at angle alpha (rad) through a wall this thick."""
-    return max(minimum, d / np.cos(alpha) + thickness * np.tan(alpha) + clearance)
+    """Smallest hole a tendon of diameter d passes at angle alpha (rad) through a wall this thick
+    (elementwise over arrays of thickness and alpha)."""
+    return np.maximum(minimum, d / np.cos(alpha) + thickness * np.tan(alpha) + clearance)
 
 
 def _sweep(design: Design) -> np.ndarray:
@@ -103,11 +104,38 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
     ``sweeps``: the tendons' directions over the sweep, when the caller already has them.
     """
     sweeps = sweeps if sweeps is not None else _sweeps(d, paths)
-    n = len(d.stations)
-    dk, proc = d.disks, d.process
+    dk = d.disks
     slot_w = d.backbone.height + 2 * dk.slot_clearance
     slot_h = d.backbone.thickness + 2 * dk.slot_clearance
-    role, thick = disk_role(i, n), disk_thicknesses(d)[i]
+    role, thick = disk_role(i, len(d.stations)), disk_thicknesses(d)[i]
+    groups, holes = _eyelet_holes(d, i, paths, rest_axes, sweeps, exits)
+    # a hole around tendons at one position is shared by design; one around several, an overlap
+    merges = [Merge(i, h.tendons, "overlap" if _centre(g, i)[1] >= SAME_POSITION_MM else "shared")
+              for g, h in zip(groups, holes) if len(g) > 1]
+    seats, chambers = (), ()
+    if role == "base":
+        leaving = {p.name: rest_axes[p.name][i] for p in paths}
+        found = [seats_for(d, h, thick, leaving) for h in holes if not h.in_slot]
+        seats = tuple(s for group, _ in found for s in group)
+        chambers = tuple(c for _, c in found if c is not None)
+    hub = hub_spec(d, role, hub_lengths(d)[i], thick, slot_w, slot_h, tuple(holes), {p.name: p.points[i] for p in paths},
+                   {p.name: (sweeps[p.name][0][:, i], sweeps[p.name][1][:, i]) for p in paths})
+    mounts = _mount_holes(d, role, holes, seats, chambers, (slot_w, slot_h), hub)
+    spec = DiskSpec(i, float(d.stations[i]), role, thick, dk.outer_diameter, slot_w, slot_h, tuple(holes),
+                    dk.eyelets.edge_size if dk.eyelets.edge == "chamfer" else 0.0, mounts, hub, seats,
+                    dk.anchors.plate if seats else 0.0, chambers)
+    return spec, merges
+
+
+def _eyelet_holes(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, np.ndarray],
+                  sweeps: dict[str, Sweep], exits: dict[str, np.ndarray] | None = None,
+                  ) -> tuple[list[list[TendonPath]], list[Hole]]:
+    """Disk i's eyelet holes and the tendons of each: one per position, sized for the worst angle
+    over the sweep (and the exit, on the tip disk), holes that would run into each other merged."""
+    proc = d.process
+    slot_w = d.backbone.height + 2 * d.disks.slot_clearance
+    slot_h = d.backbone.thickness + 2 * d.disks.slot_clearance
+    thick = disk_thicknesses(d)[i]
     exits = exits or {}
     groups: list[list[TendonPath]] = []
     for p in paths:
@@ -122,7 +150,8 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
         own = [rest_axes[p.name][i] + exits.get(p.name, 0.0) for p in g]
         ax = np.sum([v / np.linalg.norm(v) for v in own], axis=0)
         ax /= np.linalg.norm(ax)
-        alpha = max(_worst_angles(sweeps[p.name], np.tile(ax, (n, 1)))[i] for p in g)
+        alpha = max(_worst_angles((sweeps[p.name][0][:, i:i + 1], sweeps[p.name][1][:, i:i + 1]), ax[None])[0]
+                    for p in g)
         for p in g:
             if p.name in exits:
                 alpha = max(alpha, float(np.arccos(np.clip(abs(exits[p.name] @ ax), 0, 1))))
@@ -146,22 +175,7 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
         groups[a] += groups.pop(b)
         holes[a] = hole(groups[a])
         holes.pop(b)
-    # a hole around tendons at one position is shared by design; one around several, an overlap
-    merges = [Merge(i, h.tendons, "overlap" if _centre(g, i)[1] >= SAME_POSITION_MM else "shared")
-              for g, h in zip(groups, holes) if len(g) > 1]
-    seats, chambers = (), ()
-    if role == "base":
-        leaving = {p.name: rest_axes[p.name][i] for p in paths}
-        found = [seats_for(d, h, thick, leaving) for h in holes if not h.in_slot]
-        seats = tuple(s for group, _ in found for s in group)
-        chambers = tuple(c for _, c in found if c is not None)
-    hub = hub_spec(d, role, hub_lengths(d)[i], thick, slot_w, slot_h, tuple(holes), {p.name: p.points[i] for p in paths},
-                   {p.name: (sweeps[p.name][0][:, i], sweeps[p.name][1][:, i]) for p in paths})
-    mounts = _mount_holes(d, role, holes, seats, chambers, (slot_w, slot_h), hub)
-    spec = DiskSpec(i, float(d.stations[i]), role, thick, dk.outer_diameter, slot_w, slot_h, tuple(holes),
-                    dk.eyelets.edge_size if dk.eyelets.edge == "chamfer" else 0.0, mounts, hub, seats,
-                    dk.anchors.plate if seats else 0.0, chambers)
-    return spec, merges
+    return groups, holes
 
 
 def _centre(group: list[TendonPath], i: int) -> tuple[tuple[float, float], float]:
@@ -247,3 +261,15 @@ def _backbone_holes(d: Design, paths: list[TendonPath], disks: list[DiskSpec]):
         findings += [f"{p.name}: runs in the backbone plane between stations {i} and {i + 1}"
                      for i in in_strip_plane(p.points, half_h)]
     return out, findings
+
+
+
+def eyelet_holes(design: Design, paths: list[TendonPath], disks, rest_axes: dict[str, np.ndarray] | None = None,
+                 sweeps: dict[str, Sweep] | None = None) -> dict[int, tuple[Hole, ...]]:
+    """The eyelet holes of the given disks as :func:`plan` makes them (shared ones one hole, holes
+    that would run into each other merged), without the tip disk's turn toward the tensioner: for
+    callers that size most holes their own, faster way and need the plan's answer where tendons
+    run into each other. ``rest_axes`` and ``sweeps`` (by tendon name), when the caller has them."""
+    rest_axes = rest_axes or {p.name: _rest_axes(design, p) for p in paths}
+    sweeps = sweeps or _sweeps(design, paths)
+    return {int(i): tuple(_eyelet_holes(design, int(i), paths, rest_axes, sweeps)[1]) for i in disks}
