@@ -115,40 +115,78 @@ def test_variants_grid_samples_zip_and_hashes():
 
 # ---------------------------------------------------------------- the lengths level
 
+def _plan_agrees(d, p) -> int:
+    """The lengths level's holes against the plan's, every disk but the tip (sized there for the turn
+    toward the drum, which this level leaves out, so the plan's tip holes can only be larger):
+    each tendon's hole has the plan's centre, axis and diameter. Returns how many were compared."""
+    from hwgen.model.fixing import disk_thicknesses
+
+    xz = np.stack([q.points for q in p.paths])[None]
+    ax, dia, centre, joined, _ = lengths._holes([d], [p.paths], np.asarray(d.stations), xz,
+                                                np.asarray(disk_thicknesses(d)))
+    names = [q.name for q in p.paths]
+    n = 0
+    for disk in p.disks[:-1]:
+        for h in disk.holes:
+            k = [names.index(t) for t in h.tendons]
+            for t in k:
+                assert dia[0, t, disk.index] == pytest.approx(h.diameter, abs=1e-9)
+                assert ax[0, t, disk.index] == pytest.approx(np.asarray(h.axis), abs=1e-9)
+                assert centre[0, t, disk.index] == pytest.approx([h.x, h.z], abs=1e-9)
+                assert set(np.flatnonzero(joined[0, disk.index, t])) == set(k)
+                n += 1
+    tip = p.disks[-1]
+    for h in tip.holes:
+        assert all(dia[0, names.index(t), tip.index] <= h.diameter + 1e-9 for t in h.tendons)
+    return n
+
+
 def test_lengths_level_sizes_eyelets_as_the_plan_and_takes_eq2_as_kinematics():
-    """Every hole but the tip disk's (sized there for the turn toward the drum, which this level
-    leaves out) has the plan's axis and diameter; eq. (2) is the kinematics module's; the sweep of
-    angles is hwgen check's."""
+    """Every hole but the tip disk's has the plan's centre, axis and diameter; eq. (2) is the
+    kinematics module's; the sweep of angles is hwgen check's."""
     from hwgen.checks.lengths import sweep_angles
     from hwgen.model import kinematics as kin
-    from hwgen.model.fixing import disk_thicknesses
     from hwgen.model.plan import plan as make_plan
     from hwgen.params import read
 
     for name in ("prototype", "paper-table2"):
         d = read(PARAMS / f"{name}.yaml").design
         p = make_plan(d)
+        assert _plan_agrees(d, p) >= 4 * (len(p.disks) - 1)
         xz = np.stack([q.points for q in p.paths])[None]
-        ax, dia, _ = lengths._holes(d, np.asarray(d.stations), xz, np.asarray(disk_thicknesses(d)))
-        names = [q.name for q in p.paths]
-        n = 0
-        for disk in p.disks[:-1]:
-            for h in disk.holes:
-                for t in h.tendons:
-                    k = names.index(t)
-                    assert dia[0, k, disk.index] == pytest.approx(h.diameter, abs=1e-9)
-                    assert ax[0, k, disk.index] == pytest.approx(np.asarray(h.axis), abs=1e-9)
-                    n += 1
-        assert n >= 4 * (len(p.disks) - 1)
-        tip = p.disks[-1]
-        for h in tip.holes:       # the full plan's tip eyelets can only be larger
-            assert all(dia[0, names.index(t), tip.index] <= h.diameter + 1e-9 for t in h.tendons)
         ang = lengths.check_angles(d.check_angle_deg, d.check.step_deg)
         assert np.array_equal(ang, sweep_angles(d.check_angle_deg, d.check.step_deg))
         kap = kin.kappas_for_angles(ang, d.backbone.length)
         mine = lengths.centre_lengths(np.asarray(d.stations), kap, xz)[0]
         for k, q in enumerate(p.paths):
             assert mine[k] == pytest.approx(kin.tendon_lengths(d.stations, q.points, kap), abs=1e-9)
+
+
+@pytest.mark.parametrize("index", [25, 72])
+def test_lengths_level_merges_eyelets_routed_into_each_other_as_the_plan(index):
+    """Robots 25 and 72 of the stability draw route two tendons 0.8 and 0.3 mm apart: the plan
+    gives each such pair one opening around both. The lengths level has the plan's openings
+    (centre, axis, diameter, which tendons), counts no wall between their tendons, and fails the
+    variant naming the overlap, as hwgen check fails eyelet.overlap."""
+    from hwgen.model.plan import plan as make_plan
+    from hwgen.params import Design
+
+    from .robots import random_robot
+    from .stability import SEED
+
+    rng = np.random.default_rng(SEED)
+    doc = [random_robot(rng, f"robot{i:03d}") for i in range(index + 1)][index]
+    d = Design.model_validate(doc)
+    p = make_plan(d)
+    overlaps = [m for m in p.merges if m.kind == "overlap" and m.station < len(p.disks) - 1]
+    assert overlaps, "the draw no longer routes tendons into each other"
+    _plan_agrees(d, p)
+    row = lengths.evaluate([d])[0]
+    below_tip = len({m.station for m in overlaps})     # the tip disk may differ (sized without its exits)
+    assert below_tip <= row["overlapping_eyelets"] <= below_tip + 1
+    assert row["clearance_mm"] == 0.0
+    verdict, message, _ = lengths.verdict(row)
+    assert verdict == "fail" and "share one opening" in message
 
 
 def test_lengths_level_imports_no_cad_kernel():

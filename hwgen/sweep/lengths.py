@@ -9,14 +9,17 @@ count, sweeps) are evaluated together, as arrays with a leading variant axis:
   tendon's straight segments (or the disk normal), shared where tendons meet, its diameter
   d/cos α + t·tan α + clearance for the worst angle α over ``disks.eyelets.sweep_deg``. The tip
   disk is sized without the turn toward the tensioner's drum (that needs the tensioner's
-  layout, which this level does not make): the full plan's tip eyelets can only be larger;
+  layout, which this level does not make): the full plan's tip eyelets can only be larger.
+  Where holes sized so would run into each other the disk takes the plan's own holes
+  (:func:`hwgen.model.plan.eyelet_holes`: one opening around those tendons);
 - eq. (2) through the hole centres over ``hwgen check``'s bending sweep (±check angle, its step);
 - the taut path of the nominal print through those holes (:func:`hwgen.model.taut.sweep`, every
   variant of a group a "sample" of one call), from the hole on the base disk's outer face to a
   point :data:`END_RUN_MM` beyond the tip disk along the backbone (where ``hwgen check`` ends a
   tendon that has no tensioner run);
 - plan-level clearances: the least wall between two holes of a disk, a hole and the disk's rim,
-  a hole and the strip's slot (a hole inside the slot is a strip crossing, counted apart);
+  a hole and the strip's slot (a hole inside the slot is a strip crossing, counted apart; no wall
+  is left between tendons routed into one opening);
 - the disks' and the strip's mass from their plan volumes (plates less holes and slot; hubs,
   tensioner and mount not included).
 """
@@ -35,7 +38,8 @@ from ..model.fixing import disk_thicknesses
 from ..model.materials import printed_density
 from ..model.routing import tendon_paths
 from ..model.scatter import _basis
-from ..model.plan import SAME_POSITION_MM, SWEEP_STEP_DEG as SIZING_STEP_DEG
+from ..model.plan import SAME_POSITION_MM, SWEEP_STEP_DEG as SIZING_STEP_DEG, eyelet_holes, hole_diameter
+from ..model.routing import TendonPath
 from ..params import Design
 
 # what hwgen check and the plan use, so a variant's figures are theirs
@@ -92,13 +96,19 @@ def _unique(arr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return arr[first], inv
 
 
-def _holes(d: Design, stations, xz: np.ndarray, thick: np.ndarray):
-    """Hole axes (V, T, N, 3) and diameters (V, T, N) as the plan sizes them, per tendon (a shared
-    hole repeated for each of its tendons), and the sharing masks (V, N, T, T).
+def _holes(ds: list[Design], paths: list[list[TendonPath]], stations, xz: np.ndarray, thick: np.ndarray):
+    """Hole axes (V, T, N, 3), diameters (V, T, N) and centres (V, T, N, 2) as the plan sizes and
+    places them, per tendon (a hole repeated for each of its tendons), and the masks (V, N, T, T)
+    of tendon pairs that pass one hole and of those among them routed apart (an overlap).
 
     The directions over the sizing sweep are worked out once per distinct tendon path (a sweep
     over one tendon's routing repeats every other tendon in every variant); a hole shared by
-    several tendons is then sized against its shared axis, disk by disk."""
+    several tendons is then sized against its shared axis, disk by disk. Where holes sized so
+    would run into each other the plan merges them into one opening
+    (:func:`hwgen.model.plan.eyelet_holes`); those few disks take the plan's own holes.
+
+    ``ds`` share their process, tendon material, disks and strip; ``paths``: each one's tendons."""
+    d = ds[0]
     a = d.disks.eyelets.sweep_deg
     kap = kin.kappas_for_angles(np.linspace(-a, a, int(round(2 * a / SIZING_STEP_DEG)) + 1), d.backbone.length)
     V, T, N = xz.shape[:3]
@@ -122,8 +132,8 @@ def _holes(d: Design, stations, xz: np.ndarray, thick: np.ndarray):
     uworst = worst_against(np.arange(len(uxz)), own)
     ax = own[inv].reshape(V, T, N, 3).copy()
     worst = uworst[inv].reshape(V, T, N).copy()
-    gap = np.linalg.norm(xz[:, :, None] - xz[:, None, :], axis=-1)       # (V, T, T, N)
-    share = np.moveaxis(gap < SAME_POSITION_MM, -1, 1)                    # (V, N, T, T)
+    gap = np.moveaxis(np.linalg.norm(xz[:, :, None] - xz[:, None, :], axis=-1), -1, 1)   # (V, N, T, T)
+    share = gap < SAME_POSITION_MM
     uidx = inv.reshape(V, T)
     memo: dict[tuple, tuple[np.ndarray, float]] = {}
     for v, i in zip(*np.nonzero(share.sum(axis=(2, 3)) > T)):
@@ -144,19 +154,37 @@ def _holes(d: Design, stations, xz: np.ndarray, thick: np.ndarray):
                 memo[key] = (g, max(w, 0.0))
             ax[v, members, i], worst[v, members, i] = memo[key]   # a shared hole: the worst of its tendons
     p = d.process
-    dia = np.maximum(p.min_hole, d.tendon_material.diameter / np.cos(worst) + thick * np.tan(worst) + p.hole_clearance)
-    return ax, dia, share
+    dia = hole_diameter(d.tendon_material.diameter, thick, worst, p.hole_clearance, p.min_hole)
+    centre = xz.copy()
+    joined = share.copy()
+    r = np.moveaxis(dia, 1, 2) / 2                                          # (V, N, T)
+    clash = ~share & (gap < r[..., :, None] + r[..., None, :])
+    for v in np.flatnonzero(clash.any(axis=(1, 2, 3))):
+        names = [q.name for q in paths[v]]
+        u = uidx[v]               # the directions this level already has, by tendon
+        rest = {q.name: own[u[t]] for t, q in enumerate(paths[v])}
+        sweeps = {q.name: (into[u[t]], out[u[t]]) for t, q in enumerate(paths[v])}
+        for i, holes in eyelet_holes(ds[v], paths[v], np.flatnonzero(clash[v].any(axis=(1, 2))), rest, sweeps).items():
+            for h in holes:
+                k = np.array([names.index(t) for t in h.tendons])
+                ax[v, k, i], dia[v, k, i], centre[v, k, i] = h.axis, h.diameter, (h.x, h.z)
+                joined[v, i, k[:, None], k[None, :]] = True
+    return ax, dia, centre, joined, joined & ~share
 
 
-def _clearances(d: Design, xz: np.ndarray, dia: np.ndarray, share: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(V,) least wall of any disk (hole to hole, hole to rim, hole to slot) and (V,) holes inside the slot."""
+def _clearances(d: Design, xz: np.ndarray, dia: np.ndarray, joined: np.ndarray,
+                overlap: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(V,) least wall of any disk (hole to hole, hole to rim, hole to slot) and (V,) holes inside
+    the slot, for holes centred at ``xz`` (V, T, N, 2). Two tendons of one hole have no wall between
+    them: none is needed where they share a position, and none is left (0) where the hole joins
+    tendons routed apart, as ``hwgen check`` counts ``eyelet.wall.eyelet``."""
     V, T, N = dia.shape
     r = dia / 2                                              # (V, T, N)
     pts = np.moveaxis(xz, 1, 2)                              # (V, N, T, 2)
     rr = np.moveaxis(r, 1, 2)                                # (V, N, T)
     dist = np.linalg.norm(pts[:, :, :, None] - pts[:, :, None, :], axis=-1)
     wall = dist - rr[..., :, None] - rr[..., None, :]
-    wall = np.where(share, np.inf, wall)                     # a shared hole (and a hole with itself) is one hole
+    wall = np.where(overlap, 0.0, np.where(joined, np.inf, wall))   # one hole (and a hole with itself)
     least = wall.reshape(V, -1).min(axis=1)
     R = d.disks.outer_diameter / 2
     rim = R - (np.linalg.norm(pts, axis=-1) + rr)
@@ -171,10 +199,10 @@ def _clearances(d: Design, xz: np.ndarray, dia: np.ndarray, share: np.ndarray) -
     return least, inside.reshape(V, -1).sum(axis=1)
 
 
-def _mass(d: Design, dia: np.ndarray, share: np.ndarray, thick: np.ndarray) -> np.ndarray:
-    """(V,) g: disk plates less their holes (a shared hole once) and slot, and the strip."""
+def _mass(d: Design, dia: np.ndarray, joined: np.ndarray, thick: np.ndarray) -> np.ndarray:
+    """(V,) g: disk plates less their holes (a hole of several tendons once) and slot, and the strip."""
     rho, _ = printed_density(d.process)
-    first = ~np.triu(share, 1).any(axis=2)                   # (V, N, T): the first tendon of its hole
+    first = ~np.triu(joined, 1).any(axis=2)                  # (V, N, T): the first tendon of its hole
     holes = (np.pi * (np.moveaxis(dia, 1, 2) / 2) ** 2 * first).sum(axis=2)    # (V, N) mm²
     sw = d.backbone.height + 2 * d.disks.slot_clearance
     st = d.backbone.thickness + 2 * d.disks.slot_clearance
@@ -212,19 +240,22 @@ def _group(ds: list[Design]) -> list[dict]:
     # hole sizing, clearances and mass take each design's process and material: per design where they differ
     ax = np.empty((V, T, N, 3))
     dia = np.empty((V, T, N))
+    centre_xz = np.empty((V, T, N, 2))
+    overlaps = np.empty(V, int)
     least = np.empty(V)
     crossings = np.empty(V, int)
     mass = np.empty(V)
     for key, members in _by(ds, lambda d: (d.process, d.tendon_material.diameter, d.disks, d.backbone)).items():
         m = np.asarray(members)
         d = ds[m[0]]
-        a_, dia_, share = _holes(d, stations, xz[m], thick)
-        ax[m], dia[m] = a_, dia_
-        least[m], crossings[m] = _clearances(d, xz[m], dia_, share)
-        mass[m] = _mass(d, dia_, share, thick)
+        a_, dia_, c_, joined, overlap = _holes([ds[k] for k in m], [paths[k] for k in m], stations, xz[m], thick)
+        ax[m], dia[m], centre_xz[m] = a_, dia_, c_
+        least[m], crossings[m] = _clearances(d, c_, dia_, joined, overlap)
+        mass[m] = _mass(d, dia_, joined, thick)
+        overlaps[m] = overlap.any(axis=(2, 3)).sum(axis=1)
     # the nominal print's taut path: each distinct chain (a tendon's holes, anchor and end) one sample
     free = np.array([[d.tendon_material.diameter] for d in ds])                 # (V, 1)
-    chains = np.concatenate([xz.reshape(V, T, -1), ax.reshape(V, T, -1), dia,
+    chains = np.concatenate([centre_xz.reshape(V, T, -1), ax.reshape(V, T, -1), dia,
                              np.broadcast_to(free[:, :, None], (V, T, 1))], axis=-1).reshape(V * T, -1)
     uch, cinv = _unique(chains)
     S = len(uch)
@@ -245,6 +276,7 @@ def _group(ds: list[Design]) -> list[dict]:
                     "centre_mm": float(centre[v, t]), "taut_mm": float(tautd[v, t]),
                     "rest_mm": float(L0[v, t])} for t, p in enumerate(paths[v])]
         rows.append({"tendons": tendons, "clearance_mm": float(least[v]), "strip_crossings": int(crossings[v]),
+                     "overlapping_eyelets": int(overlaps[v]),
                      "mass_g": float(mass[v]), "min_wall_mm": d.process.min_wall})
     return rows
 
@@ -262,6 +294,8 @@ def verdict(row: dict) -> tuple[str, str, dict]:
     budgeted = [t for t in row["tendons"] if t["budget_mm"] is not None]
     fails = [f"{t['name']} changes {t['centre_mm']:.3f} mm by eq. (2), budget {t['budget_mm']:g} mm"
              for t in budgeted if t["centre_mm"] > t["budget_mm"]]
+    if row.get("overlapping_eyelets"):
+        fails.append(f"tendons routed into each other share one opening on {row['overlapping_eyelets']} disk(s)")
     if row["clearance_mm"] < row["min_wall_mm"]:
         fails.append(f"least wall {row['clearance_mm']:.2f} mm, under process.min_wall {row['min_wall_mm']:g} mm")
     figures = {"centre_mm": max((t["centre_mm"] for t in budgeted), default=None),
