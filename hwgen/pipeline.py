@@ -43,9 +43,9 @@ from .atomic import new_folder, side_folder, snapshot, write_json
 from .cad import Part, export
 from .cad.families import build_unit, kernel_errors, part_count, units
 from .errors import DesignError, InputError, clip
-from .cad.manifest import describe, design_report, entry, measure, sha256
+from .cad.manifest import (MANIFEST, describe, design_report, entry, manifest_files, measure, read_manifest, sha256,
+                           write_manifest)
 from .cad.memo import kept_in
-from .checks.measure import read_manifest
 from .checks.report import write_summary
 from .checks.run import run_checks
 from .model import feasibility
@@ -206,7 +206,7 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
         if post_build:
             with cache.using(store):
                 _after_files(store, plan, tmp, target, manifest, done, reused)
-        write_json(tmp / "manifest.json", manifest)
+        write_manifest(tmp, manifest)
     _trim(store, limit)
     notes = [f"damaged entries rebuilt: {', '.join(store.corrupt)}"] if store.corrupt else []
     notes += [f"not written, so not used: {store.unwritable}"] if store.unwritable else []
@@ -599,11 +599,10 @@ def _assemble(loaded, plan: Plan, path: Path, store: cache.Store, units_done) ->
 
 def stale_reason(folder: Path, loaded) -> str | None:
     """Why the outputs in ``folder`` cannot be checked as they are (None: they can)."""
-    mpath = folder / "manifest.json"
-    if not mpath.exists():
+    if not (folder / MANIFEST).exists():
         return "no outputs yet"
     try:
-        m = json.loads(mpath.read_text())
+        m = read_manifest(folder)
     except (OSError, ValueError):
         return "manifest.json is unreadable"
     try:
@@ -611,10 +610,10 @@ def stale_reason(folder: Path, loaded) -> str | None:
             return "built from other parameters"
         if m.get("hwgen_version") != __version__:
             return f"built by hwgen {m.get('hwgen_version')}, this is {__version__}"
-        files = [f["path"] for p in m["parts"] for f in p["files"].values()]
-        files += [f["path"] for f in m["files"].values()]
+        m["files"]
+        files = [f.path for f in manifest_files(m)]
         m["design_report"]["disks"]
-    except (AttributeError, KeyError, TypeError):
+    except (AttributeError, KeyError, TypeError, ValueError):
         return "manifest.json is not one hwgen wrote"
     for path in files:
         if not isinstance(path, str) or not (folder / path).is_file():
@@ -677,7 +676,7 @@ def render(loaded: params.LoadedDesign, out_root: Path,
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
         manifest = read_manifest(tmp)
         draw(plan, tmp, manifest)
-        write_json(tmp / "manifest.json", manifest)
+        write_manifest(tmp, manifest)
     return manifest["render"], folder, None
 
 
@@ -696,7 +695,7 @@ def plates(loaded: params.LoadedDesign, out_root: Path,
         manifest = read_manifest(tmp)
         shutil.rmtree(tmp / print_plates.FOLDER, ignore_errors=True)
         summary = plates_stage(plan, tmp, manifest)
-        write_json(tmp / "manifest.json", manifest)
+        write_manifest(tmp, manifest)
     return summary, folder, None
 
 

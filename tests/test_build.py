@@ -6,7 +6,8 @@ import json
 import numpy as np
 import pytest
 
-from hwgen.checks.measure import disk_mid_section, load_mesh, section_loops
+from hwgen.checks.meshes import load_mesh
+from hwgen.checks.sections import disk_mid_section, section_loops
 from hwgen.pipeline import load
 from hwgen.model.routing import tendon_paths
 

@@ -375,7 +375,7 @@ def test_segment_distance_against_sampling():
 
 
 def test_loop_gap_is_exact():
-    from hwgen.checks.measure import loop_gap, points_to_polyline
+    from hwgen.checks.polygons import loop_gap, points_to_polyline
 
     rng = np.random.default_rng(1)
     for _ in range(200):

@@ -13,7 +13,9 @@ import pytest
 
 from hwgen.cad.disk import build_disk
 from hwgen.cad.export import write_stl
-from hwgen.checks.measure import chain_loops, inside_many, load_mesh, section_moments, section_robot, to_manifold
+from hwgen.checks.meshes import load_mesh, to_manifold
+from hwgen.checks.polygons import inside_many, section_moments
+from hwgen.checks.sections import chain_loops, section_robot
 from hwgen.checks.run import run_checks
 from hwgen.model import sag
 from hwgen.model.plan import plan as make_plan

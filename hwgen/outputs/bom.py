@@ -26,7 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cad.manifest import sha256
+from ..cad.manifest import ManifestPart, sha256
+from ..checks.meshes import part_mesh
 from ..model import kinematics as kin
 from ..model.fixing import termination_of
 
@@ -82,8 +83,7 @@ def rest_lengths(folder: Path, manifest: dict) -> tuple[dict[str, float], str]:
 def _size(folder: Path, entry: dict) -> str:
     """Overall size, largest first, from the STL's vertices (the manifest's CAD box is loose)."""
     try:
-        import trimesh
-        lo, hi = trimesh.load_mesh(str(Path(folder) / entry["files"]["stl"]["path"]), process=False).bounds
+        lo, hi = part_mesh(folder, ManifestPart.of(entry)).bounds
     except (OSError, ValueError, KeyError):
         lo, hi = np.asarray(entry["bbox_mm"]["min"]), np.asarray(entry["bbox_mm"]["max"])
     ext = sorted(np.asarray(hi) - np.asarray(lo), reverse=True)
@@ -109,7 +109,7 @@ def bom_rows(folder: Path, manifest: dict, design) -> tuple[list[dict], str]:
             continue
         add(category="printed", part=e["name"], family=e["role"], qty=1,
             material=design.process.name, size=_size(folder, e),
-            volume_mm3=f"{e['volume_mm3']:.1f}", mass_g=f"{e['mass_g']:.2f}", file=e["files"]["stl"]["path"],
+            volume_mm3=f"{e['volume_mm3']:.1f}", mass_g=f"{e['mass_g']:.2f}", file=ManifestPart.of(e).stl,
             notes=_printed_note(e))
 
     template = manifest.get("files", {}).get("backbone_template", {}).get("path", "backbone_template.dxf")
@@ -126,7 +126,7 @@ def bom_rows(folder: Path, manifest: dict, design) -> tuple[list[dict], str]:
             material = e.get("material", "")
         add(category="purchased", part=e["name"], family=e["role"], qty=1, material=material,
             size=_size(folder, e), volume_mm3=f"{e['volume_mm3']:.1f}", mass_g=f"{e['mass_g']:.2f}",
-            file=e["files"]["step"]["path"], notes=notes)
+            file=ManifestPart.of(e).step, notes=notes)
 
     lengths, source = rest_lengths(folder, manifest)
     r = design.bom
