@@ -298,6 +298,7 @@ def test_overstress_fails_the_check_unless_the_design_waives_it(built, faulty):
 def test_bill_of_materials_has_adhesive_mount_hardware_and_crimps(built, tmp_path):
     import csv
 
+    from hwgen.checks.report import read_report
     from hwgen.outputs import bom
 
     folder = built("prototype")
@@ -318,6 +319,6 @@ def test_bill_of_materials_has_adhesive_mount_hardware_and_crimps(built, tmp_pat
     crimp = d.tendon_material.termination.model_copy(update={"kind": "crimp", "diameter": 1.3, "length": 4.0,
                                                             "name": "copper crimp sleeve 0.5 mm bore"})
     d2 = d.model_copy(update={"tendon_material": d.tendon_material.model_copy(update={"termination": crimp})})
-    rows2, _ = bom.bom_rows(folder, _manifest(folder), d2)
+    rows2, _ = bom.bom_rows(folder, _manifest(folder), d2, read_report(folder))
     (sleeves,) = [r for r in rows2 if r["part"] == "crimp sleeve"]
     assert sleeves["qty"] == 5 and sleeves["size"] == "Ø1.3 × 4 mm"
