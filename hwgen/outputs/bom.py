@@ -28,13 +28,14 @@ import numpy as np
 from ..cad.manifest import ManifestPart, sha256
 from ..checks.meshes import part_mesh
 from ..checks.report import REPORT
+from ..model import hardware
 from ..model import kinematics as kin
 from ..model.fixing import termination_of
 
 PURCHASED_ROLES = {"backbone"}     # families that are bought and cut, not printed
 
 # ISO 273 "normal" clearance holes: hole diameter -> metric thread it clears.
-ISO273_NORMAL = {2.4: "M2", 2.9: "M2.5", 3.4: "M3", 4.5: "M4", 5.5: "M5", 6.6: "M6", 9.0: "M8"}
+ISO273_NORMAL = hardware.clearance_holes()     # ISO 273 normal clearance hole -> thread (data/fasteners.csv)
 CLEARANCE_MATCH_MM = 0.35          # a hole within this of a table size takes that thread
 TIP_SCREW = "socket head cap screw ISO 4762"   # fastens the tensioner (or a fixture) to the tip disk
 
