@@ -255,7 +255,7 @@ def main(argv: list[str]) -> None:
         with timed("hwgen build, everything", "with checks, bill of materials and pictures, no part cache"):
             res = build(loaded, Path(tmp) / "b", cache_dir=None)
         from hwgen.checks.gear_mesh import gear_checks
-        from hwgen.checks.measure import read_manifest
+        from hwgen.cad.manifest import read_manifest
         with timed("gear checks from the meshes", "axes, counts and sweeps per channel; backlash, loaded "
                                                   "face and Lewis Y on one pair"):
             gear_checks(res.folder, read_manifest(res.folder), plan)

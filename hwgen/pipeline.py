@@ -43,10 +43,10 @@ from .atomic import new_folder, side_folder, snapshot, write_json
 from .cad import Part, export
 from .cad.families import build_unit, kernel_errors, part_count, units
 from .errors import DesignError, InputError, clip
-from .cad.manifest import describe, design_report, entry, measure, sha256
+from .cad.manifest import (MANIFEST, describe, design_report, entry, manifest_files, measure, read_manifest, sha256,
+                           write_manifest)
 from .cad.memo import kept_in
-from .checks.measure import read_manifest
-from .checks.report import write_summary
+from .checks.report import REPORT, read_report, write_report, write_summary
 from .checks.run import run_checks
 from .model import feasibility
 from .model import stiffness as statics_study
@@ -56,7 +56,7 @@ from .outputs import bom, guide, pictures, plates as print_plates
 from .outputs.plots import plot_lengths, plot_sag, plot_tolerance
 from .outputs.stiffness import plot_gravity, plot_stiffness
 
-REPORT, PLOT, SUMMARY, SAG, TOLERANCE = "report.json", "lengths.png", "summary.md", "sag.png", "tolerance.png"
+PLOT, SUMMARY, SAG, TOLERANCE = "lengths.png", "summary.md", "sag.png", "tolerance.png"
 STIFFNESS, STIFFNESS_PLOT, GRAVITY_PLOT = "stiffness.json", "stiffness.png", "gravity.png"
 
 
@@ -106,13 +106,13 @@ def output_errors(out_root: Path) -> Iterator[None]:
 
 # ---------------------------------------------------------------- stages after the files
 
-def checks_stage(plan: Plan, folder: Path, manifest: dict) -> dict:
+def checks_stage(plan: Plan, folder: Path, manifest: dict, no_report: None) -> dict:
     """Measure the fresh files: report.json, summary.md, lengths.png, tolerance.png and sag.png; the checks go
     into the manifest."""
     report = run_checks(folder, manifest, plan)
     manifest["checks"] = report["checks"]
     manifest["checks_ok"] = report["ok"]
-    write_json(folder / REPORT, report)
+    write_report(report, folder)
     write_summary(report, folder / SUMMARY)
     plot_lengths(report, folder / PLOT)
     plot_tolerance(report, folder / TOLERANCE)
@@ -120,30 +120,31 @@ def checks_stage(plan: Plan, folder: Path, manifest: dict) -> dict:
     return report
 
 
-def bom_stage(plan: Plan, folder: Path, manifest: dict) -> None:
-    """bom.csv and bom.md, from the manifest and the checks' report.json."""
-    bom.write_bom(folder, manifest, plan.design)
+def bom_stage(plan: Plan, folder: Path, manifest: dict, report: dict | None) -> None:
+    """bom.csv and bom.md, from the manifest and the checks' report."""
+    bom.write_bom(folder, manifest, plan.design, report)
 
 
-def plates_stage(plan: Plan, folder: Path, manifest: dict) -> dict:
+def plates_stage(plan: Plan, folder: Path, manifest: dict, report: dict | None) -> dict:
     """plates/plate_NN.3mf and plates/plates.md: the printed parts on the printer's plates."""
     return print_plates.write_plates(folder, manifest, plan.design)
 
 
-def pictures_stage(plan: Plan, folder: Path, manifest: dict) -> None:
+def pictures_stage(plan: Plan, folder: Path, manifest: dict, report: dict | None) -> None:
     """exploded.png, assembled.png, bent.png, exploded.svg and the guide's step pictures; a missing
     backend is recorded, not raised."""
     pictures.draw(folder, manifest, plan.design, bom.family_table(manifest, plan.design),
                   guide.picture_jobs(folder, manifest, plan.design))
 
 
-def guide_stage(plan: Plan, folder: Path, manifest: dict) -> dict:
+def guide_stage(plan: Plan, folder: Path, manifest: dict, report: dict | None) -> dict:
     """guide/assembly.md and guide/assembly.html, from bom.csv, the manifest and the step pictures."""
     return guide.write_guide(folder, manifest, plan.design)
 
 
-# (name, stage(plan, folder, manifest)) in the order a build runs them on its fresh files
-AFTER_FILES: list[tuple[str, Callable[[Plan, Path, dict], object]]] = [
+# (name, stage(plan, folder, manifest, report)) in the order a build runs them on its fresh files; ``report``
+# is the checks' (None for the checks themselves, and for a stage that runs beside them)
+AFTER_FILES: list[tuple[str, Callable[[Plan, Path, dict, dict | None], object]]] = [
     ("checks", checks_stage), ("bom", bom_stage), ("plates", plates_stage), ("pictures", pictures_stage),
     ("guide", guide_stage)]
 DRAWING_STAGES = ("bom", "pictures", "guide")     # what `hwgen render` runs on existing outputs
@@ -151,9 +152,10 @@ DRAWING_STAGES = ("bom", "pictures", "guide")     # what `hwgen render` runs on 
 
 def draw(plan: Plan, folder: Path, manifest: dict) -> None:
     """The drawing stages (bill of materials, pictures) on a folder that has its files and report."""
+    report = read_report(folder)
     for name, stage in AFTER_FILES:
         if name in DRAWING_STAGES:
-            stage(plan, folder, manifest)
+            stage(plan, folder, manifest, report)
 
 
 # ---------------------------------------------------------------- build
@@ -206,7 +208,7 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
         if post_build:
             with cache.using(store):
                 _after_files(store, plan, tmp, target, manifest, done, reused)
-        write_json(tmp / "manifest.json", manifest)
+        write_manifest(tmp, manifest)
     _trim(store, limit)
     notes = [f"damaged entries rebuilt: {', '.join(store.corrupt)}"] if store.corrupt else []
     notes += [f"not written, so not used: {store.unwritable}"] if store.unwritable else []
@@ -246,10 +248,10 @@ def _after_files(store: cache.Store, plan: Plan, folder: Path, target: Path, man
                 m, got = _json(manifest), []
                 job = contextvars.copy_context().run
                 side[name] = (where, _files(where), _json(m), m, got,
-                              pool.submit(job, _cached_stage, store, name, stage, plan, where, m, got))
+                              pool.submit(job, _cached_stage, store, name, stage, plan, where, m, got, None))
         for name, stage in AFTER_FILES:
             if name not in side:
-                done[name] = _cached_stage(store, name, stage, plan, folder, manifest, reused)
+                done[name] = _cached_stage(store, name, stage, plan, folder, manifest, reused, done.get("checks"))
                 continue
             where, before, original, m, got, future = side[name]
             done[name] = future.result()
@@ -263,7 +265,7 @@ def _after_files(store: cache.Store, plan: Plan, folder: Path, target: Path, man
 
 # the stages the cache keeps, and what each reads besides the folder, the manifest and the design
 STAGE_ENV = {"checks": ("HWGEN_CHECK_SAMPLES",), "bom": (), "plates": (), "guide": (), "pictures": ("HWGEN_RENDER_BACKEND", "DISPLAY")}
-STAGE_RESULT = {"checks": REPORT}       # a stage whose return value is this file of its outputs
+STAGE_RESULT = {"checks": REPORT}       # a stage whose return value is this file of its outputs (read back by read_report)
 
 
 def _files(folder: Path) -> dict[str, str]:
@@ -271,13 +273,13 @@ def _files(folder: Path) -> dict[str, str]:
 
 
 def _cached_stage(store: cache.Store, name: str, stage, plan: Plan, folder: Path, manifest: dict,
-                  reused: list[str]):
+                  reused: list[str], report: dict | None):
     """Run a stage after the files, or take what it wrote last time from the cache: the files it
     added to the folder and the manifest fields it set, keyed by every file in the folder, the
     manifest, the design, the environment it reads and hwgen's code. Pictures that could not be
     drawn are not kept (another try may find a renderer)."""
     if not store.enabled or name not in STAGE_ENV:
-        return stage(plan, folder, manifest)
+        return stage(plan, folder, manifest, report)
     before = _files(folder)
     key = cache.key("stage", name, before, manifest, plan.design, {e: os.environ.get(e) for e in STAGE_ENV[name]},
                     __version__, cache.code())
@@ -291,12 +293,16 @@ def _cached_stage(store: cache.Store, name: str, stage, plan: Plan, folder: Path
                     (folder / path).write_bytes(data)
                 manifest.update(_json(rec["manifest"]))
                 reused.append(name)
-                result = STAGE_RESULT.get(name)
-                return json.loads((folder / result).read_text()) if result else None
+                if name not in STAGE_RESULT:
+                    return None
+                kept = read_report(folder)
+                if kept is None:
+                    raise ValueError(f"{STAGE_RESULT[name]} cannot be read back")
+                return kept
         except (KeyError, TypeError, AttributeError, ValueError):
             pass
     fields = {k: json.dumps(v, sort_keys=True) for k, v in manifest.items()}
-    out = stage(plan, folder, manifest)
+    out = stage(plan, folder, manifest, report)
     after = _files(folder)
     if any(after.get(path) != sha for path, sha in before.items()):
         return out                              # it changed a file it was given: not kept
@@ -599,11 +605,10 @@ def _assemble(loaded, plan: Plan, path: Path, store: cache.Store, units_done) ->
 
 def stale_reason(folder: Path, loaded) -> str | None:
     """Why the outputs in ``folder`` cannot be checked as they are (None: they can)."""
-    mpath = folder / "manifest.json"
-    if not mpath.exists():
+    if not (folder / MANIFEST).exists():
         return "no outputs yet"
     try:
-        m = json.loads(mpath.read_text())
+        m = read_manifest(folder)
     except (OSError, ValueError):
         return "manifest.json is unreadable"
     try:
@@ -611,10 +616,10 @@ def stale_reason(folder: Path, loaded) -> str | None:
             return "built from other parameters"
         if m.get("hwgen_version") != __version__:
             return f"built by hwgen {m.get('hwgen_version')}, this is {__version__}"
-        files = [f["path"] for p in m["parts"] for f in p["files"].values()]
-        files += [f["path"] for f in m["files"].values()]
+        m["files"]
+        files = [f.path for f in manifest_files(m)]
         m["design_report"]["disks"]
-    except (AttributeError, KeyError, TypeError):
+    except (AttributeError, KeyError, TypeError, ValueError):
         return "manifest.json is not one hwgen wrote"
     for path in files:
         if not isinstance(path, str) or not (folder / path).is_file():
@@ -677,7 +682,7 @@ def render(loaded: params.LoadedDesign, out_root: Path,
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
         manifest = read_manifest(tmp)
         draw(plan, tmp, manifest)
-        write_json(tmp / "manifest.json", manifest)
+        write_manifest(tmp, manifest)
     return manifest["render"], folder, None
 
 
@@ -695,8 +700,8 @@ def plates(loaded: params.LoadedDesign, out_root: Path,
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
         manifest = read_manifest(tmp)
         shutil.rmtree(tmp / print_plates.FOLDER, ignore_errors=True)
-        summary = plates_stage(plan, tmp, manifest)
-        write_json(tmp / "manifest.json", manifest)
+        summary = plates_stage(plan, tmp, manifest, None)
+        write_manifest(tmp, manifest)
     return summary, folder, None
 
 
@@ -747,11 +752,8 @@ def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | No
     folder = Path(out_root) / loaded.design.design
     measured = None
     with output_errors(Path(out_root)), snapshot(folder) as view:
-        if stale_reason(view, loaded) is None and (view / REPORT).is_file():
-            try:
-                measured = json.loads((view / REPORT).read_text()).get("gravity")
-            except (OSError, ValueError):
-                measured = None
+        if stale_reason(view, loaded) is None:
+            measured = (read_report(view) or {}).get("gravity")
     report = statics_study.study(plan, which, measured=measured)
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
         write_json(tmp / STIFFNESS, report)

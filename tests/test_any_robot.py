@@ -219,7 +219,7 @@ def test_eyelets_routed_into_each_other_share_one_opening_in_a_closed_disk(index
     from hwgen.cad.disk import build_disk
     from hwgen.cad.export import write_stl
     from hwgen.checks.eyelets import measure_disk
-    from hwgen.checks.measure import inside
+    from hwgen.checks.polygons import inside
 
     rng = np.random.default_rng(SEED)
     doc = [random_robot(rng, f"robot{i:03d}") for i in range(index + 1)][index]

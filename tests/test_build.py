@@ -6,7 +6,8 @@ import json
 import numpy as np
 import pytest
 
-from hwgen.checks.measure import disk_mid_section, load_mesh, section_loops
+from hwgen.checks.meshes import load_mesh
+from hwgen.checks.sections import disk_mid_section, section_loops
 from hwgen.pipeline import load
 from hwgen.model.routing import tendon_paths
 
@@ -163,7 +164,7 @@ def test_failed_build_leaves_previous_outputs(tmp_path, monkeypatch):
     first = build_mod.build(loaded, tmp_path, post_build=False).folder
     before = {p.relative_to(tmp_path): p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
 
-    def boom(plan, folder, manifest):
+    def boom(plan, folder, manifest, report):
         raise RuntimeError("simulated failure after the parts were written")
 
     monkeypatch.setattr(build_mod, "AFTER_FILES", [("boom", boom)])

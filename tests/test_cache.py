@@ -215,7 +215,7 @@ def test_a_stage_is_reused_only_for_the_same_files_manifest_design_and_environme
 
     runs = []
 
-    def stage(plan, folder, manifest):
+    def stage(plan, folder, manifest, report):
         runs.append(1)
         (folder / "report.json").write_text(json.dumps({"n": len(runs)}))
         manifest["checks_ok"] = True
@@ -232,7 +232,7 @@ def test_a_stage_is_reused_only_for_the_same_files_manifest_design_and_environme
         for name, text in files.items():
             (folder / name).write_text(text)
         reused = []
-        out = pipeline._cached_stage(store, "checks", stage, plan, folder, manifest, reused)
+        out = pipeline._cached_stage(store, "checks", stage, plan, folder, manifest, reused, None)
         return out, manifest, (folder / "report.json").read_text(), reused
 
     first = run({"a.stl": "x"}, {"design": "d"})

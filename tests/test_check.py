@@ -48,6 +48,41 @@ def _failed(rep, cid):
     return [c for c in rep["checks"] if c["id"] == cid and not c["passed"]]
 
 
+def _drawn(ax):
+    """The labelled lines of an axes (matplotlib names the unlabelled ones "_child…")."""
+    return [ln for ln in ax.get_lines() if not ln.get_label().startswith("_")]
+
+
+def _levels(ax) -> set[float]:
+    """The heights of the horizontal lines drawn across an axes (axhline)."""
+    return {round(float(ln.get_ydata()[0]), 9) for ln in ax.get_lines()
+            if ln.get_label().startswith("_") and len(set(ln.get_ydata())) == 1}
+
+
+def _assert_lengths_figure(rep):
+    """lengths.png as drawn: every tendon's ΔL over the sweep on top, labelled; the budgeted ones
+    below, over budget said in their label, with their ±budget lines; the axes named."""
+    import matplotlib.pyplot as plt
+
+    from hwgen.outputs.plots import lengths_figure
+    fig = lengths_figure(rep)
+    try:
+        stiff = [t for t in rep["tendons"] if t["budget_mm"] is not None]
+        assert stiff and len(fig.axes) == 2
+        top, bot = fig.axes
+        assert [ln.get_label() for ln in _drawn(top)] == [t["name"] for t in rep["tendons"]]
+        for ln, t in zip(_drawn(top), rep["tendons"]):
+            assert np.allclose(ln.get_xdata(), rep["sweep"]["angles_deg"]) and np.allclose(ln.get_ydata(), t["delta_mm"])
+        assert [ln.get_label() for ln in _drawn(bot)] == [t["name"] + ("" if t["passed"] else " (over budget)")
+                                                         for t in stiff]
+        assert {round(s * t["budget_mm"], 9) for t in stiff for s in (1, -1)} | {0.0} == _levels(bot)
+        assert top.get_ylabel() == bot.get_ylabel() == "ΔL (mm)"
+        assert bot.get_xlabel() == "constant-curvature bending angle (deg)"
+        assert top.get_title().startswith(rep["design"])
+    finally:
+        plt.close(fig)
+
+
 def test_prototype_passes_every_check_and_build_writes_report(built):
     folder = built("prototype")
     rep = json.loads((folder / "report.json").read_text())
@@ -80,6 +115,7 @@ def test_prototype_passes_every_check_and_build_writes_report(built):
     manifest = json.loads((folder / "manifest.json").read_text())
     assert manifest["checks"] == rep["checks"]
     assert (folder / "lengths.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    _assert_lengths_figure(rep)
     summary = (folder / "summary.md").read_text()
     assert summary.startswith("# prototype: PASS") and "| C2 | C2 |" in summary
 
@@ -270,7 +306,7 @@ def test_strip_holes_checked_against_crossing_angle(built, tmp_path):
     bad = _failed(_check(folder), "backbone.hole_angle")
     assert [(c["where"]["tendon"], c["where"]["station"]) for c in bad] == [("C2", 2)]
     assert bad[0]["measured"] == pytest.approx(0.8, abs=0.02)
-    assert "C2 crosses the 0.59 mm strip at station 2" in bad[0]["message"]
+    assert f"C2 crosses the {plan.design.backbone.thickness:g} mm strip at station 2" in bad[0]["message"]
     assert "bears on the hole's edge" in bad[0]["message"]
 
 
@@ -375,7 +411,7 @@ def test_segment_distance_against_sampling():
 
 
 def test_loop_gap_is_exact():
-    from hwgen.checks.measure import loop_gap, points_to_polyline
+    from hwgen.checks.polygons import loop_gap, points_to_polyline
 
     rng = np.random.default_rng(1)
     for _ in range(200):

@@ -31,7 +31,7 @@ def test_coupon_spec_steps_around_the_design():
 
 def _rings(mesh, z):
     """The closed outlines of the section at height z, largest first: (centre, area, size along x and y)."""
-    from hwgen.checks.measure import section_loops
+    from hwgen.checks.sections import section_loops
     return [((lp.points.min(axis=0) + lp.points.max(axis=0)) / 2, lp.area, np.ptp(lp.points, axis=0))
             for lp in section_loops(mesh, np.eye(4), [0, 0, z], [0, 0, 1], axes=(0, 1))]
 

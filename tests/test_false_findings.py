@@ -67,7 +67,8 @@ def test_a_strip_hole_through_the_edge_is_called_a_notch(tmp_path):
     no hole loop there, only a notch in the outline; the message says so."""
     from hwgen.checks.clearances import backbone_checks
     from hwgen.checks.eyelets import EyeletMap
-    from hwgen.checks.measure import Loop, area_centroid
+    from hwgen.checks.polygons import area_centroid
+    from hwgen.checks.sections import Loop
 
     x, y, r = 29.6, 5.0, 0.7
     arc = [(30 - r * np.sin(a), y - r * np.cos(a)) for a in np.linspace(0, np.pi, 25)]
@@ -90,7 +91,8 @@ def test_a_strip_hole_through_the_end_is_called_a_notch_at_the_end(tmp_path):
     the strip ends, whose hole opens the strip's end, was said to open its edge."""
     from hwgen.checks.clearances import backbone_checks
     from hwgen.checks.eyelets import Eyelet, EyeletMap
-    from hwgen.checks.measure import Loop, area_centroid
+    from hwgen.checks.polygons import area_centroid
+    from hwgen.checks.sections import Loop
 
     x, y, r = 11.0, 270.0, 2.5
     top = np.degrees(np.arcsin(2 / r))          # where the circle meets the strip's end, y = 272

@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import re
 import shutil
 
 import numpy as np
@@ -13,7 +14,9 @@ import pytest
 
 from hwgen.cad.disk import build_disk
 from hwgen.cad.export import write_stl
-from hwgen.checks.measure import chain_loops, inside_many, load_mesh, section_moments, section_robot, to_manifold
+from hwgen.checks.meshes import load_mesh, to_manifold
+from hwgen.checks.polygons import inside_many, section_moments
+from hwgen.checks.sections import chain_loops, section_robot
 from hwgen.checks.run import run_checks
 from hwgen.model import sag
 from hwgen.model.plan import plan as make_plan
@@ -77,33 +80,53 @@ def _seat_rows(folder, design, stl=None):
 
 @pytest.mark.parametrize("name", DESIGNS)
 def test_tilt_measured_from_each_disk_is_under_the_limit(built, name):
-    """0.05 mm of slot clearance a side over an 11.5 mm hub: atan(0.1 / 11.5) = 0.498° of pitch;
-    the yaw against the slot's ends the same; the roll over the 60 mm height a tenth of that."""
+    """Each disk's play is its slot less the strip, both from the design; it pitches by
+    atan(play through the strip / the length its hub holds the strip), yaws by the play across
+    the strip over the same length and rolls by the play through it over the strip's height.
+    (The prototype: 0.05 mm a side over an 11.5 mm hub, 0.498° of pitch.)"""
     d = load(PARAMS / f"{name}.yaml").design
-    rep = _report(built(name))
+    folder = built(name)
+    rep = _report(folder)
+    designed = {f"disk_{r['index']:02d}": r for r in _manifest(folder)["design_report"]["disks"]}
     fits = {f["part"]: f for f in rep["as_built"]["disks"]}
     assert sorted(fits) == [f"disk_{i:02d}" for i in range(13)]
     limit = d.disks.hub.max_tilt_deg
+    h, t = d.backbone.height, d.backbone.thickness
     for part, f in fits.items():
+        slot_w, slot_h = designed[part]["slot_mm"]
+        play_x, play_z, held = slot_w - h, slot_h - t, designed[part]["engagement_mm"]
+        assert play_x > 0 and play_z > 0, part
+        assert f["play_x_mm"] == pytest.approx(play_x, abs=1e-3) and f["play_z_mm"] == pytest.approx(play_z, abs=1e-3)
+        assert f["engagement_mm"] == pytest.approx(held, abs=0.05), part
         pitch = max(abs(v) for v in f["tilt_x_deg"])
         assert pitch <= limit, part
-        assert pitch == pytest.approx(math.degrees(math.atan(0.1 / 11.5)), abs=0.005), part
-        assert max(abs(v) for v in f["tilt_z_deg"]) == pytest.approx(pitch, abs=0.02), part
-        assert max(abs(v) for v in f["tilt_y_deg"]) == pytest.approx(math.degrees(math.atan(0.1 / 60)), abs=0.005)
-        assert f["play_x_mm"] == pytest.approx(0.1, abs=1e-3) and f["play_z_mm"] == pytest.approx(0.1, abs=1e-3)
-        assert f["engagement_mm"] == pytest.approx(11.5, abs=0.05), part
+        assert pitch == pytest.approx(math.degrees(math.atan(play_z / held)), abs=0.005), part
+        assert max(abs(v) for v in f["tilt_z_deg"]) == pytest.approx(math.degrees(math.atan(play_x / held)),
+                                                                     abs=0.02), part
+        assert max(abs(v) for v in f["tilt_y_deg"]) == pytest.approx(math.degrees(math.atan(play_z / h)), abs=0.005)
     assert rep["as_built"]["station_tolerance_mm"] == d.jig.station_tolerance_mm
     tilt = [c for c in rep["checks"] if c["id"] == "disk.tilt"]
     assert len(tilt) == 13 and all(c["passed"] and c["severity"] == "error" for c in tilt)
-    assert "moves 0.261 mm along the backbone" in tilt[0]["message"]      # r = 30 mm at 0.499°
+    # the message says how far the disk's outermost eyelet moves along the backbone at that pitch
+    first = tilt[0]
+    r, moved = (float(v) for v in re.search(r"an eyelet at r = ([\d.]+) mm moves ([\d.]+) mm along the backbone",
+                                            first["message"]).groups())
+    station = first["where"]["station"]
+    tendons = _manifest(folder)["design_report"]["tendons"]
+    assert r == pytest.approx(max(math.hypot(*tn["eyelets_xz_mm"][station]) for tn in tendons), abs=0.01)
+    assert moved == pytest.approx(r * math.tan(math.radians(first["measured"])), abs=0.001)
 
 
 def test_a_shortened_hub_fails_the_tilt_check_with_its_name(faulty):
     bad = _failed(faulty, "disk.tilt")
     assert [c["where"]["part"] for c in bad] == ["disk_05"]
-    # 3 mm of disk and 2 mm of hub: atan(0.1 / 5) = 1.15°
-    assert bad[0]["measured"] == pytest.approx(math.degrees(math.atan(0.1 / 5.0)), abs=0.01)
-    assert bad[0]["message"].startswith("disk_05: the slot holds the strip over 5.0")
+    # the disk's thickness and its 2 mm hub hold the strip, with the slot's play through it
+    # (the prototype: 3 mm + 2 mm, 0.1 mm: atan(0.1 / 5) = 1.15°)
+    d = load(PARAMS / "prototype.yaml").design
+    spec = make_plan(d).disks[5]
+    held, play = spec.thickness + 2.0, spec.slot_height - d.backbone.thickness
+    assert bad[0]["measured"] == pytest.approx(math.degrees(math.atan(play / held)), abs=0.01)
+    assert bad[0]["message"].startswith(f"disk_05: the slot holds the strip over {held:.1f}")
     assert "more than the 0.5° allowed" in bad[0]["message"]
 
 
@@ -253,9 +276,11 @@ def test_the_mount_bolts_to_the_table_grid(built):
 def test_own_weight_point_mass_matches_the_cantilever_and_disks_add(built):
     """With the strip's measured E·I: a small tip mass gives P·L³/(3EI) within 1 %; the disks'
     measured masses on top of it make the sag larger."""
-    g = _report(built("prototype"))["gravity"]
+    rep = _report(built("prototype"))
+    g = rep["gravity"]
     E, I, L, t = g["E_mpa"], g["I_mm4"], g["length_mm"], g["thickness_mm"]
-    assert I == pytest.approx(60 * 0.59 ** 3 / 12, rel=1e-3)         # h t³/12 of the strip's STL
+    bb = load(PARAMS / "prototype.yaml").design.backbone
+    assert I == pytest.approx(bb.height * bb.thickness ** 3 / 12, rel=1e-3)     # h t³/12 of the strip's STL
     P = 0.01 * E * I / L ** 2                                         # P L²/EI = 0.01: linear
     m = P / (9.81e-3)
     alone = sag.solve_sag(L, [L], [m], E=E, I=I, thickness=t, strip_lin_density=0.0)
@@ -270,6 +295,32 @@ def test_own_weight_point_mass_matches_the_cantilever_and_disks_add(built):
     assert g["tip_assembly"]["mass_g"] > 50 and g["tip_assembly"]["a_mm"] > 0
     assert 0 < worst["tip_sag_mm"] < g["uniform_strip"]["tip_sag_mm"]
     assert (built("prototype") / "sag.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    _assert_sag_figure(rep, _manifest(built("prototype"))["design_report"])
+
+
+def _assert_sag_figure(rep, design_report):
+    """sag.png as drawn: the strip along the solved elastica, every disk as a polygon on it, the
+    tip assembly's centre of mass, the sag and stress in its text, the axes named."""
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Polygon
+
+    from hwgen.outputs.plots import sag_figure
+    g = rep["gravity"]
+    fig = sag_figure(rep, design_report)
+    try:
+        (ax,) = fig.axes
+        lines = {ln.get_label(): ln for ln in ax.get_lines()}
+        strip = lines["strip (elastica)"]
+        assert np.allclose(strip.get_xdata(), g["curve"]["y_mm"]) and np.allclose(strip.get_ydata(), g["curve"]["z_mm"])
+        assert "without its weight" in lines
+        assert sum(isinstance(p, Polygon) for p in ax.patches) == len(design_report["disks"])
+        case = g["cases"][g["gravity"]]
+        text = " ".join(tx.get_text() for tx in ax.texts)
+        assert f"tip sag {case['tip_sag_mm']:.1f} mm" in text and f"{case['max_stress_mpa']:.0f} MPa" in text
+        assert ax.get_xlabel() == "horizontal (mm)" and ax.get_ylabel() == "vertical (mm)"
+        assert sag_figure({**rep, "gravity": None}, design_report) is None
+    finally:
+        plt.close(fig)
 
 
 def test_overstress_fails_the_check_unless_the_design_waives_it(built, faulty):
@@ -296,6 +347,7 @@ def test_overstress_fails_the_check_unless_the_design_waives_it(built, faulty):
 def test_bill_of_materials_has_adhesive_mount_hardware_and_crimps(built, tmp_path):
     import csv
 
+    from hwgen.checks.report import read_report
     from hwgen.outputs import bom
 
     folder = built("prototype")
@@ -316,6 +368,6 @@ def test_bill_of_materials_has_adhesive_mount_hardware_and_crimps(built, tmp_pat
     crimp = d.tendon_material.termination.model_copy(update={"kind": "crimp", "diameter": 1.3, "length": 4.0,
                                                             "name": "copper crimp sleeve 0.5 mm bore"})
     d2 = d.model_copy(update={"tendon_material": d.tendon_material.model_copy(update={"termination": crimp})})
-    rows2, _ = bom.bom_rows(folder, _manifest(folder), d2)
+    rows2, _ = bom.bom_rows(folder, _manifest(folder), d2, read_report(folder))
     (sleeves,) = [r for r in rows2 if r["part"] == "crimp sleeve"]
     assert sleeves["qty"] == 5 and sleeves["size"] == "Ø1.3 × 4 mm"

@@ -62,7 +62,7 @@ def _drum_radius(folder, wheel: dict) -> float:
     """The drum's radius measured from the wheel's STL: its section across the axis in the middle
     of the first winding zone, as the circle of the same area."""
     import trimesh
-    from hwgen.checks.measure import section_loops
+    from hwgen.checks.sections import section_loops
     mesh = trimesh.load_mesh(str(folder / wheel["files"]["stl"]["path"]))
     P = np.asarray(wheel["placement"], float)
     assert abs(abs(P[2, 2]) - 1) < 1e-9                 # the file's z is the wheel's axis, robot z

@@ -423,7 +423,16 @@ def test_a_kernel_failure_names_the_part_and_its_parameters(tmp_path, monkeypatc
     assert escaped is None and code == 2, stderr
     line = stderr.strip()
     assert line.startswith("error: ") and "prototype.yaml: disks: the CAD kernel could not make disk_04" in line
-    assert "inner disk at y = 90 mm: thickness 3 mm, Ø72 mm, slot 60.1 × 0.69 mm" in line
+    # the disk's inputs as the plan makes them: its slot is the strip's section with the clearance around it
+    from hwgen.model.plan import plan as make_plan
+    from hwgen.pipeline import load
+    design = load(PARAMS / "prototype.yaml").design
+    spec = make_plan(design).disks[4]
+    c = design.disks.slot_clearance
+    assert spec.role == "inner" and spec.slot_width == pytest.approx(design.backbone.height + 2 * c)
+    assert spec.slot_height == pytest.approx(design.backbone.thickness + 2 * c)
+    assert (f"inner disk at y = {spec.y:g} mm: thickness {spec.thickness:g} mm, Ø{design.disks.outer_diameter:g} mm, "
+            f"slot {spec.slot_width:g} × {spec.slot_height:g} mm") in line
     assert "BRep_API: command not done" in line and len(line.splitlines()) == 1
     assert not (out / "prototype").exists() and not list(out.glob(".prototype.*"))
 

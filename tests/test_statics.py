@@ -321,7 +321,37 @@ def test_hwgen_stiffness_writes_its_files_and_refuses_an_unknown_state(tmp_path)
     assert rep["endpoint_ratio"]["states"] == ["AC1", "A"] and rep["endpoint_ratio"]["ratio"] > 1
     for png in ("stiffness.png", "gravity.png"):
         assert (folder / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    _assert_stiffness_figures(rep)
     assert "AC1/A" in r.stdout
     bad = subprocess.run(run + ["--states", "AX"], capture_output=True, text=True, timeout=300)
     assert bad.returncode == 2 and "--states: unknown state 'AX'" in bad.stderr
     assert "prototype.yaml" in bad.stderr and "Traceback" not in bad.stderr
+
+
+def _assert_stiffness_figures(rep):
+    """stiffness.png and gravity.png as drawn: a bar per disk and state at the report's stiffness
+    on a log axis, the states in the legend; a shape per state along the report's curve."""
+    import matplotlib.pyplot as plt
+
+    from hwgen.outputs.stiffness import gravity_figure, stiffness_figure
+    states = rep["states"]
+    fig = stiffness_figure(rep)
+    try:
+        (ax,) = fig.axes
+        heights = [b.get_height() for b in ax.patches]
+        assert heights == pytest.approx([d["stiffness_n_per_mm"] for s in states for d in s["disks"]])
+        assert ax.get_yscale() == "log" and [tx.get_text() for tx in ax.get_legend().get_texts()] == \
+            [s["state"] for s in states]
+        assert [tk.get_text() for tk in ax.get_xticklabels()] == [str(d["disk"] + 1) for d in states[0]["disks"]]
+        assert f"{rep['endpoint_ratio']['ratio']:.2f}×" in ax.get_title()
+    finally:
+        plt.close(fig)
+    fig = gravity_figure(rep)
+    try:
+        (ax,) = fig.axes
+        lines = [ln for ln in ax.get_lines() if not ln.get_label().startswith("_")]
+        assert [ln.get_label() for ln in lines] == [f"{s['state']}: tip {s['tip_sag_mm']:.1f} mm down" for s in states]
+        for ln, s in zip(lines, states):
+            assert np.allclose(ln.get_xdata(), s["curve"]["y_mm"]) and np.allclose(ln.get_ydata(), s["curve"]["z_mm"])
+    finally:
+        plt.close(fig)

@@ -105,6 +105,7 @@ def test_shipped_prototype_as_built(built, proto):
     assert all(c["severity"] == "warning" for c in robust.values())
     assert "— **FAILS**" in (built("prototype") / "summary.md").read_text()
     assert (built("prototype") / "tolerance.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    _assert_tolerance_figure(rep)
     rb, sc = proto
     names = [t["name"] for t in rep["tendons"]]
     res = mc.run(rb, replace(sc.scaled(WHAT_IT_TAKES), hole_play=0.0), ANGLES, N, 0)
@@ -169,3 +170,34 @@ def test_an_early_stop_keeps_the_samples_a_longer_run_draws(proto, monkeypatch):
     assert np.array_equal(first.worst, mc.run(rb, sc, ANGLES, 40, 5).worst)     # the first batch is seed 5's
     back = mc.from_json(json.loads(json.dumps(mc.to_json(second))))
     assert all(np.array_equal(getattr(back, f), getattr(second, f)) for f in ("worst", "band", "envelope", "rest"))
+
+
+def _assert_tolerance_figure(rep):
+    """tolerance.png as drawn: a column per budgeted tendon, its verdict in the title; the taut
+    path and the eq. (2) line are the report's, the budget lines at ±budget; below, the histogram
+    of the samples with the verdict's statistic marked."""
+    import matplotlib.pyplot as plt
+
+    from hwgen.outputs.plots import tolerance_figure
+    tb = rep["as_built"]["taut"]
+    budgeted = [r for r in tb["tendons"] if r["budget_mm"] is not None]
+    centre = {t["name"]: t["delta_mm"] for t in rep["tendons"]}
+    fig = tolerance_figure(rep)
+    try:
+        assert tb["samples"] and len(fig.axes) == 2 * len(budgeted)
+        tops, hists = fig.axes[:len(budgeted)], fig.axes[len(budgeted):]
+        for ax, hx, r in zip(tops, hists, budgeted):
+            verdict = "passes" if r["passed"] else "fails"
+            assert ax.get_title().startswith(f"{r['name']}: {r['robust_mm']:.3f} mm") and ax.get_title().endswith(verdict)
+            lines = {ln.get_label(): ln for ln in ax.get_lines()}
+            assert np.allclose(lines["taut path, nominal print"].get_ydata(), r["taut_delta_mm"])
+            assert np.allclose(lines["eq. (2), hole centres"].get_ydata(), centre[r["name"]])
+            assert np.allclose(lines["taut path, nominal print"].get_xdata(), tb["angles_deg"])
+            levels = {round(float(ln.get_ydata()[0]), 9) for ln in ax.get_lines() if len(set(ln.get_ydata())) == 1}
+            assert {round(r["budget_mm"], 9), round(-r["budget_mm"], 9)} <= levels
+            marks = {ln.get_label(): float(ln.get_xdata()[0]) for ln in hx.get_lines()}
+            assert marks[tb["robust"]] == pytest.approx(r["robust_mm"])
+            assert marks[f"budget {r['budget_mm']:g} mm"] == pytest.approx(r["budget_mm"])
+        assert tops[0].get_ylabel() == "L(θ) − L(0) (mm)" and hists[0].get_ylabel() == f"samples (of {tb['samples']})"
+    finally:
+        plt.close(fig)

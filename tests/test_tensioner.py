@@ -7,9 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from hwgen.checks.gear_mesh import (INTERFERENCE_TOL_MM3, GAP_TOL_MM, count_teeth, gear_checks, manifold,
-                                   measure_pair, mesh_measure, placed_mesh, tendon_checks, toward)
-from hwgen.checks.measure import fit_axis, load_mesh
+from hwgen.checks.axes import fit_axis
+from hwgen.checks.gear_mesh import GAP_TOL_MM, INTERFERENCE_TOL_MM3, count_teeth, gear_checks, measure_pair, mesh_measure, toward
+from hwgen.checks.meshes import load_mesh, placed_manifold, placed_mesh
+from hwgen.checks.tendon_runs import tendon_checks
 from hwgen.model.plan import plan
 from hwgen.model.gearing import worm_pair
 from hwgen.pipeline import load
@@ -80,7 +81,7 @@ def test_worm_has_a_thread_and_wheel_has_teeth(proto):
     z_mid = worm.bounds[1, 2] - pair.worm_length / 2          # the thread ends at the far end
     # the axial section (file plane Y = 0): turn file Y onto Z and slice with manifold3d
     turn = np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0], [0, -1.0, 0, 0], [0, 0, 0, 1.0]])
-    polys = manifold(folder, worm_q, turn).slice(0.0).to_polygons()
+    polys = placed_manifold(folder, worm_q, turn).slice(0.0).to_polygons()
 
     def inside(pts):
         hit = np.zeros(len(pts), bool)
@@ -103,7 +104,7 @@ def test_worm_has_a_thread_and_wheel_has_teeth(proto):
     lay = layout(p.design, p.paths, p.disks[-1])
     unit = lay.unit("C1")
     z_file = (lay.wheel_flip(unit) @ [0, 0, unit.z_wheel_mid - unit.z_part[0], 1])[2]
-    sec = manifold(folder, wheel_q, np.eye(4)).slice(z_file).to_polygons()
+    sec = placed_manifold(folder, wheel_q, np.eye(4)).slice(z_file).to_polygons()
     pts = np.vstack(sec)
     r = np.hypot(pts[:, 0], pts[:, 1])
     assert r.max() == pytest.approx(pair.ra2, abs=0.02)
@@ -119,7 +120,7 @@ def test_nominal_mesh_no_interference_gap_within_backlash(proto, channel):
     folder, man, p = proto
     pair = worm_pair(p.design.tensioner)
     worm, wheel = _by_role(man, "tensioner_worm")[channel], _by_role(man, "tensioner_wheel")[channel]
-    vol, gap = mesh_measure(manifold(folder, worm), manifold(folder, wheel), pair.center_offset + 1.0)
+    vol, gap = mesh_measure(placed_manifold(folder, worm), placed_manifold(folder, wheel), pair.center_offset + 1.0)
     assert vol <= INTERFERENCE_TOL_MM3
     assert gap <= pair.center_offset + GAP_TOL_MM
     assert gap > 0.0         # teeth do not touch: the backlash is real
@@ -128,12 +129,12 @@ def test_nominal_mesh_no_interference_gap_within_backlash(proto, channel):
 def test_wheel_moved_toward_worm_interferes(proto):
     folder, man, _ = proto
     worm, wheel = _by_role(man, "tensioner_worm")["C1"], _by_role(man, "tensioner_wheel")["C1"]
-    wm = manifold(folder, worm)
-    moved = manifold(folder, wheel, toward(wheel, worm, 0.2))
+    wm = placed_manifold(folder, worm)
+    moved = placed_manifold(folder, wheel, toward(wheel, worm, 0.2))
     vol, _ = mesh_measure(wm, moved)
     assert vol > INTERFERENCE_TOL_MM3 * 10
-    _, nominal = mesh_measure(wm, manifold(folder, wheel))
-    away = manifold(folder, wheel, toward(wheel, worm, -0.2))
+    _, nominal = mesh_measure(wm, placed_manifold(folder, wheel))
+    away = placed_manifold(folder, wheel, toward(wheel, worm, -0.2))
     _, gap = mesh_measure(wm, away)
     # 0.2 mm more centre distance opens each flank by about 0.2 sin α (less where the throated
     # wheel's flank normals lean toward its axis)
@@ -316,7 +317,7 @@ def test_worm_is_turned_from_outside(proto):
     """A straight line along each worm's axis from its drive shaft's hex socket outward meets no part."""
     folder, man, _ = proto
     drives = _by_role(man, "tensioner_drive")
-    solids = [manifold(folder, q) for q in man["parts"] if q["role"] not in ("tensioner_worm", "tensioner_drive")]
+    solids = [placed_manifold(folder, q) for q in man["parts"] if q["role"] not in ("tensioner_worm", "tensioner_drive")]
     import manifold3d as m3d
     for ch, q in drives.items():
         m = np.asarray(q["placement"])
@@ -337,22 +338,22 @@ def test_worm_is_turned_from_outside(proto):
 def test_turning_parts_clear_the_housing_at_every_angle(proto):
     """Wheel (with its clamps) and worm turned about their own axes never touch the housing."""
     folder, man, p = proto
-    housing = manifold(folder, next(q for q in man["parts"] if q["role"] == "tensioner_housing"))
+    housing = placed_manifold(folder, next(q for q in man["parts"] if q["role"] == "tensioner_housing"))
     for ch, wheel in _by_role(man, "tensioner_wheel").items():
         worm = _by_role(man, "tensioner_worm")[ch]
         ph, pw = np.asarray(wheel["placement"]), np.asarray(worm["placement"])
         clamps = [q for q in man["parts"] if q["role"] == "tensioner_clamp" and q["channel"] == ch]
-        drive = manifold(folder, _by_role(man, "tensioner_drive")[ch])
+        drive = placed_manifold(folder, _by_role(man, "tensioner_drive")[ch])
         assert drive.min_gap(housing, 0.3) < 1e-6 and (drive ^ housing).volume() < 1e-3   # seated, not sunk
-        assert (drive ^ manifold(folder, worm)).volume() < 1e-3                           # in the worm's bore
+        assert (drive ^ placed_manifold(folder, worm)).volume() < 1e-3                           # in the worm's bore
         for a in np.linspace(0, 2 * math.pi, 6, endpoint=False):
             turn = ph @ _rz(a) @ np.linalg.inv(ph)          # about the wheel's axis, in robot space
             for q in [wheel] + clamps:
-                s = manifold(folder, q, turn @ np.asarray(q["placement"]))
+                s = placed_manifold(folder, q, turn @ np.asarray(q["placement"]))
                 assert s.min_gap(housing, 0.3) >= 0.05, (ch, q["name"], a)
-            w = manifold(folder, worm, pw @ _rz(a))
+            w = placed_manifold(folder, worm, pw @ _rz(a))
             assert w.min_gap(housing, 0.3) >= 0.05, (ch, a)
-            d = manifold(folder, _by_role(man, "tensioner_drive")[ch], pw @ _rz(a) @ np.linalg.inv(pw)
+            d = placed_manifold(folder, _by_role(man, "tensioner_drive")[ch], pw @ _rz(a) @ np.linalg.inv(pw)
                          @ np.asarray(_by_role(man, "tensioner_drive")[ch]["placement"]))
             assert (d ^ housing).volume() < 1e-3, (ch, a)    # the shaft turns in the spine's hole
 
@@ -361,7 +362,7 @@ def test_hex_socket_for_the_key(proto):
     folder, man, p = proto
     key = p.design.tensioner.hex_key
     drive_q = _by_role(man, "tensioner_drive")["A"]
-    polys = manifold(folder, drive_q, np.eye(4)).slice(2.0).to_polygons()
+    polys = placed_manifold(folder, drive_q, np.eye(4)).slice(2.0).to_polygons()
     areas = sorted(abs(0.5 * np.sum(q[:, 0] * np.roll(q[:, 1], -1) - np.roll(q[:, 0], -1) * q[:, 1]))
                    for q in polys)
     hexagon = math.sqrt(3) / 2 * (key + 0.1) ** 2            # across flats: key + clearance

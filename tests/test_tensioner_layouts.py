@@ -116,7 +116,7 @@ def odd_build(request, tmp_path_factory):
 
 @pytest.mark.slow
 def test_odd_tensioners_build_with_a_housing_in_one_piece(odd_build):
-    from hwgen.checks.measure import load_mesh
+    from hwgen.checks.meshes import load_mesh
     doc, res = odd_build
     parts = res.manifest["parts"]
     channels = set(doc["tensioner"]["channels"])

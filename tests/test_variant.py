@@ -8,7 +8,7 @@ import pytest
 import yaml
 
 from hwgen.pipeline import build
-from hwgen.checks.measure import disk_mid_section
+from hwgen.checks.sections import disk_mid_section
 from hwgen.pipeline import load
 from hwgen.model.routing import tendon_paths
 

@@ -11,6 +11,7 @@ from collections.abc import Iterator
 import cadquery as cq
 import numpy as np
 
+from ..model import hardware
 from ..model.fixtures import NUT_AF, NUT_DEPTH, NUT_PLAY, NUT_THICK, JigLayout, MountLayout, jig_layout
 from ..model.plan import Plan, base_mount
 from . import Part, placement
@@ -19,9 +20,9 @@ MOUNT_COLOR = (0.35, 0.40, 0.48, 1.0)     # slate: it stays on the table
 CLAMP_COLOR = (0.55, 0.62, 0.72, 1.0)
 JIG_COLOR = (0.80, 0.80, 0.78, 1.0)
 TOOL = 1.0                                  # cutting tools overrun faces by this much, mm
-SCREW_LENGTHS = (6, 8, 10, 12, 16, 20, 25, 30, 35, 40, 45, 50)   # ISO 4762 preferred lengths, mm
-WASHER = 0.5                               # ISO 7089 M3 washer thickness, mm
-M6_WASHER = 1.6                            # ISO 7089 M6 washer
+SCREW_LENGTHS = hardware.lengths("socket head cap screw", "any")   # ISO 4762 stock lengths, mm
+WASHER = hardware.size("washer", "M3", "thickness")                 # ISO 7089 M3 washer, mm
+M6_WASHER = hardware.size("washer", "M6", "thickness")              # ISO 7089 M6 washer, mm
 TABLE_THREAD = 8.0                         # engagement of the foot bolts in the table's tapped holes, mm
 
 
@@ -43,7 +44,8 @@ def _one(shape) -> cq.Solid:
 
 
 def _screw(length_needed: float) -> int:
-    return next((n for n in SCREW_LENGTHS if n >= length_needed), SCREW_LENGTHS[-1])
+    """The shortest stock screw that reaches through its nut."""
+    return hardware.shortest_reaching(SCREW_LENGTHS, length_needed)
 
 
 def _hw(item, size, qty, material="steel", **extra) -> dict:

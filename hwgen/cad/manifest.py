@@ -1,14 +1,93 @@
 """The manifest: per part its files and their sha256, volume, box and placement, and the design
-report the checks compare the files against. Plain JSON; no CAD kernel."""
+report the checks compare the files against. Plain JSON; no CAD kernel.
+
+Written here and read here: :func:`write_manifest` and :func:`read_manifest` for the file, and
+:class:`ManifestPart` for one part's entry as the later stages use it (its files, placement,
+role), so no stage spells the JSON's keys itself."""
 from __future__ import annotations
 
 import hashlib
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..atomic import write_json
 from ..model.plan import Plan
 from . import Part, mass_properties
+
+MANIFEST = "manifest.json"
+
+
+def read_manifest(folder: str | Path) -> dict:
+    """The manifest of a built folder, as :func:`write_manifest` wrote it."""
+    return json.loads((Path(folder) / MANIFEST).read_text())
+
+
+def write_manifest(folder: str | Path, manifest: dict) -> None:
+    """manifest.json into the folder, whole or not at all."""
+    write_json(Path(folder) / MANIFEST, manifest)
+
+
+@dataclass(frozen=True, kw_only=True)
+class PartFile:
+    """One file of a part: its path inside the build folder and its sha256."""
+
+    path: str
+    sha256: str
+
+
+@dataclass(frozen=True, kw_only=True)
+class ManifestPart:
+    """One part's manifest entry as the checks and outputs read it. ``entry`` keeps the whole
+    entry for the fields only one family has (a disk's role, a drum's tendon runs, ...)."""
+
+    name: str
+    role: str
+    files: Mapping[str, PartFile]       # "stl", "step" (and "brep" in the part cache)
+    placement: np.ndarray               # 4x4: file coordinates -> robot coordinates, mm
+    station: int | None
+    volume_mm3: float | None
+    bbox_min: np.ndarray                # the solid's box in file coordinates, mm
+    bbox_max: np.ndarray
+    fixture: bool                       # an assembly aid (the jig), not part of the robot
+    entry: Mapping
+
+    @staticmethod
+    def of(entry: Mapping) -> ManifestPart:
+        bbox = entry["bbox_mm"]
+        return ManifestPart(
+            name=entry["name"], role=entry.get("role", ""),
+            files={kind: PartFile(path=f["path"], sha256=f["sha256"]) for kind, f in entry["files"].items()},
+            placement=np.asarray(entry["placement"], dtype=float), station=entry.get("station"),
+            volume_mm3=entry.get("volume_mm3"), bbox_min=np.asarray(bbox["min"], dtype=float),
+            bbox_max=np.asarray(bbox["max"], dtype=float), fixture=bool(entry.get("fixture")), entry=entry)
+
+    @property
+    def stl(self) -> str:
+        """The STL's path inside the build folder."""
+        return self.files["stl"].path
+
+    @property
+    def step(self) -> str:
+        """The STEP file's path inside the build folder."""
+        return self.files["step"].path
+
+    def stl_in(self, folder: str | Path) -> Path:
+        return Path(folder) / self.stl
+
+
+def manifest_parts(manifest: Mapping) -> list[ManifestPart]:
+    """Every part of a manifest, in its order."""
+    return [ManifestPart.of(e) for e in manifest.get("parts", [])]
+
+
+def manifest_files(manifest: Mapping) -> list[PartFile]:
+    """Every file the manifest lists: each part's, then the whole design's (assembly, template, ...)."""
+    out = [f for p in manifest_parts(manifest) for f in p.files.values()]
+    return out + [PartFile(path=f["path"], sha256=f["sha256"]) for f in manifest.get("files", {}).values()]
 
 
 def sha256(path: Path) -> str:

@@ -41,9 +41,9 @@ from OCP.TopoDS import TopoDS
 from ..model.gearing import GearDesignError, WormPair
 from ..model.plan import Plan
 from ..model.tensioner_layout import Fastening, TensionerLayout, Unit, joint, tip_joint
-from ..model.tensioner_layout.sizes import (ANCHOR_HOLE, AXIAL_PLAY, CAP, CLAMP_PLATE, CLAMP_SCREW, DRIVE_FLANGE,
-                                            DRIVE_HEX, DRIVE_HEX_LENGTH, DRIVE_SHAFT, NUT, NUT_PLAY, PIN_ENGAGE, POST,
-                                            WORM_END)
+from ..model.tensioner_layout.sizes import (ANCHOR_HOLE, AXIAL_PLAY, CAP, CLAMP_PLATE, DRIVE_FLANGE, DRIVE_HEX,
+                                            DRIVE_HEX_LENGTH, DRIVE_SHAFT, INSERT, M2_CLEARANCE, NUT, NUT_PLAY,
+                                            PIN_ENGAGE, POST, SET_SCREW, WORM_END)
 from . import DISK_ROTATION, Part, location, placement
 from .memo import kept
 
@@ -366,7 +366,7 @@ def clamp_solid() -> cq.Solid:
     """Clamp plate: the tendon, led out of the anchor hole, is pinched under it by an M2 screw."""
     x, y, t = CLAMP_PLATE
     plate = cq.Solid.makeBox(x, y, t, cq.Vector(-x / 2, -y / 2, 0))
-    hole = cq.Solid.makeCylinder((CLAMP_SCREW + 0.4) / 2, t + 2 * TOOL, cq.Vector(0, 0, -TOOL))
+    hole = cq.Solid.makeCylinder(M2_CLEARANCE / 2, t + 2 * TOOL, cq.Vector(0, 0, -TOOL))
     return _one(plate.cut(hole))
 
 
@@ -478,14 +478,15 @@ def build_tensioner(plan: Plan) -> Iterator[Part]:
     n_tip = len(plan.disks[-1].mount_holes)
     tip = tip_joint(lay.fastening, plan.disks[-1].thickness, lay.base_t)
     set_screw = {"nut": _hw("hex nut ISO 4032", "M3", 2, STEEL, "for the strip's set screws, in a side slot"),
-                 "insert": _hw("heat-set insert", "M3 × 5.7", 2, BRASS, "for the strip's set screws, melted in")}
+                 "insert": _hw("heat-set insert", f"M3 × {INSERT['M3'][1]:g}", 2, BRASS,
+                               "for the strip's set screws, melted in")}
     yield Part("tensioner_housing", "tensioner_housing", housing_solid(lay).moved(location(inv)), hp, HOUSING_COLOR,
                meta={"channel": "all", "channels": [u.channel for u in lay.units], "layout_search": lay.search,
                      "hardware": [
                          {**_hw("socket head cap screw ISO 4762", tip.screw, n_tip, STEEL,
                                 "through the tip disk into the housing"), "tip_mount": True},
                          tip.held_by(n_tip, "takes the tip-disk screws, in a side slot"),
-                         _hw("set screw ISO 4026", "M3 × 6", 2, STEEL, "clamps the strip's tip"),
+                         _hw("set screw ISO 4026", f"M3 × {SET_SCREW:g}", 2, STEEL, "clamps the strip's tip"),
                          set_screw[lay.fastening]]})
 
 

@@ -18,7 +18,8 @@ from ..model.fixing import termination_of
 from ..cad.export import STL_TOLERANCE_MM
 from .base import Check
 from .eyelets import DiskSections
-from .measure import area_centroid, chain_loops, inside, inside_many, loop_gap, points_to_polyline, section_robot
+from .polygons import area_centroid, inside, inside_many, loop_gap, points_to_polyline
+from .sections import chain_loops, section_robot
 
 PLANE_STEP_MM = 0.1         # depth between cuts
 INSCRIBED_STEPS = 40        # grid across a loop for its largest inscribed circle, per zoom

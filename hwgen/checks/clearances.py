@@ -19,7 +19,7 @@ from ..model import kinematics as kin
 from ..model.crossings import crossing_angles, strip_crossings
 from .base import Check
 from .eyelets import EyeletMap, joined_holes
-from .measure import inside, loop_gap, num, points_to_polyline
+from .polygons import inside, loop_gap, num, points_to_polyline
 
 SAG_MM = STL_TOLERANCE_MM      # chordal deviation of the STL: section polygons sit this far inside holes
 

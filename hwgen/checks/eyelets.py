@@ -20,7 +20,9 @@ from pathlib import Path
 import numpy as np
 
 from .base import Check
-from .measure import Loop, area_centroid, chain_loops, disk_slab, inside, load_mesh, num, section_loops
+from .meshes import load_mesh
+from .polygons import area_centroid, inside, num
+from .sections import Loop, chain_loops, disk_slab, section_loops
 
 OFF_PLANE_FRACTION = 1 / 8   # the axis cuts sit this fraction of the thickness either side of the mid-plane,
 CLEAR_FRACTION = 1 / 2       # or this fraction of the way from the mid-plane to a recess floor, if nearer

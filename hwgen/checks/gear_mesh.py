@@ -1,5 +1,5 @@
-"""Worm-gear tensioner checks measured from the exported meshes, and the free span of every
-tendon from its tip eyelet to its spool.
+"""Worm-gear tensioner checks measured from the exported meshes (the tendons' free spans to their
+spools are measured in :mod:`hwgen.checks.tendon_runs`).
 
 From the files (each STL placed by its manifest placement, nothing else of the manifest):
 the axes of each worm and wheel fitted to their surfaces give the centre distance and the
@@ -25,11 +25,13 @@ from pathlib import Path
 import numpy as np
 
 from ..cache import remembered
+from ..cad.manifest import ManifestPart
 from ..model.gearing import hertz_allowable, worm_pair
 from ..model.materials import contact_elasticity
+from .axes import Axis, axes_angle, axes_distance, fit_axis
 from .base import Check
-from .measure import (Axis, SurfaceDistance, across, axes_angle, axes_distance, fit_axis, load_mesh,
-                      sample_surface, to_manifold)
+from .meshes import placed_mesh, to_manifold
+from .surface import SurfaceDistance, sample_surface
 
 INTERFERENCE_TOL_MM3 = 0.01   # worm ∩ wheel counts as zero below this
 GAP_TOL_MM = 0.02             # STL chordal tolerance is 0.01 mm on each part
@@ -47,21 +49,6 @@ ZONE_REACH_MM = 0.6           # flank faces that come this near the worm's crest
 ZONE_MARGIN_MM = 0.1          # closing a flank moves its points less than this (r·δ ≈ 0.03 mm for the prototype)
 CLOSE_TOL_RAD = 2e-6          # the wheel's turn to close a flank is iterated to this
 RING_WIDTH_MM = 0.05          # ring in a section where teeth (or starts) are counted
-TENDON_SEARCH_MM = 5.0        # a tendon's nearest other part is reported up to this far
-TENDON_SEGMENTS = 16          # facets of the tendon's cylinder
-
-
-def manifold(folder: Path, entry: dict, placement: np.ndarray | None = None):
-    """The part's STL as a manifold3d solid in robot coordinates (or under ``placement``)."""
-    mesh = load_mesh(Path(folder) / entry["files"]["stl"]["path"])
-    return to_manifold(mesh, entry["placement"] if placement is None else placement)
-
-
-def placed_mesh(folder: Path, entry: dict, placement: np.ndarray | None = None):
-    """The part's STL as a trimesh in robot coordinates (or under ``placement``)."""
-    mesh = load_mesh(Path(folder) / entry["files"]["stl"]["path"]).copy()      # the loaded mesh is shared
-    mesh.apply_transform(np.asarray(entry["placement"] if placement is None else placement, dtype=float))
-    return mesh
 
 
 def toward(wheel: dict, worm: dict, distance: float) -> np.ndarray:
@@ -81,19 +68,6 @@ def toward(wheel: dict, worm: dict, distance: float) -> np.ndarray:
 def mesh_measure(worm_m, wheel_m, search: float = GAP_SEARCH_MM) -> tuple[float, float]:
     """(interference volume mm³, closest gap mm) of two placed solids."""
     return float((worm_m ^ wheel_m).volume()), float(worm_m.min_gap(wheel_m, search))
-
-
-def tendon_cylinder(p0, p1, radius: float):
-    """A cylinder of the tendon's diameter from p0 to p1 (robot mm), as a manifold."""
-    import manifold3d as m3d
-    p0, p1 = np.asarray(p0, float), np.asarray(p1, float)
-    d = p1 - p0
-    length = float(np.linalg.norm(d))
-    z = d / length
-    x = across(z)
-    y = np.cross(z, x)
-    m = np.column_stack([x, y, z, p0])
-    return m3d.Manifold.cylinder(length, radius, radius, TENDON_SEGMENTS).transform(m.tolist())
 
 
 # ---- teeth and tooth form from sections ---------------------------------------------------
@@ -244,7 +218,7 @@ class Meshing:
         return {"turn_deg": turns, "extent_mm": extents, "points": int(len(pts))}
 
 
-def _pairs(manifest: dict) -> dict[str, dict[str, dict]]:
+def gear_pairs(manifest: dict) -> dict[str, dict[str, dict]]:
     out: dict[str, dict[str, dict]] = {}
     for p in manifest.get("parts", []):
         if p.get("role") in ("tensioner_worm", "tensioner_wheel"):
@@ -265,18 +239,17 @@ def measure_pair(folder: Path, worm: dict, wheel: dict) -> dict:
 
 
 def gear_checks(folder: Path, manifest: dict, plan) -> list[Check]:
-    """Every worm and wheel measured from its file, then the tendon runs. The first part (most
-    of a check's time) is remembered (:func:`hwgen.cache.remembered`) under the bytes of the
+    """Every worm and wheel measured from its file. What it finds (most of a check's time) is remembered (:func:`hwgen.cache.remembered`) under the bytes of the
     worm and wheel files, their manifest entries and the design."""
     folder = Path(folder)
-    pairs = _pairs(manifest)
+    pairs = gear_pairs(manifest)
     if not pairs:
         return [Check("gear.parts", "error", False, "no tensioner worm/wheel parts in the manifest")]
     entries = [p for pw in pairs.values() for p in pw.values()]
-    files = [_file_sha(folder / p["files"]["stl"]["path"]) for p in entries]
+    files = [_file_sha(ManifestPart.of(p).stl_in(folder)) for p in entries]
     found = remembered("gear checks", (files, entries, plan.design),
                        lambda: [c.to_json() for c in _pair_checks(folder, manifest, plan, pairs)])
-    return [Check(**c) for c in found] + tendon_checks(folder, manifest, plan)
+    return [Check(**c) for c in found]
 
 
 def _file_sha(path: Path) -> str | None:
@@ -398,58 +371,4 @@ def _strength_checks(measured: dict, manifest: dict, plan, pair) -> list[Check]:
         out.append(Check("gear.worm_torque", "info", True,
                          f"channel {channel}: {t1:.1f} N·mm on the worm's hex key to hold the tendon break load "
                          f"(design data; tightening, μ = {mu:g}, efficiency {pair.efficiency(mu):.2f})", t1, None, where))
-    return out
-
-
-def tendon_checks(folder: Path, manifest: dict, plan) -> list[Check]:
-    """Each tendon's free span (tip face to spool) against every part but its own start disk
-    and, over the last stretch where it enters between the flanges, its own spool."""
-    folder = Path(folder)
-    d = plan.design.tendon_material.diameter
-    runs = []
-    for p in manifest.get("parts", []):
-        for r in p.get("tendon_runs", []):
-            runs.append((p["name"], r))
-    if not runs:
-        return [Check("tensioner.tendon_clearance", "error", False, "no tendon runs in the manifest")]
-    parts = [p for p in manifest["parts"] if not (p.get("role") == "disk" and p.get("disk_role") == "tip")]
-    solids = {}
-    out = []
-    for own, r in runs:
-        start, end = np.asarray(r["start"], float), np.asarray(r["end"], float)
-        lo, hi = np.minimum(start, end) - TENDON_SEARCH_MM, np.maximum(start, end) + TENDON_SEARCH_MM
-        worst, worst_part, own_gap = math.inf, None, math.inf
-        for p in parts:
-            bmin = np.asarray(p["bbox_mm"]["min"])
-            bmax = np.asarray(p["bbox_mm"]["max"])
-            m = np.asarray(p["placement"], dtype=float)
-            corners = np.array([[x, y, z] for x in (bmin[0], bmax[0]) for y in (bmin[1], bmax[1])
-                                for z in (bmin[2], bmax[2])]) @ m[:3, :3].T + m[:3, 3]
-            if np.any(corners.max(axis=0) < lo) or np.any(corners.min(axis=0) > hi):
-                continue
-            s0, s1 = start, end
-            if p["name"] == own:
-                trim = r["own_part_trim_mm"]
-                s1 = end - trim * (end - start) / np.linalg.norm(end - start)
-            if p["name"] not in solids:
-                solids[p["name"]] = manifold(folder, p)
-            g = float(tendon_cylinder(s0, s1, d / 2).min_gap(solids[p["name"]], TENDON_SEARCH_MM))
-            if p["name"] == own:
-                own_gap = g
-            elif g < worst:
-                worst, worst_part = g, p["name"]
-        ok = min(worst, own_gap) >= d
-        if worst >= TENDON_SEARCH_MM - 1e-9:
-            worst_part = None
-        near = (f"nearest other part {worst_part} at {worst:.3f} mm" if worst_part else
-                f"no other part within {TENDON_SEARCH_MM:g} mm")
-        out.append(Check("tensioner.tendon_clearance", "error", ok,
-                         f"tendon {r['tendon']}: free span from its tip eyelet to its spool: {near}, its own wheel "
-                         f"{own_gap:.3f} mm short of the winding point (needs ≥ the tendon diameter {d:g} mm)",
-                         min(worst, own_gap), d,
-                         {"tendon": r["tendon"], "part": own if own_gap <= worst else worst_part,
-                          "nearest_other_part": worst_part, "nearest_other_mm": min(worst, TENDON_SEARCH_MM)}))
-        out.append(Check("tensioner.exit_angle", "info", True,
-                         f"tendon {r['tendon']}: turns {r['exit_angle_deg']:.1f}° at its tip eyelet toward its spool",
-                         r["exit_angle_deg"], None, {"tendon": r["tendon"]}))
     return out

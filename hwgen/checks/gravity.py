@@ -26,7 +26,8 @@ import numpy as np
 from ..model import sag
 from ..model.materials import printed_modulus
 from .base import Check
-from .measure import chain_loops, section_moments, section_robot
+from .polygons import section_moments
+from .sections import chain_loops, section_robot
 from .seating import SlotFit
 
 CURVE_POINTS = 300           # the deformed shape is reported at about this many points

@@ -1,14 +1,16 @@
 """Whole parts: sound meshes, no two parts occupying the same space, each fits the printer."""
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from itertools import combinations
 from pathlib import Path
 
 import numpy as np
 
+from ..cad.manifest import manifest_parts
 from .base import Check
-from .measure import load_mesh, to_manifold
+from .meshes import part_mesh, to_manifold
 
 NOT_PRINTED = {"backbone"}     # roles cut from stock rather than printed: no build-volume check
 VOLUME_REL_TOL = 0.01          # STL volume versus the solid's volume in the manifest
@@ -22,7 +24,7 @@ class LoadedPart:
     mesh: object               # trimesh.Trimesh in file coordinates
     placement: np.ndarray
     volume_mm3: float | None
-    entry: dict = field(default_factory=dict)   # the part's manifest entry
+    entry: Mapping = field(default_factory=dict)   # the part's manifest entry
 
     @property
     def fixture(self) -> bool:
@@ -36,16 +38,14 @@ class LoadedPart:
 
 def load_parts(folder: Path, manifest: dict) -> tuple[list[LoadedPart], list[Check]]:
     parts, checks = [], []
-    for p in manifest["parts"]:
-        stl = folder / p["files"]["stl"]["path"]
+    for p in manifest_parts(manifest):
         try:
-            mesh = load_mesh(stl)
+            mesh = part_mesh(folder, p)
         except Exception as e:  # unreadable file: say so and go on with the others
-            checks.append(Check("part.mesh", "error", False, f"{p['name']}: cannot read {stl.name} ({e})",
-                                None, None, {"part": p["name"]}))
+            checks.append(Check("part.mesh", "error", False, f"{p.name}: cannot read {p.stl_in(folder).name} ({e})",
+                                None, None, {"part": p.name}))
             continue
-        parts.append(LoadedPart(p["name"], p.get("role", ""), mesh, np.asarray(p["placement"], dtype=float),
-                                p.get("volume_mm3"), p))
+        parts.append(LoadedPart(p.name, p.role, mesh, p.placement, p.volume_mm3, p.entry))
     return parts, checks
 
 

@@ -9,7 +9,8 @@ import numpy as np
 
 from .base import Check
 from .parts import NOT_PRINTED, LoadedPart
-from .measure import signed_area, to_manifold
+from .meshes import to_manifold
+from .polygons import signed_area
 
 LAYER_MM = 0.5               # slicing step: finer than any cavity worth reporting
 CUP_MIN_AREA_MM2 = 1.0       # a closed-below hole smaller than this (under Ø1.1 mm) holds too little to matter

@@ -1,4 +1,8 @@
-"""The check report for people and for CI: JSON, JUnit XML, a Markdown summary and a rich table."""
+"""The check report for people and for CI: JSON, JUnit XML, a Markdown summary and a rich table.
+
+report.json is written and read here only: :func:`write_report` by the checks stage and
+:func:`read_report` by whatever runs without the checks in the same process (``hwgen render``,
+the statics study). A build hands the report to the outputs in memory."""
 from __future__ import annotations
 
 import json
@@ -6,6 +10,23 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from .. import atomic
+
+REPORT = "report.json"
+
+
+def write_report(report: dict, folder: Path) -> None:
+    """report.json into the folder, whole or not at all."""
+    atomic.write_json(Path(folder) / REPORT, report)
+
+
+def read_report(folder: Path) -> dict | None:
+    """The report a build's checks wrote into ``folder``; None when there is none, or it is not
+    a JSON object (unreadable, cut short)."""
+    try:
+        report = json.loads((Path(folder) / REPORT).read_text())
+    except (OSError, ValueError):
+        return None
+    return report if isinstance(report, dict) else None
 
 
 def place(check: dict) -> str:

@@ -11,21 +11,22 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
-from ..cad.manifest import sha256
+from ..cad.manifest import manifest_files, manifest_parts, sha256
 from ..model import kinematics as kin
 from ..model.routing import table_deviations
 from .anchors import seat_checks
 from .base import Check
 from .clearances import backbone_checks, hole_checks, tendon_pair_checks, wall_checks
 from .eyelets import backbone_section, locate_eyelets, measure_disk
-from .gear_mesh import gear_checks
+from .gear_mesh import gear_checks, gear_pairs
 from .gravity import gravity_checks
 from .lengths import length_checks, pair_take_up, sweep_angles, tendon_lengths
-from .measure import one_load_per_mesh
+from .meshes import one_load_per_mesh
 from .parts import build_volume_checks, interference_checks, load_parts, mass_summary, mesh_checks
 from .printing import printing_checks
 from .seating import hub_checks, measure_fit, tilt_checks
 from .taut import as_built
+from .tendon_runs import tendon_checks
 from .tension import tension_checks
 
 TABLE_MATCH_MM = 0.1   # Table II gives one decimal: a table within this of its function samples it
@@ -52,15 +53,14 @@ def _plain(v):
 
 def _file_checks(folder: Path, manifest: dict) -> list[Check]:
     out = []
-    entries = [(p["name"], f) for p in manifest["parts"] for f in p["files"].values()]
-    entries += [(k, f) for k, f in manifest.get("files", {}).items()]
+    entries = manifest_files(manifest)
     changed, missing = [], []
-    for name, f in entries:
-        path = folder / f["path"]
+    for f in entries:
+        path = folder / f.path
         if not path.exists():
-            missing.append(f["path"])
-        elif sha256(path) != f["sha256"]:
-            changed.append(f["path"])
+            missing.append(f.path)
+        elif sha256(path) != f.sha256:
+            changed.append(f.path)
     if missing:
         out.append(Check("files.present", "error", False, f"missing: {', '.join(missing)}", float(len(missing)),
                          0.0, {"files": missing}))
@@ -136,7 +136,10 @@ def _run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     checks += printing_checks(parts, proc.technology)
     mass, c = mass_summary(parts, manifest)
     checks += c
-    checks += gear_checks(folder, manifest, plan) + _strip_clamp_checks(manifest)
+    checks += gear_checks(folder, manifest, plan)
+    if gear_pairs(manifest):                  # no tensioner: no tendon runs to it either
+        checks += tendon_checks(folder, manifest, plan)
+    checks += _strip_clamp_checks(manifest)
     fits, c = _seating(parts, emap, bb_outline, strip_t, d, angles)
     checks += c
     seats, c = _seats(parts, emap, rep_in, d)
@@ -203,18 +206,18 @@ def _measure_disks(folder: Path, manifest: dict, meshes: dict, tol: float):
               + max((c["height_mm"] for c in d.get("seat_chambers", [])), default=0.0)
               for d in manifest["design_report"]["disks"] if d.get("seats")}
     disks, checks = [], []
-    for p in manifest["parts"]:
-        if p.get("role") != "disk":
+    for p in manifest_parts(manifest):
+        if p.role != "disk":
             continue
-        stl = folder / p["files"]["stl"]["path"]
+        stl = p.stl_in(folder)
         if not stl.exists():
             continue
         try:
-            dk = measure_disk(stl, p["placement"], p["name"], int(p["station"]), meshes.get(p["name"]),
-                              recess.get(int(p["station"]), 0.0))
+            dk = measure_disk(stl, p.entry["placement"], p.name, int(p.station), meshes.get(p.name),
+                              recess.get(int(p.station), 0.0))
         except Exception as e:
-            checks.append(Check("disk.section", "error", False, f"{p['name']}: cannot be measured ({e})",
-                                None, None, {"part": p["name"]}))
+            checks.append(Check("disk.section", "error", False, f"{p.name}: cannot be measured ({e})",
+                                None, None, {"part": p.name}))
             continue
         disks.append(dk)
         dy = abs(dk.y_mid - ys[dk.station])
@@ -226,14 +229,14 @@ def _measure_disks(folder: Path, manifest: dict, meshes: dict, tol: float):
 
 def _measure_strip(folder: Path, manifest: dict):
     """The strip's outline, holes and thickness from its STL (None where it cannot be read)."""
-    bb = next((p for p in manifest["parts"] if p.get("role") == "backbone"), None)
-    if bb is None or not (folder / bb["files"]["stl"]["path"]).exists():
+    bb = next((p for p in manifest_parts(manifest) if p.role == "backbone"), None)
+    if bb is None or not bb.stl_in(folder).exists():
         return None, None, None, []
     try:
-        return (*backbone_section(folder / bb["files"]["stl"]["path"], bb["placement"]), [])
+        return (*backbone_section(bb.stl_in(folder), bb.entry["placement"]), [])
     except Exception as e:
-        return None, None, None, [Check("backbone.section", "error", False, f"{bb['name']}: cannot be measured "
-                                        f"({e})", None, None, {"part": bb["name"]})]
+        return None, None, None, [Check("backbone.section", "error", False, f"{bb.name}: cannot be measured "
+                                        f"({e})", None, None, {"part": bb.name})]
 
 
 def _routing_checks(plan, stations_y: np.ndarray, angles: np.ndarray):

@@ -27,7 +27,8 @@ from ..model import kinematics as kin
 from ..model.fixing import HUB_GAP_MM
 from .base import Check
 from .eyelets import DiskSections, EyeletMap
-from .measure import chain_loops, inside_many, points_to_polyline, section_moments, section_robot
+from .polygons import inside_many, points_to_polyline, section_moments
+from .sections import chain_loops, section_robot
 
 X_STEP_MM = 5.0             # cuts across the strip for the pitch and roll (the slot and hub are prisms along x)
 Y_STEP_MM = 0.02            # lines along the backbone on each cut

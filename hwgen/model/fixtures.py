@@ -20,6 +20,7 @@ import math
 from dataclasses import dataclass
 
 from ..params import Design
+from . import hardware
 from .fixing import disk_thicknesses
 
 # Bolt patterns of the tables the mount stands on: pitch, clearance hole, screw.
@@ -41,14 +42,15 @@ UPPER_JAW = 12.0            # height of the upper jaw above the strip, mm
 JAW_BEYOND_STRIP = 2.0      # the jaws run this far past the strip's base end, mm
 STRIP_RECESS_FRACTION = 0.5  # the strip lies in a recess this share of its thickness deep in the lower jaw
 STRIP_RECESS_CLEARANCE = 0.1  # per side, strip to recess, mm
-CLAMP_GAP = 0.01            # each jaw stands this far off the strip until the jaw screws close them on it, mm
+JAW_STANDOFF = 0.01         # each jaw stands this far off the strip until the jaw screws close them on it, mm
 JAW_SCREW_FROM_END = 7.0    # jaw screws this far from the jaws' front and back faces, mm
-NUT_AF, NUT_THICK, NUT_PLAY = 5.5, 2.4, 0.3   # ISO 4032 M3 nut and the room it slides in with
+NUT_AF, NUT_THICK = hardware.nut("M3")                       # ISO 4032 M3 nut (data/fasteners.csv)
+NUT_PLAY = hardware.size("nut trap", "any", "play")           # the room it slides in with
 JAW_NUT_WALL = 1.0          # resin between the two rows of jaw screws' nut traps, mm
 # the least strip the jaws clamp beyond the base disk: two rows of screws whose nut traps keep a wall between them, mm
 JAW_LEAST = math.ceil(2 * JAW_SCREW_FROM_END + NUT_AF + NUT_PLAY + JAW_NUT_WALL - JAW_BEYOND_STRIP)
 NUT_DEPTH = 3.5             # nut traps this far below the lower jaw's top face, mm
-M3_HEAD = 5.5               # ISO 4762 M3 head diameter (for access around the disk screws), mm
+M3_HEAD = hardware.size("socket head cap screw", "M3", "head_diameter")   # for access around the disk screws
 
 JIG_ENGAGE = 3.0            # a disk's rim enters each comb wall this deep (x), mm
 JIG_CLEAR = 1.0             # the comb walls stand this far clear of the strip's edges and the hubs' sides, mm
@@ -114,8 +116,8 @@ def mount_layout(d: Design, disk_screws=()) -> MountLayout:
     return MountLayout(
         y_face=y_face, y_back=y_back, y_column_front=y_col, y_foot_back=min(rows) - FOOT_EDGE,
         jaw_half_x=half_x, z_table=z_table, z_foot_top=z_table + FOOT_THICKNESS, z_jaw_bottom=JAW_BOTTOM,
-        z_lower_top=-t / 2 + STRIP_RECESS_FRACTION * t, z_recess=-t / 2 - CLAMP_GAP, z_upper_bottom=t / 2 + CLAMP_GAP,
-        z_upper_top=t / 2 + CLAMP_GAP + UPPER_JAW, recess_half_x=bb.height / 2 + STRIP_RECESS_CLEARANCE,
+        z_lower_top=-t / 2 + STRIP_RECESS_FRACTION * t, z_recess=-t / 2 - JAW_STANDOFF, z_upper_bottom=t / 2 + JAW_STANDOFF,
+        z_upper_top=t / 2 + JAW_STANDOFF + UPPER_JAW, recess_half_x=bb.height / 2 + STRIP_RECESS_CLEARANCE,
         jaw_screws=screws, disk_screws=tuple((float(x), float(z)) for x, z in disk_screws),
         screw_hole=bm.screw_hole, foot_holes=feet, foot_hole=hole, bolt=bolt, pitch=pitch,
         foot_half_x=fx + FOOT_EDGE)

@@ -20,10 +20,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import hardware
+
 GRID_MM = 0.5            # the search grid on the disk face
 MARGIN_CAP_MM = 1.0      # clearance beyond what is required that still counts toward a better place
 MARGIN_STEP_MM = 0.05    # clearances this close count as equal, and the wider stance decides
-WASHER_OD = 7.0          # ISO 7089 M3 washer under each head: what must clear the eyelets and the hub
+WASHER_OD = hardware.size("washer", "M3", "outer_diameter")   # ISO 7089 M3 washer under each head: what must clear
+#                                                               the eyelets and the hub
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ Printed parts are the manifest's parts, one row per file, grouped by family (the
 * the backbone strip (any part of a purchased family, or with ``"purchased": true`` in its
   manifest entry): its cut size from the file's bounding box, its holes from the drill template;
 * every tendon, cut to its rest length plus the tie-off and spool allowances of ``bom:``;
-  the rest length is the one the checks measured from the geometry (``report.json``, written
+  the rest length is the one the checks measured from the geometry (their report, handed over
   by the stage before this one); a folder without a report (built without its checks) gets
   eq. (2) at zero curvature on the design report's eyelets, and says so;
 * hardware a part lists in its manifest entry as ``"hardware": [{"item", "qty", "size",
@@ -21,20 +21,21 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 from pathlib import Path
 
 import numpy as np
 
-from ..cad.manifest import sha256
+from ..cad.manifest import ManifestPart, sha256
+from ..checks.meshes import part_mesh
+from ..checks.report import REPORT
+from ..model import hardware
 from ..model import kinematics as kin
 from ..model.fixing import termination_of
 
 PURCHASED_ROLES = {"backbone"}     # families that are bought and cut, not printed
-REPORT = "report.json"             # written by the checks stage, before this one
 
 # ISO 273 "normal" clearance holes: hole diameter -> metric thread it clears.
-ISO273_NORMAL = {2.4: "M2", 2.9: "M2.5", 3.4: "M3", 4.5: "M4", 5.5: "M5", 6.6: "M6", 9.0: "M8"}
+ISO273_NORMAL = hardware.clearance_holes()     # ISO 273 normal clearance hole -> thread (data/fasteners.csv)
 CLEARANCE_MATCH_MM = 0.35          # a hole within this of a table size takes that thread
 TIP_SCREW = "socket head cap screw ISO 4762"   # fastens the tensioner (or a fixture) to the tip disk
 
@@ -60,14 +61,12 @@ def thread_for_hole(diameter: float) -> str | None:
     return ISO273_NORMAL[best] if abs(best - diameter) <= CLEARANCE_MATCH_MM else None
 
 
-def rest_lengths(folder: Path, manifest: dict) -> tuple[dict[str, float], str]:
-    """Tendon rest lengths (mm) and where they came from."""
-    path = Path(folder) / REPORT
-    if path.exists():
+def rest_lengths(manifest: dict, report: dict | None) -> tuple[dict[str, float], str]:
+    """Tendon rest lengths (mm) and where they came from: the checks' ``report`` (None: there is none)."""
+    if report is not None:
         try:
-            rep = json.loads(path.read_text())
-            lengths = {t["name"]: float(t["rest_length_mm"]) for t in rep.get("tendons", [])}
-        except (OSError, ValueError, KeyError, TypeError):
+            lengths = {t["name"]: float(t["rest_length_mm"]) for t in report.get("tendons", [])}
+        except (ValueError, KeyError, TypeError, AttributeError):
             lengths = {}
         names = {t["name"] for t in manifest["design_report"]["tendons"]}
         if lengths and names <= set(lengths):
@@ -82,8 +81,7 @@ def rest_lengths(folder: Path, manifest: dict) -> tuple[dict[str, float], str]:
 def _size(folder: Path, entry: dict) -> str:
     """Overall size, largest first, from the STL's vertices (the manifest's CAD box is loose)."""
     try:
-        import trimesh
-        lo, hi = trimesh.load_mesh(str(Path(folder) / entry["files"]["stl"]["path"]), process=False).bounds
+        lo, hi = part_mesh(folder, ManifestPart.of(entry)).bounds
     except (OSError, ValueError, KeyError):
         lo, hi = np.asarray(entry["bbox_mm"]["min"]), np.asarray(entry["bbox_mm"]["max"])
     ext = sorted(np.asarray(hi) - np.asarray(lo), reverse=True)
@@ -95,8 +93,9 @@ def _strip_holes(manifest: dict) -> int:
     return len(seen)
 
 
-def bom_rows(folder: Path, manifest: dict, design) -> tuple[list[dict], str]:
-    """Every row of the bill of materials (dicts keyed by COLUMNS) and the rest-length source."""
+def bom_rows(folder: Path, manifest: dict, design, report: dict | None) -> tuple[list[dict], str]:
+    """Every row of the bill of materials (dicts keyed by COLUMNS) and the rest-length source; ``report``
+    is the checks' (None: there is none, and the lengths and adhesive come from the design report)."""
     rows: list[dict] = []
 
     def add(**kw):
@@ -109,7 +108,7 @@ def bom_rows(folder: Path, manifest: dict, design) -> tuple[list[dict], str]:
             continue
         add(category="printed", part=e["name"], family=e["role"], qty=1,
             material=design.process.name, size=_size(folder, e),
-            volume_mm3=f"{e['volume_mm3']:.1f}", mass_g=f"{e['mass_g']:.2f}", file=e["files"]["stl"]["path"],
+            volume_mm3=f"{e['volume_mm3']:.1f}", mass_g=f"{e['mass_g']:.2f}", file=ManifestPart.of(e).stl,
             notes=_printed_note(e))
 
     template = manifest.get("files", {}).get("backbone_template", {}).get("path", "backbone_template.dxf")
@@ -126,9 +125,9 @@ def bom_rows(folder: Path, manifest: dict, design) -> tuple[list[dict], str]:
             material = e.get("material", "")
         add(category="purchased", part=e["name"], family=e["role"], qty=1, material=material,
             size=_size(folder, e), volume_mm3=f"{e['volume_mm3']:.1f}", mass_g=f"{e['mass_g']:.2f}",
-            file=e["files"]["step"]["path"], notes=notes)
+            file=ManifestPart.of(e).step, notes=notes)
 
-    lengths, source = rest_lengths(folder, manifest)
+    lengths, source = rest_lengths(manifest, report)
     r = design.bom
     allowance = r.tie_off_mm + r.spool_mm
     tm = design.tendon_material
@@ -151,20 +150,20 @@ def bom_rows(folder: Path, manifest: dict, design) -> tuple[list[dict], str]:
                                      f"{'their seats' if len(names) > 1 else 'its seat'} in the base disk")
     for item, qty, size, material, notes in _fasteners(manifest):
         add(category="purchased", part=item, family="hardware", qty=qty, size=size, material=material, notes=notes)
-    ml, how = _adhesive_ml(folder, manifest, design)
+    ml, how = _adhesive_ml(manifest, design, report)
     add(category="purchased", part="adhesive", family="consumable", qty=1, material=design.disks.anchors.adhesive,
         size=f"{ml:.2f} ml", notes=how)
     return rows, source
 
 
-def _adhesive_ml(folder: Path, manifest: dict, design) -> tuple[float, str]:
+def _adhesive_ml(manifest: dict, design, report: dict | None) -> tuple[float, str]:
     """Adhesive for every disk: the slot's gap around the strip over the length the disk holds it."""
     h, t = design.backbone.height, design.backbone.thickness
     try:
-        fits = json.loads((Path(folder) / REPORT).read_text())["as_built"]["disks"]
+        fits = report["as_built"]["disks"]
         gaps = [((h + f["play_x_mm"]) * (t + f["play_z_mm"]) - h * t) * f["engagement_mm"] for f in fits]
         how = "fills each slot's gap over the length its hub holds the strip (report.json: as_built)"
-    except (OSError, ValueError, KeyError, TypeError):
+    except (ValueError, KeyError, TypeError):
         gaps = [(d["slot_mm"][0] * d["slot_mm"][1] - h * t) * d.get("engagement_mm", d["thickness_mm"])
                 for d in manifest["design_report"]["disks"]]
         how = "fills each slot's gap over the length its hub holds the strip (design report)"
@@ -307,10 +306,10 @@ def _markdown(manifest: dict, design, rows: list[dict], source: str) -> str:
     return "\n".join(L)
 
 
-def write_bom(folder: Path, manifest: dict, design) -> list[dict]:
+def write_bom(folder: Path, manifest: dict, design, report: dict | None) -> list[dict]:
     """bom.csv and bom.md into the folder; records them and the rest-length source in the manifest."""
     folder = Path(folder)
-    rows, source = bom_rows(folder, manifest, design)
+    rows, source = bom_rows(folder, manifest, design, report)
     (folder / "bom.csv").write_text(_csv(rows), encoding="utf-8")
     (folder / "bom.md").write_text(_markdown(manifest, design, rows, source), encoding="utf-8")
     files = manifest.setdefault("files", {})

@@ -34,7 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cad.manifest import sha256
+from ..cad.manifest import ManifestPart, sha256
+from ..checks.meshes import part_meshes
 from .bom import is_purchased
 
 FOLDER = "plates"
@@ -246,14 +247,11 @@ def printed_parts(manifest: dict) -> list[dict]:
 
 def layout(folder: Path, manifest: dict, design) -> tuple[list[Oriented], list[dict], list[str]]:
     """Every printed part oriented, the plates (name -> corner x, y and turned) and the parts on none."""
-    import trimesh
-
     proc, settings = design.process, design.plates
     oriented = []
-    for e in printed_parts(manifest):
-        mesh = trimesh.load_mesh(str(Path(folder) / e["files"]["stl"]["path"]), process=True)
-        oriented.append(orient(e["name"], e["role"], np.asarray(mesh.vertices), np.asarray(mesh.faces),
-                               float(e["volume_mm3"]), proc.technology, settings, proc.build_volume))
+    for p, mesh in part_meshes(folder, [ManifestPart.of(e) for e in printed_parts(manifest)]):
+        oriented.append(orient(p.name, p.role, np.asarray(mesh.vertices), np.asarray(mesh.faces),
+                               float(p.volume_mm3), proc.technology, settings, proc.build_volume))
     too_tall = {o.name for o in oriented if o.size[2] > proc.build_volume[2]}
     sizes = {o.name: (float(o.size[0]), float(o.size[1])) for o in oriented if o.name not in too_tall}
     plates, nowhere = pack(sizes, proc.build_volume[:2], settings.gap_mm, settings.edge_margin_mm)

@@ -27,6 +27,13 @@ def _save(plt, fig, path: Path) -> None:
 
 
 def plot_lengths(report: dict, path: Path) -> None:
+    """lengths.png: :func:`lengths_figure` written."""
+    _save(_pyplot(), lengths_figure(report), path)
+
+
+def lengths_figure(report: dict):
+    """The matplotlib Figure of lengths.png: every tendon's ΔL over the sweep on top (one line
+    each, labelled by name); the budgeted ones below with ±budget lines."""
     plt = _pyplot()
 
     ang = np.asarray(report["sweep"]["angles_deg"])
@@ -59,17 +66,26 @@ def plot_lengths(report: dict, path: Path) -> None:
         ax.grid(True, alpha=0.3)
     axes[-1, 0].set_xlabel("constant-curvature bending angle (deg)")
     fig.tight_layout()
-    _save(plt, fig, path)
+    return fig
 
 
 def plot_sag(report: dict, design_report: dict, path: Path) -> bool:
-    """sag.png: the robot's own-weight state N seen from the side, like the first photograph of
-    Sect. III-B: the deformed strip, every disk to scale square to it, the tip assembly's centre
-    of mass, the clamp, the straight line it would keep without weight, and the numbers. Returns
-    False (and writes nothing) when the report has no gravity state."""
+    """sag.png (:func:`sag_figure`); False (and nothing written) when the report has no gravity state."""
+    fig = sag_figure(report, design_report)
+    if fig is None:
+        return False
+    _save(_pyplot(), fig, path)
+    return True
+
+
+def sag_figure(report: dict, design_report: dict):
+    """The Figure of sag.png: the robot's own-weight state N seen from the side, like the first
+    photograph of Sect. III-B: the deformed strip, every disk to scale square to it, the tip
+    assembly's centre of mass, the clamp, the straight line it would keep without weight, and the
+    numbers. None when the report has no gravity state."""
     g = report.get("gravity") or {}
     if not g.get("curve"):
-        return False
+        return None
     plt = _pyplot()
     from matplotlib.patches import Polygon, Rectangle
 
@@ -128,22 +144,30 @@ def plot_sag(report: dict, design_report: dict, path: Path) -> bool:
     ax.legend(loc="lower left", fontsize=8)
     ax.set_title(f"{report['design']}: own weight, no tendon tensioned (state N), flexible direction along gravity")
     fig.tight_layout()
-    _save(plt, fig, path)
-    return True
+    return fig
 
 
 def plot_tolerance(report: dict, path: Path) -> bool:
-    """tolerance.png, like the lower panel of Fig. 6 for each budgeted tendon: ΔL against the
-    bending angle through the hole centres (eq. (2)), along the taut path of the nominal print,
-    and the as-built spread (p5-p95 band, p50, min-max envelope) against ±budget; below, the
-    histogram of each sample's largest |ΔL| with the budget and the verdict's statistic. Returns
-    False (and writes nothing) without a budgeted tendon."""
+    """tolerance.png (:func:`tolerance_figure`); False (and nothing written) without a budgeted tendon."""
+    fig = tolerance_figure(report)
+    if fig is None:
+        return False
+    _save(_pyplot(), fig, path)
+    return True
+
+
+def tolerance_figure(report: dict):
+    """The Figure of tolerance.png, like the lower panel of Fig. 6 for each budgeted tendon (a
+    column each): ΔL against the bending angle through the hole centres (eq. (2)), along the taut
+    path of the nominal print, and the as-built spread (p5-p95 band, p50, min-max envelope)
+    against ±budget; below, the histogram of each sample's largest |ΔL| with the budget and the
+    verdict's statistic. None without a budgeted tendon."""
     tb = (report.get("as_built") or {}).get("taut")
     if not tb:
-        return False
+        return None
     rows = [(k, r) for k, r in enumerate(tb["tendons"]) if r["budget_mm"] is not None]
     if not rows:
-        return False
+        return None
     plt = _pyplot()
 
     ang = np.asarray(tb["angles_deg"], float)
@@ -191,5 +215,4 @@ def plot_tolerance(report: dict, path: Path) -> bool:
                  f"station ±{p['station_tolerance_mm']:g} mm, "
                  f"tilt and play as measured)", fontsize=9)
     fig.tight_layout(rect=(0, 0, 1, 0.95))
-    _save(plt, fig, path)
-    return True
+    return fig

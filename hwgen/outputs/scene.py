@@ -17,6 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..cad.manifest import manifest_parts
+from ..checks.meshes import part_meshes
 from ..model import kinematics as kin
 
 FEATURE_ANGLE_DEG = 30.0    # a mesh edge sharper than this is drawn (rims, hole edges, chamfers)
@@ -92,15 +94,11 @@ def is_fixture(entry: dict) -> bool:
 def load_parts(folder: Path, manifest: dict, fixtures: bool = False) -> list[ScenePart]:
     """The robot's parts (or, with ``fixtures``, only the assembly aids), read back from their STLs
     (vertices merged)."""
-    import trimesh
     out = []
     keep = {"name", "role", "station", "files", "placement", "color", "volume_mm3", "bbox_mm"}
-    for e in manifest["parts"]:
-        if is_fixture(e) != fixtures:
-            continue
-        mesh = trimesh.load_mesh(str(Path(folder) / e["files"]["stl"]["path"]), process=True)
-        out.append(ScenePart(e["name"], e["role"], np.asarray(mesh.vertices), np.asarray(mesh.faces),
-                             np.asarray(e["placement"], dtype=float), e.get("station"),
+    for p, mesh in part_meshes(folder, [p for p in manifest_parts(manifest) if p.fixture == fixtures]):
+        e = p.entry
+        out.append(ScenePart(p.name, p.role, np.asarray(mesh.vertices), np.asarray(mesh.faces), p.placement, p.station,
                              {k: v for k, v in e.items() if k not in keep} | {"color": e.get("color")}))
     return out
 

@@ -11,6 +11,12 @@ from .plots import _pyplot, _save
 
 
 def plot_stiffness(report: dict, path: Path) -> None:
+    """stiffness.png: :func:`stiffness_figure` written."""
+    _save(_pyplot(), stiffness_figure(report), path)
+
+
+def stiffness_figure(report: dict):
+    """The Figure of stiffness.png: a bar per disk and state (a colour per state, log scale)."""
     plt = _pyplot()
     states = report["states"]
     disks = [d["disk"] for d in states[0]["disks"]]
@@ -34,10 +40,16 @@ def plot_stiffness(report: dict, path: Path) -> None:
     ax.grid(axis="y", which="both", alpha=0.3)
     ax.legend(ncol=min(n, 9), fontsize=8, loc="upper right")
     fig.tight_layout()
-    _save(plt, fig, path)
+    return fig
 
 
 def plot_gravity(report: dict, path: Path) -> None:
+    """gravity.png: :func:`gravity_figure` written."""
+    _save(_pyplot(), gravity_figure(report), path)
+
+
+def gravity_figure(report: dict):
+    """The Figure of gravity.png: the strip's shape per state, one line each."""
     plt = _pyplot()
     states = report["states"]
     fig, ax = plt.subplots(figsize=(9, 4.5))
@@ -55,4 +67,4 @@ def plot_gravity(report: dict, path: Path) -> None:
     ax.legend(fontsize=8, loc="lower left")
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    _save(plt, fig, path)
+    return fig

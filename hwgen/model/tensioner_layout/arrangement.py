@@ -10,7 +10,7 @@ import numpy as np
 
 from ..gearing import WormPair
 from ..routing import TendonPath
-from .sizes import (CAP, CLAMP_GAP, CLAMP_HEAD, CLAMP_PLATE, EVERY_ORDER_UP_TO, FLANGE, GAP, PIN_ENGAGE, PIN_LENGTHS,
+from .sizes import (CAP, CLAMP_BAY, CLAMP_HEAD, CLAMP_PLATE, EVERY_ORDER_UP_TO, FLANGE, GAP, PIN_ENGAGE, PIN_LENGTHS,
                     SHELF, STRIP_CLAMP_X, STRIP_CLAMP_Z, WIND_WIDTH, WORM_CLEAR, NoFit, Sizes)
 
 
@@ -83,14 +83,14 @@ def _wheel_stack(zs: list[float], b: float, worm_radius: float, gear_low: bool):
     reach = CLAMP_PLATE[2] + CLAMP_HEAD
     caps, clamps = [], []
     if gear_low:
-        top = min(zones[0][0] - FLANGE - CLAMP_GAP, zs[0] - WORM_CLEAR - worm_radius + b / 2)
+        top = min(zones[0][0] - FLANGE - CLAMP_BAY, zs[0] - WORM_CLEAR - worm_radius + b / 2)
         gear = (top - b, top)
         clamps.append((gear[1], 1.0))
         if len(zones) > 1:
             caps.append((zones[-1][1], zones[-1][1] + CAP))
             clamps.append((caps[-1][1], 1.0))
     else:
-        bot = max(zones[-1][1] + FLANGE + CLAMP_GAP, zs[-1] + WORM_CLEAR + worm_radius - b / 2)
+        bot = max(zones[-1][1] + FLANGE + CLAMP_BAY, zs[-1] + WORM_CLEAR + worm_radius - b / 2)
         gear = (bot, bot + b)
         clamps.append((gear[0], -1.0))
         if len(zones) > 1:

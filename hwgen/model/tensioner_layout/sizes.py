@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 
 from ...params import Design, Tensioner
+from .. import hardware
 from ..gearing import WormPair, worm_pair
 from ..specs import DiskSpec
 
@@ -13,12 +14,11 @@ from ..specs import DiskSpec
 WIND_WIDTH = 3.0         # axial length of one tendon's winding zone
 FLANGE_HEIGHT = 2.5      # flange radius above the drum core: holds a few turns of 0.15 mm line
 FLANGE = 1.2             # flange thickness (≥ 0.8 mm process wall)
-CLAMP_GAP = 3.5          # axial gap between the inner flange and the wheel face, room for the clamp
+CLAMP_BAY = 3.5          # axial gap between the inner flange and the wheel face, room for the clamp
 WORM_CLEAR = 1.5         # least z distance from a worm to its own unit's tendon planes
 HUB_WALL = 2.0           # radial wall of the drum around the pin bore
-CLAMP_SCREW = 2.0        # M2: pinches the tendon under the clamp plate
-CLAMP_PLATE = (6.0, 5.0, 1.5)   # clamp plate x, y, thickness
-CLAMP_HEAD = 1.4         # M2 low head (ISO 7380) height above the plate
+CLAMP_PLATE = (6.0, 5.0, 1.5)   # clamp plate x, y, thickness; an M2 button head screw pinches the tendon under it
+CLAMP_HEAD = hardware.size("button head screw", "M2", "head_height")   # its head's height above the plate
 ANCHOR_HOLE = 1.0        # axial hole through the inner flange the tendon leaves the drum by
 CAP = 5.0                # end cap at the far end of a two-zone drum, holds the second clamp
 # Housing (mm)
@@ -34,22 +34,24 @@ POST = 6.0               # far worm bearing post, square section
 BOSS = 3.5               # radius of the pin bosses and bars around a dowel
 UNIT_GAP = 2.0           # y gap between neighbouring units' parts
 PIN_ENGAGE = 5.0         # dowel length inside a turning part's bore
-PIN_LENGTHS = (8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30)   # ISO 2338 lengths for Ø3, mm
+PIN_LENGTHS = hardware.lengths("dowel pin", "Ø3")     # ISO 2338 stock lengths, mm
 STRIP_CLAMP_Z = (-1.5, 6.0)   # strip clamp block, z range (set screws from +z)
 STRIP_CLAMP_X = 2.0       # block beyond the strip's edges, x
 STRIP_SLOT_CLEARANCE = 0.05   # per side, strip in its slot
-M3_CLEARANCE = 3.4        # ISO 273 normal
-M2_CLEARANCE = 2.4
+M3_CLEARANCE = hardware.clearance_hole("M3")        # ISO 273 normal
+M2_CLEARANCE = hardware.clearance_hole("M2")
 MOUNT_BAR = 9.0           # z height of the base bar through a row of tip-disk screws
 TENDON_HOLE = 3.0         # minimum hole through a base bar around a tendon
-# Fasteners by process: (hole it needs). Resin: hex nuts (ISO 4032) in traps, 0.2 mm over the
-# nut (SLA holds ±0.05 mm; the nut must slide in); thermoplastic: heat-set inserts.
-NUT = {"M2": (4.0, 1.6), "M3": (5.5, 2.4)}      # across flats, height
-NUT_PLAY = 0.2
-INSERT = {"M2": (3.2, 4.0), "M3": (4.0, 5.7)}   # bore, length (M2 × 4, M3 × 5.7)
+# Fasteners by process (data/fasteners.csv). Resin: hex nuts (ISO 4032) in traps, with play over
+# the nut; thermoplastic: heat-set inserts.
+NUT = {t: hardware.nut(t) for t in ("M2", "M3")}          # across flats, height
+NUT_PLAY = hardware.size("nut trap", "any", "play")
+INSERT = {t: hardware.insert(t) for t in ("M2", "M3")}    # bore, length
+SET_SCREW = hardware.size("set screw", "M3", "length")    # the strip clamp's M3 set screws
 SPINE = 4.0              # spine wall: the drive shaft's bearing and the worm's thrust face
 BASE = {"nut": 5.0, "insert": 7.0}    # base bars on the tip disk (y)
-SCREW_LENGTHS = {"M2": (4, 5, 6, 8, 10, 12, 16, 20), "M3": (6, 8, 10, 12, 16, 20, 25)}
+# stock lengths: the clamps' M2 button head screws, the tip disk's M3 socket head cap screws
+SCREW_LENGTHS = {"M2": hardware.lengths("button head screw", "M2"), "M3": hardware.lengths("socket head cap screw", "M3")}
 # Layout search
 X_STEP = 0.5
 X_COARSE = 2.0
@@ -170,11 +172,11 @@ class Sizes:
 
 
 def standard_screw(kind: str, reach: float) -> float:
-    """Longest standard screw of this size no longer than ``reach``."""
-    fits = [n for n in SCREW_LENGTHS[kind] if n <= reach + 1e-9]
-    if not fits:
+    """Longest standard screw of this size no longer than ``reach``: it ends inside the body."""
+    n = hardware.longest_within(SCREW_LENGTHS[kind], reach)
+    if n is None:
         raise NoFit(f"no standard {kind} screw is as short as {reach:.1f} mm")
-    return float(max(fits))
+    return float(n)
 
 
 def tip_joint(fast: str, tip_thickness: float, base_t: float) -> Fastening:
