@@ -316,12 +316,19 @@ def _cached_stage(store: cache.Store, name: str, stage, plan: Plan, folder: Path
 
 # ---------------------------------------------------------------- the parts, through the cache
 
+def _sources() -> list[Path]:
+    """The files that make the solids: the code in hwgen/cad and hwgen/model and the tables in
+    hwgen/data they read (a nut's size in fasteners.csv shapes its trap as much as code does)."""
+    root = Path(__file__).resolve().parent
+    return sorted([*root.glob("cad/*.py"), *root.glob("model/**/*.py"), *root.glob("data/*.csv")])
+
+
 def _sources_digest() -> str:
-    """The sha256 of the code that makes the solids (hwgen/cad and hwgen/model): a cached part
-    made by other code is not reused, even under the same version number."""
+    """The sha256 of :func:`_sources`: a cached part made by other code or other tables is not
+    reused, even under the same version number."""
     root = Path(__file__).resolve().parent
     h = hashlib.sha256()
-    for f in sorted([*root.glob("cad/*.py"), *root.glob("model/**/*.py")]):
+    for f in _sources():
         h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes() + b"\0")
     return h.hexdigest()
 

@@ -235,9 +235,11 @@ def test_hole_too_small_for_tendon_angle(built, tmp_path):
 
 def test_overlapping_parts_named_with_volume(built, tmp_path):
     _, folder = _copy(built, tmp_path)
+    s1, s2 = make_plan(load(PARAMS / "prototype.yaml").design).disks[1:3]
+    into = 1.5
     m = json.loads((folder / "manifest.json").read_text())
     d1 = next(p for p in m["parts"] if p["name"] == "disk_01")
-    d1["placement"][1][3] += 21.0                   # 1.5 mm into disk_02
+    d1["placement"][1][3] += (s2.y - s2.thickness / 2) - (s1.y + s1.thickness / 2) + into   # 1.5 mm into disk_02
     (folder / "manifest.json").write_text(json.dumps(m))
     rep = _check(folder)
     bad = {tuple(sorted(c["where"]["parts"])): c for c in _failed(rep, "part.interference")}
@@ -245,10 +247,12 @@ def test_overlapping_parts_named_with_volume(built, tmp_path):
     assert set(bad) == {("disk_01", "disk_02"), ("disk_01", "jig_1")}
     c = bad[("disk_01", "disk_02")]
     assert "disk_01 and disk_02 interfere" in c["message"]
-    # two disks overlapping by 1.5 mm of their Ø72 faces, less the slot and holes; and disk_01's
-    # 8.5 mm hub (151.6 mm² of ring) in disk_02 and its hub
-    hub = 8.5 * (62.5 * 3.09 - 60.1 * 0.69)
-    assert 1.5 * np.pi * 36 ** 2 * 0.9 < c["measured"] < 1.5 * np.pi * 36 ** 2 + hub
+    # two disks overlapping by 1.5 mm of their faces, less the slot and holes; and disk_01's hub
+    # (its wall around the slot, over its length) in disk_02 and its hub
+    w = s1.hub.wall
+    hub = s1.hub.length * ((s1.slot_width + 2 * w) * (s1.slot_height + 2 * w) - s1.slot_width * s1.slot_height)
+    face = np.pi * (s1.outer_diameter / 2) ** 2
+    assert into * face * 0.9 < c["measured"] < into * face + hub
     assert any(c["where"]["part"] == "disk_01" for c in _failed(rep, "disk.station"))
 
 

@@ -64,3 +64,11 @@ def test_a_screw_in_a_blind_body_is_the_longest_that_ends_inside(room):
 def test_no_screw_is_short_enough_for_too_little_room():
     stock = hardware.lengths("button head screw", "M2")
     assert hardware.longest_within(stock, stock[0] - 0.5) is None
+
+
+def test_the_part_cache_is_keyed_by_the_tables_the_solids_read():
+    """A cached part made with another fastener (or material) table is not reused: the tables are
+    among the files the part cache's key is taken from, beside the model's and the CAD's code."""
+    from hwgen import pipeline
+    names = {f.name for f in pipeline._sources()}
+    assert {"fasteners.csv", "materials.csv", "hardware.py", "fixtures.py"} <= names
