@@ -39,7 +39,6 @@ from OCP.TopExp import TopExp
 from OCP.TopoDS import TopoDS
 
 from ..model.gearing import GearDesignError, WormPair
-from ..model.plan import Plan
 from ..model.tensioner_layout import Fastening, TensionerLayout, Unit, joint, tip_joint
 from ..model.tensioner_layout.sizes import (ANCHOR_HOLE, AXIAL_PLAY, CAP, CLAMP_PLATE, CLAMP_SCREW, DRIVE_FLANGE,
                                             DRIVE_HEX, DRIVE_HEX_LENGTH, DRIVE_SHAFT, NUT, NUT_PLAY, PIN_ENGAGE, POST,
@@ -98,14 +97,13 @@ def drive_solid(lay: TensionerLayout) -> cq.Solid:
     """The drive shaft, file Z from its flange's outer face: the flange (it stops the shaft
     against the spine) with the hex key's socket, the shaft that turns in the spine's hole,
     and the hex end pressed into the worm."""
-    ts = lay.params
     fd, ft = DRIVE_FLANGE
     shaft_len = lay.spine[1] - lay.spine[0] + AXIAL_PLAY / 2
     # pieces overlap 0.01 mm inside each other so they fuse into one solid, never past the worm's face
     flange = cq.Solid.makeCylinder(fd / 2, ft, cq.Vector(0, 0, 0))
     shaft = cq.Solid.makeCylinder(DRIVE_SHAFT / 2, shaft_len + 0.01, cq.Vector(0, 0, ft - 0.01))
     hexa = _hex(DRIVE_HEX, (0, 0, ft + shaft_len - 0.01), (0, 0, ft + shaft_len + DRIVE_HEX_LENGTH), (1, 0, 0))
-    socket = _hex(ts.hex_key + HEX_CLEARANCE, (0, 0, -TOOL), (0, 0, HEX_DEPTH), (1, 0, 0))
+    socket = _hex(lay.hex_key + HEX_CLEARANCE, (0, 0, -TOOL), (0, 0, HEX_DEPTH), (1, 0, 0))
     vent = cq.Solid.makeCylinder(VENT / 2, ft + shaft_len + DRIVE_HEX_LENGTH + TOOL, cq.Vector(0, 0, 0))
     return _one(flange.fuse(shaft, hexa).cut(socket, vent))
 
@@ -346,11 +344,10 @@ def _lightening(lay: TensionerLayout, unit: Unit, height: float) -> list[cq.Soli
     """Material the wheel does not need: the drum core hollow between the dowels' ends (the
     hollow opens into the pin bore at both ends, so resin drains), and holes through the gear
     between hub and tooth root, away from the clamp's nut and the anchor hole."""
-    ts = lay.params
     out = []
     engaged = PIN_ENGAGE + 1.0
     r_in = lay.hub_radius - LIGHTENING_WALL
-    if height > 2 * engaged + 2 and r_in > (ts.shaft_diameter + ts.running_fit) / 2 + 0.5:
+    if height > 2 * engaged + 2 and r_in > (lay.shaft_diameter + lay.running_fit) / 2 + 0.5:
         out.append(cq.Solid.makeCylinder(r_in, height - 2 * engaged, cq.Vector(0, 0, engaged)))
     r0 = lay.hub_radius + LIGHTENING_WALL + LIGHTENING_HOLE / 2
     if r0 + LIGHTENING_HOLE / 2 + LIGHTENING_WALL <= lay.pair.rf2:
@@ -442,14 +439,16 @@ def housing_placement(lay: TensionerLayout) -> np.ndarray:
     return placement(DISK_ROTATION, [0.0, lay.y_face, 0.0])
 
 
-def build_tensioner(plan: Plan) -> Iterator[Part]:
-    lay = plan.require_tensioner_layout()
-    ts = lay.params
+def build_tensioner(lay: TensionerLayout, *, min_wall: float, tendon_diameter: float, tip_screws: int,
+                    tip_thickness: float) -> Iterator[Part]:
+    """The tensioner's parts as ``lay`` places them: the process's ``min_wall`` (the gears'
+    thinnest tip), the tendon's diameter, and the tip disk's screw count and thickness (the
+    screws' grip)."""
     pair = lay.pair
-    problems = pair.problems(ts.friction_coefficient, plan.design.process.min_wall)
+    problems = pair.problems(lay.friction_coefficient, min_wall)
     if problems:
         raise GearDesignError("; ".join(f"tensioner.{f}: {m}" for f, m in problems))
-    running = ts.shaft_diameter + ts.running_fit
+    running = lay.shaft_diameter + lay.running_fit
     # the drive's hex goes into the worm's line to line: the resin's own scatter (±0.05 mm) makes
     # it snug; modelled without overlap so the parts' interference check stays meaningful
     worm = worm_solid(pair, lay.worm_near_end, DRIVE_HEX, running, lay.worm_pin - POST + 0.5)
@@ -465,18 +464,18 @@ def build_tensioner(plan: Plan) -> Iterator[Part]:
         meta = {"channel": u.channel, "tendons": list(u.tendons)}
         wp = lay.worm_placement(u)
         yield Part(f"tensioner_worm_{u.channel}", "tensioner_worm", worm, wp, WORM_COLOR,
-                   meta={**meta, "mesh_with": f"tensioner_wheel_{u.channel}", "hex_key_mm": ts.hex_key,
-                         "hardware": [_dowel(ts.shaft_diameter, lay.worm_pin, "pressed into the far post")],
+                   meta={**meta, "mesh_with": f"tensioner_wheel_{u.channel}", "hex_key_mm": lay.hex_key,
+                         "hardware": [_dowel(lay.shaft_diameter, lay.worm_pin, "pressed into the far post")],
                          **pair.summary()})
         yield Part(f"tensioner_drive_{u.channel}", "tensioner_drive", drive, lay.drive_placement(u), DRIVE_COLOR,
-                   meta={"channel": u.channel, "hex_key_mm": ts.hex_key,
+                   meta={"channel": u.channel, "hex_key_mm": lay.hex_key,
                          "drives": f"tensioner_worm_{u.channel}"})
-        yield _wheel_part(lay, u, wheels[key], meta, plan.design.tendon_material.diameter)
+        yield _wheel_part(lay, u, wheels[key], meta, tendon_diameter)
         yield from _clamp_parts(lay, u, clamp, meta)
     hp = housing_placement(lay)
     inv = np.linalg.inv(hp)
-    n_tip = len(plan.disks[-1].mount_holes)
-    tip = tip_joint(lay.fastening, plan.disks[-1].thickness, lay.base_t)
+    n_tip = tip_screws
+    tip = tip_joint(lay.fastening, tip_thickness, lay.base_t)
     set_screw = {"nut": _hw("hex nut ISO 4032", "M3", 2, STEEL, "for the strip's set screws, in a side slot"),
                  "insert": _hw("heat-set insert", "M3 × 5.7", 2, BRASS, "for the strip's set screws, melted in")}
     yield Part("tensioner_housing", "tensioner_housing", housing_solid(lay).moved(location(inv)), hp, HOUSING_COLOR,
@@ -490,7 +489,6 @@ def build_tensioner(plan: Plan) -> Iterator[Part]:
 
 
 def _wheel_part(lay: TensionerLayout, u: Unit, solid, meta: dict, tendon_d: float) -> Part:
-    ts = lay.params
     # the run meets its own drum tangentially: the last stretch, where it is closer to the
     # drum than 1.5 tendon diameters, is where it is meant to touch and is not checked
     trim = math.sqrt((lay.winding_radius + 1.5 * tendon_d) ** 2 - lay.winding_radius ** 2)
@@ -499,10 +497,10 @@ def _wheel_part(lay: TensionerLayout, u: Unit, solid, meta: dict, tendon_d: floa
             for r in lay.runs if r.channel == u.channel]
     return Part(f"tensioner_wheel_{u.channel}", "tensioner_wheel", solid, lay.wheel_placement(u), WHEEL_COLOR,
                 meta={**meta, "tendon_runs": runs, "winding_radius_mm": lay.winding_radius,
-                      "winding": ts.winding.get(u.channel, "same"),
+                      "winding": lay.windings[u.channel],
                       "flange_radius_mm": lay.flange_radius, "spool_diameter_mm": 2 * lay.spool_radius,
                       "winding_zones_z_mm": [list(z) for z in u.zones],
-                      "hardware": [_dowel(ts.shaft_diameter, n, "pressed into the housing") for n in u.pins]})
+                      "hardware": [_dowel(lay.shaft_diameter, n, "pressed into the housing") for n in u.pins]})
 
 
 def _clamp_parts(lay: TensionerLayout, u: Unit, clamp, meta: dict) -> Iterator[Part]:
