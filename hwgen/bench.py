@@ -219,7 +219,7 @@ def main(argv: list[str]) -> None:
     params_path = Path(argv[0]) if argv else Path("params/prototype.yaml")
     with timed("import numpy, pydantic, yaml (schema, model)"):
         from hwgen import pipeline
-        from hwgen.model.plan import plan as make_plan
+        from hwgen.model.plan import make_plan
     with timed("import cadquery", "a command that builds no solid skips this"):
         import cadquery  # noqa: F401
     with timed("load + validate YAML"):

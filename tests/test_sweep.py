@@ -122,7 +122,7 @@ def test_lengths_level_sizes_eyelets_as_the_plan_and_takes_eq2_as_kinematics():
     from hwgen.checks.lengths import sweep_angles
     from hwgen.model import kinematics as kin
     from hwgen.model.fixing import disk_thicknesses
-    from hwgen.model.plan import plan as make_plan
+    from hwgen.model.plan import make_plan
     from hwgen.params import read
 
     for name in ("prototype", "paper-table2"):

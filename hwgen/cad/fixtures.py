@@ -11,8 +11,7 @@ from collections.abc import Iterator
 import cadquery as cq
 import numpy as np
 
-from ..model.fixtures import NUT_AF, NUT_DEPTH, NUT_PLAY, NUT_THICK, JigLayout, MountLayout, jig_layout
-from ..model.plan import Plan, base_mount
+from ..model.fixtures import NUT_AF, NUT_DEPTH, NUT_PLAY, NUT_THICK, JigLayout, MountLayout
 from . import Part, placement
 
 MOUNT_COLOR = (0.35, 0.40, 0.48, 1.0)     # slate: it stays on the table
@@ -107,11 +106,10 @@ def _to_file(solid: cq.Solid, shift, along_x: bool = False) -> tuple[cq.Solid, n
     return moved, placement(np.eye(3), s)
 
 
-def build_mount(plan: Plan) -> Iterator[Part]:
-    d = plan.design
-    lay = base_mount(plan)
+def build_mount(lay: MountLayout) -> Iterator[Part]:
+    """The base mount's two parts, as ``lay`` lays them out."""
     lower, upper = mount_solids(lay)
-    t_disk = d.disks.end_thickness
+    t_disk = lay.disk_thickness
     depth = lay.y_face - lay.y_back
     jaw_len = _screw(_jaw_grip(lay) + NUT_DEPTH + NUT_THICK + 0.5)
     disk_len = _screw(t_disk + depth + WASHER + NUT_THICK + 0.5)
@@ -132,7 +130,7 @@ def build_mount(plan: Plan) -> Iterator[Part]:
     ]
     solid, place = _to_file(lower, (0.0, 0.0, lay.z_table))
     yield Part("base_mount", "base_mount", solid, place, MOUNT_COLOR,
-               meta={"hardware": hardware, "bolt_pattern": d.base_mount.bolt_pattern, "grounded": True})
+               meta={"hardware": hardware, "bolt_pattern": lay.bolt_pattern, "grounded": True})
     solid, place = _to_file(upper, (0.0, 0.0, lay.z_upper_bottom))
     yield Part("base_clamp", "base_clamp", solid, place, CLAMP_COLOR, meta={"grounded": True})
 
@@ -176,14 +174,13 @@ def jig_solid(lay: JigLayout, k: int) -> cq.Solid:
     return _one(body.cut(*tools)) if tools else _one(body)
 
 
-def build_jig(plan: Plan) -> Iterator[Part]:
-    lay = jig_layout(plan.design)
-    holds = [s.name for s in plan.disks] + [plan.backbone.name]
+def build_jig(lay: JigLayout, holds: list[str]) -> Iterator[Part]:
+    """The jig's pieces, as ``lay`` lays them out; ``holds``: the parts it holds (disks, then the strip)."""
     for k, pc in enumerate(lay.pieces):
         solid, place = _to_file(jig_solid(lay, k), (0.0, pc.y0, lay.z_floor_bottom), along_x=True)
         yield Part(f"jig_{k + 1}", "jig", solid, place, JIG_COLOR,
                    meta={"fixture": True, "holds": holds, "piece": k + 1, "pieces": len(lay.pieces),
-                         "station_tolerance_mm": plan.design.jig.station_tolerance_mm})
+                         "station_tolerance_mm": lay.station_tolerance_mm})
 
 
 __all__ = ["build_mount", "build_jig"]

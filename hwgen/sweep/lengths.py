@@ -5,7 +5,7 @@ Variants that share the robot's skeleton (stations, backbone length, disk thickn
 count, sweeps) are evaluated together, as arrays with a leading variant axis:
 
 - the eyelet centres of eq. (3) at every station (:func:`hwgen.model.routing.tendon_paths`);
-- each eyelet hole sized as :func:`hwgen.model.plan.plan` sizes it: its axis on the bisector of the
+- each eyelet hole sized as :func:`hwgen.model.plan.make_plan` sizes it: its axis on the bisector of the
   tendon's straight segments (or the disk normal), shared where tendons meet, its diameter
   d/cos α + t·tan α + clearance for the worst angle α over ``disks.eyelets.sweep_deg``. The tip
   disk is sized without the turn toward the tensioner's drum (that needs the tensioner's
