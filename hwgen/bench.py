@@ -236,7 +236,7 @@ def main(argv: list[str]) -> None:
     with timed(f"same {len(plan.disks)} disks, tools cut one by one", "for comparison"):
         for s in plan.disks:
             _cut_one_by_one(s)
-    from hwgen.cad.tensioner_parts import gear_solid
+    from hwgen.cad.wheel import gear_solid
     from hwgen.model.gearing import worm_pair
     pair = worm_pair(loaded.design.tensioner, loaded.design.process.min_wall)
     with timed("build the throated wheel's gear", "blank minus every tooth-space tool in one boolean; "

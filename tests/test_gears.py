@@ -186,7 +186,8 @@ def _mesh_case(params: dict, mu: float) -> dict:
     problems = pair.problems(mu, MIN_WALL)
     if problems:
         return {"status": "rejected", "message": "; ".join(f"{f}: {m}" for f, m in problems)}
-    from hwgen.cad.tensioner_parts import gear_solid, worm_solid
+    from hwgen.cad.wheel import gear_solid
+    from hwgen.cad.worm import worm_solid
     core = 2 * pair.rf1
     hex_key = min(2.5, round((core - 2 * MIN_WALL) * math.cos(math.pi / 6) - 0.2, 1))
     try:
