@@ -680,14 +680,13 @@ def render(loaded: params.LoadedDesign, out_root: Path,
     folder, why it was rebuilt or None).
     """
     folder = Path(out_root) / loaded.name
-    plan = design_plan(loaded)
     why = stale_reason(folder, loaded)
     if why is not None:
         result = build(loaded, Path(out_root), cache_dir=cache_dir)
         return result.manifest.get("render", {}), folder, why
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
         manifest = read_manifest(tmp)
-        draw(plan, tmp, manifest)
+        draw(design_plan(loaded, tensioner_record(manifest)), tmp, manifest)     # current files: as check does
         write_json(tmp / "manifest.json", manifest)
     return manifest["render"], folder, None
 
@@ -698,7 +697,6 @@ def plates(loaded: params.LoadedDesign, out_root: Path,
     existing outputs (a build lays them out too; builds first when the outputs are missing or
     stale). Returns (the plate summary, the folder, why it was rebuilt or None)."""
     folder = Path(out_root) / loaded.name
-    plan = design_plan(loaded)
     why = stale_reason(folder, loaded)
     if why is not None:
         result = build(loaded, Path(out_root), cache_dir=cache_dir)
@@ -706,7 +704,7 @@ def plates(loaded: params.LoadedDesign, out_root: Path,
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
         manifest = read_manifest(tmp)
         shutil.rmtree(tmp / print_plates.FOLDER, ignore_errors=True)
-        summary = plates_stage(plan, tmp, manifest)
+        summary = plates_stage(design_plan(loaded, tensioner_record(manifest)), tmp, manifest)
         write_json(tmp / "manifest.json", manifest)
     return summary, folder, None
 
