@@ -80,7 +80,7 @@ def _anchor_problems(d: Design) -> list[tuple[str, str]]:
         if t.diameter <= seat:
             out.append((f"{path}.diameter", f"a {t.diameter:g} mm {t.kind} pulls through the smallest seat the process "
                                             f"makes, Ø{seat:g} mm (process.min_hole, tendon and hole clearance)"))
-    T = d.disks.end_thickness
+    T = disk_thicknesses(d)[0]          # the base disk's
     room = T / 2 - T * EYELET_CUT_FRACTION
     if d.disks.anchors.plate + CHAMBER_HEIGHT_MM >= room:
         out.append(("disks.anchors.plate", f"{d.disks.anchors.plate:g} mm of seat plate and the chamber over it reach "

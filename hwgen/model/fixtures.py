@@ -93,7 +93,7 @@ def base_length(d: Design) -> float:
     disk and the least the jaws clamp (JAW_LEAST), to the next whole mm."""
     if d.backbone.extra_base is not None:
         return d.backbone.extra_base
-    return float(math.ceil(d.disks.end_thickness / 2 + JAW_LEAST))
+    return float(math.ceil(disk_thicknesses(d)[0] / 2 + JAW_LEAST))
 
 
 def mount_layout(d: Design, disk_screws=()) -> MountLayout:
@@ -101,7 +101,8 @@ def mount_layout(d: Design, disk_screws=()) -> MountLayout:
     base disk's mount holes as the plan placed them)."""
     bm, bb = d.base_mount, d.backbone
     pitch, hole, bolt = BOLT_PATTERNS[bm.bolt_pattern]
-    y_face = -d.disks.end_thickness / 2
+    base_t = disk_thicknesses(d)[0]
+    y_face = -base_t / 2
     y_back = -base_length(d) - JAW_BEYOND_STRIP
     y_col = y_face - ACCESS_MM
     t = bb.thickness
@@ -120,7 +121,7 @@ def mount_layout(d: Design, disk_screws=()) -> MountLayout:
         z_upper_top=t / 2 + CLAMP_GAP + UPPER_JAW, recess_half_x=bb.height / 2 + STRIP_RECESS_CLEARANCE,
         jaw_screws=screws, disk_screws=tuple((float(x), float(z)) for x, z in disk_screws),
         screw_hole=bm.screw_hole, foot_holes=feet, foot_hole=hole, bolt=bolt, pitch=pitch,
-        foot_half_x=fx + FOOT_EDGE, bolt_pattern=bm.bolt_pattern, disk_thickness=d.disks.end_thickness)
+        foot_half_x=fx + FOOT_EDGE, bolt_pattern=bm.bolt_pattern, disk_thickness=base_t)
 
 
 def disk_screw_region(d: Design) -> tuple[tuple[tuple[float, float], tuple[float, float]], float]:
