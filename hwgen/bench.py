@@ -219,7 +219,7 @@ def main(argv: list[str]) -> None:
     params_path = Path(argv[0]) if argv else Path("params/prototype.yaml")
     with timed("import numpy, pydantic, yaml (schema, model)"):
         from hwgen import pipeline
-        from hwgen.model.plan import plan as make_plan
+        from hwgen.model.plan import make_plan
     with timed("import cadquery", "a command that builds no solid skips this"):
         import cadquery  # noqa: F401
     with timed("load + validate YAML"):
@@ -236,7 +236,7 @@ def main(argv: list[str]) -> None:
     with timed(f"same {len(plan.disks)} disks, tools cut one by one", "for comparison"):
         for s in plan.disks:
             _cut_one_by_one(s)
-    from hwgen.cad.tensioner_parts import gear_solid
+    from hwgen.cad.wheel import gear_solid
     from hwgen.model.gearing import worm_pair
     pair = worm_pair(loaded.design.tensioner, loaded.design.process.min_wall)
     with timed("build the throated wheel's gear", "blank minus every tooth-space tool in one boolean; "

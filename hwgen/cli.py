@@ -170,7 +170,7 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
 
     with Progress(TextColumn("{task.description}", markup=False), BarColumn(), MofNCompleteColumn(),
                   TimeElapsedColumn(), console=err, disable=quiet, transient=True) as bar:
-        task = bar.add_task(f"building {loaded.design.design}", total=None)
+        task = bar.add_task(f"building {loaded.name}", total=None)
 
         def progress(name: str, done: int, total: int) -> None:
             bar.update(task, total=total, completed=done, description=f"built {name}")
@@ -182,11 +182,11 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
         say("warning:", "yellow", f"part cache: {note}")
     if parts is not None:
         written = result.manifest["parts_written"]["names"]
-        out.print(f"{loaded.design.design}: {len(written)} of {n} parts written to {printable(result.folder)} "
+        out.print(f"{loaded.name}: {len(written)} of {n} parts written to {printable(result.folder)} "
                   f"({n - len(result.built)} from the part cache); no assembly, checks or pictures")
         return
     reused = f" ({n - len(result.built)} from the part cache)" if len(result.built) < n else ""
-    out.print(f"{loaded.design.design}: {n} parts written to {printable(result.folder)}{reused}")
+    out.print(f"{loaded.name}: {n} parts written to {printable(result.folder)}{reused}")
     failed = [c for c in result.manifest.get("checks", []) if not c.get("passed", True)
               and c.get("severity") == "error"]
     for f in result.plan.findings:
@@ -229,7 +229,7 @@ def routing(params: Path = PARAMS,
                               "function": d.function, "distance_mm": d.distance} for d in devs]
         out.print_json(json.dumps(rep))
         return
-    t = Table(title=f"{loaded.design.design}: eyelets (mm, disk frame at its mid-plane)")
+    t = Table(title=f"{loaded.name}: eyelets (mm, disk frame at its mid-plane)")
     for col in ("i", "y", "tendons", "x", "z", "Ø", "worst α°", "note"):
         t.add_column(col, justify="right" if col not in ("tendons", "note") else "left")
     for d in plan.disks:
@@ -279,7 +279,7 @@ def check(params: Path = PARAMS, out_dir: Path = OUT,
     from .checks.report import print_report, write_junit
     from .pipeline import check as check_design
 
-    rep, folder = _on_outputs(f"checking {loaded.design.design}", quiet,
+    rep, folder = _on_outputs(f"checking {loaded.name}", quiet,
                               lambda: check_design(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache, cache_size)))
     print_report(rep, out, verbose=verbose)
     if report is not None:
@@ -301,9 +301,9 @@ def render(params: Path = PARAMS, out_dir: Path = OUT,
     loaded = _load(params)
     from .pipeline import render as render_design
 
-    entry, folder = _on_outputs(f"drawing {loaded.design.design}", quiet,
+    entry, folder = _on_outputs(f"drawing {loaded.name}", quiet,
                                 lambda: render_design(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache, cache_size)))
-    out.print(f"{loaded.design.design}: bom.csv, bom.md written to {printable(folder)}")
+    out.print(f"{loaded.name}: bom.csv, bom.md written to {printable(folder)}")
     if entry.get("status") != "ok":
         say("warning:", "yellow", entry.get("message", "pictures not drawn"))
         raise typer.Exit(EXIT_FINDINGS)
@@ -322,12 +322,12 @@ def coupon(params: Path = PARAMS, out_dir: Path = OUT,
     loaded = _load(params)
     from .pipeline import coupon as make_coupon
 
-    with err.status(Text(f"building the coupon of {loaded.design.design}"), spinner="dots") if not quiet \
+    with err.status(Text(f"building the coupon of {loaded.name}"), spinner="dots") if not quiet \
             else nullcontext():
         info, folder = make_coupon(loaded, out_dir)
     holes = [f["label"] for f in info["features"] if f["kind"] == "hole"]
     slots = [f["label"] for f in info["features"] if f["kind"] == "slot"]
-    out.print(f"{loaded.design.design}: coupon {' × '.join(f'{v:g}' for v in info['size_mm'])} mm; holes Ø "
+    out.print(f"{loaded.name}: coupon {' × '.join(f'{v:g}' for v in info['size_mm'])} mm; holes Ø "
               f"{', '.join(holes)} mm (design {info['design_hole_mm']:g}); slots {', '.join(slots)} mm a side "
               f"(design {info['design_slot_clearance_mm']:g})")
     for name in ("coupon.stl", "coupon.step", "coupon.json"):
@@ -345,10 +345,10 @@ def plates(params: Path = PARAMS, out_dir: Path = OUT,
     loaded = _load(params)
     from .pipeline import plates as lay_out
 
-    summary, folder = _on_outputs(f"laying out {loaded.design.design}", quiet,
+    summary, folder = _on_outputs(f"laying out {loaded.name}", quiet,
                                   lambda: lay_out(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache)))
     what = "resin" if summary["technology"] == "SLA" else "filament"
-    t = Table(title=f"{loaded.design.design}: {len(summary['plates'])} plate(s) on {printable(summary['printer'])}")
+    t = Table(title=f"{loaded.name}: {len(summary['plates'])} plate(s) on {printable(summary['printer'])}")
     for col in ("plate", "parts", f"{what}, ml", "tallest part", "height, mm"):
         t.add_column(col, justify="right" if col.endswith(("ml", "mm")) else "left")
     for p in summary["plates"]:
@@ -385,10 +385,10 @@ def stiffness(params: Path = PARAMS, out_dir: Path = OUT,
     from .pipeline import stiffness as run_stiffness
 
     which = [s.strip() for s in states.split(",") if s.strip()] if states else None
-    with err.status(Text(f"solving {loaded.design.design}"), spinner="dots") if not quiet else nullcontext():
+    with err.status(Text(f"solving {loaded.name}"), spinner="dots") if not quiet else nullcontext():
         rep, folder = run_stiffness(loaded, out_dir, which)
     ref = next((s for s in rep["states"] if s["state"] == rep["endpoint_ratio"]["states"][1]), None)
-    t = Table(title=f"{loaded.design.design}: stiffness per tendon state (robot horizontal, own weight)")
+    t = Table(title=f"{loaded.name}: stiffness per tendon state (robot horizontal, own weight)")
     for col in ("state", "tip N/mm", "× " + (ref["state"] if ref else "-"), "least disk N/mm", "tip torsion N·mm/rad",
                 "tip sag mm"):
         t.add_column(col, justify="right" if col != "state" else "left")

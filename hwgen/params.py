@@ -185,6 +185,13 @@ class Tendon(_Model):
                                  description="tension the tendon is locked at, robot straight and unloaded, N "
                                              "(a mirrored tendon gets the same)")
 
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Its own name, and its mirror's when it is mirrored (``routing.mirror_name``, else the name + "_m")."""
+        if not self.routing.mirror:
+            return (self.name,)
+        return (self.name, self.routing.mirror_name or f"{self.name}_m")
+
 
 class Termination(_Model):
     """How a tendon ends at the base disk: a knot, or a crimp sleeve squeezed onto it."""
@@ -429,6 +436,11 @@ class LoadedDesign(_Model):
     sha256: str
     warnings: tuple[str, ...] = ()
 
+    @property
+    def name(self) -> str:
+        """The design's name (the YAML's ``design`` key): it names the output folder."""
+        return self.design.design
+
 
 def _path(loc) -> str:
     out = ""
@@ -549,10 +561,6 @@ def _check_design(d: Design, file: Path) -> None:
         raise InputError(file, "disks.spacing",
                          f"{n - 1} gaps of {d.disks.spacing} mm give {d.disks.spacing * (n - 1):g} mm, "
                          f"backbone.length is {d.backbone.length} mm")
-    half_slot = d.backbone.height / 2 + d.disks.slot_clearance
-    if half_slot >= d.disks.outer_diameter / 2:
-        raise InputError(file, "disks.outer_diameter",
-                         f"{d.disks.outer_diameter} mm does not enclose the backbone slot ({2 * half_slot:g} mm)")
     if d.disks.eyelets.edge_size >= d.disks.thickness / 2:
         raise InputError(file, "disks.eyelets.edge_size", "must be less than half the disk thickness")
     if d.disks.anchors.plate >= d.disks.end_thickness / 2:
@@ -583,9 +591,7 @@ def _check_design(d: Design, file: Path) -> None:
     names: dict[str, str] = {}
     for i, t in enumerate(d.tendons):
         where = f"tendons[{i}]"
-        own = [(t.name, f"{where}.name")]
-        if t.routing.mirror:
-            own.append((t.routing.mirror_name or f"{t.name}_m", f"{where}.routing.mirror_name"))
+        own = list(zip(t.names, (f"{where}.name", f"{where}.routing.mirror_name")))
         for name, p in own:
             if not SAFE_NAME.match(name):
                 raise InputError(file, p, f"{echo(name)} is not a safe file name (letters, digits, _ and -)")

@@ -51,7 +51,7 @@ from .checks.run import run_checks
 from .model import feasibility
 from .model import stiffness as statics_study
 from .model.materials import printed_density
-from .model.plan import Plan, plan as make_plan
+from .model.plan import Plan, make_plan
 from .outputs import bom, guide, pictures, plates as print_plates
 from .outputs.plots import plot_lengths, plot_sag, plot_tolerance
 from .outputs.stiffness import plot_gravity, plot_stiffness
@@ -70,12 +70,12 @@ def load(path: str | Path) -> params.LoadedDesign:
     return loaded
 
 
-def design_plan(loaded: params.LoadedDesign) -> Plan:
+def design_plan(loaded: params.LoadedDesign, tensioner_record: dict | None = None) -> Plan:
     """The plan of a loaded design, with everything its part families need to be built (holes
     the disks and the strip can take, the tensioner's layout); raises
     :class:`hwgen.errors.DesignError` naming the field.
     Every command starts from it, so they all refuse the same designs the same way."""
-    plan = make_plan(loaded.design)
+    plan = make_plan(loaded.design, tensioner_record)
     feasibility.check_plan(plan)
     part_count(plan)       # every part family can be made from it (the tensioner needs its layout)
     return plan
@@ -190,7 +190,7 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
     plan = design_plan(loaded)
     total = part_count(plan)
     out_root = Path(out_root)
-    target = out_root / loaded.design.design
+    target = out_root / loaded.name
     store = cache.Store(cache.default_dir() if cache_dir is True else (cache_dir or None))
     limit = _limit()                    # bad input before anything is written
     select = None if parts is None else (lambda name: fnmatch.fnmatchcase(name, parts))
@@ -513,7 +513,7 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
     for family, first, unit in units(plan):
         key = cache.key("unit", family.name, unit.inputs, salt)
         todo.append((family, first, unit, key, _unit_from_cache(store, key)))
-    asm_key = cache.key("assembly", loaded.design.design, [t[3] for t in todo], salt)
+    asm_key = cache.key("assembly", loaded.name, [t[3] for t in todo], salt)
     assembly = None if select is not None else _assembly_from_cache(store, asm_key)
     with ExitStack() as stack:
         workers = None
@@ -544,7 +544,7 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
                  "backbone_template": {"path": "backbone_template.dxf",
                                        "sha256": sha256(folder / "backbone_template.dxf")}}
     return {
-        "design": loaded.design.design,
+        "design": loaded.name,
         "hwgen_version": __version__,
         "params_file": loaded.source,
         "params_sha256": loaded.sha256,
@@ -605,7 +605,7 @@ def _assemble(loaded, plan: Plan, path: Path, store: cache.Store, units_done) ->
         parts += [Part(p["name"], p["role"], s, np.asarray(p["placement"], float), tuple(p["color"]))
                   for p, s in zip(rec["parts"], solids)]
     with kernel_errors(plan, None, "write assembly.step"):
-        export.write_assembly(parts, loaded.design.design, path)
+        export.write_assembly(parts, loaded.name, path)
 
 
 # ---------------------------------------------------------------- on existing outputs
@@ -640,17 +640,28 @@ def check(loaded: params.LoadedDesign, out_root: Path, progress=None,
 
     Outputs measured before, with every file as it was then (same bytes, same manifest, design,
     environment and code), get that report back from the cache instead of being measured again."""
-    folder = Path(out_root) / loaded.design.design
-    plan = design_plan(loaded)
+    folder = Path(out_root) / loaded.name
     limit = _limit()
     with output_errors(Path(out_root)), snapshot(folder) as view:
         why = stale_reason(view, loaded)
         if why is None:
+            manifest = read_manifest(view)
+            # these files were built from these very parameters: their tensioner is laid out again
+            # in the arrangement the build chose (its manifest says which), not searched for again
+            plan = design_plan(loaded, tensioner_record(manifest))
             store = cache.Store(cache.default_dir() if cache_dir is True else (cache_dir or None))
-            report = _measured(store, view, read_manifest(view), plan)
+            report = _measured(store, view, manifest, plan)
             _trim(store, limit)
             return report, folder, None
     return build(loaded, Path(out_root), progress, cache_dir=cache_dir).report, folder, why
+
+
+def tensioner_record(manifest: dict) -> dict | None:
+    """The tensioner layout's search record a build kept in its manifest (None: none there)."""
+    for p in manifest.get("parts", []):
+        if p.get("role") == "tensioner_housing" and isinstance(p.get("layout_search"), dict):
+            return p["layout_search"]
+    return None
 
 
 def _measured(store: cache.Store, folder: Path, manifest: dict, plan: Plan) -> dict:
@@ -680,15 +691,14 @@ def render(loaded: params.LoadedDesign, out_root: Path,
     existing folder and rewrites its manifest. Returns (the manifest's render entry, the
     folder, why it was rebuilt or None).
     """
-    folder = Path(out_root) / loaded.design.design
-    plan = design_plan(loaded)
+    folder = Path(out_root) / loaded.name
     why = stale_reason(folder, loaded)
     if why is not None:
         result = build(loaded, Path(out_root), cache_dir=cache_dir)
         return result.manifest.get("render", {}), folder, why
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
         manifest = read_manifest(tmp)
-        draw(plan, tmp, manifest)
+        draw(design_plan(loaded, tensioner_record(manifest)), tmp, manifest)     # current files: as check does
         write_manifest(tmp, manifest)
     return manifest["render"], folder, None
 
@@ -698,8 +708,7 @@ def plates(loaded: params.LoadedDesign, out_root: Path,
     """`hwgen plates`: the print plates of ``out_root/<design>/``, laid out again into the
     existing outputs (a build lays them out too; builds first when the outputs are missing or
     stale). Returns (the plate summary, the folder, why it was rebuilt or None)."""
-    folder = Path(out_root) / loaded.design.design
-    plan = design_plan(loaded)
+    folder = Path(out_root) / loaded.name
     why = stale_reason(folder, loaded)
     if why is not None:
         result = build(loaded, Path(out_root), cache_dir=cache_dir)
@@ -707,7 +716,7 @@ def plates(loaded: params.LoadedDesign, out_root: Path,
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
         manifest = read_manifest(tmp)
         shutil.rmtree(tmp / print_plates.FOLDER, ignore_errors=True)
-        summary = plates_stage(plan, tmp, manifest, None)
+        summary = plates_stage(design_plan(loaded, tensioner_record(manifest)), tmp, manifest, None)
         write_manifest(tmp, manifest)
     return summary, folder, None
 
@@ -727,14 +736,14 @@ def coupon(loaded: params.LoadedDesign, out_root: Path) -> tuple[dict, Path]:
     spec = coupon_spec(plan)
     with kernel_errors(plan, None, "build the calibration coupon"):
         solid = build_coupon(spec)
-    folder = Path(out_root) / loaded.design.design
+    folder = Path(out_root) / loaded.name
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
         where = tmp / COUPON
         shutil.rmtree(where, ignore_errors=True)
         where.mkdir()
         export.write_stl(solid, where / "coupon.stl")
-        export.write_step(solid, where / "coupon.step", f"{loaded.design.design}_coupon")
-        info = {"design": loaded.design.design, "params_sha256": loaded.sha256, "size_mm": list(spec.size),
+        export.write_step(solid, where / "coupon.step", f"{loaded.name}_coupon")
+        info = {"design": loaded.name, "params_sha256": loaded.sha256, "size_mm": list(spec.size),
                 "design_hole_mm": spec.design_hole, "design_slot_clearance_mm": spec.design_clearance,
                 "strip_thickness_mm": spec.strip_thickness, "text_mm": spec.text_mm, "engrave_mm": spec.engrave_mm,
                 "volume_mm3": solid.Volume(),
@@ -756,7 +765,7 @@ def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | No
             if name not in known:
                 raise InputError(loaded.source, "--states", f"unknown state {clip(name)!r}; this design's are "
                                                             f"{', '.join(known)}")
-    folder = Path(out_root) / loaded.design.design
+    folder = Path(out_root) / loaded.name
     measured = None
     with output_errors(Path(out_root)), snapshot(folder) as view:
         if stale_reason(view, loaded) is None:

@@ -16,7 +16,7 @@ from hwgen.errors import DesignError, InputError
 from hwgen.model import screws
 from hwgen.model.fixing import HUB_GAP_MM, disk_gaps, hub_extension, hub_lengths, least_hub
 from hwgen.model.fixtures import jig_layout, mount_layout
-from hwgen.model.plan import plan as make_plan
+from hwgen.model.plan import make_plan
 from hwgen.params import Design
 from hwgen.pipeline import design_plan, load
 

@@ -24,8 +24,8 @@ from .conftest import PARAMS
 # ---------------------------------------------------------------- the store (no CAD)
 
 def test_keys_are_canonical_and_refuse_what_has_no_value():
-    h = Hole(1.0, 2.0, (0.0, 1.0, 0.0), 0.8, ("A1",), 3.0, False)
-    assert cache.key(h) == cache.key(Hole(1.0, 2.0, (0.0, 1.0, 0.0), 0.8, ("A1",), 3.0, False))
+    h = Hole(x=1.0, z=2.0, axis=(0.0, 1.0, 0.0), diameter=0.8, tendons=("A1",), worst_angle_deg=3.0, in_slot=False)
+    assert cache.key(h) == cache.key(Hole(x=1.0, z=2.0, axis=(0.0, 1.0, 0.0), diameter=0.8, tendons=("A1",), worst_angle_deg=3.0, in_slot=False))
     assert cache.key(h) != cache.key(dataclasses.replace(h, x=1.0 + 1e-12))       # floats are exact
     assert cache.key({"b": 1, "a": np.arange(3.0)}) == cache.key({"a": np.array([0.0, 1.0, 2.0]), "b": 1})
     assert cache.key(np.arange(3.0)) != cache.key(np.arange(3))                     # dtype counts

@@ -20,7 +20,7 @@ from hwgen.pipeline import build
 from hwgen.checks.clearances import segment_distance
 from hwgen.pipeline import stale_reason
 from hwgen.checks.run import run_checks
-from hwgen.model.plan import plan as make_plan
+from hwgen.model.plan import make_plan
 from hwgen.cad.manifest import sha256
 from hwgen.pipeline import load
 

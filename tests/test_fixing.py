@@ -19,7 +19,7 @@ from hwgen.checks.polygons import inside_many, section_moments
 from hwgen.checks.sections import chain_loops, section_robot
 from hwgen.checks.run import run_checks
 from hwgen.model import sag
-from hwgen.model.plan import plan as make_plan
+from hwgen.model.plan import make_plan
 from hwgen.pipeline import load
 
 from .conftest import PARAMS
@@ -269,7 +269,7 @@ def test_the_mount_bolts_to_the_table_grid(built):
     assert all(2 * math.sqrt(h["area"] / math.pi) == pytest.approx(6.6, abs=0.02) for h in holes)
     d = load(PARAMS / "prototype.yaml").design
     imperial = d.model_copy(update={"base_mount": d.base_mount.model_copy(update={"bolt_pattern": "quarter20_1in"})})
-    mount = next(build_mount(make_plan(imperial)))
+    mount = next(build_mount(make_plan(imperial).mount))
     assert any(h["size"].startswith("1/4-20") for h in mount.meta["hardware"])
 
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import yaml
 
-from hwgen.model.gearing import WormPair, engagement_length
+from hwgen.model.gearing import WormPair, meshing_length
 from hwgen.errors import InputError
 from hwgen.pipeline import load
 
@@ -186,7 +186,8 @@ def _mesh_case(params: dict, mu: float) -> dict:
     problems = pair.problems(mu, MIN_WALL)
     if problems:
         return {"status": "rejected", "message": "; ".join(f"{f}: {m}" for f, m in problems)}
-    from hwgen.cad.tensioner_parts import gear_solid, worm_solid
+    from hwgen.cad.wheel import gear_solid
+    from hwgen.cad.worm import worm_solid
     core = 2 * pair.rf1
     hex_key = min(2.5, round((core - 2 * MIN_WALL) * math.cos(math.pi / 6) - 0.2, 1))
     try:
@@ -246,7 +247,7 @@ def _random_cases(n: int, seed: int) -> list[tuple[dict, float]]:
                     face_width=float(np.round(rng.uniform(5, 12), 1)),
                     worm_length=1.0, center_offset=float(np.round(rng.uniform(0.02, 0.2), 3)))
         probe = WormPair(**pair)
-        pair["worm_length"] = float(np.round(engagement_length(probe) + 2 * probe.pitch, 1))
+        pair["worm_length"] = float(np.round(meshing_length(probe) + 2 * probe.pitch, 1))
         cases.append((pair, float(np.round(rng.uniform(0.08, 0.3), 3))))
     return cases
 

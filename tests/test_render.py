@@ -251,8 +251,8 @@ def test_a_failing_renderer_is_reported(proto, tmp_path, monkeypatch, child, sta
     shutil.copytree(folder / "stl", out / "stl")
     (out / "bent.png").write_bytes(b"an old picture")
     m = json.loads(json.dumps(m))
-    from hwgen.model.plan import plan
-    pipeline.draw(plan(load(ROOT / "params" / "prototype.yaml").design), out, m)
+    from hwgen.model.plan import make_plan
+    pipeline.draw(make_plan(load(ROOT / "params" / "prototype.yaml").design), out, m)
     assert m["render"]["status"] == status
     for w in words:
         assert w in m["render"]["message"]

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import yaml
 
-from hwgen.model.plan import plan
+from hwgen.model.plan import make_plan
 from hwgen.errors import InputError
 from hwgen.pipeline import load
 from hwgen.model.routing import tendon_paths
@@ -39,7 +39,7 @@ def test_explicit_stations_are_used_and_checked(tmp_path):
     doc["disks"]["stations"] = st
     f = tmp_path / "st.yaml"
     f.write_text(yaml.safe_dump(doc))
-    p = plan(load(f).design)
+    p = make_plan(load(f).design)
     assert [d.y for d in p.disks] == st
     c1 = next(t for t in p.paths if t.name == "C1")
     assert np.allclose(c1.points[:, 1], 25 * np.cos(np.pi * np.array(st) / 270))
@@ -56,5 +56,5 @@ def test_shared_and_overlapping_eyelets_are_reported(tmp_path):
     doc["tendons"].append({"name": "B", "channel": "A", "routing": {"function": {"kind": "straight", "z0": 29.5}}})
     f = tmp_path / "ov.yaml"
     f.write_text(yaml.safe_dump(doc))
-    merges = plan(load(f).design).merges
+    merges = make_plan(load(f).design).merges
     assert {m.station for m in merges if m.kind == "overlap" and set(m.tendons) == {"A1", "B"}} == set(range(13))

@@ -160,9 +160,9 @@ COARSE_MM = 3.0          # segments of the prototype's strip in these tests: the
 def prototype():
     from hwgen import params
     from hwgen.model import stiffness as sf
-    from hwgen.model.plan import plan
+    from hwgen.model.plan import make_plan
     design = params.read("params/prototype.yaml").design
-    desc = sf.describe(plan(design))
+    desc = sf.describe(make_plan(design))
     model = st.Model(desc.robot, COARSE_MM)
     return sf, design, desc, model
 
@@ -193,10 +193,10 @@ def test_state_N_sags_as_the_own_weight_model_shoots_it(prototype):
 
 def test_measured_weights_replace_the_plans_estimate(prototype):
     sf, design, desc, _ = prototype
-    from hwgen.model.plan import plan
+    from hwgen.model.plan import make_plan
     gravity = {"disks": [{"part": "disk_06", "s_mm": 134.0, "mass_g": 10.0}],
                "tip_assembly": {"mass_g": 100.0, "a_mm": 60.0, "z_mm": -2.0}, "strip": {"lambda_g_mm": 0.05}}
-    measured = sf.describe(plan(design), gravity)
+    measured = sf.describe(make_plan(design), gravity)
     r = measured.robot
     assert r.point_masses == ((134.0, 10.0),) and r.tip_mass == 100.0 and r.tip_offset == (60.0, -2.0)
     assert r.section.lin_density == 0.05 and "measured" in measured.masses["how"]
@@ -240,8 +240,8 @@ def test_the_helix_stiffens_torsion_and_leaves_bending_at_the_tip_as_it_was(prot
 
 def test_the_hub_section_is_a_closed_tube_until_a_window_cuts_it(prototype):
     sf, _, desc, _ = prototype
-    from hwgen.model.plan import plan
-    p = plan(prototype[1])
+    from hwgen.model.plan import make_plan
+    p = make_plan(prototype[1])
     uncut = next(d for d in p.disks if d.hub is not None and not d.hub.windows)
     cut = next(d for d in p.disks if d.hub is not None and d.hub.windows)
     wall = prototype[1].disks.hub.wall
@@ -261,9 +261,9 @@ def test_the_hub_section_is_a_closed_tube_until_a_window_cuts_it(prototype):
 def swept():
     from hwgen import params
     from hwgen.checks.tension import sweeps
-    from hwgen.model.plan import plan
+    from hwgen.model.plan import make_plan
     design = params.read("params/prototype.yaml").design
-    p = plan(design)
+    p = make_plan(design)
     return design, p, sweeps(p)
 
 
@@ -297,11 +297,11 @@ def test_the_as_built_excess_lowers_the_least_tension_at_the_spring_rate(swept):
 def test_a_stiffening_tendon_locked_too_loose_goes_slack_and_fails():
     from hwgen import params
     from hwgen.checks.tension import tension_checks
-    from hwgen.model.plan import plan
+    from hwgen.model.plan import make_plan
     design = params.read("params/prototype.yaml").design
     tendons = tuple(t.model_copy(update={"pretension_n": 0.6}) if t.name == "C2" else t for t in design.tendons)
     half = design.check.model_copy(update={"max_angle_deg": 45.0})          # it goes slack before 45°
-    _, checks = tension_checks(plan(design.model_copy(update={"tendons": tendons, "check": half})), {"tendons": []}, {})
+    _, checks = tension_checks(make_plan(design.model_copy(update={"tendons": tendons, "check": half})), {"tendons": []}, {})
     c2 = next(c for c in checks if c.id == "tendon.taut" and c.where["tendon"] == "C2")
     assert not c2.passed and c2.severity == "error" and "SLACK" in c2.message
 

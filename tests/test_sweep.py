@@ -146,7 +146,7 @@ def test_lengths_level_sizes_eyelets_as_the_plan_and_takes_eq2_as_kinematics():
     kinematics module's; the sweep of angles is hwgen check's."""
     from hwgen.checks.lengths import sweep_angles
     from hwgen.model import kinematics as kin
-    from hwgen.model.plan import plan as make_plan
+    from hwgen.model.plan import make_plan
     from hwgen.params import read
 
     for name in ("prototype", "paper-table2"):
@@ -168,7 +168,7 @@ def test_lengths_level_merges_eyelets_routed_into_each_other_as_the_plan(index):
     gives each such pair one opening around both. The lengths level has the plan's openings
     (centre, axis, diameter, which tendons), counts no wall between their tendons, and fails the
     variant naming the overlap, as hwgen check fails eyelet.overlap."""
-    from hwgen.model.plan import plan as make_plan
+    from hwgen.model.plan import make_plan
     from hwgen.params import Design
 
     from .robots import random_robot

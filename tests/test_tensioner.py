@@ -11,7 +11,7 @@ from hwgen.checks.axes import fit_axis
 from hwgen.checks.gear_mesh import GAP_TOL_MM, INTERFERENCE_TOL_MM3, count_teeth, gear_checks, measure_pair, mesh_measure, toward
 from hwgen.checks.meshes import load_mesh, placed_manifold, placed_mesh
 from hwgen.checks.tendon_runs import tendon_checks
-from hwgen.model.plan import plan
+from hwgen.model.plan import make_plan
 from hwgen.model.gearing import worm_pair
 from hwgen.pipeline import load
 from hwgen.model.tensioner_layout import layout
@@ -23,7 +23,7 @@ from .conftest import PARAMS
 def proto(built):
     folder = built("prototype")
     man = json.loads((folder / "manifest.json").read_text())
-    return folder, man, plan(load(PARAMS / "prototype.yaml").design)
+    return folder, man, make_plan(load(PARAMS / "prototype.yaml").design)
 
 
 def _by_role(man, role):
@@ -386,7 +386,7 @@ def test_layout_adapts_to_other_gears(tmp_path, change):
     data["tensioner"].update(change)
     f = tmp_path / "v.yaml"
     f.write_text(yaml.safe_dump(data))
-    p = plan(load(f).design)
+    p = make_plan(load(f).design)
     lay = layout(p.design, p.paths, p.disks[-1])
     pair = lay.pair
     assert pair.center_distance == pytest.approx(lay.units[0].worm_y - lay.units[0].center[1]

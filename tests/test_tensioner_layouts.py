@@ -23,7 +23,7 @@ def _verdict(doc: dict):
     """Laid out, refused (with the message) or crashed (with the traceback): in a spawned worker."""
     try:
         from hwgen.errors import InputError
-        from hwgen.model.plan import plan
+        from hwgen.model.plan import make_plan
         from hwgen.pipeline import load
         with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
             f.write(yaml.safe_dump(doc))
@@ -31,7 +31,7 @@ def _verdict(doc: dict):
             design = load(f.name).design
         except InputError as e:
             return ("input", f"{e.path}: {e.message}")
-        p = plan(design)
+        p = make_plan(design)
         return ("laid out", None) if p.tensioner_layout is not None else ("refused", p.tensioner_error)
     except Exception:
         return ("crash", traceback.format_exc())
@@ -148,7 +148,7 @@ def test_a_tendon_where_the_strip_clamp_stands_leaves_the_clamp_off_and_says_so(
     """A tendon that leaves the tip in the strip's plane, where the strip's tip would be clamped on
     either side: the tensioner is laid out without the clamp, and the plan's findings name the
     tendon; with the strip ending inside the tip disk there is no clamp to leave off."""
-    from hwgen.model.plan import plan
+    from hwgen.model.plan import make_plan
     from hwgen.pipeline import load
     doc = _prototype(design="in-the-clamp")
     doc["tendons"].append({"name": "Z", "channel": "Z", "routing": {
@@ -156,33 +156,33 @@ def test_a_tendon_where_the_strip_clamp_stands_leaves_the_clamp_off_and_says_so(
     doc["tensioner"]["channels"].append("Z")
     f = tmp_path / "z.yaml"
     f.write_text(yaml.safe_dump(doc))
-    p = plan(load(f).design)
+    p = make_plan(load(f).design)
     assert p.tensioner_layout is not None and p.tensioner_layout.clamp_block is None
     finding = p.tensioner_layout.search["strip_clamp"]
     assert "tendon Z" in finding and "backbone.extra_tip" in finding
-    proto = plan(load(PARAMS / "prototype.yaml").design)
+    proto = make_plan(load(PARAMS / "prototype.yaml").design)
     assert proto.tensioner_layout.clamp_block is not None and "strip_clamp" not in proto.tensioner_layout.search
     doc["backbone"]["extra_tip"] = 2          # the strip ends inside the tip disk: nothing to clamp
     f.write_text(yaml.safe_dump(doc))
-    p = plan(load(f).design)
+    p = make_plan(load(f).design)
     assert p.tensioner_layout is not None and "strip_clamp" not in p.tensioner_layout.search
 
 
 def test_opposite_winding_puts_the_pair_on_either_side_of_its_drum(tmp_path):
     """winding: opposite: one tendon meets the drum on the side facing the strip, the other on the
     far side, so turning the worm hauls one in as it pays the other out."""
-    from hwgen.model.plan import plan
+    from hwgen.model.plan import make_plan
     from hwgen.pipeline import load
     doc = _prototype()
     doc["tensioner"]["winding"] = {"A": "opposite"}
     f = tmp_path / "opposite.yaml"
     f.write_text(yaml.safe_dump(doc))
-    lay = plan(load(f).design).tensioner_layout
+    lay = make_plan(load(f).design).tensioner_layout
     unit = lay.unit("A")
     centre = (lay.turn @ [unit.center[0], unit.center[1], 0, 1])[0]
     runs = {r.tendon: r for r in lay.runs if r.channel == "A"}
     assert sorted(r.sense for r in runs.values()) == [-1, 1]
     sides = {n: np.sign(r.end[0] - centre) for n, r in runs.items()}
     assert sides["A1"] == -sides["A2"]
-    same = plan(load(PARAMS / "prototype.yaml").design).tensioner_layout
+    same = make_plan(load(PARAMS / "prototype.yaml").design).tensioner_layout
     assert {r.sense for r in same.runs} == {1}

@@ -19,8 +19,7 @@ from contextlib import contextmanager
 from typing import NamedTuple
 
 from ..errors import DesignError, InputError, clip
-from ..model.fixtures import jig_layout
-from ..model.plan import Plan, base_mount
+from ..model.plan import Plan
 from . import Part
 
 MIN_VOLUME_MM3 = 1e-6       # a solid with less than this is an empty result, not a part
@@ -39,17 +38,20 @@ def _backbone(plan: Plan) -> Iterator[Part]:
 
 def _tensioner(plan: Plan) -> Iterator[Part]:
     from .tensioner_parts import build_tensioner
-    yield from build_tensioner(plan)
+    tip = plan.disks[-1]
+    yield from build_tensioner(plan.require_tensioner_layout(), min_wall=plan.min_wall,
+                               tendon_diameter=plan.tendon_diameter, tip_screws=len(tip.mount_holes),
+                               tip_thickness=tip.thickness)
 
 
 def _mount(plan: Plan) -> Iterator[Part]:
     from .fixtures import build_mount
-    yield from build_mount(plan)
+    yield from build_mount(plan.mount)
 
 
 def _jig(plan: Plan) -> Iterator[Part]:
     from .fixtures import build_jig
-    yield from build_jig(plan)
+    yield from build_jig(plan.jig, [s.name for s in plan.disks] + [plan.backbone.name])
 
 
 class Unit(NamedTuple):
@@ -74,28 +76,26 @@ def _backbone_units(plan: Plan) -> list[Unit]:
 
 
 def _tensioner_units(plan: Plan) -> list[Unit]:
-    d, tip = plan.design, plan.disks[-1]
-    # what build_tensioner reads: the layout (which holds the YAML's tensioner section), the
+    tip = plan.disks[-1]
+    # what build_tensioner reads: the layout (with the tensioner section's values it needs), the
     # printer's wall, the tendon, and the tip disk's screws and thickness
-    inputs = (plan.require_tensioner_layout(), d.process.min_wall, d.tendon_material.diameter,
+    inputs = (plan.require_tensioner_layout(), plan.min_wall, plan.tendon_diameter,
               len(tip.mount_holes), tip.thickness)
     return [Unit(inputs, _tensioner_count(plan), lambda: _tensioner(plan))]
 
 
 def _mount_units(plan: Plan) -> list[Unit]:
-    d = plan.design
-    inputs = (base_mount(plan), d.disks.end_thickness, d.base_mount)      # what build_mount reads
+    inputs = (plan.mount,)      # what build_mount reads
     return [Unit(inputs, 2, lambda: _mount(plan))]
 
 
 def _jig_units(plan: Plan) -> list[Unit]:
-    d = plan.design
-    inputs = (jig_layout(d), [s.name for s in plan.disks], plan.backbone.name, d.jig)   # what build_jig reads
+    inputs = (plan.jig, [s.name for s in plan.disks], plan.backbone.name)   # what build_jig reads
     return [Unit(inputs, _jig_count(plan), lambda: _jig(plan))]
 
 
 def _jig_count(plan: Plan) -> int:
-    return len(jig_layout(plan.design).pieces)
+    return len(plan.jig.pieces)
 
 
 def _tensioner_count(plan: Plan) -> int:
@@ -121,21 +121,24 @@ def _backbone_made_from(plan: Plan, index: int) -> tuple[str, str]:
 
 
 def _tensioner_made_from(plan: Plan, index: int) -> tuple[str, str]:
-    t = plan.design.tensioner
-    return (f"tensioner part {index + 1}", f"module {t.module:g} mm, {t.worm_starts} start(s), {t.wheel_teeth} teeth, "
+    lay = plan.require_tensioner_layout()
+    t = lay.pair
+    return (f"tensioner part {index + 1}", f"module {t.module:g} mm, {t.starts} start(s), {t.teeth} teeth, "
             f"worm Ø{t.worm_pitch_diameter:g} × {t.worm_length:g} mm, face width {t.face_width:g} mm, "
-            f"spool Ø{t.spool_diameter:g} mm, {len(t.channels)} channel(s)")
+            f"spool Ø{2 * lay.spool_radius:g} mm, {len(lay.units)} channel(s)")
 
 
 def _mount_made_from(plan: Plan, index: int) -> tuple[str, str]:
-    m = plan.design.base_mount
+    m = plan.mount
     return (("base mount", "upper jaw")[min(index, 1)],
-            f"clamps {-plan.backbone.y_start:g} mm of strip; {m.model_dump_json()[:120]}")
+            f"clamps {-plan.backbone.y_start:g} mm of strip; bolt pattern {m.bolt_pattern}, "
+            f"{len(m.disk_screws)} disk screw(s) Ø{m.screw_hole:g} mm")
 
 
 def _jig_made_from(plan: Plan, index: int) -> tuple[str, str]:
-    j = plan.design.jig
-    return f"jig piece {index + 1}", f"{len(plan.disks)} disk slots; {j.model_dump_json()[:120]}"
+    j = plan.jig
+    return f"jig piece {index + 1}", (f"{len(plan.disks)} disk slots; {len(j.pieces)} piece(s), walls "
+                                      f"{j.x_outer - j.x_inner:g} mm, floor {j.z_floor_top - j.z_floor_bottom:g} mm")
 
 
 class Family(NamedTuple):
@@ -233,6 +236,11 @@ def kernel_errors(plan: Plan, part: Part | None, doing: str) -> Iterator[None]:
 
 
 def _family_of(part: Part) -> str:
+    """The family a part comes from, by its role."""
     if part.role == "disk":
         return "disks"
+    if part.role in ("base_mount", "base_clamp"):
+        return "base mount"
+    if part.role == "jig":
+        return "jig"
     return "backbone" if part.role == "backbone" else "tensioner"

@@ -11,45 +11,23 @@ from collections.abc import Iterator
 import cadquery as cq
 import numpy as np
 
-from ..model import hardware
-from ..model.fixtures import NUT_AF, NUT_DEPTH, NUT_PLAY, NUT_THICK, JigLayout, MountLayout, jig_layout
-from ..model.plan import Plan, base_mount
+from ..model import hardware as stock
+from ..model.fixtures import NUT_AF, NUT_DEPTH, NUT_PLAY, NUT_THICK, JigLayout, MountLayout
 from . import Part, placement
+from .primitives import TOOL, box, cylinder, hardware, one
 
 MOUNT_COLOR = (0.35, 0.40, 0.48, 1.0)     # slate: it stays on the table
 CLAMP_COLOR = (0.55, 0.62, 0.72, 1.0)
 JIG_COLOR = (0.80, 0.80, 0.78, 1.0)
-TOOL = 1.0                                  # cutting tools overrun faces by this much, mm
-SCREW_LENGTHS = hardware.lengths("socket head cap screw", "any")   # ISO 4762 stock lengths, mm
-WASHER = hardware.size("washer", "M3", "thickness")                 # ISO 7089 M3 washer, mm
-M6_WASHER = hardware.size("washer", "M6", "thickness")              # ISO 7089 M6 washer, mm
+SCREW_LENGTHS = stock.lengths("socket head cap screw", "any")   # ISO 4762 stock lengths, mm
+WASHER = stock.size("washer", "M3", "thickness")                 # ISO 7089 M3 washer, mm
+M6_WASHER = stock.size("washer", "M6", "thickness")              # ISO 7089 M6 washer, mm
 TABLE_THREAD = 8.0                         # engagement of the foot bolts in the table's tapped holes, mm
-
-
-def _box(x0, x1, y0, y1, z0, z1) -> cq.Solid:
-    return cq.Solid.makeBox(x1 - x0, y1 - y0, z1 - z0, cq.Vector(x0, y0, z0))
-
-
-def _cyl(r, p0, p1) -> cq.Solid:
-    p0, p1 = np.asarray(p0, float), np.asarray(p1, float)
-    d = p1 - p0
-    return cq.Solid.makeCylinder(r, float(np.linalg.norm(d)), cq.Vector(*p0), cq.Vector(*(d / np.linalg.norm(d))))
-
-
-def _one(shape) -> cq.Solid:
-    solids = shape.Solids() if not isinstance(shape, cq.Solid) else [shape]
-    if len(solids) != 1:
-        raise ValueError(f"expected one solid, got {len(solids)}")
-    return solids[0]
 
 
 def _screw(length_needed: float) -> int:
     """The shortest stock screw that reaches through its nut."""
-    return hardware.shortest_reaching(SCREW_LENGTHS, length_needed)
-
-
-def _hw(item, size, qty, material="steel", **extra) -> dict:
-    return {"item": item, "size": size, "qty": qty, "material": material, **extra}
+    return stock.shortest_reaching(SCREW_LENGTHS, length_needed)
 
 
 def _nut_trap(x: float, y: float, z_top: float, outward: float, x_out: float) -> list[cq.Solid]:
@@ -62,35 +40,35 @@ def _nut_trap(x: float, y: float, z_top: float, outward: float, x_out: float) ->
     wire = cq.Wire.makePolygon([cq.Vector(px, py, z_top - th) for px, py in pts], close=True)
     hexagon = cq.Solid.extrudeLinear(cq.Face.makeFromWires(wire), cq.Vector(0, 0, th))
     x0, x1 = sorted((x, x_out + outward * TOOL))
-    return [hexagon, _box(x0, x1, y - af / 2, y + af / 2, z_top - th, z_top)]
+    return [hexagon, box(x0, x1, y - af / 2, y + af / 2, z_top - th, z_top)]
 
 
 def mount_solids(lay: MountLayout) -> tuple[cq.Solid, cq.Solid]:
     """(lower jaw with its column and foot, upper jaw), in robot coordinates."""
     hx = lay.jaw_half_x
-    lower = _box(-hx, hx, lay.y_back, lay.y_face, lay.z_jaw_bottom, lay.z_lower_top)
-    column = _box(-hx, hx, lay.y_back, lay.y_column_front, lay.z_foot_top - TOOL, lay.z_jaw_bottom + TOOL)
-    foot = _box(-lay.foot_half_x, lay.foot_half_x, lay.y_foot_back, lay.y_column_front, lay.z_table, lay.z_foot_top)
+    lower = box(-hx, hx, lay.y_back, lay.y_face, lay.z_jaw_bottom, lay.z_lower_top)
+    column = box(-hx, hx, lay.y_back, lay.y_column_front, lay.z_foot_top - TOOL, lay.z_jaw_bottom + TOOL)
+    foot = box(-lay.foot_half_x, lay.foot_half_x, lay.y_foot_back, lay.y_column_front, lay.z_table, lay.z_foot_top)
     body = lower.fuse(column, foot).clean()
     r = lay.screw_hole / 2
-    tools = [_box(-lay.recess_half_x, lay.recess_half_x, lay.y_back - TOOL, lay.y_face + TOOL, lay.z_recess,
+    tools = [box(-lay.recess_half_x, lay.recess_half_x, lay.y_back - TOOL, lay.y_face + TOOL, lay.z_recess,
                   lay.z_lower_top + TOOL)]
     for x, z in lay.disk_screws:
         if z < 0:
-            tools.append(_cyl(r, (x, lay.y_face + TOOL, z), (x, lay.y_back - TOOL, z)))
+            tools.append(cylinder(r, (x, lay.y_face + TOOL, z), (x, lay.y_back - TOOL, z)))
     z_nut = lay.z_lower_top - NUT_DEPTH
     for x, y in lay.jaw_screws:
         side = 1.0 if x > 0 else -1.0
         # through to the table: a blind hole would be a cup of resin on a resin print; open, it drains
-        tools.append(_cyl(r, (x, y, lay.z_lower_top + TOOL), (x, y, lay.z_table - TOOL)))
+        tools.append(cylinder(r, (x, y, lay.z_lower_top + TOOL), (x, y, lay.z_table - TOOL)))
         tools += _nut_trap(x, y, z_nut, side, side * hx)
     for x, y in lay.foot_holes:
-        tools.append(_cyl(lay.foot_hole / 2, (x, y, lay.z_table - TOOL), (x, y, lay.z_foot_top + TOOL)))
-    lower = _one(body.cut(*tools))
-    upper = _box(-hx, hx, lay.y_back, lay.y_face, lay.z_upper_bottom, lay.z_upper_top)
-    tools = [_cyl(r, (x, y, lay.z_upper_top + TOOL), (x, y, lay.z_upper_bottom - TOOL)) for x, y in lay.jaw_screws]
-    tools += [_cyl(r, (x, lay.y_face + TOOL, z), (x, lay.y_back - TOOL, z)) for x, z in lay.disk_screws if z > 0]
-    return lower, _one(upper.cut(*tools))
+        tools.append(cylinder(lay.foot_hole / 2, (x, y, lay.z_table - TOOL), (x, y, lay.z_foot_top + TOOL)))
+    lower = one(body.cut(*tools))
+    upper = box(-hx, hx, lay.y_back, lay.y_face, lay.z_upper_bottom, lay.z_upper_top)
+    tools = [cylinder(r, (x, y, lay.z_upper_top + TOOL), (x, y, lay.z_upper_bottom - TOOL)) for x, y in lay.jaw_screws]
+    tools += [cylinder(r, (x, lay.y_face + TOOL, z), (x, lay.y_back - TOOL, z)) for x, z in lay.disk_screws if z > 0]
+    return lower, one(upper.cut(*tools))
 
 
 # a quarter turn about Z: file (X, Y) = robot (y, -x), so a part long along the backbone lies along
@@ -109,32 +87,31 @@ def _to_file(solid: cq.Solid, shift, along_x: bool = False) -> tuple[cq.Solid, n
     return moved, placement(np.eye(3), s)
 
 
-def build_mount(plan: Plan) -> Iterator[Part]:
-    d = plan.design
-    lay = base_mount(plan)
+def build_mount(lay: MountLayout) -> Iterator[Part]:
+    """The base mount's two parts, as ``lay`` lays them out."""
     lower, upper = mount_solids(lay)
-    t_disk = d.disks.end_thickness
+    t_disk = lay.disk_thickness
     depth = lay.y_face - lay.y_back
     jaw_len = _screw(_jaw_grip(lay) + NUT_DEPTH + NUT_THICK + 0.5)
     disk_len = _screw(t_disk + depth + WASHER + NUT_THICK + 0.5)
     foot_len = _screw(lay.z_foot_top - lay.z_table + M6_WASHER + TABLE_THREAD)
     foot_size = (f"{lay.bolt} × {foot_len}" if lay.bolt == "M6" else
                  f"{lay.bolt} × {math.ceil(foot_len / 25.4 * 4) / 4:g} in")
-    hardware = [
-        _hw("socket head cap screw ISO 4762", foot_size, len(lay.foot_holes),
+    bought = [
+        hardware("socket head cap screw ISO 4762", foot_size, len(lay.foot_holes),
             notes=f"to the table, on its {lay.pitch:g} mm grid, with washers"),
-        _hw("washer ISO 7089", lay.bolt, len(lay.foot_holes)),
-        _hw("socket head cap screw ISO 4762", f"M3 × {jaw_len}", len(lay.jaw_screws),
+        hardware("washer ISO 7089", lay.bolt, len(lay.foot_holes)),
+        hardware("socket head cap screw ISO 4762", f"M3 × {jaw_len}", len(lay.jaw_screws),
             notes="upper jaw onto the strip"),
-        _hw("socket head cap screw ISO 4762", f"M3 × {disk_len}", len(lay.disk_screws),
+        hardware("socket head cap screw ISO 4762", f"M3 × {disk_len}", len(lay.disk_screws),
             notes="base disk to the jaws, from the disk's inner face"),
-        _hw("hex nut ISO 4032", "M3", len(lay.jaw_screws) + len(lay.disk_screws),
+        hardware("hex nut ISO 4032", "M3", len(lay.jaw_screws) + len(lay.disk_screws),
             notes="jaw screws in the lower jaw's nut traps; disk screws on the jaws' back face"),
-        _hw("washer ISO 7089", "M3", len(lay.disk_screws)),
+        hardware("washer ISO 7089", "M3", len(lay.disk_screws)),
     ]
     solid, place = _to_file(lower, (0.0, 0.0, lay.z_table))
     yield Part("base_mount", "base_mount", solid, place, MOUNT_COLOR,
-               meta={"hardware": hardware, "bolt_pattern": d.base_mount.bolt_pattern, "grounded": True})
+               meta={"hardware": bought, "bolt_pattern": lay.bolt_pattern, "grounded": True})
     solid, place = _to_file(upper, (0.0, 0.0, lay.z_upper_bottom))
     yield Part("base_clamp", "base_clamp", solid, place, CLAMP_COLOR, meta={"grounded": True})
 
@@ -172,20 +149,19 @@ def jig_solid(lay: JigLayout, k: int) -> cq.Solid:
             continue
         for s in (-1, 1):
             x0, x1 = sorted((s * (xi - TOOL), s * lay.x_slot))
-            tools.append(_box(x0, x1, a, b, zf, zt + TOOL))
+            tools.append(box(x0, x1, a, b, zf, zt + TOOL))
     if pc.key_in:
         tools += [_dovetail(lay, pc.y0, zb - TOOL, zf + TOOL, lay.play, x) for x in lay.dovetail_x]
-    return _one(body.cut(*tools)) if tools else _one(body)
+    return one(body.cut(*tools)) if tools else one(body)
 
 
-def build_jig(plan: Plan) -> Iterator[Part]:
-    lay = jig_layout(plan.design)
-    holds = [s.name for s in plan.disks] + [plan.backbone.name]
+def build_jig(lay: JigLayout, holds: list[str]) -> Iterator[Part]:
+    """The jig's pieces, as ``lay`` lays them out; ``holds``: the parts it holds (disks, then the strip)."""
     for k, pc in enumerate(lay.pieces):
         solid, place = _to_file(jig_solid(lay, k), (0.0, pc.y0, lay.z_floor_bottom), along_x=True)
         yield Part(f"jig_{k + 1}", "jig", solid, place, JIG_COLOR,
                    meta={"fixture": True, "holds": holds, "piece": k + 1, "pieces": len(lay.pieces),
-                         "station_tolerance_mm": plan.design.jig.station_tolerance_mm})
+                         "station_tolerance_mm": lay.station_tolerance_mm})
 
 
 __all__ = ["build_mount", "build_jig"]

@@ -17,6 +17,7 @@ import numpy as np
 from ..cad.export import STL_TOLERANCE_MM
 from ..model import kinematics as kin
 from ..model.crossings import crossing_angles, strip_crossings
+from ..model.holes import hole_diameter
 from .base import Check
 from .eyelets import EyeletMap, joined_holes
 from .polygons import inside, loop_gap, num, points_to_polyline
@@ -147,7 +148,7 @@ def hole_checks(emap: EyeletMap, min_hole: float, tendon_d: float, angles_deg: n
             cos = np.clip(np.abs(dirs[valid] @ ax), 0, 1)
             k = int(np.argmin(cos))
             alpha = float(np.arccos(cos[k]))
-            need = tendon_d / np.cos(alpha) + T_of[i] * np.tan(alpha)
+            need = hole_diameter(tendon_d, T_of[i], alpha)
             margin = e.hole.diameter + 2 * SAG_MM - need
             if worst is None or margin < worst[0]:
                 worst = (margin, i, np.degrees(alpha), need, e.hole.diameter, float(bends[valid][k]))
@@ -303,7 +304,7 @@ def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendo
                                    kin.kappas_for_angles(angles_deg, length))
             k = int(np.argmax(beta))
             b = float(beta[k])
-            need = tendon_d / np.cos(b) + strip_t * np.tan(b)
+            need = hole_diameter(tendon_d, strip_t, b)
             have = float(min(dia))
             ok = have >= need
             txt = (f"{name} crosses the {strip_t:.2f} mm strip {at} at up to {np.degrees(b):.0f}° to its normal "

@@ -17,6 +17,7 @@ from ..params import Design
 from .fixing import CHAMBER_HEIGHT_MM, disk_gaps, disk_thicknesses, seat_diameter
 from .fixtures import mount_problems
 from .gearing import worm_pair
+from .holes import straight_hole
 from .materials import material_problem
 from .routing import sample_function
 from .tensioner_layout import spool_wall_problem
@@ -79,7 +80,7 @@ def _anchor_problems(d: Design) -> list[tuple[str, str]]:
         if t.diameter <= seat:
             out.append((f"{path}.diameter", f"a {t.diameter:g} mm {t.kind} pulls through the smallest seat the process "
                                             f"makes, Ø{seat:g} mm (process.min_hole, tendon and hole clearance)"))
-    T = d.disks.end_thickness
+    T = disk_thicknesses(d)[0]          # the base disk's
     room = T / 2 - T * EYELET_CUT_FRACTION
     if d.disks.anchors.plate + CHAMBER_HEIGHT_MM >= room:
         out.append(("disks.anchors.plate", f"{d.disks.anchors.plate:g} mm of seat plate and the chamber over it reach "
@@ -100,7 +101,7 @@ def _anchor_problems(d: Design) -> list[tuple[str, str]]:
 def _eyelets_outside(d: Design) -> list[tuple[str, str]]:
     """Eyelets (as the geometry will use them: table first, else the function) beyond the disk's rim."""
     r_out = d.disks.outer_diameter / 2
-    hole = _smallest_hole(d)
+    hole = straight_hole(d.tendon_material.diameter, d.process.hole_clearance, d.process.min_hole)
     out = []
     for i, t in enumerate(d.tendons):
         table = t.routing.table
@@ -124,28 +125,26 @@ MAX_MOUNT_HOLES = 32
 
 
 def _slot_problems(d: Design) -> list[tuple[str, str]]:
-    """The strip's slot (strip plus clearance) must leave a wall all round inside the disk."""
+    """The strip's slot (strip plus clearance) must leave a wall all round inside the disk: the one
+    rule that the slot fits the disk."""
     dk, wall = d.disks, d.process.min_wall
     w, h = d.backbone.height + 2 * dk.slot_clearance, d.backbone.thickness + 2 * dk.slot_clearance
     r = dk.outer_diameter / 2
     if math.hypot(w / 2, h / 2) + wall <= r:
         return []
+    if w / 2 >= r:
+        return [("disks.outer_diameter", f"{dk.outer_diameter} mm does not enclose the backbone slot ({w:g} mm)")]
     field = "backbone.thickness" if w / 2 + wall < r else "disks.outer_diameter"
     return [(field, f"the backbone slot ({w:g} × {h:g} mm: the strip and disks.slot_clearance) reaches past "
                     f"the rim of the Ø{dk.outer_diameter:g} mm disk, or leaves less than "
                     f"process.min_wall = {wall:g} mm of it")]
 
 
-def _smallest_hole(d: Design) -> float:
-    """The diameter of an eyelet the tendon passes straight: the plan only makes them larger."""
-    return max(d.process.min_hole, d.tendon_material.diameter + d.process.hole_clearance)
-
-
 def _tendon_size_problems(d: Design) -> list[tuple[str, str]]:
     """A tendon whose straight eyelet, with walls, does not fit between the slot and the rim."""
     dk = d.disks
     room = dk.outer_diameter / 2 - (d.backbone.thickness / 2 + dk.slot_clearance)
-    hole = _smallest_hole(d)
+    hole = straight_hole(d.tendon_material.diameter, d.process.hole_clearance, d.process.min_hole)
     if hole + 2 * d.process.min_wall <= room:
         return []
     return [("tendon_material.diameter",
@@ -179,8 +178,7 @@ def tendon_field(d: Design, name: str) -> str:
     """The YAML field that places tendon ``name`` (its table if it has one, else its function);
     a mirrored tendon is placed by the tendon it mirrors."""
     for i, t in enumerate(d.tendons):
-        mirror = {t.routing.mirror_name or f"{t.name}_m"} if t.routing.mirror else set()
-        if name in {t.name} | mirror:
+        if name in t.names:
             return f"tendons[{i}].routing.{'table' if t.routing.table is not None else 'function'}"
     return "tendons"
 

@@ -35,6 +35,7 @@ import math
 import numpy as np
 
 from ..params import Design, Termination
+from .holes import straight_hole
 from .intervals import interval_difference
 from .specs import Hole, HubSpec, Seat
 
@@ -181,17 +182,15 @@ def hub_spec(design: Design, role: str, ext: float, thickness: float, slot_w: fl
 def termination_of(design: Design, tendon: str) -> Termination:
     """How a tendon (or the mirror of one) ends: its own termination, else the material's."""
     for t in design.tendons:
-        names = {t.name}
-        if t.routing.mirror:
-            names.add(t.routing.mirror_name or f"{t.name}_m")
-        if tendon in names and t.termination is not None:
+        if tendon in t.names and t.termination is not None:
             return t.termination
     return design.tendon_material.termination
 
 
 def seat_diameter(design: Design) -> float:
-    """The opening of a seat: the tendon with the process's hole clearance, never under its smallest hole."""
-    return max(design.process.min_hole, design.tendon_material.diameter + design.process.hole_clearance)
+    """The opening of a seat: the hole the tendon passes straight (:func:`hwgen.model.holes.straight_hole`)."""
+    p = design.process
+    return straight_hole(design.tendon_material.diameter, p.hole_clearance, p.min_hole)
 
 
 def seats_for(design: Design, hole: Hole, thickness: float, directions: dict[str, np.ndarray]

@@ -63,7 +63,7 @@ DOVETAIL_PLAY = 0.1         # per side, key in its socket, mm
 PRINT_MARGIN = 2.0          # a jig piece stays this far inside the printer's longest axis, mm
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class MountLayout:
     y_face: float               # base disk's outer face: the jaws' front
     y_back: float               # the jaws' back face
@@ -86,6 +86,8 @@ class MountLayout:
     bolt: str                   # what goes in the foot holes
     pitch: float
     foot_half_x: float
+    bolt_pattern: str           # the table's grid, as the YAML names it (base_mount.bolt_pattern)
+    disk_thickness: float       # the base disk's thickness: the disk screws' grip with the jaws
 
 
 def base_length(d: Design) -> float:
@@ -93,7 +95,7 @@ def base_length(d: Design) -> float:
     disk and the least the jaws clamp (JAW_LEAST), to the next whole mm."""
     if d.backbone.extra_base is not None:
         return d.backbone.extra_base
-    return float(math.ceil(d.disks.end_thickness / 2 + JAW_LEAST))
+    return float(math.ceil(disk_thicknesses(d)[0] / 2 + JAW_LEAST))
 
 
 def mount_layout(d: Design, disk_screws=()) -> MountLayout:
@@ -101,7 +103,8 @@ def mount_layout(d: Design, disk_screws=()) -> MountLayout:
     base disk's mount holes as the plan placed them)."""
     bm, bb = d.base_mount, d.backbone
     pitch, hole, bolt = BOLT_PATTERNS[bm.bolt_pattern]
-    y_face = -d.disks.end_thickness / 2
+    base_t = disk_thicknesses(d)[0]
+    y_face = -base_t / 2
     y_back = -base_length(d) - JAW_BEYOND_STRIP
     y_col = y_face - ACCESS_MM
     t = bb.thickness
@@ -120,7 +123,7 @@ def mount_layout(d: Design, disk_screws=()) -> MountLayout:
         z_upper_top=t / 2 + JAW_STANDOFF + UPPER_JAW, recess_half_x=bb.height / 2 + STRIP_RECESS_CLEARANCE,
         jaw_screws=screws, disk_screws=tuple((float(x), float(z)) for x, z in disk_screws),
         screw_hole=bm.screw_hole, foot_holes=feet, foot_hole=hole, bolt=bolt, pitch=pitch,
-        foot_half_x=fx + FOOT_EDGE)
+        foot_half_x=fx + FOOT_EDGE, bolt_pattern=bm.bolt_pattern, disk_thickness=base_t)
 
 
 def disk_screw_region(d: Design) -> tuple[tuple[tuple[float, float], tuple[float, float]], float]:
@@ -171,7 +174,7 @@ class JigPiece:
     key_in: bool                # sockets for the previous piece's dovetails at its -y end
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class JigLayout:
     pieces: tuple[JigPiece, ...]
     slots: tuple[tuple[float, float], ...]    # y ranges of the comb slots (one per disk)
@@ -184,6 +187,7 @@ class JigLayout:
     dovetail: tuple[float, float, float]
     dovetail_x: tuple[float, ...]
     play: float
+    station_tolerance_mm: float  # how far the jig may set a disk off its station (design data for the checks)
 
 
 def jig_inner_floor(d: Design) -> float:
@@ -238,5 +242,8 @@ def jig_layout(d: Design) -> JigLayout:
     pieces = tuple(JigPiece(k, a, b, k < len(ends) - 2, k > 0) for k, (a, b) in enumerate(zip(ends, ends[1:])))
     x_in = max(r - JIG_ENGAGE, jig_inner_floor(d))
     z_floor_top = -r - jg.clearance
-    return JigLayout(pieces, slots, x_in, x_in + jg.wall, r + jg.clearance, z_floor_top - jg.floor, z_floor_top,
-                     math.sqrt(r**2 - x_in**2) + JIG_WALL_ABOVE, DOVETAIL, (-DOVETAIL_X, DOVETAIL_X), DOVETAIL_PLAY)
+    return JigLayout(pieces=pieces, slots=slots, x_inner=x_in, x_outer=x_in + jg.wall, x_slot=r + jg.clearance,
+                     z_floor_bottom=z_floor_top - jg.floor, z_floor_top=z_floor_top,
+                     z_top=math.sqrt(r**2 - x_in**2) + JIG_WALL_ABOVE, dovetail=DOVETAIL,
+                     dovetail_x=(-DOVETAIL_X, DOVETAIL_X), play=DOVETAIL_PLAY,
+                     station_tolerance_mm=jg.station_tolerance_mm)

@@ -394,10 +394,10 @@ class WormPair:
         if self.tip_thickness() < min_wall:
             out.append(("module", f"wheel tooth tip {self.tip_thickness():.3f} mm is thinner than the process "
                                   f"minimum wall {min_wall:g} mm; use a larger module"))
-        need = max(2 * self.pitch, engagement_length(self) + self.pitch)
+        need = max(2 * self.pitch, meshing_length(self) + self.pitch)
         if self.worm_length < need:
             out.append(("worm_length", f"{self.worm_length:g} mm of thread does not cover the "
-                                       f"{engagement_length(self):.1f} mm the wheel's teeth reach plus a pitch "
+                                       f"{meshing_length(self):.1f} mm the wheel's teeth reach plus a pitch "
                                        f"({need:.1f} mm needed)"))
         return out
 
@@ -428,7 +428,7 @@ def hertz_allowable(strength_mpa: float) -> float:
     return HERTZ_YIELD_FACTOR * strength_mpa
 
 
-def engagement_length(pair: WormPair, planes: int = 41) -> float:
+def meshing_length(pair: WormPair, planes: int = 41) -> float:
     """Length of worm along its axis that the wheel reaches, mm: in each plane Z = z across
     the face, the chord of the wheel's tip circle (throat or outside radius) that lies inside
     the worm's tip cylinder; the longest."""

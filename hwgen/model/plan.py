@@ -14,7 +14,8 @@ from ..params import Design
 from . import kinematics as kin
 from . import screws
 from .crossings import crossing_angles, in_strip_plane, strip_crossings
-from .fixtures import MountLayout, base_length, disk_screw_region, mount_layout
+from .holes import hole_diameter
+from .fixtures import JigLayout, MountLayout, base_length, disk_screw_region, jig_layout, mount_layout
 from .fixing import disk_role, disk_thicknesses, hub_lengths, hub_spec, seats_for
 from .routing import TendonPath, tendon_paths
 from .specs import BackboneHole, BackboneSpec, DiskSpec, Hole, Merge
@@ -24,14 +25,21 @@ SAME_POSITION_MM = 1e-6  # eyelets closer than this share one hole
 SWEEP_STEP_DEG = 1.0     # resolution of the bending sweep used to size eyelets
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Plan:
+    """Everything later stages build and check from, resolved from the design: frozen values."""
+
     design: Design
-    paths: list[TendonPath]
+    stations: tuple[float, ...]                       # each disk's mid-plane along the backbone, mm
+    paths: list[TendonPath]                           # every tendon, mirrors expanded, in YAML order
     disks: tuple[DiskSpec, ...]
     backbone: BackboneSpec
     merges: tuple[Merge, ...]
     findings: tuple[str, ...] = field(default=())
+    mount: MountLayout                                # the base mount, around the base disk's screws
+    jig: JigLayout                                    # the assembly jig
+    min_wall: float                                   # the process's thinnest wall, mm
+    tendon_diameter: float                            # mm
     tensioner_layout: TensionerLayout | None = None   # where the worm drives go, when they can be laid out
     tensioner_error: str | None = None                # why not, otherwise
 
@@ -40,21 +48,6 @@ class Plan:
         if self.tensioner_layout is None:
             raise DesignError("tensioner", self.tensioner_error or "no tensioner layout")
         return self.tensioner_layout
-
-    @property
-    def stations(self) -> tuple[float, ...]:
-        return self.design.stations
-
-
-def base_mount(plan: Plan) -> MountLayout:
-    """The base mount laid out around the plan's base-disk screws."""
-    return mount_layout(plan.design, [(x, z) for x, z, _ in plan.disks[0].mount_holes])
-
-
-def hole_diameter(d: float, thickness: float, alpha: float, clearance: float, minimum: float) -> float:
-    """Smallest hole a tendon of diameter d passes at angle alpha (rad) through a wall this thick
-    (elementwise over arrays of thickness and alpha)."""
-    return np.maximum(minimum, d / np.cos(alpha) + thickness * np.tan(alpha) + clearance)
 
 
 def _sweep(design: Design) -> np.ndarray:
@@ -121,9 +114,10 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
     hub = hub_spec(d, role, hub_lengths(d)[i], thick, slot_w, slot_h, tuple(holes), {p.name: p.points[i] for p in paths},
                    {p.name: (sweeps[p.name][0][:, i], sweeps[p.name][1][:, i]) for p in paths})
     mounts = _mount_holes(d, role, holes, seats, chambers, (slot_w, slot_h), hub)
-    spec = DiskSpec(i, float(d.stations[i]), role, thick, dk.outer_diameter, slot_w, slot_h, tuple(holes),
-                    dk.eyelets.edge_size if dk.eyelets.edge == "chamfer" else 0.0, mounts, hub, seats,
-                    dk.anchors.plate if seats else 0.0, chambers)
+    spec = DiskSpec(index=i, y=float(d.stations[i]), role=role, thickness=thick, outer_diameter=dk.outer_diameter,
+                    slot_width=slot_w, slot_height=slot_h, holes=tuple(holes),
+                    edge_size=dk.eyelets.edge_size if dk.eyelets.edge == "chamfer" else 0.0, mount_holes=mounts,
+                    hub=hub, seats=seats, seat_plate=dk.anchors.plate if seats else 0.0, seat_chambers=chambers)
     return spec, merges
 
 
@@ -158,8 +152,8 @@ def _eyelet_holes(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[st
         (x, z), spread = _centre(g, i)
         dia = hole_diameter(d.tendon_material.diameter, thick, alpha, proc.hole_clearance, proc.min_hole) + 2 * spread
         in_slot = abs(x) <= slot_w / 2 and abs(z) <= slot_h / 2
-        return Hole(x, z, tuple(float(a) for a in ax), float(dia), tuple(p.name for p in g),
-                    float(np.degrees(alpha)), in_slot)
+        return Hole(x=x, z=z, axis=tuple(float(a) for a in ax), diameter=float(dia), tendons=tuple(p.name for p in g),
+                    worst_angle_deg=float(np.degrees(alpha)), in_slot=in_slot)
 
     # Holes that would run into each other become one opening around all their tendons: two bores
     # that nearly coincide leave slivers no mesh closes, and the tendons could not be held apart anyway
@@ -214,8 +208,11 @@ def _mount_holes(d: Design, role: str, holes, seats, chambers, slot: tuple[float
     return tuple((x, z, dia) for x, z in screws.place(keep, bands, x_max, rim))
 
 
-def plan(design: Design) -> Plan:
+def make_plan(design: Design, tensioner_record: dict | None = None) -> Plan:
     """Disks, strip and tensioner layout of a design, all as plain data.
+
+    ``tensioner_record``: the tensioner layout's ``search`` record from a build of this very design
+    (its manifest's): the arrangement it names is laid out again instead of searched for.
 
     The tip disk is planned twice: once to lay the tensioner out on it, then again with each
     tendon's exit toward its spool, so the tip eyelets follow the bisector of the incoming
@@ -231,11 +228,15 @@ def plan(design: Design) -> Plan:
         disks.append(spec)
         merges += m
     bb_holes, findings = _backbone_holes(d, paths, disks)
-    backbone = BackboneSpec(d.backbone.height, d.backbone.thickness, -base_length(d),
-                            d.backbone.length + d.backbone.extra_tip, tuple(bb_holes), d.backbone.density_g_cm3)
-    first = Plan(d, paths, tuple(disks), backbone, tuple(merges), tuple(findings))
+    backbone = BackboneSpec(height=d.backbone.height, thickness=d.backbone.thickness, y_start=-base_length(d),
+                            y_end=d.backbone.length + d.backbone.extra_tip, holes=tuple(bb_holes),
+                            density_g_cm3=d.backbone.density_g_cm3)
+    first = Plan(design=d, stations=tuple(d.stations), paths=paths, disks=tuple(disks), backbone=backbone,
+                 merges=tuple(merges), findings=tuple(findings),
+                 mount=mount_layout(d, [(x, z) for x, z, _ in disks[0].mount_holes]), jig=jig_layout(d),
+                 min_wall=d.process.min_wall, tendon_diameter=d.tendon_material.diameter)
     try:
-        lay = layout(d, paths, disks[-1])
+        lay = layout(d, paths, disks[-1], tensioner_record)
     except ValueError as e:
         return replace(first, tensioner_error=str(e))
     exits = {r.tendon: np.subtract(r.end, r.start) / r.length for r in lay.runs}
@@ -263,13 +264,13 @@ def _backbone_holes(d: Design, paths: list[TendonPath], disks: list[DiskSpec]):
     return out, findings
 
 
-
 def eyelet_holes(design: Design, paths: list[TendonPath], disks, rest_axes: dict[str, np.ndarray] | None = None,
                  sweeps: dict[str, Sweep] | None = None) -> dict[int, tuple[Hole, ...]]:
-    """The eyelet holes of the given disks as :func:`plan` makes them (shared ones one hole, holes
-    that would run into each other merged), without the tip disk's turn toward the tensioner: for
-    callers that size most holes their own, faster way and need the plan's answer where tendons
-    run into each other. ``rest_axes`` and ``sweeps`` (by tendon name), when the caller has them."""
+    """The eyelet holes of the given disks as :func:`make_plan` makes them (shared ones one hole,
+    holes that would run into each other merged), without the tip disk's turn toward the
+    tensioner: for callers that size most holes their own, faster way and need the plan's answer
+    where tendons run into each other. ``rest_axes`` and ``sweeps`` (by tendon name), when the
+    caller has them."""
     rest_axes = rest_axes or {p.name: _rest_axes(design, p) for p in paths}
     sweeps = sweeps or _sweeps(design, paths)
     return {int(i): tuple(_eyelet_holes(design, int(i), paths, rest_axes, sweeps)[1]) for i in disks}

@@ -56,7 +56,7 @@ def tendon_paths(d: Design) -> list[TendonPath]:
         out.append(TendonPath(t.name, t.channel, pts, fpts if r.table is not None else None, budget, src))
         if r.mirror:
             flip = np.array([1.0, -1.0])
-            out.append(TendonPath(r.mirror_name or f"{t.name}_m", t.channel, pts * flip,
+            out.append(TendonPath(t.names[1], t.channel, pts * flip,
                                   None if fpts is None or r.table is None else fpts * flip,
                                   budget, src, mirrored_from=t.name))
     return out

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 SAME_HOLE_MM = 1e-6      # strip holes closer than this are one hole
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Hole:
     """An eyelet hole: centre (x, z) on the disk mid-plane, axis in disk coordinates (x, y, z)."""
 
@@ -50,7 +50,7 @@ class Seat:
     termination: float       # the knot's size or the crimp sleeve's outer diameter it holds
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class DiskSpec:
     """One tendon-support disk, ready to build."""
 
@@ -88,7 +88,7 @@ class BackboneHole:
     diameter: float
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class BackboneSpec:
     height: float
     thickness: float

@@ -239,9 +239,7 @@ def describe(plan, measured: dict | None = None) -> Described:
     stations = tuple(float(s) for s in d.stations)
     pre = {}
     for t in d.tendons:
-        pre[t.name] = t.pretension_n
-        if t.routing.mirror:
-            pre[t.routing.mirror_name or f"{t.name}_m"] = t.pretension_n
+        pre.update(dict.fromkeys(t.names, t.pretension_n))
     lines = []
     for p in plan.paths:
         P = np.column_stack([np.zeros(len(stations)), stations, np.zeros(len(stations))])

@@ -5,7 +5,7 @@ Variants that share the robot's skeleton (stations, backbone length, disk thickn
 count, sweeps) are evaluated together, as arrays with a leading variant axis:
 
 - the eyelet centres of eq. (3) at every station (:func:`hwgen.model.routing.tendon_paths`);
-- each eyelet hole sized as :func:`hwgen.model.plan.plan` sizes it: its axis on the bisector of the
+- each eyelet hole sized as :func:`hwgen.model.plan.make_plan` sizes it: its axis on the bisector of the
   tendon's straight segments (or the disk normal), shared where tendons meet, its diameter
   d/cos α + t·tan α + clearance for the worst angle α over ``disks.eyelets.sweep_deg``. The tip
   disk is sized without the turn toward the tensioner's drum (that needs the tensioner's
@@ -38,7 +38,8 @@ from ..model.fixing import disk_thicknesses
 from ..model.materials import printed_density
 from ..model.routing import tendon_paths
 from ..model.scatter import _basis
-from ..model.plan import SAME_POSITION_MM, SWEEP_STEP_DEG as SIZING_STEP_DEG, eyelet_holes, hole_diameter
+from ..model.holes import hole_diameter
+from ..model.plan import SAME_POSITION_MM, SWEEP_STEP_DEG as SIZING_STEP_DEG, eyelet_holes
 from ..model.routing import TendonPath
 from ..params import Design
 

@@ -1,7 +1,7 @@
 """What each level of a sweep computes for a batch of variants, on a worker: one row per variant.
 
 ``lengths`` (:mod:`.lengths`): the plan's eyelets, eq. (2) and the nominal taut path, many
-variants at once. ``robust``: the full plan (:func:`hwgen.model.plan.plan`) and the as-built Monte
+variants at once. ``robust``: the full plan (:func:`hwgen.model.plan.make_plan`) and the as-built Monte
 Carlo of :mod:`hwgen.model.scatter` on the plan's holes, seats and tensioner runs, judged at
 ``check.robust`` like ``hwgen check``'s ``tendon.robust``. ``coupling``: the tendon statics of
 :mod:`hwgen.checks.tension` on that plan (tautness, overload, the actuating tension's rise).
@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import DesignError, InputError
 from ..model import feasibility, scatter as mc
-from ..model.plan import Plan, plan as make_plan
+from ..model.plan import Plan, make_plan
 from . import lengths
 from .spec import Resolved, Variant, resolve
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 
-from ...params import Tensioner
 from ..intervals import interval_difference
 from .placement import Frame
 from .result import Member, Unit
@@ -16,12 +15,13 @@ FRAME = 3.0              # material left around a window and beside every featur
 WINDOW_MIN = 6.0         # narrower openings are not worth cutting
 
 
-def housing_members(fr: Frame, clamp, sz: Sizes, mounts, fast: str, ts: Tensioner,
+def housing_members(fr: Frame, clamp, sz: Sizes, mounts, fast: str, shaft_diameter: float, press_fit: float,
                     with_cuts: bool = True) -> tuple[list[Member], list[Member]]:
     """The housing's members and cuts: base bars on the tip disk (through its screw rows and
     the strip clamp), a spine foot per column, one spine pad per unit stacked from the foot
     (each overlapping the one before, so the wall is one piece), per unit an upper shelf with
-    the pin boss, a lower bar and the far worm post; dowel bores, worm holes, fastener holes
+    the pin boss, a lower bar and the far worm post; dowel bores (``shaft_diameter`` less the
+    ``press_fit``), worm holes, fastener holes
     with nut traps or insert bores, the strip's slot and the tendons' passages."""
     pair = sz.pair
     sp0, sp1 = fr.spine
@@ -62,7 +62,8 @@ def housing_members(fr: Frame, clamp, sz: Sizes, mounts, fast: str, ts: Tensione
                               (y_from, top, z0, u.lower_bar[1] + FRAME), (y_from, top, u.upper_shelf[0] - FRAME, z1)])
             y_from, prev = top - SHELF, (z0, z1)
     for u in fr.units:
-        _unit_members(u, fr, sz, members, cuts if with_cuts else None, ts)
+        _unit_members(u, fr, sz, members, cuts if with_cuts else None,
+                      (shaft_diameter - press_fit) / 2)
     if with_cuts:
         _base_cuts(fr, clamp, sz, mounts, fast, members, cuts)
     return members, cuts if with_cuts else []
@@ -109,7 +110,7 @@ def _hexagons(name, axis, lo, hi, y0, y1, v0, v1) -> list[Member]:
     return out
 
 
-def _unit_members(u: Unit, fr: Frame, sz: Sizes, members, cuts, ts: Tensioner) -> None:
+def _unit_members(u: Unit, fr: Frame, sz: Sizes, members, cuts, press_radius: float) -> None:
     """The unit's shelf, bosses, lower bar and far post; and, unless ``cuts`` is None, its bores
     and the shelf's windows."""
     s = u.side
@@ -134,7 +135,7 @@ def _unit_members(u: Unit, fr: Frame, sz: Sizes, members, cuts, ts: Tensioner) -
                      [(y_boss[0] - FRAME, y_boss[1] + FRAME, *xs), (y_post[0] - FRAME, y_post[1] + FRAME, *xs),
                       (*shelf_y, *sorted((s * p0, s * (p1 + FRAME)))), (*shelf_y, cx - BOSS - FRAME, cx + BOSS + FRAME),
                       (*shelf_y, *sorted((s * (sp0 - FRAME), s * sp1)))])
-    press = (ts.shaft_diameter - ts.press_fit) / 2
+    press = press_radius
     cuts += [
         # dowel bores (press fit): wheel pins along z, worm pin along x through the post
         Member(f"{c} upper pin", "cyl", (press, cx, cy, u.z_part[1], cx, cy, u.upper_shelf[1] + 1.0)),

@@ -92,9 +92,10 @@ def _frame(x_u: float, arr: Arrangement, centers_y, stacks, eyelets: Eyelets, wi
     units, runs = [], []
     for c, s in zip(arr.order, arr.sides):
         st = stacks[c]
-        u = Unit(c, tuple(n_ for n_, _, _ in eyelets[c]), s, (s * x_u, centers_y[c]), st.z_part,
-                 st.zones, st.flanges, st.caps, st.gear, st.clamps, centers_y[c] + s * a, st.z_wheel,
-                 st.upper, st.lower, st.pins)
+        u = Unit(channel=c, tendons=tuple(n_ for n_, _, _ in eyelets[c]), side=s, center=(s * x_u, centers_y[c]),
+                 z_part=st.z_part, zones=st.zones, flanges=st.flanges, caps=st.caps, z_gear=st.gear,
+                 clamps=st.clamps, worm_y=centers_y[c] + s * a, worm_z=st.z_wheel, upper_shelf=st.upper,
+                 lower_bar=st.lower, pins=st.pins)
         units.append(u)
         opposite = winding.get(c, "same") == "opposite"
         for k, (name, x, z) in enumerate(sorted(eyelets[c], key=lambda t: (t[2], t[0]))):

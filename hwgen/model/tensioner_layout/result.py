@@ -7,7 +7,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...params import Tensioner
 from ..gearing import WormPair
 from .sizes import AXIAL_PLAY, DRIVE_FLANGE
 
@@ -29,7 +28,7 @@ class TendonRun:
         return float(np.linalg.norm(np.subtract(self.end, self.start)))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Unit:
     """One channel's worm drive, in the layout's own frame (see ``TensionerLayout.turn``)."""
 
@@ -94,8 +93,11 @@ class Member:
         return math.sqrt(3) / 2 * d[0] ** 2 * length
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class TensionerLayout:
+    """Where every part of the tensioner goes, and the values of the YAML's tensioner section its
+    parts are made from, resolved (the CAD stage reads nothing else)."""
+
     pair: WormPair
     y_face: float
     x_u: float
@@ -119,7 +121,11 @@ class TensionerLayout:
     turn: np.ndarray                            # 4x4 layout frame -> robot: identity, or 180° about y
     fastening: str                              # "nut" (resin) or "insert" (thermoplastic)
     base_t: float                               # base bars' depth along y, on the tip disk
-    params: Tensioner                           # the YAML's tensioner section
+    hex_key: float                              # the drive shaft's socket takes this hex key, across flats
+    shaft_diameter: float                       # the dowels the worms and wheels turn on
+    running_fit: float                          # diametral clearance of a part turning on a dowel
+    friction_coefficient: float                 # μ of the worm on the wheel
+    windings: dict[str, str]                    # channel -> "same" or "opposite": how its tendons wind
     search: dict = field(default_factory=dict)  # what was tried and why this arrangement won
 
     def unit(self, channel: str) -> Unit:

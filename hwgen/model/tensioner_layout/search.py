@@ -16,7 +16,7 @@ from .arrangement import (CLAMP_MIN, GEAR_RULES, Arrangement, Eyelets, arrangeme
 from .housing import housing_members
 from .placement import Failure, Frame, Infeasible, lifted, solve, x_floor
 from .result import Member, TendonRun, TensionerLayout
-from .sizes import MAX_SOLVES, POST, STRIP_CLAMP_Z, NoFit, Sizes, fastening
+from .sizes import MAX_SOLVES, POST, STRIP_CLAMP_Z, NoFit, Sizes
 
 
 @dataclass
@@ -41,7 +41,7 @@ class _Candidate:
     mounts: list
 
 
-def layout(design: Design, paths: list[TendonPath], tip: DiskSpec) -> TensionerLayout:
+def layout(design: Design, paths: list[TendonPath], tip: DiskSpec, chosen: dict | None = None) -> TensionerLayout:
     """Where every part of the tensioner goes, on the tip disk ``tip``: of the arrangements that
     keep every tendon clear, the one that loads the strip least. NoFit (a ValueError) names the
     tendon, what it hits and the parameter that would free it when none does.
@@ -51,10 +51,32 @@ def layout(design: Design, paths: list[TendonPath], tip: DiskSpec) -> TensionerL
     centre of mass beyond the tip face (a weight P at d beyond the tip of a cantilever L
     deflects it by P·L²·(L/3 + d/2)/EI). Arrangements are solved in order of a lower bound
     on that load, so most are never solved.
+
+    ``chosen``: the ``search`` record of a layout made before from this very design (what a build's
+    manifest keeps): only the arrangement it names is laid out again, and the layout keeps that
+    record; it is searched afresh when no candidate matches it.
     """
+    if chosen is not None:
+        try:
+            return _search(design, paths, tip, _named(chosen), chosen)
+        except (NoFit, KeyError, IndexError, TypeError, ValueError):
+            pass                               # not this design's record after all: search
+    return _search(design, paths, tip, None, None)
+
+
+def _named(record: dict):
+    """Whether an arrangement is the one a layout's ``search`` record names."""
+    turn = -1 if record["turned_over"] else 1
+    up = turn * (1 if record["set_screws_from"] == "+z" else -1)
+    key = (turn < 0, up < 0, record["gear_rule"], tuple(record["order"]), tuple(record["columns"]))
+    return lambda arr: arr.key == key
+
+
+def _search(design: Design, paths: list[TendonPath], tip: DiskSpec, wanted, record: dict | None) -> TensionerLayout:
+    """The search of :func:`layout` over the arrangements ``wanted`` accepts (None: all)."""
     ts = design.tensioner
     sz = Sizes.of(design, tip)
-    fast = fastening(design.process.technology)
+    fast = sz.fast
     robot_eyelets = tip_eyelets(paths, ts.channels)
     x_min = x_floor(robot_eyelets, sz)
     candidates = []
@@ -90,8 +112,11 @@ def layout(design: Design, paths: list[TendonPath], tip: DiskSpec) -> TensionerL
                     continue
                 clamp_sets.add(touch)
                 for arr in arrangements(turn, up, gear_rule, eyelets, stacks, clamp):
+                    if wanted is not None and not wanted(arr):
+                        continue
                     fr = lifted(x_min, arr, stacks, eyelets, ts.winding, clamp, sz)
-                    members, _ = housing_members(fr, clamp, sz, mounts, fast, ts, with_cuts=False)
+                    members, _ = housing_members(fr, clamp, sz, mounts, fast, ts.shaft_diameter, ts.press_fit,
+                                                  with_cuts=False)
                     candidates.append(_Candidate(_load(members, fr, sz, design.backbone.length), arr, eyelets,
                                                  stacks, clamp, mounts))
     if not candidates:
@@ -115,7 +140,7 @@ def layout(design: Design, paths: list[TendonPath], tip: DiskSpec) -> TensionerL
         except Infeasible as e:
             failures.append(e.failure)
             continue
-        members, cuts = housing_members(fr, c.clamp, sz, c.mounts, fast, ts)
+        members, cuts = housing_members(fr, c.clamp, sz, c.mounts, fast, ts.shaft_diameter, ts.press_fit)
         load = _load(members, fr, sz, design.backbone.length)
         if best is None or (load, c.arrangement.key) < (best.load, best.arrangement.key):
             best = _Best(c.arrangement, x_u, fr, c.clamp, sz, members, cuts, load)
@@ -127,7 +152,7 @@ def layout(design: Design, paths: list[TendonPath], tip: DiskSpec) -> TensionerL
         note = (f"left off: tendon {n} leaves the tip at x = {x:g}, z = {z:g} mm, where the block that clamps the "
                 f"strip's tip would stand either side; the tensioner is held by its screws into the tip disk alone "
                 f"(backbone.extra_tip of strip runs into the housing unclamped)")
-    return _assemble(best, ts, fast, len(candidates), solved, note)
+    return _assemble(best, ts, fast, len(candidates), solved, note, record)
 
 
 def _load(members: list[Member], fr: Frame, sz: Sizes, length: float) -> float:
@@ -160,7 +185,7 @@ def _explain(failures: list[Failure], tried: int, ts: Tensioner) -> str:
 
 
 def _assemble(b: _Best, ts: Tensioner, fast: str, tried: int, solved: int,
-              clamp_note: str | None = None) -> TensionerLayout:
+              clamp_note: str | None = None, record: dict | None = None) -> TensionerLayout:
     sz, fr, arr = b.sz, b.frame, b.arrangement
     turn = np.diag([float(arr.turn), 1.0, float(arr.turn), 1.0])
     runs = tuple(TendonRun(r.tendon, r.channel, tuple(float(v) for v in turn[:3, :3] @ r.start),
@@ -172,8 +197,14 @@ def _assemble(b: _Best, ts: Tensioner, fast: str, tried: int, solved: int,
               "housing_members_mm3": round(sum(m.volume for m in b.members), 1), "load_estimate": round(b.load)}
     if clamp_note:
         search["strip_clamp"] = clamp_note
-    return TensionerLayout(sz.pair, sz.y_face, b.x_u, fr.spine, fr.post, fr.worm_x, fr.worm_file_to_mesh,
-                           fr.near_end, sz.spine_hole, pin_length(POST),
-                           fr.units, runs, sz.r_s, sz.r_w, sz.r_f, sz.hub_r,
-                           (sz.strip_half_x, sz.strip_half_z, sz.y_face, sz.y_end), b.clamp,
-                           tuple(b.members), tuple(b.cuts), turn, fast, sz.base_t, ts, search)
+    if record is not None:                # laid out again from a record: what the search found then
+        search = dict(record)
+    return TensionerLayout(
+        pair=sz.pair, y_face=sz.y_face, x_u=b.x_u, spine=fr.spine, post=fr.post, worm_x=fr.worm_x,
+        worm_file_to_mesh=fr.worm_file_to_mesh, worm_near_end=fr.near_end, spine_hole=sz.spine_hole,
+        worm_pin=pin_length(POST), units=fr.units, runs=runs, spool_radius=sz.r_s, winding_radius=sz.r_w,
+        flange_radius=sz.r_f, hub_radius=sz.hub_r, strip=(sz.strip_half_x, sz.strip_half_z, sz.y_face, sz.y_end),
+        clamp_block=b.clamp, members=tuple(b.members), cuts=tuple(b.cuts), turn=turn, fastening=fast,
+        base_t=sz.base_t, hex_key=ts.hex_key, shaft_diameter=ts.shaft_diameter, running_fit=ts.running_fit,
+        friction_coefficient=ts.friction_coefficient,
+        windings={c: ts.winding.get(c, "same") for c in ts.channels}, search=search)

@@ -121,7 +121,7 @@ def fastening(technology: str) -> str:
     return "nut" if technology == "SLA" else "insert"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Sizes:
     """Dimensions every unit shares, derived once from the parameters (mm)."""
 
@@ -163,12 +163,13 @@ class Sizes:
             raise NoFit(f"tensioner.spool_diameter {problem}")
         fast = fastening(d.process.technology)
         td = d.tendon_material.diameter
-        return Sizes(pair, tip.y + tip.thickness / 2, td, td / 2 + ts.tendon_clearance + td / 2,
-                     math.radians(ts.max_exit_deg), r_s, r_s + td / 2, r_s + FLANGE_HEIGHT,
-                     max(ts.shaft_diameter / 2 + ts.running_fit / 2 + HUB_WALL, r_s),
-                     DRIVE_SHAFT + ts.running_fit,
-                     SPINE, BASE[fast], tip.thickness, d.backbone.height / 2, d.backbone.thickness / 2,
-                     d.backbone.length + d.backbone.extra_tip, fast)
+        return Sizes(pair=pair, y_face=tip.y + tip.thickness / 2, tendon_d=td,
+                     need=td / 2 + ts.tendon_clearance + td / 2, max_exit=math.radians(ts.max_exit_deg),
+                     r_s=r_s, r_w=r_s + td / 2, r_f=r_s + FLANGE_HEIGHT,
+                     hub_r=max(ts.shaft_diameter / 2 + ts.running_fit / 2 + HUB_WALL, r_s),
+                     spine_hole=DRIVE_SHAFT + ts.running_fit, spine_t=SPINE, base_t=BASE[fast], tip_t=tip.thickness,
+                     strip_half_x=d.backbone.height / 2, strip_half_z=d.backbone.thickness / 2,
+                     y_end=d.backbone.length + d.backbone.extra_tip, fast=fast)
 
 
 def standard_screw(kind: str, reach: float) -> float:

@@ -1,0 +1,233 @@
+"""The throated wheel with its spool drum, and the clamp plate that pinches a tendon on it.
+
+The throated wheel: a blank of revolution minus one tooth-space tool per tooth, cut in one
+boolean. A tool's flanks and root are one bicubic B-spline surface through the tooth-space
+outlines that :meth:`WormPair.level_outline` generates plane by plane (the same points and
+parameters at every level), closed by a ruled top above the blank and two planar caps.
+"""
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import cadquery as cq
+import numpy as np
+from OCP.BRep import BRep_Tool
+from OCP.BRepBuilderAPI import (BRepBuilderAPI_MakeEdge, BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakeSolid,
+                                BRepBuilderAPI_MakeWire, BRepBuilderAPI_Sewing)
+from OCP.BRepFill import BRepFill
+from OCP.ShapeFix import ShapeFix_Solid
+from OCP.TopExp import TopExp
+from OCP.TopoDS import TopoDS
+
+from ..model.gearing import GearDesignError, WormPair
+from ..model.tensioner_layout import Fastening, TensionerLayout, Unit, joint
+from ..model.tensioner_layout.sizes import ANCHOR_HOLE, CAP, CLAMP_PLATE, M2_CLEARANCE, NUT, NUT_PLAY, PIN_ENGAGE
+from . import location
+from .bspline import interpolating_surface
+from .primitives import TOOL, cylinder, hex_prism, one
+
+CLAMP_ANGLE = 90.0       # where on the wheel face the clamp sits, deg from the tooth on +X
+GEAR_LEVELS = 11          # transverse planes interpolated over the face (+ TOOL_OVERRUN each side)
+GEAR_FLANK_POINTS = 16    # outline points per flank and level (≤ 2.6 µm from the envelope)
+GEAR_ROOT_POINTS = 7      # outline points on the root arc
+TOOL_OVERRUN = 0.4        # the tooth-space tool reaches this far beyond each face, mm
+TOOL_TOP_MARGIN = 0.2     # the tool's top above the outside radius, mm (halved until neighbours stay apart)
+TOOL_MIN_LAND = 0.05      # tooth left between two neighbouring tools at their top, mm
+SURFACE_TOL = 1e-7        # face made on the interpolated surface, mm
+SEWING_TOL = 1e-6         # sewing the tool's faces into a shell, mm
+
+
+def _v(x, y, z=0.0) -> cq.Vector:
+    return cq.Vector(float(x), float(y), float(z))
+
+
+
+def _blank(pair: WormPair) -> cq.Solid:
+    """The wheel's blank, mid-plane at Z = 0: throat torus about the worm axis, outside
+    cylinder, 45° rim chamfers; its half-section in the XZ plane revolved about Z."""
+    h, ch, ro = pair.face_width / 2, pair.rim_chamfer, pair.outside_radius
+    zo = pair.z_outside
+    band = zo < h - ch                       # the outside cylinder is reached inside the face
+    if band and zo < 1e-3:
+        raise GearDesignError("wheel throat never rises: the outside radius equals the throat radius")
+    throat = _v(pair.ra2, 0, 0)
+    if band:
+        edge = ro
+        rim = [cq.Edge.makeLine(_v(edge - ch, 0, -h), _v(edge, 0, -h + ch)),
+               cq.Edge.makeLine(_v(edge, 0, -h + ch), _v(ro, 0, -zo)),
+               cq.Edge.makeThreePointArc(_v(ro, 0, -zo), throat, _v(ro, 0, zo)),
+               cq.Edge.makeLine(_v(ro, 0, zo), _v(edge, 0, h - ch)),
+               cq.Edge.makeLine(_v(edge, 0, h - ch), _v(edge - ch, 0, h))]
+    else:                                    # the face edge lies on the torus: chamfer down to it
+        edge, zc = float(pair.tip_radius(h)), h - ch
+        rc = float(pair.tip_radius(zc))
+        rim = [cq.Edge.makeLine(_v(edge - ch, 0, -h), _v(rc, 0, -zc)),
+               cq.Edge.makeThreePointArc(_v(rc, 0, -zc), throat, _v(rc, 0, zc)),
+               cq.Edge.makeLine(_v(rc, 0, zc), _v(edge - ch, 0, h))]
+    edges = [cq.Edge.makeLine(_v(0, 0, -h), _v(edge - ch, 0, -h)), *rim,
+             cq.Edge.makeLine(_v(edge - ch, 0, h), _v(0, 0, h)), cq.Edge.makeLine(_v(0, 0, h), _v(0, 0, -h))]
+    face = cq.Face.makeFromWires(cq.Wire.assembleEdges(edges))
+    return cq.Solid.revolve(face, 360.0, _v(0, 0, 0), _v(0, 0, 1))
+
+
+def _tool_top(pair: WormPair, levels: np.ndarray) -> float:
+    """The tool's top radius, the same at every level (a top that followed the throat would
+    kink the outlines' radial spacing where throat and cylinder meet, and the interpolation
+    would carry the kink into the flanks): TOOL_TOP_MARGIN above the outside radius, halved
+    until the tooth left between two tools is TOOL_MIN_LAND thick there at every level."""
+    margin = TOOL_TOP_MARGIN
+    while margin > 0.02:
+        top = pair.outside_radius + margin
+        if all(2 * top * pair.tooth_half_angles(float(z), [top])[1][0] > TOOL_MIN_LAND for z in levels[::2]):
+            break
+        margin /= 2
+    return pair.outside_radius + margin
+
+
+
+def _tooth_space_tool(pair: WormPair) -> cq.Solid:
+    """One tooth-space tool (the space centred near π/z2, mid-plane at Z = 0), a closed solid."""
+    h = pair.face_width / 2 + TOOL_OVERRUN
+    zs = np.linspace(-h, h, GEAR_LEVELS)
+    top = _tool_top(pair, zs)
+    outlines = np.array([pair.level_outline(z, top, GEAR_FLANK_POINTS, GEAR_ROOT_POINTS) for z in zs])
+    seg = np.linalg.norm(np.diff(outlines, axis=1), axis=2)         # one chord-length parameter set for all
+    u = np.concatenate([np.zeros((len(zs), 1)), np.cumsum(seg, axis=1)], axis=1)
+    u = (u / u[:, -1:]).mean(axis=0)
+    P = np.concatenate([outlines, np.broadcast_to(zs[:, None, None], outlines.shape[:2] + (1,))], axis=2)
+    surf = interpolating_surface(np.ascontiguousarray(P.transpose(1, 0, 2)), u, (zs + h) / (2 * h))
+    u0, u1, v0, v1 = surf.Bounds()
+
+    def iso(along_u: bool, val: float):
+        return BRepBuilderAPI_MakeEdge(surf.UIso(val) if along_u else surf.VIso(val)).Edge()
+    sew = BRepBuilderAPI_Sewing(SEWING_TOL)
+    sew.Add(BRepBuilderAPI_MakeFace(surf, SURFACE_TOL).Face())
+    sew.Add(BRepFill.Face_s(iso(True, u0), iso(True, u1)))          # the ruled top
+    for val in (v0, v1):                                              # planar caps beyond the faces
+        e = iso(False, val)
+        a, b = BRep_Tool.Pnt_s(TopExp.FirstVertex_s(e)), BRep_Tool.Pnt_s(TopExp.LastVertex_s(e))
+        sew.Add(BRepBuilderAPI_MakeFace(BRepBuilderAPI_MakeWire(e, BRepBuilderAPI_MakeEdge(b, a).Edge()).Wire(),
+                                        True).Face())
+    sew.Perform()
+    fix = ShapeFix_Solid(BRepBuilderAPI_MakeSolid(TopoDS.Shell_s(sew.SewedShape())).Solid())
+    fix.Perform()
+    tool = cq.Solid(fix.Solid())
+    if tool.Volume() < 0:
+        tool = cq.Solid(tool.wrapped.Reversed())
+    if not tool.isValid():
+        raise GearDesignError("the wheel's tooth-space tool is not a valid solid")
+    return tool
+
+
+@lru_cache(maxsize=8)
+def gear_solid(pair: WormPair) -> cq.Solid:
+    """Throated worm wheel generated by the pair's worm thread, file Z from 0 to the face
+    width, a tooth centred on +X at mid-width. Built once per distinct pair (a few seconds:
+    one boolean of the blank and all tooth-space tools); one valid solid (loose chips of the
+    tooth spaces' tops dropped) or :class:`GearDesignError`."""
+    tool = _tooth_space_tool(pair)
+    step = 360.0 / pair.teeth
+    tools = [tool] + [tool.rotate(_v(0, 0, 0), _v(0, 0, 1), k * step) for k in range(1, pair.teeth)]
+    pieces = sorted(_blank(pair).cut(*tools).Solids(), key=lambda s: s.Volume())
+    # The tool's top is a chord between its corners; where the tooth tips leave little room
+    # above the outside radius, the chord dips under it mid-space and leaves a loose chip of
+    # the outside band on each side of the throat. Chips lie wholly beyond the throat radius
+    # and belong to the space anyway; a loose piece reaching further in (a lost tooth) is an error.
+    loose = pieces[:-1]
+    if not pieces or any(min(math.hypot(v.X, v.Y) for v in s.Vertices()) <= pair.ra2 for s in loose):
+        raise GearDesignError(f"the wheel came out in {len(pieces)} pieces, expected one solid")
+    wheel = pieces[-1]
+    if not wheel.isValid():
+        raise GearDesignError("the wheel is not a valid solid")
+    return wheel.translate(_v(0, 0, pair.face_width / 2))
+
+
+def clamp_site(lay: TensionerLayout) -> float:
+    """Radius on the wheel face of the clamp's screw, mm: midway between flange and tooth root,
+    or nearer the flange if the nut trap would otherwise reach the root."""
+    e = (NUT["M2"][0] + NUT_PLAY) / math.sqrt(3)
+    return min((lay.flange_radius + lay.pair.rf2) / 2, lay.pair.rf2 - e - 1.0)
+
+
+def clamp_joint(lay: TensionerLayout, unit: Unit, zc: float) -> Fastening:
+    """The clamp's M2 screw: through the plate into the gear, or into the end cap it sits on."""
+    on_cap = any(c[0] - 1e-9 <= zc <= c[1] + 1e-9 for c in unit.caps)
+    return joint(lay.fastening, "M2", CLAMP_PLATE[2], CAP if on_cap else lay.pair.face_width)
+
+
+def wheel_solid(lay: TensionerLayout, unit: Unit, gear: cq.Solid, pin_bore: float) -> cq.Solid:
+    """Gear + spool drum + flanges (+ end cap), bored for the pins, the clamps' screws (a nut
+    trap from the far face, or an insert bore) and the tendons' anchor holes. Built with
+    Z = robot z - unit.z_part[0], then turned over when the gear is on top so that its face
+    rests on the plate."""
+    z_lo = unit.z_part[0]
+    pair = lay.pair
+    height = unit.z_part[1] - z_lo
+    pieces = [gear.translate(cq.Vector(0, 0, unit.z_gear[0] - z_lo))]
+    pieces.append(cq.Solid.makeCylinder(lay.hub_radius, height, cq.Vector(0, 0, 0)))
+    for f0, f1 in unit.flanges:
+        pieces.append(cq.Solid.makeCylinder(lay.flange_radius, f1 - f0, cq.Vector(0, 0, f0 - z_lo)))
+    for c0, c1 in unit.caps:
+        pieces.append(cq.Solid.makeCylinder(pair.rf2, c1 - c0, cq.Vector(0, 0, c0 - z_lo)))
+    body = pieces[0].fuse(*pieces[1:])
+    tools = [cq.Solid.makeCylinder(pin_bore / 2, height + 2 * TOOL, cq.Vector(0, 0, -TOOL))]
+    rc = clamp_site(lay)
+    ang = math.radians(CLAMP_ANGLE)
+    at = np.array([rc * math.cos(ang), rc * math.sin(ang)])
+    for zc, s in unit.clamps:
+        zf = zc - z_lo
+        j = clamp_joint(lay, unit, zc)
+        if j.kind == "nut":
+            # through the body, and a trap from its far face (where the nut goes in) to the nut's near face
+            tools.append(cylinder(j.hole / 2, (*at, zf + s * TOOL), (*at, zf - s * (j.body + TOOL))))
+            tools.append(hex_prism(NUT["M2"][0] + NUT_PLAY, (*at, zf - s * (j.body + TOOL)), (*at, zf - s * j.nut_from),
+                              (math.cos(ang), math.sin(ang), 0.0)))
+        else:
+            tools.append(cylinder(j.hole / 2, (*at, zf + s * TOOL), (*at, zf - s * j.depth)))
+    tools += _lightening(lay, unit, height)
+    # anchor holes: through the flange between each winding zone and its clamp face
+    r_anchor = lay.spool_radius + ANCHOR_HOLE / 2 + 0.3
+    for zc, s in unit.clamps:
+        # on an end cap: through the cap; on the gear's face: through the flange nearest to it
+        f = next((c for c in unit.caps if c[0] - 1e-9 <= zc <= c[1] + 1e-9), None) or \
+            min(unit.flanges, key=lambda f: abs((f[0] + f[1]) / 2 - zc))
+        tools.append(cq.Solid.makeCylinder(ANCHOR_HOLE / 2, f[1] - f[0] + 2 * TOOL,
+                                           cq.Vector(r_anchor * math.cos(ang), r_anchor * math.sin(ang),
+                                                     f[0] - z_lo - TOOL)))
+    solid = one(body.cut(*tools), GearDesignError)
+    if unit.gear_on_top:
+        solid = one(solid.moved(location(lay.wheel_flip(unit))), GearDesignError)
+    return solid
+
+
+LIGHTENING_WALL = 1.2        # resin left around a lightening hole or inside a hollow drum, mm
+LIGHTENING_HOLE = 6.0        # Ø of the holes through the gear between its hub and its root, mm
+
+
+def _lightening(lay: TensionerLayout, unit: Unit, height: float) -> list[cq.Solid]:
+    """Material the wheel does not need: the drum core hollow between the dowels' ends (the
+    hollow opens into the pin bore at both ends, so resin drains), and holes through the gear
+    between hub and tooth root, away from the clamp's nut and the anchor hole."""
+    out = []
+    engaged = PIN_ENGAGE + 1.0
+    r_in = lay.hub_radius - LIGHTENING_WALL
+    if height > 2 * engaged + 2 and r_in > (lay.shaft_diameter + lay.running_fit) / 2 + 0.5:
+        out.append(cq.Solid.makeCylinder(r_in, height - 2 * engaged, cq.Vector(0, 0, engaged)))
+    r0 = lay.hub_radius + LIGHTENING_WALL + LIGHTENING_HOLE / 2
+    if r0 + LIGHTENING_HOLE / 2 + LIGHTENING_WALL <= lay.pair.rf2:
+        z0 = unit.z_gear[0] - unit.z_part[0]
+        for deg in (CLAMP_ANGLE + 90, CLAMP_ANGLE + 180, CLAMP_ANGLE + 270):      # the clamp is at CLAMP_ANGLE
+            a = math.radians(deg)
+            out.append(cq.Solid.makeCylinder(LIGHTENING_HOLE / 2, lay.pair.face_width + 2 * TOOL,
+                                              cq.Vector(r0 * math.cos(a), r0 * math.sin(a), z0 - TOOL)))
+    return out
+
+
+def clamp_solid() -> cq.Solid:
+    """Clamp plate: the tendon, led out of the anchor hole, is pinched under it by an M2 screw."""
+    x, y, t = CLAMP_PLATE
+    plate = cq.Solid.makeBox(x, y, t, cq.Vector(-x / 2, -y / 2, 0))
+    hole = cq.Solid.makeCylinder(M2_CLEARANCE / 2, t + 2 * TOOL, cq.Vector(0, 0, -TOOL))
+    return one(plate.cut(hole), GearDesignError)
+
