@@ -424,7 +424,7 @@ def test_a_kernel_failure_names_the_part_and_its_parameters(tmp_path, monkeypatc
     line = stderr.strip()
     assert line.startswith("error: ") and "prototype.yaml: disks: the CAD kernel could not make disk_04" in line
     # the disk's inputs as the plan makes them: its slot is the strip's section with the clearance around it
-    from hwgen.model.plan import plan as make_plan
+    from hwgen.model.plan import make_plan
     from hwgen.pipeline import load
     design = load(PARAMS / "prototype.yaml").design
     spec = make_plan(design).disks[4]
