@@ -47,9 +47,7 @@ from .cad.manifest import describe, design_report, entry, measure, sha256
 from .cad.memo import kept_in
 from .checks.measure import read_manifest
 from .checks.report import write_summary
-from .checks.run import run_checks
 from .model import feasibility
-from .model import stiffness as statics_study
 from .model.materials import printed_density
 from .model.plan import Plan, plan as make_plan
 from .outputs import bom, guide, pictures, plates as print_plates
@@ -105,6 +103,13 @@ def output_errors(out_root: Path) -> Iterator[None]:
 
 
 # ---------------------------------------------------------------- stages after the files
+
+def run_checks(folder: Path, manifest: dict, plan: Plan) -> dict:
+    """:func:`hwgen.checks.run.run_checks`, imported when the checks run: it brings scipy's
+    optimisers (about a second), which a build whose stages all come from the cache never needs."""
+    from .checks.run import run_checks as run
+    return run(folder, manifest, plan)
+
 
 def checks_stage(plan: Plan, folder: Path, manifest: dict) -> dict:
     """Measure the fresh files: report.json, summary.md, lengths.png, tolerance.png and sag.png; the checks go
@@ -171,7 +176,7 @@ class BuildResult:
 
 def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, int, int], None] | None = None,
           post_build: bool = True, cache_dir: Path | None | bool = True, parts: str | None = None,
-          jobs: int = 0) -> BuildResult:
+          jobs: int | None = 0) -> BuildResult:
     """Build every part and file of the design into ``out_root/<design>/``, then (``post_build``)
     run the stages after the files. ``progress(part_name, done, total)`` follows each part.
     ``cache_dir``: the part cache's folder (True: :func:`hwgen.cache.default_dir`; None or False:
@@ -184,7 +189,8 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
     incomplete and builds it whole first. A pattern that matches no part is bad input.
 
     ``jobs``: worker processes that build the parts not in the cache and the assembly (0: all in
-    this process, which then holds the CAD kernel's memory through the checks)."""
+    this process, which then holds the CAD kernel's memory through the checks; None: as many as
+    the parts to build pay for, :func:`auto_jobs`)."""
     plan = design_plan(loaded)
     total = part_count(plan)
     out_root = Path(out_root)
@@ -482,15 +488,34 @@ class _Workers:
         return _result(self.pool.submit(_assembly_in_worker, loaded, plan, done, breps, store, salt).result())
 
 
+PARTS_PER_WORKER = 18     # a worker's start (the CadQuery import: 2-4 s of CPU, about 500 MB) pays for
+#                          itself when it has about this many parts to make (the prototype's tensioner is 19)
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its CPU affinity, which a container or taskset narrows)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return max(1, os.cpu_count() or 1)
+
+
+def auto_jobs(parts_to_build: int) -> int:
+    """Worker processes for ``parts_to_build`` parts not in the cache: one per
+    :data:`PARTS_PER_WORKER` of them, at most one per usable core, at least one (the process that
+    runs the checks then never imports CadQuery)."""
+    return max(1, min(usable_cores(), -(-parts_to_build // PARTS_PER_WORKER)))
+
+
 def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: int, progress,
                  store: cache.Store, select: Callable[[str], bool] | None = None,
-                 jobs: int = 0) -> tuple[dict, list[str]]:
+                 jobs: int | None = 0) -> tuple[dict, list[str]]:
     """Every part's STL and STEP, assembly.step, backbone_template.dxf and the manifest; a unit
     whose key is in the cache is copied from it, the others are built (and kept). Returns the
     manifest and the names of the parts built afresh. With ``select``, only the parts it takes
     get their files, and the assembly and the DXF are not written. With ``jobs`` ≥ 1, the units
     to build and the assembly are made in that many worker processes (:class:`_Workers`), started
-    only when there is something to make; 0: in this process."""
+    only when there is something to make; 0: in this process; None: :func:`auto_jobs`."""
     (folder / "stl").mkdir()
     (folder / "step").mkdir()
     entries, built, units_done = [], [], []
@@ -502,6 +527,8 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
         todo.append((family, first, unit, key, _unit_from_cache(store, key)))
     asm_key = cache.key("assembly", loaded.design.design, [t[3] for t in todo], salt)
     assembly = None if select is not None else _assembly_from_cache(store, asm_key)
+    if jobs is None:
+        jobs = auto_jobs(sum(t[2].count for t in todo if t[4] is None))
     with ExitStack() as stack:
         workers = None
         if jobs >= 1 and (any(t[4] is None for t in todo) or (select is None and assembly is None)):
@@ -526,7 +553,7 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
             (folder / "assembly.step").write_bytes(assembly)
     files = {}
     if select is None:
-        export.write_backbone_dxf(plan.backbone, plan.stations, folder / "backbone_template.dxf")
+        _backbone_dxf(store, plan, folder / "backbone_template.dxf", salt)
         files = {"assembly": {"path": "assembly.step", "sha256": sha256(folder / "assembly.step")},
                  "backbone_template": {"path": "backbone_template.dxf",
                                        "sha256": sha256(folder / "backbone_template.dxf")}}
@@ -539,6 +566,20 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
         "parts": entries,
         "design_report": design_report(plan),
     }, built
+
+
+def _backbone_dxf(store: cache.Store, plan: Plan, path: Path, salt: dict) -> None:
+    """backbone_template.dxf, from the cache when the strip and the stations did not change (ezdxf
+    and the drawing cost a fifth of a second, most of a rebuild with nothing changed)."""
+    key = cache.key("backbone_dxf", plan.backbone, list(plan.stations), salt,
+                    cache.code()["libraries"]["ezdxf"])
+    rec = store.get_record(key)
+    data = store.get_bytes(rec["dxf"]) if isinstance(rec, dict) and isinstance(rec.get("dxf"), str) else None
+    if data is not None:
+        path.write_bytes(data)
+        return
+    export.write_backbone_dxf(plan.backbone, plan.stations, path)
+    store.put_record(key, {"dxf": store.put_bytes(path.read_bytes())})
 
 
 def _record(rec: dict) -> dict:
@@ -737,6 +778,7 @@ def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | No
     report's gravity section), else estimated from the plan; written as stiffness.json,
     stiffness.png and gravity.png into that folder (added to what is there; a later build replaces
     the folder and drops them). Returns (report, folder)."""
+    from .model import stiffness as statics_study       # scipy's optimisers: only this command and the checks
     plan = design_plan(loaded)
     if which:
         known = [s.name for s in statics_study.states(plan.design)]
