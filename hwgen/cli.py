@@ -157,10 +157,10 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
           parts: str = typer.Option(None, "--parts", show_default=False,
                                     help="write only the parts whose names match this pattern ('disk_*'); "
                                          "no assembly, checks or pictures"),
-          jobs: int = typer.Option(None, "--jobs", "-j", min=0, envvar="HWGEN_JOBS", show_default=False,
-                                   help="worker processes that build the parts not in the cache and the assembly "
-                                        "(0: in this process, which then holds the CAD kernel's memory through the "
-                                        "checks; default: one per 18 parts to build, at most one per core)")
+          jobs: int = typer.Option(1, "--jobs", "-j", min=0, envvar="HWGEN_JOBS", help="worker processes that build the parts not in "
+                                                                  "the cache and the assembly (0: in this process, "
+                                                                  "which then holds the CAD kernel's memory through "
+                                                                  "the checks)")
           ) -> None:
     """Build every part (STL, STEP), assembly.step, the backbone DXF and manifest.json."""
     loaded = _load(params)

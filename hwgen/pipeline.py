@@ -176,7 +176,7 @@ class BuildResult:
 
 def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, int, int], None] | None = None,
           post_build: bool = True, cache_dir: Path | None | bool = True, parts: str | None = None,
-          jobs: int | None = 0) -> BuildResult:
+          jobs: int = 0) -> BuildResult:
     """Build every part and file of the design into ``out_root/<design>/``, then (``post_build``)
     run the stages after the files. ``progress(part_name, done, total)`` follows each part.
     ``cache_dir``: the part cache's folder (True: :func:`hwgen.cache.default_dir`; None or False:
@@ -189,8 +189,7 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
     incomplete and builds it whole first. A pattern that matches no part is bad input.
 
     ``jobs``: worker processes that build the parts not in the cache and the assembly (0: all in
-    this process, which then holds the CAD kernel's memory through the checks; None: as many as
-    the parts to build pay for, :func:`auto_jobs`)."""
+    this process, which then holds the CAD kernel's memory through the checks)."""
     plan = design_plan(loaded)
     total = part_count(plan)
     out_root = Path(out_root)
@@ -488,34 +487,15 @@ class _Workers:
         return _result(self.pool.submit(_assembly_in_worker, loaded, plan, done, breps, store, salt).result())
 
 
-PARTS_PER_WORKER = 18     # a worker's start (the CadQuery import: 2-4 s of CPU, about 500 MB) pays for
-#                          itself when it has about this many parts to make (the prototype's tensioner is 19)
-
-
-def usable_cores() -> int:
-    """The cores this process may run on (its CPU affinity, which a container or taskset narrows)."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except (AttributeError, OSError):
-        return max(1, os.cpu_count() or 1)
-
-
-def auto_jobs(parts_to_build: int) -> int:
-    """Worker processes for ``parts_to_build`` parts not in the cache: one per
-    :data:`PARTS_PER_WORKER` of them, at most one per usable core, at least one (the process that
-    runs the checks then never imports CadQuery)."""
-    return max(1, min(usable_cores(), -(-parts_to_build // PARTS_PER_WORKER)))
-
-
 def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: int, progress,
                  store: cache.Store, select: Callable[[str], bool] | None = None,
-                 jobs: int | None = 0) -> tuple[dict, list[str]]:
+                 jobs: int = 0) -> tuple[dict, list[str]]:
     """Every part's STL and STEP, assembly.step, backbone_template.dxf and the manifest; a unit
     whose key is in the cache is copied from it, the others are built (and kept). Returns the
     manifest and the names of the parts built afresh. With ``select``, only the parts it takes
     get their files, and the assembly and the DXF are not written. With ``jobs`` ≥ 1, the units
     to build and the assembly are made in that many worker processes (:class:`_Workers`), started
-    only when there is something to make; 0: in this process; None: :func:`auto_jobs`."""
+    only when there is something to make; 0: in this process."""
     (folder / "stl").mkdir()
     (folder / "step").mkdir()
     entries, built, units_done = [], [], []
@@ -527,8 +507,6 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
         todo.append((family, first, unit, key, _unit_from_cache(store, key)))
     asm_key = cache.key("assembly", loaded.design.design, [t[3] for t in todo], salt)
     assembly = None if select is not None else _assembly_from_cache(store, asm_key)
-    if jobs is None:
-        jobs = auto_jobs(sum(t[2].count for t in todo if t[4] is None))
     with ExitStack() as stack:
         workers = None
         if jobs >= 1 and (any(t[4] is None for t in todo) or (select is None and assembly is None)):

@@ -370,16 +370,3 @@ def test_the_cache_keeps_to_its_size_dropping_the_least_recently_used(tmp_path, 
     monkeypatch.setenv(cache.ENV_SIZE, "-3G")
     code, _, stderr, escaped = run_cli("build", str(PARAMS / "prototype.yaml"), "--out", str(tmp_path / "o"))
     assert escaped is None and code == 2 and "HWGEN_CACHE_SIZE" in stderr and not (tmp_path / "o").exists()
-
-
-def test_the_default_worker_count_follows_the_parts_to_build_and_the_cores(monkeypatch):
-    """--jobs left out: one worker per PARTS_PER_WORKER parts missing from the cache, never more
-    than the usable cores, always one (the checks' process never imports CadQuery)."""
-    from hwgen import pipeline
-    per = pipeline.PARTS_PER_WORKER
-    monkeypatch.setattr(pipeline, "usable_cores", lambda: 2)
-    assert [pipeline.auto_jobs(n) for n in (0, 1, per, per + 1, 2 * per, 10 * per)] == [1, 1, 1, 2, 2, 2]
-    monkeypatch.setattr(pipeline, "usable_cores", lambda: 8)
-    assert pipeline.auto_jobs(10 * per) == 8 and pipeline.auto_jobs(3 * per - 1) == 3
-    monkeypatch.undo()
-    assert 1 <= pipeline.usable_cores() <= (os.cpu_count() or 1)
