@@ -33,8 +33,10 @@ clients:
 	      prusa-slicer freecad >/dev/null; \
 	  else echo "not installed:$$missing (apt-get install prusa-slicer freecad); their tests will skip"; fi; fi
 
+# one pytest worker per core (pytest-xdist); the tests that share a module's build run in one
+# worker, and the workers share one part cache (tests/conftest.py)
 test: $(STAMP) clients
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto --dist loadgroup
 
 # every print plate sliced in PrusaSlicer as the process prints it (SLA: minutes per plate); not in make test
 slicer-check: $(STAMP) clients
@@ -43,7 +45,7 @@ slicer-check: $(STAMP) clients
 
 # one pytest worker per core (pytest-xdist): the CAD-free tier is many small tests that do not share a build
 test-fast: $(STAMP)
-	$(BIN)/python -m pytest -q -m "not slow" -n auto
+	$(BIN)/python -m pytest -q -m "not slow" -n auto --dist loadgroup
 
 bench: $(STAMP)
 	$(BIN)/python -m hwgen.bench

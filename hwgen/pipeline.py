@@ -47,9 +47,7 @@ from .cad.manifest import (MANIFEST, describe, design_report, entry, manifest_fi
                            write_manifest)
 from .cad.memo import kept_in
 from .checks.report import REPORT, read_report, write_report, write_summary
-from .checks.run import run_checks
 from .model import feasibility
-from .model import stiffness as statics_study
 from .model.materials import printed_density
 from .model.plan import Plan, make_plan
 from .outputs import bom, guide, pictures, plates as print_plates
@@ -105,6 +103,13 @@ def output_errors(out_root: Path) -> Iterator[None]:
 
 
 # ---------------------------------------------------------------- stages after the files
+
+def run_checks(folder: Path, manifest: dict, plan: Plan) -> dict:
+    """:func:`hwgen.checks.run.run_checks`, imported when the checks run: it brings scipy's
+    optimisers (about a second), which a build whose stages all come from the cache never needs."""
+    from .checks.run import run_checks as run
+    return run(folder, manifest, plan)
+
 
 def checks_stage(plan: Plan, folder: Path, manifest: dict, no_report: None) -> dict:
     """Measure the fresh files: report.json, summary.md, lengths.png, tolerance.png and sag.png; the checks go
@@ -539,7 +544,7 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
             (folder / "assembly.step").write_bytes(assembly)
     files = {}
     if select is None:
-        export.write_backbone_dxf(plan.backbone, plan.stations, folder / "backbone_template.dxf")
+        _backbone_dxf(store, plan, folder / "backbone_template.dxf", salt)
         files = {"assembly": {"path": "assembly.step", "sha256": sha256(folder / "assembly.step")},
                  "backbone_template": {"path": "backbone_template.dxf",
                                        "sha256": sha256(folder / "backbone_template.dxf")}}
@@ -552,6 +557,20 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
         "parts": entries,
         "design_report": design_report(plan),
     }, built
+
+
+def _backbone_dxf(store: cache.Store, plan: Plan, path: Path, salt: dict) -> None:
+    """backbone_template.dxf, from the cache when the strip and the stations did not change (ezdxf
+    and the drawing cost a fifth of a second, most of a rebuild with nothing changed)."""
+    key = cache.key("backbone_dxf", plan.backbone, list(plan.stations), salt,
+                    cache.code()["libraries"]["ezdxf"])
+    rec = store.get_record(key)
+    data = store.get_bytes(rec["dxf"]) if isinstance(rec, dict) and isinstance(rec.get("dxf"), str) else None
+    if data is not None:
+        path.write_bytes(data)
+        return
+    export.write_backbone_dxf(plan.backbone, plan.stations, path)
+    store.put_record(key, {"dxf": store.put_bytes(path.read_bytes())})
 
 
 def _record(rec: dict) -> dict:
@@ -758,6 +777,7 @@ def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | No
     report's gravity section), else estimated from the plan; written as stiffness.json,
     stiffness.png and gravity.png into that folder (added to what is there; a later build replaces
     the folder and drops them). Returns (report, folder)."""
+    from .model import stiffness as statics_study       # scipy's optimisers: only this command and the checks
     plan = design_plan(loaded)
     if which:
         known = [s.name for s in statics_study.states(plan.design)]

@@ -3,12 +3,20 @@
 Two tiers (``make test-fast`` and ``make test``): a test that builds parts with the CAD kernel is
 marked ``slow``; every test that asks for the session's :func:`built` designs (directly or through
 a fixture of its module) is marked here, the others that build by themselves carry the mark.
+
+Under pytest-xdist (``-n auto --dist loadgroup``: ``make test``, ``make test-fast``) every worker
+process shares the one part cache the controlling process made, so a design one worker built is
+read from the cache by the other; a worker that wants a design another is building waits for it
+(a lock per design) instead of building it a second time beside it; the tests that share a
+module's fixture run in one worker (:func:`_module_fixtures`).
 """
 from __future__ import annotations
 
+import fcntl
 import os
 import shutil
 import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -22,8 +30,16 @@ os.environ.setdefault("HWGEN_CHECK_SAMPLES", "64")
 # monkeypatches is the one that runs. The workers have tests of their own (tests/test_cache.py).
 os.environ.setdefault("HWGEN_JOBS", "0")
 # One part cache for the whole session (also for the CLI in child processes), in a temp folder:
-# a design's parts are built once however many tests build it; never the user's own cache.
-SESSION_CACHE = tempfile.mkdtemp(prefix="hwgen-test-cache-")
+# a design's parts are built once however many tests build it; never the user's own cache. The
+# controlling process makes it; pytest-xdist's workers (started after this file is read, with its
+# environment) take the same folder, and only the controller removes it.
+SHARED = "HWGEN_TEST_SESSION_CACHE"
+WORKER = os.environ.get("PYTEST_XDIST_WORKER")       # gw0, gw1, ... in an xdist worker; None otherwise
+if WORKER and os.environ.get(SHARED):
+    SESSION_CACHE = os.environ[SHARED]
+else:
+    SESSION_CACHE = tempfile.mkdtemp(prefix="hwgen-test-cache-")
+    os.environ[SHARED] = SESSION_CACHE
 os.environ["HWGEN_CACHE_DIR"] = SESSION_CACHE
 # with no size bound to speak of: a test that expects the session's parts to be there finds them
 # (the folder goes at the end of the session; tests/test_cache.py tests the bound)
@@ -45,7 +61,20 @@ def remembered_in_the_session_cache():
 
 
 def pytest_sessionfinish(session, exitstatus):
-    shutil.rmtree(SESSION_CACHE, ignore_errors=True)
+    if not WORKER:
+        shutil.rmtree(SESSION_CACHE, ignore_errors=True)
+
+
+@contextmanager
+def session_lock(name: str):
+    """Held by one process of the session at a time (an flock on a file in the session's cache
+    folder): the xdist workers take turns at what ``name`` guards."""
+    with open(Path(SESSION_CACHE) / f".lock-{name}", "a") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(f, fcntl.LOCK_UN)
 
 
 @pytest.fixture
@@ -61,11 +90,30 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         if BUILDS in getattr(item, "fixturenames", ()):
             item.add_marker(pytest.mark.slow)
+        if _module_fixtures(item):
+            item.add_marker(pytest.mark.xdist_group(item.module.__name__))
+    if WORKER:
+        # the slow tests first, the many quick ones after: they fill whichever worker is done
+        # first, instead of one long build being the last test of one worker while the other waits
+        items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+
+
+def _module_fixtures(item) -> list[str]:
+    """The module- or class-scoped fixtures (a build, a pool of gear cases) the test asks for:
+    under ``--dist loadgroup`` the tests of a module that ask for any run in one worker, which
+    makes each once, instead of each worker making it again."""
+    info = getattr(item, "_fixtureinfo", None)
+    if info is None:
+        return []
+    return sorted(name for name, defs in info.name2fixturedefs.items()
+                  if defs and defs[-1].scope in ("module", "class"))
 
 
 @pytest.fixture(scope="session")
 def built(tmp_path_factory):
-    """build(name) -> output folder of params/<name>.yaml, built once per session."""
+    """build(name) -> output folder of params/<name>.yaml, built once per session (per worker
+    process under xdist: the first to ask builds it, the others wait and take it from the
+    session's cache, every part and stage)."""
     from hwgen.pipeline import build, load
 
     cache: dict[str, Path] = {}
@@ -73,7 +121,8 @@ def built(tmp_path_factory):
 
     def get(name: str) -> Path:
         if name not in cache:
-            cache[name] = build(load(PARAMS / f"{name}.yaml"), root).folder
+            with session_lock(f"build-{name}"):
+                cache[name] = build(load(PARAMS / f"{name}.yaml"), root).folder
         return cache[name]
 
     return get

@@ -184,6 +184,7 @@ class Renderer:
         Returns (renderer, width, height) so a caller can read the depth buffer.
         """
         rc = self.rc
+        self.release()                  # the last picture's scene goes before this one is built
         ren = rc.vtkRenderer()
         ren.SetBackground(*BACKGROUND)
         lw = max(1.0, self.width / 1000)
@@ -222,8 +223,6 @@ class Renderer:
             t.GetTextProperty().BoldOn()
             t.SetDisplayPosition(x, y)
             ren.AddViewProp(t)
-        rens = self.window.GetRenderers()
-        rens.RemoveAllItems()
         self.window.AddRenderer(ren)
         self.window.SetSize(W, H)
         if labels:
@@ -247,7 +246,15 @@ class Renderer:
             if img.min() == img.max():
                 raise RenderUnavailable(f"the offscreen {self.backend} drew nothing (no working OpenGL context)")
             write_png(img, path)
+        _trim_heap()                    # what building and drawing the scene freed
         return ren, W, H
+
+    def release(self) -> None:
+        """Drop the scene of the last picture (its actors, meshes and the driver's copies of them)
+        and hand the freed heap back to the system: a process that draws one picture after another
+        then holds one scene at a time, not the largest it ever drew plus what the heap kept."""
+        self.window.GetRenderers().RemoveAllItems()
+        _trim_heap()
 
     def rgb(self, W: int, H: int) -> np.ndarray:
         from vtkmodules.util.numpy_support import vtk_to_numpy
@@ -264,6 +271,16 @@ class Renderer:
         arr = vtkFloatArray()
         self.window.GetZbufferData(0, 0, W - 1, H - 1, arr)
         return vtk_to_numpy(arr).reshape(H, W)[::-1].copy()
+
+
+def _trim_heap() -> None:
+    """glibc's malloc_trim(0): the pages freed by VTK and numpy go back to the system (glibc keeps
+    them otherwise, and the renderer's resident memory only grows); nothing where there is no glibc."""
+    import ctypes
+    try:
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):
+        pass
 
 
 def write_png(img: np.ndarray, path: Path) -> None:
