@@ -47,7 +47,11 @@ slicer-check: $(STAMP) clients
 test-fast: $(STAMP)
 	$(BIN)/python -m pytest -q -m "not slow" -n auto --dist loadgroup
 
+# the benchmark times the disks against OpenSCAD (Debian's openscad, installed here when missing and apt-get can)
 bench: $(STAMP)
+	@command -v openscad >/dev/null || { [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null && \
+	  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends openscad >/dev/null; } || \
+	  echo "openscad not installed: the benchmark's OpenSCAD row says so"
 	$(BIN)/python -m hwgen.bench
 
 # 100 robots drawn as a lab writes them, each built whole: a table of exit codes and failed checks

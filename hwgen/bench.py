@@ -77,9 +77,13 @@ EDIT_KEEPS_TIP = "function: {kind: cosine, a: 25, k: 5, axis: z}"
 def _process(label: str, args: list[str], env: dict, note: str = "") -> tuple[str, float, float, float, str, str]:
     """Run ``hwgen ARGS`` as its own process: (label, wall s, CPU s, peak MB, note, stdout). The peak
     is the largest resident set of the process and the children it waited for (the renderer)."""
+    return _run(label, [sys.executable, "-m", "hwgen.cli", *args], env, note)
+
+
+def _run(label: str, argv: list[str], env: dict, note: str = "") -> tuple[str, float, float, float, str, str]:
+    """Run ``argv`` as its own process, measured as :func:`_process` says."""
     t = time.perf_counter()
-    p = subprocess.Popen([sys.executable, "-m", "hwgen.cli", *args], env=env, stdout=subprocess.PIPE,
-                         stderr=subprocess.DEVNULL, text=True)
+    p = subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     stdout = p.stdout.read()
     p.stdout.close()
     _, status, usage = os.wait4(p.pid, 0)
@@ -132,6 +136,7 @@ def processes(params_path: Path) -> None:
             r = _process("one-tendon edit, tip kept", build, env, "C2: k 3 → 5 from the prototype")
             rows.append((*r[:4], "; ".join(x for x in (r[4], _from_cache(r[5])) if x)))
         rows.append(_process("hwgen routing", ["routing", str(params)], env)[:5])
+        rows += disk_rows(params, tmp, env)
         rows += sweep_rows(params, tmp)
     t = Table(title=f"hwgen benchmark: {params_path} (whole processes, {os.cpu_count()} cores, "
                     f"load {os.getloadavg()[0]:.1f})")
@@ -140,6 +145,137 @@ def processes(params_path: Path) -> None:
     for label, wall, cpu, peak, note in rows:
         t.add_row(label, f"{wall:.2f}", f"{cpu:.2f}", f"{peak:.0f}", note)
     Console().print(t)
+
+
+# ---------------------------------------------------------------- the disks against OpenSCAD
+
+# OpenSCAD's facets near the STL export's (cad/export.py: 0.01 mm chord, 0.2 rad): the Ø72 mm
+# outline in 133 segments (2.7°), a Ø1.2 mm eyelet in 38 (0.1 mm edges)
+SCAD_RESOLUTION = "$fa = 2.7; $fs = 0.1;"
+
+
+def _v(p) -> str:
+    return "[" + ", ".join(f"{float(c):.6f}" for c in p) + "]"
+
+
+def _onto(axis) -> list[list[float]]:
+    """4x4 rotation taking +Z onto ``axis`` (Rodrigues), as OpenSCAD's multmatrix wants it."""
+    import numpy as np
+    a = np.asarray(axis, float) / np.linalg.norm(axis)
+    v, c = np.cross([0.0, 0.0, 1.0], a), float(a[2])
+    if np.linalg.norm(v) < 1e-12:
+        r = np.diag([1.0, 1.0, 1.0 if c > 0 else -1.0]) if c > 0 else np.diag([1.0, -1.0, -1.0])
+    else:
+        k = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+        r = np.eye(3) + k + k @ k / (1 + c)
+    m = np.eye(4)
+    m[:3, :3] = r
+    return m.tolist()
+
+
+def disk_scad(spec) -> str:
+    """One disk as OpenSCAD source, from the same plan and the same tool profiles as
+    :func:`hwgen.cad.disk.blank_and_tools`: the plate with its slot, straight eyelets and screw holes
+    extruded, the hub with its tendon windows, then every slanted bore and chamfer cone (revolved
+    from :func:`hwgen.cad.disk.eyelet_profiles`), seat, seat chamber and glue port cut at once. Left
+    out: turning the tip disk over for printing (orientation only). OpenSCAD writes meshes only:
+    no STEP or exact BREP, which hwgen's disks also write."""
+    from hwgen.cad.disk import NORMAL_AXIS_TOL, SEAT_OVERLAP, TOOL_OVERRUN, _to_file, eyelet_profiles
+    T, seated = spec.thickness, bool(spec.seats)
+    normal = [h for h in spec.holes if abs(abs(h.axis[1]) - 1) < NORMAL_AXIS_TOL and not seated]
+    slanted = [h for h in spec.holes if h not in normal]
+    cut2d = [f"square([{spec.slot_width:.6f}, {spec.slot_height:.6f}], center=true);"]
+    cut2d += [f"translate({_v(_to_file(h.x, h.z))}) circle(d={h.diameter:.6f});" for h in normal]
+    cut2d += [f"translate({_v(_to_file(x, z))}) circle(d={d:.6f});" for x, z, d in spec.mount_holes]
+    body = [f"linear_extrude({T:.6f}) difference() {{ circle(d={spec.outer_diameter:.6f}); {' '.join(cut2d)} }}"]
+    hub = spec.hub
+    if hub is not None:
+        w, h = spec.slot_width + 2 * hub.wall, spec.slot_height + 2 * hub.wall
+        win = " ".join(f"translate([{(a + b) / 2:.6f}, 0]) square([{b - a:.6f}, {h + 2 * TOOL_OVERRUN:.6f}], center=true);"
+                       for a, b in hub.windows)
+        z0 = T if hub.side > 0 else -hub.length
+        body.append(f"translate([0, 0, {z0:.6f}]) linear_extrude({hub.length:.6f}) difference() {{ "
+                    f"square([{w:.6f}, {h:.6f}], center=true); square([{spec.slot_width:.6f}, {spec.slot_height:.6f}], "
+                    f"center=true); {win} }}")
+
+    def revolved(h, with_bore):
+        origin, ax, profiles = eyelet_profiles(h, T, spec.edge_size, not seated, True, with_bore)
+        m = _onto(ax)
+        for r in range(3):
+            m[r][3] = origin[r]
+        return [f"multmatrix({m}) rotate_extrude() polygon({[list(p) for p in prof]});" for prof in profiles]
+
+    big = spec.outer_diameter + 4 * TOOL_OVERRUN
+    tools = []
+    for h in slanted:
+        (tool,) = revolved(h, True)
+        if seated and not h.in_slot:    # the bore stops at the seat plate
+            tool = (f"intersection() {{ {tool} translate([{-big / 2:.6f}, {-big / 2:.6f}, {spec.seat_plate:.6f}]) "
+                    f"cube([{big:.6f}, {big:.6f}, {T + 2 * TOOL_OVERRUN - spec.seat_plate:.6f}]); }}")
+        tools.append(tool)
+    for h in normal:
+        tools += revolved(h, False)
+    for st in spec.seats:
+        tools.append(f"translate({_v((*_to_file(st.x, st.z), -TOOL_OVERRUN))}) "
+                     f"cylinder(d={st.diameter:.6f}, h={spec.seat_plate + SEAT_OVERLAP + TOOL_OVERRUN:.6f});")
+    for x, z, dia, height in spec.seat_chambers:
+        tools.append(f"translate({_v((*_to_file(x, z), spec.seat_plate))}) cylinder(d={dia:.6f}, h={height:.6f});")
+    if hub is not None and hub.port is not None:
+        x, off, dia = hub.port
+        z = T + off if hub.side > 0 else -off
+        tools.append(f"translate({_v((x, 0, z))}) rotate([90, 0, 0]) "
+                     f"cylinder(d={dia:.6f}, h={spec.slot_height / 2 + hub.wall + TOOL_OVERRUN:.6f});")
+    nl = "\n  "
+    return (f"// {spec.name}: written by hwgen.bench from the plan, for timing against hwgen's own disk\n"
+            f"{SCAD_RESOLUTION}\ndifference() {{\n  union() {{\n  {nl.join(body)}\n  }}\n  {nl.join(tools)}\n}}\n")
+
+
+HWGEN_DISKS = """
+import sys
+from pathlib import Path
+from hwgen import pipeline
+from hwgen.cad.disk import build_disk
+from hwgen.cad.export import write_step, write_stl
+from hwgen.model.plan import make_plan
+plan = make_plan(pipeline.load(Path(sys.argv[1])).design)
+for spec in plan.disks:
+    part = build_disk(spec)
+    write_stl(part.solid, Path(sys.argv[2]) / f"{part.name}.stl")
+    write_step(part.solid, Path(sys.argv[2]) / f"{part.name}.step")
+"""
+
+
+def disk_rows(params_path: Path, tmp: Path, env: dict) -> list[tuple]:
+    """The plan's disks built and written (STL and STEP) by hwgen in one cold process, against the
+    same disks written as .scad and made into STL by OpenSCAD (Debian's ``openscad``), one process
+    per disk as a lab would run it."""
+    from hwgen import pipeline
+    from hwgen.model.plan import make_plan
+    specs = make_plan(pipeline.load(params_path).design).disks
+    (tmp / "hw").mkdir()
+    ours = _run(f"{len(specs)} disks, hwgen (STL + STEP)", [sys.executable, "-c", HWGEN_DISKS, str(params_path),
+                                                             str(tmp / "hw")], env, "one cold process, CadQuery imported")
+    openscad = shutil.which("openscad")
+    if openscad is None:
+        return [(*ours[:4], ours[4]), (f"{len(specs)} disks, OpenSCAD", 0.0, 0.0, 0.0,
+                                      "not installed (apt-get install openscad)")]
+    (tmp / "scad").mkdir()
+    wall = cpu = peak = 0.0
+    failed = 0
+    for spec in specs:
+        src = tmp / "scad" / f"{spec.name}.scad"
+        src.write_text(disk_scad(spec))
+        r = _run(spec.name, [openscad, "-o", str(src.with_suffix(".stl")), str(src)], env)
+        wall, cpu, peak = wall + r[1], cpu + r[2], max(peak, r[3])
+        failed += bool(r[4])
+    note = (f"one process per disk (CGAL), STL only; hwgen took {ours[1] / wall:.2f}× its time"
+            + (f"; {failed} failed" if failed else ""))
+    return [ours[:5], (f"{len(specs)} disks, OpenSCAD {_version(openscad)}", wall, cpu, peak, note)]
+
+
+def _version(exe: str) -> str:
+    out = subprocess.run([exe, "--version"], capture_output=True, text=True)
+    return (out.stdout + out.stderr).strip().split()[-1] if (out.stdout + out.stderr).strip() else ""
 
 
 # ---------------------------------------------------------------- hwgen sweep

@@ -46,12 +46,12 @@ def _revolved(profile: list[tuple[float, float]], origin, axis) -> cq.Solid:
     return solid.translate(cq.Vector(*origin))
 
 
-def _eyelet_tool(h: Hole, thickness: float, edge: float, base_side: bool, tip_side: bool,
-                 with_bore: bool) -> cq.Solid | None:
-    """The solid removed for one eyelet: its bore (if slanted) and chamfer cones at the rims.
-
-    Built along the hole axis from the mid-plane crossing; the cones start where the
-    rim on the steep side of a slanted hole meets the face, so the chamfer is never
+def eyelet_profiles(h: Hole, thickness: float, edge: float, base_side: bool, tip_side: bool,
+                    with_bore: bool) -> tuple[tuple[float, float, float], np.ndarray, list[list[tuple[float, float]]]]:
+    """What is removed for one eyelet, as closed (radius, axial) profiles to revolve about its axis:
+    (origin in file coordinates, unit axis in file coordinates, profiles). The bore (if slanted) and
+    the chamfer cones at the rims, along the hole axis from the mid-plane crossing; the cones start
+    where the rim on the steep side of a slanted hole meets the face, so the chamfer is never
     smaller than ``edge`` and never reaches the mid-plane.
     """
     ax = np.array([h.axis[0], -h.axis[2], h.axis[1]])   # robot disk axes -> file axes
@@ -77,14 +77,22 @@ def _eyelet_tool(h: Hole, thickness: float, edge: float, base_side: bool, tip_si
     x, y = _to_file(h.x, h.z)
     origin = (x, y, thickness / 2)
     if with_bore:
-        profile = [(0, -u_end)] + prof_bot + prof_top + [(0, u_end)]
-        return _revolved(profile, origin, ax)
+        return origin, ax, [[(0, -u_end)] + prof_bot + prof_top + [(0, u_end)]]
     cones = []
     if edge > 0 and base_side:
-        cones.append(_revolved([(0, -u_end), (r_end, -u_end), (r, -u_cone), (0, -u_cone)], origin, ax))
+        cones.append([(0, -u_end), (r_end, -u_end), (r, -u_cone), (0, -u_cone)])
     if edge > 0 and tip_side:
-        cones.append(_revolved([(0, u_cone), (r, u_cone), (r_end, u_end), (0, u_end)], origin, ax))
-    return cones
+        cones.append([(0, u_cone), (r, u_cone), (r_end, u_end), (0, u_end)])
+    return origin, ax, cones
+
+
+def _eyelet_tool(h: Hole, thickness: float, edge: float, base_side: bool, tip_side: bool,
+                 with_bore: bool) -> cq.Solid | list[cq.Solid]:
+    """The solid removed for one eyelet (``with_bore``), or its chamfer cones: the revolved
+    :func:`eyelet_profiles`."""
+    origin, ax, profiles = eyelet_profiles(h, thickness, edge, base_side, tip_side, with_bore)
+    solids = [_revolved(p, origin, ax) for p in profiles]
+    return solids[0] if with_bore else solids
 
 
 def _hub_solid(spec: DiskSpec, hub: HubSpec) -> cq.Solid:
