@@ -164,7 +164,7 @@ def _onto(axis) -> list[list[float]]:
     a = np.asarray(axis, float) / np.linalg.norm(axis)
     v, c = np.cross([0.0, 0.0, 1.0], a), float(a[2])
     if np.linalg.norm(v) < 1e-12:
-        r = np.diag([1.0, 1.0, 1.0 if c > 0 else -1.0]) if c > 0 else np.diag([1.0, -1.0, -1.0])
+        r = np.eye(3) if c > 0 else np.diag([1.0, -1.0, -1.0])     # along +Z, or a half turn about X
     else:
         k = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
         r = np.eye(3) + k + k @ k / (1 + c)
