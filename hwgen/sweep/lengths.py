@@ -36,11 +36,10 @@ from ..model import kinematics as kin
 from ..model import taut
 from ..model.fixing import disk_thicknesses
 from ..model.materials import printed_density
-from ..model.routing import tendon_paths
+from ..model.routing import TendonPath, tendon_paths
 from ..model.scatter import _basis
 from ..model.holes import hole_diameter
 from ..model.plan import SAME_POSITION_MM, SWEEP_STEP_DEG as SIZING_STEP_DEG, eyelet_holes
-from ..model.routing import TendonPath
 from ..params import Design
 
 # what hwgen check and the plan use, so a variant's figures are theirs
