@@ -642,9 +642,8 @@ def stale_reason(folder: Path, loaded) -> str | None:
             return "built from other parameters"
         if m.get("hwgen_version") != __version__:
             return f"built by hwgen {m.get('hwgen_version')}, this is {__version__}"
-        m["files"]
+        m["files"], m["design_report"]["disks"]       # raise for a manifest hwgen did not write
         files = [f.path for f in manifest_files(m)]
-        m["design_report"]["disks"]
     except (AttributeError, KeyError, TypeError, ValueError):
         return "manifest.json is not one hwgen wrote"
     for path in files:
