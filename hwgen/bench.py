@@ -334,7 +334,7 @@ def _statics(plan) -> None:
 
     from hwgen.checks.tension import sweeps
     from hwgen.model import stiffness as sf
-    n = len(sf.states(plan.design))
+    n = len(sf.states(plan))
     cpu = time.process_time()
     with timed(f"statics: {n} tendon states", "settle, own weight, stiffness at every disk, tip torsion"):
         rep = sf.study(plan)

@@ -14,8 +14,9 @@ both build first only when the outputs are missing or made from other parameters
 Every build goes through the cache (:mod:`hwgen.cache`, ``--cache-dir``, ``--no-cache``): each
 unit of parts (:mod:`hwgen.cad.families`) is keyed by the frozen values its builder reads and
 copied from the cache when they did not change; assembly.step by its units' keys; each stage
-after the files by every file it reads, the manifest, the design, the environment it reads and
-hwgen's code. What comes from the cache has the bytes a fresh build writes.
+after the files by every file it reads, the manifest, the plan (every value the stages read from
+the design, as the model resolved it), the environment it reads and hwgen's code. What comes
+from the cache has the bytes a fresh build writes.
 
 An output root that cannot be written (not a folder, no permission, a full disk) is bad input
 naming ``--out`` (:class:`hwgen.errors.InputError`), like any other.
@@ -48,7 +49,6 @@ from .cad.manifest import (MANIFEST, describe, design_report, entry, manifest_fi
 from .cad.memo import kept_in
 from .checks.report import REPORT, read_report, write_report, write_summary
 from .model import feasibility
-from .model.materials import printed_density
 from .model.plan import Plan, make_plan
 from .outputs import bom, guide, pictures, plates as print_plates
 from .outputs.plots import plot_lengths, plot_sag, plot_tolerance
@@ -74,7 +74,7 @@ def design_plan(loaded: params.LoadedDesign, tensioner_record: dict | None = Non
     :class:`hwgen.errors.DesignError` naming the field.
     Every command starts from it, so they all refuse the same designs the same way."""
     plan = make_plan(loaded.design, tensioner_record)
-    feasibility.check_plan(plan)
+    feasibility.check_plan(plan, loaded.design)
     part_count(plan)       # every part family can be made from it (the tensioner needs its layout)
     return plan
 
@@ -127,24 +127,24 @@ def checks_stage(plan: Plan, folder: Path, manifest: dict, no_report: None) -> d
 
 def bom_stage(plan: Plan, folder: Path, manifest: dict, report: dict | None) -> None:
     """bom.csv and bom.md, from the manifest and the checks' report."""
-    bom.write_bom(folder, manifest, plan.design, report)
+    bom.write_bom(folder, manifest, plan, report)
 
 
 def plates_stage(plan: Plan, folder: Path, manifest: dict, report: dict | None) -> dict:
     """plates/plate_NN.3mf and plates/plates.md: the printed parts on the printer's plates."""
-    return print_plates.write_plates(folder, manifest, plan.design)
+    return print_plates.write_plates(folder, manifest, plan.process, plan.plates)
 
 
 def pictures_stage(plan: Plan, folder: Path, manifest: dict, report: dict | None) -> None:
     """exploded.png, assembled.png, bent.png, exploded.svg and the guide's step pictures; a missing
     backend is recorded, not raised."""
-    pictures.draw(folder, manifest, plan.design, bom.family_table(manifest, plan.design),
-                  guide.picture_jobs(folder, manifest, plan.design))
+    pictures.draw(folder, manifest, plan.render, bom.family_table(manifest, plan.process.name),
+                  guide.picture_jobs(folder, manifest, plan))
 
 
 def guide_stage(plan: Plan, folder: Path, manifest: dict, report: dict | None) -> dict:
     """guide/assembly.md and guide/assembly.html, from bom.csv, the manifest and the step pictures."""
-    return guide.write_guide(folder, manifest, plan.design)
+    return guide.write_guide(folder, manifest, plan)
 
 
 # (name, stage(plan, folder, manifest, report)) in the order a build runs them on its fresh files; ``report``
@@ -268,7 +268,7 @@ def _after_files(store: cache.Store, plan: Plan, folder: Path, target: Path, man
             reused += got
 
 
-# the stages the cache keeps, and what each reads besides the folder, the manifest and the design
+# the stages the cache keeps, and what each reads besides the folder, the manifest and the plan
 STAGE_ENV = {"checks": ("HWGEN_CHECK_SAMPLES",), "bom": (), "plates": (), "guide": (), "pictures": ("HWGEN_RENDER_BACKEND", "DISPLAY")}
 STAGE_RESULT = {"checks": REPORT}       # a stage whose return value is this file of its outputs (read back by read_report)
 
@@ -281,12 +281,13 @@ def _cached_stage(store: cache.Store, name: str, stage, plan: Plan, folder: Path
                   reused: list[str], report: dict | None):
     """Run a stage after the files, or take what it wrote last time from the cache: the files it
     added to the folder and the manifest fields it set, keyed by every file in the folder, the
-    manifest, the design, the environment it reads and hwgen's code. Pictures that could not be
+    manifest, the plan (the design's values as the stages read them), the environment it reads and
+    hwgen's code. Pictures that could not be
     drawn are not kept (another try may find a renderer)."""
     if not store.enabled or name not in STAGE_ENV:
         return stage(plan, folder, manifest, report)
     before = _files(folder)
-    key = cache.key("stage", name, before, manifest, plan.design, {e: os.environ.get(e) for e in STAGE_ENV[name]},
+    key = cache.key("stage", name, before, manifest, plan, {e: os.environ.get(e) for e in STAGE_ENV[name]},
                     __version__, cache.code())
     rec = store.get_record(key)
     if isinstance(rec, dict):
@@ -512,7 +513,7 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
     (folder / "stl").mkdir()
     (folder / "step").mkdir()
     entries, built, units_done = [], [], []
-    density, _ = printed_density(plan.design.process)
+    density = plan.process.density_g_cm3
     salt = _salt()
     todo = []
     for family, first, unit in units(plan):
@@ -602,7 +603,7 @@ def _place_units(plan: Plan, folder: Path, todo, elsewhere: dict, store: cache.S
                     path.unlink(missing_ok=True)        # built for the manifest, not asked for
                 elif not in_place:
                     path.write_bytes(rec["blobs"][hashes[kind]])
-            entries.append(entry(p, p["measured"], files, folder, plan.design.process.material, density, hashes))
+            entries.append(entry(p, p["measured"], files, folder, plan.process.material, density, hashes))
             if progress:
                 progress(p["name"], len(entries), total)
         units_done.append((key, rec, parts))
@@ -656,7 +657,7 @@ def check(loaded: params.LoadedDesign, out_root: Path, progress=None,
           cache_dir: Path | None | bool = True) -> tuple[dict, Path, str | None]:
     """`hwgen check`: build if needed, then measure. Returns (report, folder, why it was rebuilt or None).
 
-    Outputs measured before, with every file as it was then (same bytes, same manifest, design,
+    Outputs measured before, with every file as it was then (same bytes, same manifest, plan,
     environment and code), get that report back from the cache instead of being measured again."""
     folder = Path(out_root) / loaded.name
     limit = _limit()
@@ -686,7 +687,7 @@ def _measured(store: cache.Store, folder: Path, manifest: dict, plan: Plan) -> d
     """run_checks on the folder, or its report from the last time these very files were measured."""
     if not store.enabled:
         return run_checks(folder, manifest, plan)
-    key = cache.key("check", _files(folder), manifest, plan.design, {e: os.environ.get(e) for e in STAGE_ENV["checks"]},
+    key = cache.key("check", _files(folder), manifest, plan, {e: os.environ.get(e) for e in STAGE_ENV["checks"]},
                     __version__, cache.code())
     rec = store.get_record(key)
     data = store.get_bytes(rec["report"]) if isinstance(rec, dict) and isinstance(rec.get("report"), str) else None
@@ -751,7 +752,7 @@ def coupon(loaded: params.LoadedDesign, out_root: Path) -> tuple[dict, Path]:
     from .model.coupon import coupon_spec
 
     plan = design_plan(loaded)
-    spec = coupon_spec(plan)
+    spec = coupon_spec(plan, loaded.design)
     with kernel_errors(plan, None, "build the calibration coupon"):
         solid = build_coupon(spec)
     folder = Path(out_root) / loaded.name
@@ -779,7 +780,7 @@ def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | No
     from .model import stiffness as statics_study       # scipy's optimisers: only this command and the checks
     plan = design_plan(loaded)
     if which:
-        known = [s.name for s in statics_study.states(plan.design)]
+        known = [s.name for s in statics_study.states(plan)]
         for name in which:
             if name not in known:
                 raise InputError(loaded.source, "--states", f"unknown state {clip(name)!r}; this design's are "

@@ -15,7 +15,7 @@ import yaml
 from hwgen.errors import DesignError, InputError
 from hwgen.model import screws
 from hwgen.model.fixing import HUB_GAP_MM, disk_gaps, hub_extension, hub_lengths, least_hub
-from hwgen.model.fixtures import jig_layout, mount_layout
+from hwgen.model.fixtures import jig_layout
 from hwgen.model.plan import make_plan
 from hwgen.params import Design
 from hwgen.pipeline import design_plan, load
@@ -111,7 +111,7 @@ def _screws_clear(p) -> None:
         margin = keep.margin(xy[:, 0], xy[:, 1])
         rim = screws.head_rim(disk.outer_diameter, 3.4, 0.8) - np.hypot(xy[:, 0], xy[:, 1])
         assert (np.minimum(margin, rim) >= -1e-9).all(), (disk.name, xy, margin, rim)
-    lay = mount_layout(p.design, [m[:2] for m in p.disks[0].mount_holes])
+    lay = p.mount       # laid out around the base disk's screws as the plan placed them
     for x, z in lay.disk_screws:
         h = lay.screw_hole / 2
         in_upper = lay.z_upper_bottom + h <= z <= lay.z_upper_top - h

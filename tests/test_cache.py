@@ -207,10 +207,12 @@ def test_the_stages_after_the_files_are_reused_with_the_same_bytes(built, tmp_pa
     assert again.report == json.loads((again.folder / "report.json").read_text())
 
 
-def test_a_stage_is_reused_only_for_the_same_files_manifest_design_and_environment(tmp_path, monkeypatch):
+def test_a_stage_is_reused_only_for_the_same_files_manifest_plan_and_environment(tmp_path, monkeypatch):
     """The stage memo on a stand-in stage: what it wrote and set comes back without running it;
-    another input file, manifest, design or $HWGEN_CHECK_SAMPLES runs it again."""
+    another input file, manifest, plan (a setting the stages read) or $HWGEN_CHECK_SAMPLES runs it
+    again."""
     from hwgen import pipeline
+    from hwgen.model.plan import make_plan
     from hwgen.pipeline import load
 
     runs = []
@@ -221,8 +223,8 @@ def test_a_stage_is_reused_only_for_the_same_files_manifest_design_and_environme
         manifest["checks_ok"] = True
         return {"n": len(runs)}
 
-    class P:
-        design = load(PARAMS / "prototype.yaml").design
+    design = load(PARAMS / "prototype.yaml").design
+    P = make_plan(design)
 
     store = cache.Store(tmp_path / "cache")
 
@@ -242,8 +244,7 @@ def test_a_stage_is_reused_only_for_the_same_files_manifest_design_and_environme
     run({"a.stl": "y"}, {"design": "d"})
     run({"a.stl": "x"}, {"design": "e"})
 
-    class Q:
-        design = P.design.model_copy(update={"design": "other"})
+    Q = make_plan(design.model_copy(update={"bom": design.bom.model_copy(update={"spool_mm": 151.0})}))
     run({"a.stl": "x"}, {"design": "d"}, Q)
     monkeypatch.setenv("HWGEN_CHECK_SAMPLES", "32")
     run({"a.stl": "x"}, {"design": "d"})

@@ -310,7 +310,7 @@ def test_strip_holes_checked_against_crossing_angle(built, tmp_path):
     bad = _failed(_check(folder), "backbone.hole_angle")
     assert [(c["where"]["tendon"], c["where"]["station"]) for c in bad] == [("C2", 2)]
     assert bad[0]["measured"] == pytest.approx(0.8, abs=0.02)
-    assert f"C2 crosses the {plan.design.backbone.thickness:g} mm strip at station 2" in bad[0]["message"]
+    assert f"C2 crosses the {plan.backbone.thickness:g} mm strip at station 2" in bad[0]["message"]
     assert "bears on the hole's edge" in bad[0]["message"]
 
 

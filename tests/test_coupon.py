@@ -18,7 +18,7 @@ def test_coupon_spec_steps_around_the_design():
     from hwgen.pipeline import design_plan, load
 
     loaded = load(PARAMS / "prototype.yaml")
-    spec = coupon_spec(design_plan(loaded))
+    spec = coupon_spec(design_plan(loaded), loaded.design)
     c = loaded.design.coupon
     holes = [f for f in spec.features if f.kind == "hole"]
     slots = [f for f in spec.features if f.kind == "slot"]

@@ -75,7 +75,8 @@ def _seat_rows(folder, design, stl=None):
     mesh = load_mesh(stl)
     disk = measure_disk(stl, part["placement"], "disk_00", 0, mesh)
     rd = next(r for r in man["design_report"]["disks"] if r["index"] == 0)
-    return seat_checks(disk, mesh, np.asarray(part["placement"]), rd, design, design.process.min_wall, 44.5, 35.0)
+    ends = {t.name: t.termination for t in make_plan(design).paths}
+    return seat_checks(disk, mesh, np.asarray(part["placement"]), rd, ends, design.process.min_wall, 44.5, 35.0)
 
 
 @pytest.mark.parametrize("name", DESIGNS)
@@ -368,6 +369,6 @@ def test_bill_of_materials_has_adhesive_mount_hardware_and_crimps(built, tmp_pat
     crimp = d.tendon_material.termination.model_copy(update={"kind": "crimp", "diameter": 1.3, "length": 4.0,
                                                             "name": "copper crimp sleeve 0.5 mm bore"})
     d2 = d.model_copy(update={"tendon_material": d.tendon_material.model_copy(update={"termination": crimp})})
-    rows2, _ = bom.bom_rows(folder, _manifest(folder), d2, read_report(folder))
+    rows2, _ = bom.bom_rows(folder, _manifest(folder), make_plan(d2), read_report(folder))
     (sleeves,) = [r for r in rows2 if r["part"] == "crimp sleeve"]
     assert sleeves["qty"] == 5 and sleeves["size"] == "Ø1.3 × 4 mm"

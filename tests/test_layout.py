@@ -1,5 +1,6 @@
 """The package shows the pipeline: no import cycles between hwgen modules (function-level
-imports count), and every stage imports only the stages before it."""
+imports count), and every stage imports only the stages before it; the stages after the model
+reach no schema, and the plan the model hands on holds none."""
 from __future__ import annotations
 
 import ast
@@ -155,14 +156,47 @@ def test_schema_reads_are_found():
     assert _schema_reads(src) == ["1: argument design", "2: .design", "3: .params", "4: name design"]
 
 
-@pytest.mark.parametrize("stage", [
-    "cad",
-    pytest.param("checks", marks=pytest.mark.xfail(strict=True, reason="issue 21: the checks still read the "
-                                                    "design's check, process, tendon and tensioner settings")),
-    pytest.param("outputs", marks=pytest.mark.xfail(strict=True, reason="issue 21: the outputs still read the "
-                                                     "design's process, bom, plates and render settings"))])
+@pytest.mark.parametrize("stage", AFTER_MODEL)
 def test_later_stages_read_no_schema(stage):
-    """The CAD stage builds from the plan's frozen values alone: no ``plan.design``, no
-    ``layout.params``, no design handed in."""
+    """The CAD, the checks and the outputs work from the plan's frozen values alone: no
+    ``plan.design``, no ``layout.params``, no design handed in."""
     found = {m: _schema_reads(f.read_text()) for m, f in _modules().items() if _stage(m) == stage}
     assert {m: r for m, r in found.items() if r} == {}
+
+
+def _schema_objects(value, where: str = "plan") -> list[str]:
+    """Where in a plan (dataclasses, tuples, lists, dicts, walked down) a schema object sits."""
+    import dataclasses
+
+    from pydantic import BaseModel
+    if isinstance(value, BaseModel):
+        return [f"{where}: {type(value).__name__}"]
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return [w for f in dataclasses.fields(value) for w in _schema_objects(getattr(value, f.name), f"{where}.{f.name}")]
+    if isinstance(value, (list, tuple)):
+        return [w for i, v in enumerate(value) for w in _schema_objects(v, f"{where}[{i}]")]
+    if isinstance(value, dict):
+        return [w for k, v in value.items() for w in _schema_objects(v, f"{where}[{k!r}]")]
+    return []
+
+
+@pytest.mark.parametrize("name", ["prototype", "paper-table2"])
+def test_the_plan_holds_no_schema(name):
+    """What the model hands on is frozen plain values all the way down: no pydantic object at any
+    depth of the plan (the settings the checks and outputs read included)."""
+    from hwgen import params
+    from hwgen.model.plan import make_plan
+    plan = make_plan(params.read(PKG.parent / "params" / f"{name}.yaml").design)
+    assert _schema_objects(plan) == []
+    assert plan.check.max_angle_deg > 0 and plan.tensioner.actuating_channel in plan.tensioner.channels
+
+
+def test_the_schema_object_finder_finds_one():
+    import dataclasses
+
+    from hwgen import params
+    from hwgen.model.plan import make_plan
+    design = params.read(PKG.parent / "params" / "prototype.yaml").design
+    plan = make_plan(design)
+    leaky = dataclasses.replace(plan, render=design.render)
+    assert _schema_objects(leaky) == ["plan.render: Render"]

@@ -205,11 +205,13 @@ def test_measured_weights_replace_the_plans_estimate(prototype):
 
 def test_the_nine_states_are_the_papers_and_follow_the_channels(prototype):
     sf, design, _, _ = prototype
-    assert [s.name for s in sf.states(design)] == ["N", "A", "AC2", "AH", "AC2H", "AC1", "AC1C2", "AC1H", "AC1C2H"]
+    from hwgen.model.plan import make_plan
+    assert [s.name for s in sf.states(make_plan(design))] == ["N", "A", "AC2", "AH", "AC2H", "AC1", "AC1C2", "AC1H",
+                                                              "AC1C2H"]
     tendons = tuple(t.model_copy(update={"channel": "P"}) if t.channel == "A" else t for t in design.tendons)
     renamed = design.model_copy(update={"tendons": tendons, "tensioner": design.tensioner.model_copy(
         update={"channels": ("P", "Q", "C1", "C2", "H"), "actuating_channel": "P"})})
-    names = [s.name for s in sf.states(renamed)]
+    names = [s.name for s in sf.states(make_plan(renamed))]
     assert names[:3] == ["N", "P", "PC2"]               # no tendon on Q: no state with it
     assert all("Q" not in n for n in names) and len(names) == 9
 

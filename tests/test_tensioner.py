@@ -23,7 +23,11 @@ from .conftest import PARAMS
 def proto(built):
     folder = built("prototype")
     man = json.loads((folder / "manifest.json").read_text())
-    return folder, man, make_plan(load(PARAMS / "prototype.yaml").design)
+    return folder, man, make_plan(_design())
+
+
+def _design():
+    return load(PARAMS / "prototype.yaml").design
 
 
 def _by_role(man, role):
@@ -38,7 +42,7 @@ def _rz(a):
 
 def test_one_worm_drive_per_channel(proto):
     _, man, p = proto
-    channels = set(p.design.tensioner.channels)
+    channels = set(p.tensioner.channels)
     assert set(_by_role(man, "tensioner_worm")) == channels
     assert set(_by_role(man, "tensioner_wheel")) == channels
     clamps = [q for q in man["parts"] if q["role"] == "tensioner_clamp"]
@@ -75,7 +79,7 @@ def test_worm_has_a_thread_and_wheel_has_teeth(proto):
     """Probe the files: along a line parallel to the worm's axis at the pitch radius, solid
     and space alternate every half pitch; the wheel's mid-plane section has one tip per tooth."""
     folder, man, p = proto
-    pair = worm_pair(p.design.tensioner)
+    pair = worm_pair(_design().tensioner)
     worm_q = _by_role(man, "tensioner_worm")["C1"]
     worm = load_mesh(folder / worm_q["files"]["stl"]["path"])
     z_mid = worm.bounds[1, 2] - pair.worm_length / 2          # the thread ends at the far end
@@ -101,7 +105,7 @@ def test_worm_has_a_thread_and_wheel_has_teeth(proto):
     assert inside(np.array([[pair.rf1 - 0.05, z_mid]]))[0]
 
     wheel_q = _by_role(man, "tensioner_wheel")["C1"]
-    lay = layout(p.design, p.paths, p.disks[-1])
+    lay = layout(_design(), p.paths, p.disks[-1])
     unit = lay.unit("C1")
     z_file = (lay.wheel_flip(unit) @ [0, 0, unit.z_wheel_mid - unit.z_part[0], 1])[2]
     sec = placed_manifold(folder, wheel_q, np.eye(4)).slice(z_file).to_polygons()
@@ -118,7 +122,7 @@ def test_worm_has_a_thread_and_wheel_has_teeth(proto):
 @pytest.mark.parametrize("channel", ["A", "C1", "C2", "H"])
 def test_nominal_mesh_no_interference_gap_within_backlash(proto, channel):
     folder, man, p = proto
-    pair = worm_pair(p.design.tensioner)
+    pair = worm_pair(_design().tensioner)
     worm, wheel = _by_role(man, "tensioner_worm")[channel], _by_role(man, "tensioner_wheel")[channel]
     vol, gap = mesh_measure(placed_manifold(folder, worm), placed_manifold(folder, wheel), pair.center_offset + 1.0)
     assert vol <= INTERFERENCE_TOL_MM3
@@ -145,7 +149,7 @@ def test_mesh_holds_through_the_motion_and_only_with_the_right_sense(proto):
     """Turn the worm through one pitch and the wheel by 1/ratio of that: no interference.
     Turning the wheel the wrong way collides, so the pose above is not luck."""
     folder, man, p = proto
-    pair = worm_pair(p.design.tensioner)
+    pair = worm_pair(_design().tensioner)
     worm, wheel = _by_role(man, "tensioner_worm")["H"], _by_role(man, "tensioner_wheel")["H"]
     wm_mesh = load_mesh(folder / worm["files"]["stl"]["path"])
     wh_mesh = load_mesh(folder / wheel["files"]["stl"]["path"])
@@ -172,7 +176,7 @@ def test_centre_distance_shaft_angle_and_counts_come_from_the_meshes(proto):
     """Axes fitted to each worm's and wheel's crests (not read from the placements) meet at
     (d1 + d2)/2 + center_offset and 90°; 24 teeth and 1 start counted in their sections."""
     folder, man, p = proto
-    pair = worm_pair(p.design.tensioner)
+    pair = worm_pair(_design().tensioner)
     for ch, worm in _by_role(man, "tensioner_worm").items():
         m = measure_pair(folder, worm, _by_role(man, "tensioner_wheel")[ch])
         assert m["worm_axis"].rms < 0.005 and m["wheel_axis"].rms < 0.005
@@ -192,7 +196,7 @@ def test_wheel_tip_is_throated(proto):
     """Measured on the exported STL: the tip radius at mid-face is the throat radius, smaller
     than toward the face edges (the wheel wraps round the worm)."""
     folder, man, p = proto
-    pair = worm_pair(p.design.tensioner)
+    pair = worm_pair(_design().tensioner)
     mesh = placed_mesh(folder, _by_role(man, "tensioner_wheel")["C1"])
     ax = fit_axis(mesh)
     h = pair.face_width / 2
@@ -233,7 +237,7 @@ def test_moved_wheels_and_an_edited_mesh_are_caught(proto, tmp_path):
         assert not ch["gear.center_distance"].passed
     assert not c1["gear.interference"].passed and c1["gear.interference"].measured > 0.1
     assert c2["gear.interference"].passed and not c2["gear.gap"].passed and c2["gear.gap"].measured < 0.005
-    nominal = worm_pair(p.design.tensioner).center_distance
+    nominal = worm_pair(_design().tensioner).center_distance
     assert h["gear.center_distance"].measured == pytest.approx(nominal + 0.05, abs=0.002)
     assert c1["gear.center_distance"].measured == pytest.approx(nominal - 0.2, abs=0.002)
 
@@ -243,10 +247,10 @@ def test_counts_are_read_from_the_sections(proto):
     in the wheel's section fail the check."""
     import dataclasses
     folder, man, p = proto
-    ts = p.design.tensioner.model_copy(update={"wheel_teeth": 25, "module": 1.2})
-    design = p.design.model_copy(update={"tensioner": ts})
+    ts = _design().tensioner.model_copy(update={"wheel_teeth": 25, "module": 1.2})
+    lay = dataclasses.replace(p.tensioner_layout, pair=worm_pair(ts, p.min_wall))
     one = {"parts": [_by_role(man, "tensioner_worm")["C1"], _by_role(man, "tensioner_wheel")["C1"]]}
-    checks = gear_checks(folder, one, dataclasses.replace(p, design=design))
+    checks = gear_checks(folder, one, dataclasses.replace(p, tensioner_layout=lay))
     teeth = next(c for c in checks if c.id == "gear.teeth")
     assert not teeth.passed and teeth.measured == 24 and teeth.limit == 25
     assert next(c for c in checks if c.id == "gear.starts").passed
@@ -259,7 +263,7 @@ def test_every_tendon_clears_every_other_part(proto):
     checks = tendon_checks(folder, man, p)
     clear = [c for c in checks if c.id == "tensioner.tendon_clearance"]
     assert sorted(c.where["tendon"] for c in clear) == sorted(t.name for t in p.paths)
-    d = p.design.tendon_material.diameter
+    d = p.tendon_material.diameter
     for c in clear:
         assert c.passed and c.measured >= d, c.message
 
@@ -288,7 +292,7 @@ def test_gear_checks_pass_on_the_prototype(proto):
             "gear.lead_angle"} <= ids
     # loading refuses what is not self-locking or undercut: no check that could never fail
     assert not {"gear.self_locking", "gear.undercut"} & ids
-    pair = worm_pair(p.design.tensioner)
+    pair = worm_pair(_design().tensioner)
     face = next(c for c in checks if c.id == "gear.loaded_face")
     assert 0.95 * pair.face_width < face.measured <= pair.face_width + 0.01      # throated: the whole face
     lash = next(c for c in checks if c.id == "gear.backlash")
@@ -305,7 +309,7 @@ def test_gear_checks_pass_on_the_prototype(proto):
 
 def test_tensioner_parts_fit_the_printer(proto):
     folder, man, p = proto
-    vol = np.asarray(p.design.process.build_volume)
+    vol = np.asarray(p.process.build_volume)
     for q in man["parts"]:
         if q["role"].startswith("tensioner"):
             b = load_mesh(folder / q["files"]["stl"]["path"]).bounds
@@ -360,7 +364,7 @@ def test_turning_parts_clear_the_housing_at_every_angle(proto):
 
 def test_hex_socket_for_the_key(proto):
     folder, man, p = proto
-    key = p.design.tensioner.hex_key
+    key = _design().tensioner.hex_key
     drive_q = _by_role(man, "tensioner_drive")["A"]
     polys = placed_manifold(folder, drive_q, np.eye(4)).slice(2.0).to_polygons()
     areas = sorted(abs(0.5 * np.sum(q[:, 0] * np.roll(q[:, 1], -1) - np.roll(q[:, 0], -1) * q[:, 1]))
@@ -386,8 +390,9 @@ def test_layout_adapts_to_other_gears(tmp_path, change):
     data["tensioner"].update(change)
     f = tmp_path / "v.yaml"
     f.write_text(yaml.safe_dump(data))
-    p = make_plan(load(f).design)
-    lay = layout(p.design, p.paths, p.disks[-1])
+    d = load(f).design
+    p = make_plan(d)
+    lay = layout(d, p.paths, p.disks[-1])
     pair = lay.pair
     assert pair.center_distance == pytest.approx(lay.units[0].worm_y - lay.units[0].center[1]
                                                  if lay.units[0].side > 0 else
@@ -395,7 +400,7 @@ def test_layout_adapts_to_other_gears(tmp_path, change):
     for u in lay.units:
         zs = [t.points[-1][1] for t in p.paths if t.channel == u.channel]
         assert min(abs(u.worm_z - z) for z in zs) >= pair.ra1 + WORM_CLEAR - 1e-9
-    assert max(r.exit_angle_deg for r in lay.runs) <= p.design.tensioner.max_exit_deg + 1e-6
+    assert max(r.exit_angle_deg for r in lay.runs) <= d.tensioner.max_exit_deg + 1e-6
     # units in one column do not overlap along y
     for s in (1, -1):
         col = sorted((u for u in lay.units if u.side == s), key=lambda u: u.center[1])

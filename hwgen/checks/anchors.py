@@ -14,8 +14,8 @@ import math
 
 import numpy as np
 
-from ..model.fixing import termination_of
 from ..cad.export import STL_TOLERANCE_MM
+from ..model.settings import Termination
 from .base import Check
 from .eyelets import DiskSections
 from .polygons import area_centroid, inside, inside_many, loop_gap, points_to_polyline
@@ -50,9 +50,10 @@ def inscribed_diameter(loop: np.ndarray) -> float:
     return 2 * best
 
 
-def seat_checks(disk: DiskSections, mesh, placement, design_disk: dict, design, min_wall: float,
-                tendon_break: float, resin_strength: float) -> tuple[list[Check], list[dict]]:
-    """One check per seat of the base disk; and what was measured, for the report."""
+def seat_checks(disk: DiskSections, mesh, placement, design_disk: dict, ends: dict[str, Termination],
+                min_wall: float, tendon_break: float, resin_strength: float) -> tuple[list[Check], list[dict]]:
+    """One check per seat of the base disk; and what was measured, for the report. ``ends``: what
+    each tendon ends in (design data), by name."""
     seats = design_disk.get("seats", [])
     if not seats:
         return [], []
@@ -66,7 +67,7 @@ def seat_checks(disk: DiskSections, mesh, placement, design_disk: dict, design, 
     out, rows = [], []
     for k, s in enumerate(seats):
         name = s["tendon"]
-        term = termination_of(design, name)
+        term = ends[name]
         what = f"{term.diameter:g} mm knot" if term.kind == "knot" else f"crimp sleeve Ø{term.diameter:g} mm"
         openings, plate, alone, held = [], 0.0, True, []
         last = (None, 0.0)                                   # (area, inscribed diameter) of the last cut

@@ -26,8 +26,7 @@ import numpy as np
 
 from ..cache import remembered
 from ..cad.manifest import ManifestPart
-from ..model.gearing import hertz_allowable, worm_pair
-from ..model.materials import contact_elasticity
+from ..model.gearing import hertz_allowable
 from .axes import Axis, axes_angle, axes_distance, fit_axis
 from .base import Check
 from .meshes import placed_mesh, to_manifold
@@ -239,15 +238,21 @@ def measure_pair(folder: Path, worm: dict, wheel: dict) -> dict:
 
 
 def gear_checks(folder: Path, manifest: dict, plan) -> list[Check]:
-    """Every worm and wheel measured from its file. What it finds (most of a check's time) is remembered (:func:`hwgen.cache.remembered`) under the bytes of the
-    worm and wheel files, their manifest entries and the design."""
+    """Every worm and wheel measured from its file. What it finds (most of a check's time) is
+    remembered (:func:`hwgen.cache.remembered`) under the bytes of the worm and wheel files, their
+    manifest entries and the plan's values the checks read (the pair, μ, the winding radius, the
+    tendon's break load, the resin's strength and contact figures)."""
     folder = Path(folder)
     pairs = gear_pairs(manifest)
     if not pairs:
         return [Check("gear.parts", "error", False, "no tensioner worm/wheel parts in the manifest")]
     entries = [p for pw in pairs.values() for p in pw.values()]
     files = [_file_sha(ManifestPart.of(p).stl_in(folder)) for p in entries]
-    found = remembered("gear checks", (files, entries, plan.design),
+    lay = plan.require_tensioner_layout()
+    reads = (lay.pair, lay.friction_coefficient, lay.winding_radius, plan.tendon_material.break_load,
+             plan.tensioner, plan.process.material, plan.process.contact_modulus_mpa, plan.process.poisson,
+             plan.process.contact_reason)
+    found = remembered("gear checks", (files, entries, reads),
                        lambda: [c.to_json() for c in _pair_checks(folder, manifest, plan, pairs)])
     return [Check(**c) for c in found]
 
@@ -260,9 +265,7 @@ def _file_sha(path: Path) -> str | None:
 
 
 def _pair_checks(folder: Path, manifest: dict, plan, pairs: dict) -> list[Check]:
-    d = plan.design
-    ts = d.tensioner
-    pair = worm_pair(ts, d.process.min_wall)
+    pair = plan.require_tensioner_layout().pair
     out: list[Check] = []
     measured = {}
     flank_gap = pair.backlash()["normal_mm"] / 2
@@ -304,9 +307,8 @@ def _pair_checks(folder: Path, manifest: dict, plan, pairs: dict) -> list[Check]
 
 def _strength_checks(measured: dict, manifest: dict, plan, pair) -> list[Check]:
     """Backlash and loaded face on the representative pair; Lewis and Hertz on every channel."""
-    d = plan.design
-    ts = d.tensioner
-    mu, load = ts.friction_coefficient, d.tendon_material.break_load
+    lay, ts, proc = plan.require_tensioner_layout(), plan.tensioner, plan.process
+    mu, load = lay.friction_coefficient, plan.tendon_material.break_load
     wheels = {p["channel"]: p for p in manifest["parts"] if p.get("role") == "tensioner_wheel"}
     usable = [c for c, m in measured.items() if "meshing" in m]
     if not usable:
@@ -340,19 +342,19 @@ def _strength_checks(measured: dict, manifest: dict, plan, pair) -> list[Check]:
                      f"lead angle {gamma:.3f}° (design: d1 = {pair.worm_pitch_diameter:g} mm, m = {pair.module:g} mm), "
                      f"{phi - gamma:.2f}° below the friction angle atan(μ / cos α_n) = {phi:.3f}° (design μ = {mu:g}; "
                      f"loading refuses a pair that is not self-locking)", gamma, phi, common))
-    e_mpa, nu, why = contact_elasticity(d.process)
+    e_mpa, nu, why = proc.contact_modulus_mpa, proc.poisson, proc.contact_reason
     allow = hertz_allowable(ts.resin_strength)
     for channel in sorted(measured):
         where = {"channel": channel}
         n = len(wheels[channel].get("tendons", [])) or 1
-        r_w = wheels[channel].get("winding_radius_mm", ts.spool_diameter / 2 + d.tendon_material.diameter / 2)
+        r_w = wheels[channel].get("winding_radius_mm", lay.winding_radius)
         t2 = n * load * r_w
-        design = (f"{n} × {load:g} N (design: tendon break load) at r = {r_w:.3f} mm: {t2:.0f} N·mm on the wheel, "
-                  f"F_t2 = {pair.wheel_tangential_force(t2):.1f} N")
+        loading = (f"{n} × {load:g} N (design: tendon break load) at r = {r_w:.3f} mm: {t2:.0f} N·mm on the wheel, "
+                   f"F_t2 = {pair.wheel_tangential_force(t2):.1f} N")
         sigma = pair.lewis_stress(t2, face, y)
         sf = ts.resin_strength / sigma
         out.append(Check("gear.lewis", "error", sf >= ts.safety_factor,
-                         f"channel {channel}: {design}; Lewis tooth stress {sigma:.1f} MPa on the loaded face "
+                         f"channel {channel}: {loading}; Lewis tooth stress {sigma:.1f} MPa on the loaded face "
                          f"{face:.2f} mm with Y = {y:.3f} (both measured on channel {rep}'s files), m = "
                          f"{pair.module:g} mm: safety {sf:.2f} against the design's resin_strength "
                          f"{ts.resin_strength:g} MPa (need {ts.safety_factor:g})", sf, ts.safety_factor,
@@ -360,11 +362,12 @@ def _strength_checks(measured: dict, manifest: dict, plan, pair) -> list[Check]:
         hz = pair.hertz_line(t2, face, mu, e_mpa, nu)
         sh = allow / hz["p0_mpa"]
         out.append(Check("gear.hertz", "error", sh >= ts.safety_factor,
-                         f"channel {channel}: {design}; Hertz line contact over {hz['length_mm']:.2f} mm (the measured "
-                         f"face / cos γ) on the flank's radius {hz['radius_mm']:.2f} mm at the pitch point, normal force "
-                         f"{hz['force_n']:.1f} N (μ = {mu:g}): peak pressure {hz['p0_mpa']:.1f} MPa, safety {sh:.2f} "
+                         f"channel {channel}: {loading}; Hertz line contact over {hz['length_mm']:.2f} mm "
+                         f"(the measured face / cos γ) on the flank's radius {hz['radius_mm']:.2f} mm at the pitch "
+                         f"point, normal force {hz['force_n']:.1f} N (μ = {mu:g}): peak pressure "
+                         f"{hz['p0_mpa']:.1f} MPa, safety {sh:.2f} "
                          f"against {allow:.1f} MPa = 1.67 × the design's resin_strength (onset of yield below the "
-                         f"surface; E = {e_mpa:g} MPa, ν = {nu:g} from the materials table, {d.process.material}) "
+                         f"surface; E = {e_mpa:g} MPa, ν = {nu:g} from the materials table, {proc.material}) "
                          f"(need {ts.safety_factor:g})", sh, ts.safety_factor,
                          {**where, "p0_mpa": hz["p0_mpa"], "allowable_mpa": allow, "elasticity": why}))
         t1 = pair.worm_torque(t2, mu)

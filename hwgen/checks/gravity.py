@@ -24,7 +24,6 @@ import math
 import numpy as np
 
 from ..model import sag
-from ..model.materials import printed_modulus
 from .base import Check
 from .polygons import section_moments
 from .sections import chain_loops, section_robot
@@ -95,15 +94,15 @@ def _case(r: sag.SagResult) -> dict:
                        "base_moment_nmm": abs(r.lin_base_moment)}}
 
 
-def gravity_checks(parts, manifest: dict, design, fits: list[SlotFit], strip_h: float | None,
+def gravity_checks(parts, manifest: dict, plan, fits: list[SlotFit], strip_h: float | None,
                    strip_t: float | None, length: float) -> tuple[dict, list[Check]]:
     """State N, the mount's stiffness and the strip under the actuating pair: (report, checks)."""
-    bb = design.backbone
+    bb = plan.backbone
     h = strip_h if strip_h else bb.height
     t = strip_t if strip_t else bb.thickness
     E = bb.modulus_gpa * 1000.0
     I = sag.second_moment(h, t)
-    e_print, e_why = printed_modulus(design.process)
+    e_print, e_why = plan.process.modulus_gpa, plan.process.modulus_reason
     e_print *= 1000.0
     strip, points, tip = loads(parts, manifest, length)
     if strip is None:
@@ -149,7 +148,7 @@ def gravity_checks(parts, manifest: dict, design, fits: list[SlotFit], strip_h: 
     }
     checks = []
     ok = r.max_stress <= allow
-    sev = design.check.overstress
+    sev = plan.check.overstress
     text = (f"state N (no tendon tensioned, horizontal, gravity along {worst_key}): tip sags {r.tip_sag:.1f} mm, "
             f"tip {-r.tip_angle_deg:.1f}° below horizontal; the strip's largest bending stress "
             f"{r.max_stress:.1f} MPa at s = {r.s_max_stress:.1f} mm "
@@ -162,16 +161,17 @@ def gravity_checks(parts, manifest: dict, design, fits: list[SlotFit], strip_h: 
                         {"part": strip["part"], "gravity": worst_key, "s_mm": r.s_max_stress}))
     checks.append(Check("gravity.sag", "info", True, f"state N: tip sag {r.tip_sag:.1f} mm (small-deflection "
                         f"theory: {r.lin_tip_sag:.1f} mm)", r.tip_sag, None, {"gravity": worst_key}))
-    mount, c = _mount_check(parts, design, r, e_print, e_why)
+    mount, c = _mount_check(parts, plan.mount.max_tip_share, r, e_print, e_why)
     report["mount"] = mount
     checks += c
-    bend, c = _bend_check(design, spans, E, I, t, length)
+    bend, c = _bend_check(plan.check.max_angle_deg, allow, spans, E, I, t, length)
     report["bend"] = bend
     checks += c
     return report, checks
 
 
-def _mount_check(parts, design, r: sag.SagResult, e_print: float, e_why: str) -> tuple[dict, list[Check]]:
+def _mount_check(parts, limit: float, r: sag.SagResult, e_print: float, e_why: str) -> tuple[dict, list[Check]]:
+    """``limit``: the largest share of the tip's sag the mount's give may add (base_mount.max_tip_share)."""
     mount = next((p for p in parts if p.role == "base_mount"), None)
     if mount is None:
         return {}, []
@@ -195,7 +195,6 @@ def _mount_check(parts, design, r: sag.SagResult, e_print: float, e_why: str) ->
     theta = (M + W * H / 2) * H / (e_print * mo["i_vc"])
     drop = theta * r.tip_y
     share = drop / r.tip_sag if r.tip_sag > 0 else 0.0
-    limit = design.base_mount.max_tip_share
     ok = share <= limit
     strip_k = r.EI / r.L
     mount_k = e_print * mo["i_vc"] / H
@@ -213,11 +212,10 @@ def _mount_check(parts, design, r: sag.SagResult, e_print: float, e_why: str) ->
     return rep, [Check("mount.stiffness", "error", ok, msg, share, limit, {"part": mount.name})]
 
 
-def _bend_check(design, spans, E, I, t, length) -> tuple[dict, list[Check]]:
-    ang = design.check_angle_deg
+def _bend_check(ang: float, allow: float, spans, E, I, t, length) -> tuple[dict, list[Check]]:
+    """The strip bent ``ang`` degrees (the check's sweep end) against its allowable stress ``allow``, MPa."""
     stress, kappa = sag.bending_stress_under_uniform_moment(length, math.radians(ang), E, I, t, spans)
     bare = E * t / 2 * math.radians(ang) / length
-    allow = design.backbone.allowable_stress_mpa
     ok = stress <= allow
     msg = (f"bent {ang:g}° by the actuating pair (a moment uniform along the strip), the strip between the disks' "
            f"plates and hubs (measured) curves at {kappa * 1000:.2f} /m: {stress:.1f} MPa, "

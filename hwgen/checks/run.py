@@ -100,8 +100,7 @@ def _run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     ``eyelets`` (each designed eyelet: where it was found), ``sweep``.
     """
     folder = Path(folder)
-    d = plan.design
-    s = d.check
+    s = plan.check
     rep_in = manifest["design_report"]
     checks: list[Check] = _file_checks(folder, manifest)
     parts, c = load_parts(folder, manifest)
@@ -113,17 +112,17 @@ def _run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     emap, c = locate_eyelets(disks, rep_in, bb_holes, s.position_tol_mm)
     checks += c
 
-    angles = sweep_angles(d.check_angle_deg, s.step_deg)
-    L = d.backbone.length
+    angles = sweep_angles(s.max_angle_deg, s.step_deg)
+    L = plan.backbone.length
     tls = tendon_lengths(emap, rep_in, angles, L)
     devs, fdelta, c = _routing_checks(plan, emap.stations_y, angles)
     checks += c
     checks += length_checks(tls, emap, devs, fdelta)
-    pair = pair_take_up(tls, d.tensioner.actuating_channel)
+    pair = pair_take_up(tls, plan.tensioner.actuating_channel)
     if pair:
         checks.append(_take_up_check(pair))
 
-    proc, td = d.process, d.tendon_material.diameter
+    proc, td = plan.process, plan.tendon_material.diameter
     checks += wall_checks(emap, rep_in, proc.min_wall)
     checks += hole_checks(emap, proc.min_hole, td, angles, L, tip_exits(manifest))
     checks += tendon_pair_checks(emap, rep_in, td, angles, L)
@@ -140,15 +139,15 @@ def _run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     if gear_pairs(manifest):                  # no tensioner: no tendon runs to it either
         checks += tendon_checks(folder, manifest, plan)
     checks += _strip_clamp_checks(manifest)
-    fits, c = _seating(parts, emap, bb_outline, strip_t, d, angles)
+    fits, c = _seating(parts, emap, bb_outline, strip_t, plan, angles)
     checks += c
-    seats, c = _seats(parts, emap, rep_in, d)
+    seats, c = _seats(parts, emap, rep_in, plan)
     checks += c
-    taut, c = as_built(emap, rep_in, manifest, d, fits, angles, devs, {t.name: t.max_abs_delta for t in tls})
+    taut, c = as_built(emap, rep_in, manifest, plan, fits, angles, devs, {t.name: t.max_abs_delta for t in tls})
     checks += c
     tension, c = tension_checks(plan, taut, {t.name: t.max_abs_delta for t in tls})
     checks += c
-    gravity, c = gravity_checks(parts, manifest, d, fits, None if bb_outline is None else bb_outline.extent[0],
+    gravity, c = gravity_checks(parts, manifest, plan, fits, None if bb_outline is None else bb_outline.extent[0],
                                 strip_t, L)
     checks += c
     report = _report(manifest["design"], checks, angles, s.step_deg, tls, pair, emap, taut)
@@ -156,8 +155,8 @@ def _run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     report["as_built"] = _plain({
         "about": "what the files let each disk do on the strip (measured from its STL) and how well the jig sets "
                  "its station (design data: jig.station_tolerance_mm), for a study of as-built tendon lengths",
-        "station_tolerance_mm": d.jig.station_tolerance_mm,
-        "max_tilt_deg": d.disks.hub.max_tilt_deg,
+        "station_tolerance_mm": plan.jig.station_tolerance_mm,
+        "max_tilt_deg": plan.hub.max_tilt_deg,
         "disks": [f.to_json() for f in fits],
         "taut": taut})
     report["seats"] = _plain(seats)
@@ -166,32 +165,33 @@ def _run_checks(folder: str | Path, manifest: dict, plan) -> dict:
     return report
 
 
-def _seating(parts, emap, bb_outline, strip_t, d, angles):
+def _seating(parts, emap, bb_outline, strip_t, plan, angles):
     """Each disk's slot fit (tilt, play, engagement) and its hub against the tendons."""
     by_name = {p.name: p for p in parts}
-    h = bb_outline.extent[0] if bb_outline is not None else d.backbone.height
-    t = strip_t if strip_t is not None else d.backbone.thickness
+    h = bb_outline.extent[0] if bb_outline is not None else plan.backbone.height
+    t = strip_t if strip_t is not None else plan.backbone.thickness
     fits = [measure_fit(dk, by_name[dk.part].mesh, by_name[dk.part].placement, h, t)
             for dk in emap.disks if dk.part in by_name]
     radius = {e.station: 0.0 for e in emap.eyelets}
     for e in emap.eyelets:
         radius[e.station] = max(radius[e.station], float(np.hypot(*e.design_xz)))
-    checks = tilt_checks(fits, d.disks.hub.max_tilt_deg, radius)
+    checks = tilt_checks(fits, plan.hub.max_tilt_deg, radius)
     checks += hub_checks(emap, fits, {p.name: p.mesh for p in parts}, {p.name: p.placement for p in parts},
-                         d.tendon_material.diameter, angles, d.backbone.length)
+                         plan.tendon_material.diameter, angles, plan.backbone.length)
     return fits, checks
 
 
-def _seats(parts, emap, rep_in, d):
+def _seats(parts, emap, rep_in, plan):
     """The tendons' seats on the base disk."""
     by_name = {p.name: p for p in parts}
+    ends = {p.name: p.termination for p in plan.paths}
     out, rows = [], []
     for dk in emap.disks:
         rd = next((r for r in rep_in["disks"] if r["index"] == dk.station), None)
         if rd is None or not rd.get("seats") or dk.part not in by_name:
             continue
-        c, r = seat_checks(dk, by_name[dk.part].mesh, by_name[dk.part].placement, rd, d, d.process.min_wall,
-                           d.tendon_material.break_load, d.tensioner.resin_strength)
+        c, r = seat_checks(dk, by_name[dk.part].mesh, by_name[dk.part].placement, rd, ends, plan.process.min_wall,
+                           plan.tendon_material.break_load, plan.tensioner.resin_strength)
         out += c
         rows += r
     return rows, out
@@ -246,7 +246,7 @@ def _routing_checks(plan, stations_y: np.ndarray, angles: np.ndarray):
     for dv in table_deviations(plan.paths):
         devs.setdefault(dv.tendon, []).append((dv.station, dv.distance))
     fdelta = {}
-    kappa = kin.kappas_for_angles(angles, plan.design.backbone.length)
+    kappa = kin.kappas_for_angles(angles, plan.backbone.length)
     for p in plan.paths:
         if p.function_points is not None:
             Lf = kin.tendon_lengths(stations_y, p.function_points, kappa)
@@ -273,13 +273,13 @@ def _take_up_check(pair: dict) -> Check:
                  {"channel": pair["channel"], "tendons": pair["tendons"]})
 
 
-def _report(design: str, checks: list[Check], angles, step_deg: float, tls, pair, emap, taut: dict) -> dict:
+def _report(name: str, checks: list[Check], angles, step_deg: float, tls, pair, emap, taut: dict) -> dict:
     """``tendons``: eq. (2) through the measured hole centres beside the taut path (nominal print)
     and the as-built statistic; ``passed`` is the verdict, on the taut path as built."""
     ok = not any(c.severity == "error" and not bool(c.passed) for c in checks)
     tt = {r["name"]: r for r in taut["tendons"]}
     return _plain({
-        "design": design,
+        "design": name,
         "ok": ok,
         "hwgen_version": __version__,
         "sweep": {"max_angle_deg": float(angles[-1]), "step_deg": step_deg, "angles_deg": angles.tolist()},

@@ -70,11 +70,11 @@ def robot(emap: EyeletMap, rep: dict, manifest: dict, tendon_d: float, length: f
                     np.asarray(end, float), tendon_d, length)
 
 
-def process_scatter(design, fits) -> mc.Scatter:
+def process_scatter(n_disks: int, position_sigma: float, diameter_sigma: float, station_tolerance: float,
+                    fits) -> mc.Scatter:
     """The stated process and the play measured in each disk's STL (half ranges about the middle)."""
-    tilt, play = _play(design.disks.count, [f.to_json() for f in fits])
-    p = design.process
-    return mc.Scatter(p.position_sigma, p.diameter_sigma, design.jig.station_tolerance_mm, tilt, play)
+    tilt, play = _play(n_disks, [f.to_json() for f in fits])
+    return mc.Scatter(position_sigma, diameter_sigma, station_tolerance, tilt, play)
 
 
 def samples(stated: int) -> int:
@@ -97,15 +97,15 @@ def _play(n: int, fits: list[dict]) -> tuple[np.ndarray, np.ndarray]:
     return tilt, play
 
 
-def as_built(emap: EyeletMap, rep: dict, manifest: dict, design, fits, angles: np.ndarray,
+def as_built(emap: EyeletMap, rep: dict, manifest: dict, plan, fits, angles: np.ndarray,
              deviations: dict[str, list], centre: dict[str, float]) -> tuple[dict, list[Check]]:
     """The taut-path report section and its checks: one verdict per budgeted tendon, the pair's take-up.
     ``centre``: each tendon's largest |ΔL| by eq. (2) between the measured hole centres (quoted beside)."""
-    s = design.check
-    rb = robot(emap, rep, manifest, design.tendon_material.diameter, design.backbone.length)
-    sc = process_scatter(design, fits)
+    s, proc, channel = plan.check, plan.process, plan.tensioner.actuating_channel
+    rb = robot(emap, rep, manifest, plan.tendon_material.diameter, plan.backbone.length)
+    sc = process_scatter(len(plan.disks), proc.position_sigma, proc.diameter_sigma, plan.jig.station_tolerance_mm, fits)
     names = [t["name"] for t in rep["tendons"]]
-    act = [k for k, t in enumerate(rep["tendons"]) if t["channel"] == design.tensioner.actuating_channel]
+    act = [k for k, t in enumerate(rep["tendons"]) if t["channel"] == channel]
     budgets = [t["budget_mm"] for t in rep["tendons"]]
     res = monte_carlo(rb, sc, angles, samples(s.samples), s, tuple(act) if len(act) == 2 else None, budgets)
     checks, rows = [], []
@@ -151,7 +151,7 @@ def as_built(emap: EyeletMap, rep: dict, manifest: dict, design, fits, angles: n
                             f"upper bounds", float(res.unconverged), 0.0, {}))
     if res.take_up is not None and len(res.take_up):
         i, j = act
-        pair = {"channel": design.tensioner.actuating_channel, "tendons": [names[i], names[j]],
+        pair = {"channel": channel, "tendons": [names[i], names[j]],
                 "centreline_mm": res.pair_nominal[0], "taut_mm": res.pair_nominal[1], **mc.statistics(res.take_up)}
         out["pair"] = pair
         checks.append(Check("tendon.take_up_as_built", "info", True,

@@ -35,7 +35,7 @@ def tendon_checks(folder: Path, manifest: dict, plan) -> list[Check]:
     """Each tendon's free span (tip face to spool) against every part but its own start disk
     and, over the last stretch where it enters between the flanges, its own spool."""
     folder = Path(folder)
-    d = plan.design.tendon_material.diameter
+    d = plan.tendon_material.diameter
     every = manifest_parts(manifest)
     runs = [(p.name, r) for p in every for r in p.entry.get("tendon_runs", [])]
     if not runs:

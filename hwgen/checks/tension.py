@@ -42,14 +42,15 @@ MAX_DOF = 1500             # a longer robot or more disks than this resolves: th
 
 def sweeps(plan) -> tuple[sf.Described, dict, dict]:
     """The statics of the sweep (the expensive part): the robot, and the sweep with the stiffening
-    tendons locked and with them slack. The sweeps are of the plan alone: what they gave last time
-    for this design (and this code) is remembered in the active cache (the same values either way)."""
+    tendons locked and with them slack. The sweeps are of the described robot and the angle alone:
+    what they gave last time for these (and this code) is remembered in the active cache (the same
+    values either way)."""
     desc = sf.describe(plan)
     model = st.Model(desc.robot, sf.SWEEP_H_MAX)
     if model.n_dof > MAX_DOF:
         raise ValueError(f"{model.n_dof} joint coordinates, more than the {MAX_DOF} the sweep is run with")
-    ang = plan.design.check_angle_deg
-    locked, free = cache.remembered("tension sweeps", plan.design, lambda: (
+    ang = plan.check.max_angle_deg
+    locked, free = cache.remembered("tension sweeps", (desc, ang), lambda: (
         sf.sweep(desc, model, ang, SWEEP_STEP_DEG, locked=True), sf.sweep(desc, model, ang, FREE_STEP_DEG, locked=False)))
     return desc, locked, free
 
@@ -58,7 +59,7 @@ def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict,
     """(report, checks). ``taut``: this report's as-built taut study; ``centre_mm``: each tendon's
     largest |ΔL| through the hole centres (eq. (2), measured); ``swept``: :func:`sweeps` of this
     plan, if already at hand."""
-    d = plan.design
+    chk, tm = plan.check, plan.tendon_material
     if swept is None:
         try:
             swept = sweeps(plan)
@@ -66,9 +67,9 @@ def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict,
             return ({"skipped": str(e)},
                     [Check("tension.model", "warning", False, f"the tendon tensions were not computed: {e}")])
     desc, locked, free = swept
-    ang = d.check_angle_deg
-    allow = d.tendon_material.break_load / d.check.tendon_safety_factor
-    floor = d.check.taut_floor_n
+    ang = chk.max_angle_deg
+    allow = tm.break_load / chk.tendon_safety_factor
+    floor = chk.taut_floor_n
     rows = {r["name"]: r for r in taut.get("tendons", [])}
     springs = {t.name: t.stiffness for t in desc.robot.tendons}
     reached = [side["reached_deg"] for side in locked.values() if side["inner"] is not None]
@@ -89,17 +90,17 @@ def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict,
                         "least_n": lo, "greatest_n": hi, "as_built_excess_mm": excess, "least_as_built_n": lo_built,
                         "greatest_as_built_n": hi_built})
         ok = lo_built > floor
-        sev = "error" if lo <= floor else d.check.robust_severity   # slack even through the centres: an error
+        sev = "error" if lo <= floor else chk.robust_severity   # slack even through the centres: an error
         msg = (f"{name}: locked at {desc.pretension[name]:g} N, its tension runs {lo:.2f}-{hi:.2f} N over "
                f"{span} (statics through the eyelet centres, spring {springs[name]:.2f} N/mm); as built "
-               f"({d.check.robust}) its path shortens {excess:.3f} mm more, so at least {lo_built:.2f} N: "
+               f"({chk.robust}) its path shortens {excess:.3f} mm more, so at least {lo_built:.2f} N: "
                + ("taut" if ok else "SLACK") + f" (floor {floor:g} N)")
         checks.append(Check("tendon.taut", sev, ok, msg, lo_built, floor, {"tendon": name}))
         ok = hi_built < allow
         checks.append(Check("tendon.overload", "error", ok,
                             f"{name}: greatest tension over the sweep {hi:.2f} N, {hi_built:.2f} N as built if its "
                             f"excess went the taut way, {'under' if ok else 'over'} "
-                            f"{d.tendon_material.break_load:g} N / {d.check.tendon_safety_factor:g} = {allow:.1f} N",
+                            f"{tm.break_load:g} N / {chk.tendon_safety_factor:g} = {allow:.1f} N",
                             hi_built, allow, {"tendon": name}))
     sides = []
     for key, side in locked.items():
@@ -114,7 +115,7 @@ def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict,
                       "rise": rise, "reached_deg": side["reached_deg"], "angles_deg": side["angles_deg"],
                       "tensions_n": side["tensions_n"], "without_angles_deg": free[key]["angles_deg"],
                       "without_tensions_n": free[key]["tensions_n"][inner]})
-    limit = d.check.max_coupling
+    limit = chk.max_coupling
     if not sides:
         checks.append(Check("actuation.coupling", "info", True, "no actuating tendon bends the robot either way "
                             "when hauled in: no coupling to judge"))
@@ -134,7 +135,7 @@ def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict,
                             f"{top['inner']}: {top['with_stiffening_n']:.1f} N at {min(abs(top['at_deg']), ang):.0f}° "
                             f"of bending "
                             f"({'under' if ok else 'over'} the {allow:.1f} N a tendon may carry: "
-                            f"{d.tendon_material.break_load:g} N / {d.check.tendon_safety_factor:g})",
+                            f"{tm.break_load:g} N / {chk.tendon_safety_factor:g})",
                             top["with_stiffening_n"], allow, {"tendon": top["inner"]}))
     report = {
         "model": "weightless robot bent by hauling in the inner actuating tendon, the others at pre-tension; "

@@ -49,8 +49,9 @@ def label(v: float) -> str:
     return f"{v:.3f}".rstrip("0").rstrip(".")
 
 
-def coupon_spec(plan) -> CouponSpec:
-    d = plan.design
+def coupon_spec(plan, d) -> CouponSpec:
+    """The coupon of a plan (its eyelet holes) and the design it was made from (``d``: its coupon,
+    process, disks and backbone sections)."""
     c = d.coupon
     diameters = Counter(round(h.diameter, 3) for disk in plan.disks for h in disk.holes)
     hole = max(diameters, key=lambda v: (diameters[v], -v)) if diameters else d.process.min_hole

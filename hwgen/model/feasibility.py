@@ -183,11 +183,11 @@ def tendon_field(d: Design, name: str) -> str:
     return "tendons"
 
 
-def plan_problems(plan) -> list[tuple[str, str]]:
+def plan_problems(plan, d: Design) -> list[tuple[str, str]]:
     """(field path, what is wrong) for holes the plan sized but no part can take: an eyelet
     that breaks through its disk's rim, a strip hole as wide as the strip. Both come from a
-    tendon that meets the disk or the strip almost edge-on (its hole grows as 1/cos α)."""
-    d = plan.design
+    tendon that meets the disk or the strip almost edge-on (its hole grows as 1/cos α). ``d``: the
+    design the plan was made from (the fields to name)."""
     out = []
     for disk in plan.disks:
         r_out = disk.outer_diameter / 2
@@ -212,9 +212,9 @@ def plan_problems(plan) -> list[tuple[str, str]]:
     return out
 
 
-def check_plan(plan) -> None:
+def check_plan(plan, d: Design) -> None:
     """Raise :class:`DesignError` for the first of :func:`plan_problems`."""
-    for path, message in plan_problems(plan):
+    for path, message in plan_problems(plan, d):
         raise DesignError(path, message)
 
 

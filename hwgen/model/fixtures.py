@@ -88,6 +88,7 @@ class MountLayout:
     foot_half_x: float
     bolt_pattern: str           # the table's grid, as the YAML names it (base_mount.bolt_pattern)
     disk_thickness: float       # the base disk's thickness: the disk screws' grip with the jaws
+    max_tip_share: float        # base_mount.max_tip_share: the share of the tip's sag the mount's give may add (checks)
 
 
 def base_length(d: Design) -> float:
@@ -123,7 +124,8 @@ def mount_layout(d: Design, disk_screws=()) -> MountLayout:
         z_upper_top=t / 2 + JAW_STANDOFF + UPPER_JAW, recess_half_x=bb.height / 2 + STRIP_RECESS_CLEARANCE,
         jaw_screws=screws, disk_screws=tuple((float(x), float(z)) for x, z in disk_screws),
         screw_hole=bm.screw_hole, foot_holes=feet, foot_hole=hole, bolt=bolt, pitch=pitch,
-        foot_half_x=fx + FOOT_EDGE, bolt_pattern=bm.bolt_pattern, disk_thickness=base_t)
+        foot_half_x=fx + FOOT_EDGE, bolt_pattern=bm.bolt_pattern, disk_thickness=base_t,
+        max_tip_share=bm.max_tip_share)
 
 
 def disk_screw_region(d: Design) -> tuple[tuple[tuple[float, float], tuple[float, float]], float]:

@@ -18,6 +18,10 @@ from .holes import hole_diameter
 from .fixtures import JigLayout, MountLayout, base_length, disk_screw_region, jig_layout, mount_layout
 from .fixing import disk_role, disk_thicknesses, hub_lengths, hub_spec, seats_for
 from .routing import TendonPath, tendon_paths
+from .settings import (AnchorsSettings, BomSettings, CheckSettings, HubSettings, PlatesSettings, ProcessSettings,
+                       RenderSettings, TendonMaterialSettings, TensionerSettings, anchors_settings, bom_settings,
+                       check_settings, hub_settings, plates_settings, process_settings, render_settings,
+                       tendon_material_settings, tensioner_settings)
 from .specs import BackboneHole, BackboneSpec, DiskSpec, Hole, Merge
 from .tensioner_layout import TensionerLayout, layout
 
@@ -27,9 +31,10 @@ SWEEP_STEP_DEG = 1.0     # resolution of the bending sweep used to size eyelets
 
 @dataclass(frozen=True, kw_only=True)
 class Plan:
-    """Everything later stages build and check from, resolved from the design: frozen values."""
+    """Everything later stages build and check from, resolved from the design: frozen values.
+    The schema stays behind in the model: the YAML's settings the checks and outputs read are
+    here as their sections (:mod:`hwgen.model.settings`), the rest in the layouts."""
 
-    design: Design
     stations: tuple[float, ...]                       # each disk's mid-plane along the backbone, mm
     paths: list[TendonPath]                           # every tendon, mirrors expanded, in YAML order
     disks: tuple[DiskSpec, ...]
@@ -38,10 +43,27 @@ class Plan:
     findings: tuple[str, ...] = field(default=())
     mount: MountLayout                                # the base mount, around the base disk's screws
     jig: JigLayout                                    # the assembly jig
-    min_wall: float                                   # the process's thinnest wall, mm
-    tendon_diameter: float                            # mm
+    check: CheckSettings
+    process: ProcessSettings
+    tendon_material: TendonMaterialSettings
+    tensioner: TensionerSettings                      # the channels; where the parts go: tensioner_layout
+    hub: HubSettings                                  # disks.hub
+    anchors: AnchorsSettings                          # disks.anchors
+    render: RenderSettings
+    bom: BomSettings
+    plates: PlatesSettings
     tensioner_layout: TensionerLayout | None = None   # where the worm drives go, when they can be laid out
     tensioner_error: str | None = None                # why not, otherwise
+
+    @property
+    def min_wall(self) -> float:
+        """The process's thinnest wall, mm."""
+        return self.process.min_wall
+
+    @property
+    def tendon_diameter(self) -> float:
+        """mm"""
+        return self.tendon_material.diameter
 
     def require_tensioner_layout(self) -> TensionerLayout:
         """The tensioner layout, or a DesignError saying why this design has none."""
@@ -228,13 +250,17 @@ def make_plan(design: Design, tensioner_record: dict | None = None) -> Plan:
         disks.append(spec)
         merges += m
     bb_holes, findings = _backbone_holes(d, paths, disks)
-    backbone = BackboneSpec(height=d.backbone.height, thickness=d.backbone.thickness, y_start=-base_length(d),
-                            y_end=d.backbone.length + d.backbone.extra_tip, holes=tuple(bb_holes),
-                            density_g_cm3=d.backbone.density_g_cm3)
-    first = Plan(design=d, stations=tuple(d.stations), paths=paths, disks=tuple(disks), backbone=backbone,
+    bb = d.backbone
+    backbone = BackboneSpec(height=bb.height, thickness=bb.thickness, y_start=-base_length(d),
+                            y_end=bb.length + bb.extra_tip, holes=tuple(bb_holes), density_g_cm3=bb.density_g_cm3,
+                            length=bb.length, extra_tip=bb.extra_tip, modulus_gpa=bb.modulus_gpa,
+                            shear_modulus_gpa=bb.shear_modulus_gpa, allowable_stress_mpa=bb.allowable_stress_mpa)
+    first = Plan(stations=tuple(d.stations), paths=paths, disks=tuple(disks), backbone=backbone,
                  merges=tuple(merges), findings=tuple(findings),
                  mount=mount_layout(d, [(x, z) for x, z, _ in disks[0].mount_holes]), jig=jig_layout(d),
-                 min_wall=d.process.min_wall, tendon_diameter=d.tendon_material.diameter)
+                 check=check_settings(d), process=process_settings(d), tendon_material=tendon_material_settings(d),
+                 tensioner=tensioner_settings(d), hub=hub_settings(d), anchors=anchors_settings(d),
+                 render=render_settings(d), bom=bom_settings(d), plates=plates_settings(d))
     try:
         lay = layout(d, paths, disks[-1], tensioner_record)
     except ValueError as e:

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..params import Design, RoutingFunction
+from .settings import Termination, termination
 
 DEFAULT_BUDGET_MM = 0.2  # the paper's claim for the stiffening tendons (Sect. IV-A)
 
@@ -38,6 +39,8 @@ class TendonPath:
     function_points: np.ndarray | None  # (N, 2): the named eq. (3) function, where given with a table
     budget_mm: float | None         # allowed length change; None = no budget (actuating)
     source: str                     # "table" or "function"
+    pretension_n: float             # what it is locked at when its channel is tensioned, N
+    termination: Termination        # how it ends at the base disk: its own, else the material's
     mirrored_from: str | None = None
 
 
@@ -53,12 +56,14 @@ def tendon_paths(d: Design) -> list[TendonPath]:
         if budget is None and t.channel != d.tensioner.actuating_channel:
             budget = DEFAULT_BUDGET_MM
         src = "table" if r.table is not None else "function"
-        out.append(TendonPath(t.name, t.channel, pts, fpts if r.table is not None else None, budget, src))
+        term = termination(t.termination if t.termination is not None else d.tendon_material.termination)
+        out.append(TendonPath(t.name, t.channel, pts, fpts if r.table is not None else None, budget, src,
+                              t.pretension_n, term))
         if r.mirror:
             flip = np.array([1.0, -1.0])
             out.append(TendonPath(t.names[1], t.channel, pts * flip,
                                   None if fpts is None or r.table is None else fpts * flip,
-                                  budget, src, mirrored_from=t.name))
+                                  budget, src, t.pretension_n, term, mirrored_from=t.name))
     return out
 
 

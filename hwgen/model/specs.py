@@ -96,6 +96,11 @@ class BackboneSpec:
     y_end: float
     holes: tuple[BackboneHole, ...]
     density_g_cm3: float     # of the laminate
+    length: float            # backbone.length: base to tip disk mid-plane
+    extra_tip: float         # backbone.extra_tip: beyond the tip disk, for the tensioner's clamp
+    modulus_gpa: float       # backbone.modulus_gpa: the laminate's E in bending
+    shear_modulus_gpa: float
+    allowable_stress_mpa: float
     name: str = "backbone"
 
     def merged_holes(self) -> list[tuple[float, float, float, tuple[str, ...]]]:

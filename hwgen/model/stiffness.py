@@ -36,7 +36,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from .intervals import interval_difference
-from .materials import printed_density, printed_modulus, table as material_table
 from .sag import Span
 from . import statics as st
 
@@ -68,12 +67,12 @@ class Described:
     masses: dict                     # what the weights are, for the report
 
 
-def states(design) -> list[State]:
+def states(plan) -> list[State]:
     """N, the actuating channel alone, then with each combination of the stiffening channels in the
     paper's order (without the first stiffening channel first; by count; by channel order)."""
-    act = design.tensioner.actuating_channel
-    used = {t.channel for t in design.tendons}
-    stiff = [c for c in design.tensioner.channels if c != act and c in used]
+    act = plan.tensioner.actuating_channel
+    used = {p.channel for p in plan.paths}
+    stiff = [c for c in plan.tensioner.channels if c != act and c in used]
     if len(stiff) > MAX_COMBINED:
         combos = [(c,) for c in stiff] + [tuple(stiff)]
     else:
@@ -120,8 +119,8 @@ def _hub_section(disk, wall: float) -> tuple[float, float, float, float]:
 
 
 def _stiffening(plan, section: st.Section, e_print: float, g_print: float) -> st.Stiffening:
-    L = plan.design.backbone.length
-    wall = plan.design.disks.hub.wall
+    L = plan.backbone.length
+    wall = plan.hub.wall
     flex, tors, stiff = [], [], []
     for dk in plan.disks:
         a, b = max(dk.y - dk.thickness / 2, 0.0), min(dk.y + dk.thickness / 2, L)
@@ -146,7 +145,7 @@ def _stiffening(plan, section: st.Section, e_print: float, g_print: float) -> st
 
 def _disk_masses(plan, rho: float) -> list[tuple[str, float, float]]:
     """(name, s of the centre of mass, g) of every disk but the base (the clamp holds it)."""
-    wall = plan.design.disks.hub.wall
+    wall = plan.hub.wall
     out = []
     for dk in plan.disks[1:]:
         holes = sum(math.pi * h.diameter ** 2 / 4 for h in dk.holes) + sum(math.pi * d ** 2 / 4
@@ -159,7 +158,7 @@ def _disk_masses(plan, rho: float) -> list[tuple[str, float, float]]:
             s_hub = dk.y + dk.hub.side * (dk.thickness + dk.hub.length) / 2
         m = m_plate + m_hub
         s = (m_plate * s_plate + m_hub * s_hub) / m
-        out.append((dk.name, min(s, plan.design.backbone.length), m))
+        out.append((dk.name, min(s, plan.backbone.length), m))
     return out
 
 
@@ -178,8 +177,7 @@ def _member_centre(mb) -> tuple[float, float]:
 def _tip_assembly(plan, rho: float, lam: float) -> dict:
     """The tensioner as its layout sizes it, and the strip beyond the tip: mass (g), centre of mass
     beyond the tip along y (a) and along z (b)."""
-    d = plan.design
-    L = d.backbone.length
+    L = plan.backbone.length
     parts = []                                           # (name, volume mm³, y, z) layout frame
     lay = plan.tensioner_layout
     zsign = 1.0
@@ -198,8 +196,8 @@ def _tip_assembly(plan, rho: float, lam: float) -> dict:
     m_t = rho * vol
     y_t = sum(v * y for _, v, y, _ in parts) / vol if vol else L
     z_t = zsign * sum(v * z for _, v, _, z in parts) / vol if vol else 0.0
-    m_s = lam * d.backbone.extra_tip
-    y_s = L + d.backbone.extra_tip / 2
+    m_s = lam * plan.backbone.extra_tip
+    y_s = L + plan.backbone.extra_tip / 2
     m = m_t + m_s
     if m <= 0:
         return {"mass_g": 0.0, "a_mm": 0.0, "b_mm": 0.0, "tensioner_g": 0.0, "strip_g": 0.0}
@@ -213,14 +211,13 @@ def describe(plan, measured: dict | None = None) -> Described:
     """The plan's robot for :mod:`hwgen.model.statics` (see the module's docstring). ``measured``:
     the ``gravity`` section of a check report of this design (masses and centres of mass from
     its STLs), used for the weights instead of the plan's estimate."""
-    d = plan.design
-    bb = d.backbone
-    rho = printed_density(d.process)[0] * 1e-3          # g/mm³
+    bb, proc = plan.backbone, plan.process
+    rho = proc.density_g_cm3 * 1e-3          # g/mm³
     lam = bb.density_g_cm3 * 1e-3 * bb.height * bb.thickness
     section = st.Section(E=bb.modulus_gpa * 1e3, G=bb.shear_modulus_gpa * 1e3, height=bb.height,
                          thickness=bb.thickness, lin_density=lam)
-    e_print = printed_modulus(d.process)[0] * 1e3
-    nu = material_table()[d.process.material].poisson
+    e_print = proc.modulus_gpa * 1e3
+    nu = proc.poisson
     g_print = e_print / (2 * (1 + nu))
     stiffening = _stiffening(plan, section, e_print, g_print)
     disks = _disk_masses(plan, rho)
@@ -235,11 +232,9 @@ def describe(plan, measured: dict | None = None) -> Described:
         section = dataclasses.replace(section, lin_density=lam)
         how = "measured from the built files' STLs (the check report's gravity section)"
     runs = {r.tendon: r.length for r in plan.tensioner_layout.runs} if plan.tensioner_layout else {}
-    tm = d.tendon_material
-    stations = tuple(float(s) for s in d.stations)
-    pre = {}
-    for t in d.tendons:
-        pre.update(dict.fromkeys(t.names, t.pretension_n))
+    tm = plan.tendon_material
+    stations = tuple(float(s) for s in plan.stations)
+    pre = {p.name: p.pretension_n for p in plan.paths}
     lines = []
     for p in plan.paths:
         P = np.column_stack([np.zeros(len(stations)), stations, np.zeros(len(stations))])
@@ -249,7 +244,7 @@ def describe(plan, measured: dict | None = None) -> Described:
         lines.append(st.TendonLine(p.name, p.channel, stations, np.asarray(p.points, float), k))
     robot = st.Robot(bb.length, section, stiffening, tuple(lines), tuple((s, m) for _, s, m in disks),
                      tip["mass_g"], (tip["a_mm"], tip["b_mm"]))
-    act = d.tensioner.actuating_channel
+    act = plan.tensioner.actuating_channel
     masses = {"disks": [{"part": n, "s_mm": s, "mass_g": m} for n, s, m in disks], "tip_assembly": tip,
               "strip_g_per_mm": lam, "printed_density_g_mm3": rho, "how": how}
     return Described(robot, pre, tuple(p.name for p in plan.paths if p.channel == act),
@@ -301,7 +296,7 @@ def study(plan, which: list[str] | None = None, h_max: float = st.H_MAX, measure
     t0 = time.perf_counter()
     desc = describe(plan, measured)
     model = st.Model(desc.robot, h_max)
-    todo = states(plan.design)
+    todo = states(plan)
     if which:
         todo = [s for s in todo if s.name in which]
     out = []
@@ -309,7 +304,7 @@ def study(plan, which: list[str] | None = None, h_max: float = st.H_MAX, measure
         res, _ = state_result(desc, model, s)
         out.append(res)
     by = {r["state"]: r for r in out}
-    act = plan.design.tensioner.actuating_channel
+    act = plan.tensioner.actuating_channel
     full = max(todo, key=lambda s: len(s.channels)).name if todo else None
     ratio = None
     if act in by and full in by and full != act:

@@ -30,7 +30,6 @@ from ..checks.meshes import part_mesh
 from ..checks.report import REPORT
 from ..model import hardware
 from ..model import kinematics as kin
-from ..model.fixing import termination_of
 
 PURCHASED_ROLES = {"backbone"}     # families that are bought and cut, not printed
 
@@ -93,7 +92,7 @@ def _strip_holes(manifest: dict) -> int:
     return len(seen)
 
 
-def bom_rows(folder: Path, manifest: dict, design, report: dict | None) -> tuple[list[dict], str]:
+def bom_rows(folder: Path, manifest: dict, plan, report: dict | None) -> tuple[list[dict], str]:
     """Every row of the bill of materials (dicts keyed by COLUMNS) and the rest-length source; ``report``
     is the checks' (None: there is none, and the lengths and adhesive come from the design report)."""
     rows: list[dict] = []
@@ -107,7 +106,7 @@ def bom_rows(folder: Path, manifest: dict, design, report: dict | None) -> tuple
         if is_purchased(e):
             continue
         add(category="printed", part=e["name"], family=e["role"], qty=1,
-            material=design.process.name, size=_size(folder, e),
+            material=plan.process.name, size=_size(folder, e),
             volume_mm3=f"{e['volume_mm3']:.1f}", mass_g=f"{e['mass_g']:.2f}", file=ManifestPart.of(e).stl,
             notes=_printed_note(e))
 
@@ -120,7 +119,7 @@ def bom_rows(folder: Path, manifest: dict, design, report: dict | None) -> tuple
             n = _strip_holes(manifest)
             notes = (f"cut to size; drill {n} hole{'s' if n != 1 else ''} from {template} (1:1 template)"
                      if n else f"cut to size; {template} is the 1:1 template")
-            material = e.get("material", f"carbon-fibre/epoxy laminate, {design.backbone.thickness:g} mm")
+            material = e.get("material", f"carbon-fibre/epoxy laminate, {plan.backbone.thickness:g} mm")
         else:
             material = e.get("material", "")
         add(category="purchased", part=e["name"], family=e["role"], qty=1, material=material,
@@ -128,9 +127,9 @@ def bom_rows(folder: Path, manifest: dict, design, report: dict | None) -> tuple
             file=ManifestPart.of(e).step, notes=notes)
 
     lengths, source = rest_lengths(manifest, report)
-    r = design.bom
+    r = plan.bom
     allowance = r.tie_off_mm + r.spool_mm
-    tm = design.tendon_material
+    tm = plan.tendon_material
     for t in manifest["design_report"]["tendons"]:
         rest = lengths[t["name"]]
         add(category="purchased", part=f"tendon {t['name']}", family="tendon", qty=1,
@@ -139,8 +138,9 @@ def bom_rows(folder: Path, manifest: dict, design, report: dict | None) -> tuple
             notes=f"channel {t['channel']}; rest {rest:.1f} + tie-off {r.tie_off_mm:g} + spool {r.spool_mm:g} mm")
 
     crimps: dict[tuple[str, str], list[str]] = {}
+    ends = {p.name: p.termination for p in plan.paths}
     for t in manifest["design_report"]["tendons"]:
-        term = termination_of(design, t["name"])
+        term = ends[t["name"]]
         if term.kind == "crimp":
             key = (f"Ø{term.diameter:g} × {term.length:g} mm", term.name or "copper or aluminium")
             crimps.setdefault(key, []).append(t["name"])
@@ -150,15 +150,15 @@ def bom_rows(folder: Path, manifest: dict, design, report: dict | None) -> tuple
                                      f"{'their seats' if len(names) > 1 else 'its seat'} in the base disk")
     for item, qty, size, material, notes in _fasteners(manifest):
         add(category="purchased", part=item, family="hardware", qty=qty, size=size, material=material, notes=notes)
-    ml, how = _adhesive_ml(manifest, design, report)
-    add(category="purchased", part="adhesive", family="consumable", qty=1, material=design.disks.anchors.adhesive,
+    ml, how = _adhesive_ml(manifest, plan.backbone.height, plan.backbone.thickness, report)
+    add(category="purchased", part="adhesive", family="consumable", qty=1, material=plan.anchors.adhesive,
         size=f"{ml:.2f} ml", notes=how)
     return rows, source
 
 
-def _adhesive_ml(manifest: dict, design, report: dict | None) -> tuple[float, str]:
-    """Adhesive for every disk: the slot's gap around the strip over the length the disk holds it."""
-    h, t = design.backbone.height, design.backbone.thickness
+def _adhesive_ml(manifest: dict, h: float, t: float, report: dict | None) -> tuple[float, str]:
+    """Adhesive for every disk: the slot's gap around the strip (``h`` × ``t``, mm) over the length
+    the disk holds it."""
     try:
         fits = report["as_built"]["disks"]
         gaps = [((h + f["play_x_mm"]) * (t + f["play_z_mm"]) - h * t) * f["engagement_mm"] for f in fits]
@@ -225,16 +225,16 @@ def _names(names: list[str]) -> str:
     return ", ".join(names) if len(names) <= 4 else f"{', '.join(names[:3])} and {len(names) - 3} more"
 
 
-def family_table(manifest: dict, design, rows: list[dict] | None = None) -> list[dict]:
+def family_table(manifest: dict, printed_in: str, rows: list[dict] | None = None) -> list[dict]:
     """One entry per part family of the robot (assembly aids such as the jig are not drawn with it),
-    numbered in order of first appearance (the drawing's balloons)."""
+    numbered in order of first appearance (the drawing's balloons); ``printed_in``: the process's name."""
     out: list[dict] = []
     robot = [p for p in manifest["parts"] if not p.get("fixture")]
     for e in robot:
         if any(f["role"] == e["role"] for f in out):
             continue
         members = [p for p in robot if p["role"] == e["role"]]
-        material = e.get("material", "") if is_purchased(e) else design.process.name
+        material = e.get("material", "") if is_purchased(e) else printed_in
         out.append({"item": len(out) + 1, "role": e["role"], "label": family_label(e["role"]),
                     "qty": len(members), "material": material,
                     "kind": "purchased" if is_purchased(e) else "printed",
@@ -254,7 +254,7 @@ def _md_cell(v) -> str:
     return str(v).replace("|", "\\|")
 
 
-def _markdown(manifest: dict, design, rows: list[dict], source: str) -> str:
+def _markdown(manifest: dict, plan, rows: list[dict], source: str) -> str:
     printed = [r for r in rows if r["category"] == "printed"]
     fam: dict[str, list[dict]] = {}
     for r in printed:
@@ -265,7 +265,7 @@ def _markdown(manifest: dict, design, rows: list[dict], source: str) -> str:
          f"From `{manifest.get('params_file', '')}` (sha256 {manifest.get('params_sha256', '')[:12]}), "
          f"hwgen {manifest.get('hwgen_version', '')}.", "",
          "## Printed parts", "",
-         f"Material: {design.process.name}. Total part volume {total / 1000:.1f} cm³ "
+         f"Material: {plan.process.name}. Total part volume {total / 1000:.1f} cm³ "
          f"(≈ {total / 1000:.0f} ml of material before supports and waste), {mass:.1f} g.", "",
          "| family | qty | volume, cm³ | mass, g |", "|---|---:|---:|---:|"]
     for role, rs in fam.items():
@@ -283,10 +283,10 @@ def _markdown(manifest: dict, design, rows: list[dict], source: str) -> str:
     for r in bought:
         L.append(f"| {r['item']} | {r['part']} | {r['qty']} | {_md_cell(r['material'])} | {r['size']} | "
                  f"{_md_cell(r['notes'])} |")
-    r_ = design.bom
-    term = design.tendon_material.termination
+    r_, tm = plan.bom, plan.tendon_material
+    term = tm.termination
     ends = "knot on its seat in the base disk" if term.kind == "knot" else "crimp sleeve on its seat in the base disk"
-    L += ["", f"### Tendons: {design.tendon_material.name}, Ø{design.tendon_material.diameter:g} mm", "",
+    L += ["", f"### Tendons: {tm.name}, Ø{tm.diameter:g} mm", "",
           f"Cut length = rest length + {r_.tie_off_mm:g} mm tie-off ({ends}) + "
           f"{r_.spool_mm:g} mm spool (to reach and wrap the tensioner). Rest lengths: {source}.", "",
           "| # | tendon | channel | rest, mm | cut, mm |", "|---:|---|---|---:|---:|"]
@@ -306,12 +306,12 @@ def _markdown(manifest: dict, design, rows: list[dict], source: str) -> str:
     return "\n".join(L)
 
 
-def write_bom(folder: Path, manifest: dict, design, report: dict | None) -> list[dict]:
+def write_bom(folder: Path, manifest: dict, plan, report: dict | None) -> list[dict]:
     """bom.csv and bom.md into the folder; records them and the rest-length source in the manifest."""
     folder = Path(folder)
-    rows, source = bom_rows(folder, manifest, design, report)
+    rows, source = bom_rows(folder, manifest, plan, report)
     (folder / "bom.csv").write_text(_csv(rows), encoding="utf-8")
-    (folder / "bom.md").write_text(_markdown(manifest, design, rows, source), encoding="utf-8")
+    (folder / "bom.md").write_text(_markdown(manifest, plan, rows, source), encoding="utf-8")
     files = manifest.setdefault("files", {})
     for key, name in (("bom_csv", "bom.csv"), ("bom_md", "bom.md")):
         files[key] = {"path": name, "sha256": sha256(folder / name)}

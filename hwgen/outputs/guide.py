@@ -97,9 +97,10 @@ def take_up(manifest: dict) -> dict | None:
     return out or None
 
 
-def steps(folder: Path, manifest: dict, design, bom: list[dict] | None = None) -> list[Step]:
-    """The assembly in order, each step's words (numbers from bom.csv, or the rows in ``bom``) and
-    what its picture shows (from the manifest alone)."""
+def steps(folder: Path, manifest: dict, plan, bom: list[dict] | None = None) -> list[Step]:
+    """The assembly in order, each step's words (numbers from bom.csv, or the rows in ``bom``, and
+    the plan's tendon material and actuating channel) and what its picture shows (from the manifest
+    alone)."""
     bom = read_bom(folder) if bom is None else bom
     parts = [p for p in manifest["parts"]]
     names = lambda pred: [p["name"] for p in parts if pred(p)]          # noqa: E731
@@ -131,7 +132,8 @@ def steps(folder: Path, manifest: dict, design, bom: list[dict] | None = None) -
     lines += [f"{cite(r)} (channel {r['notes'].split(';')[0].removeprefix('channel ')})" for r in tendon_rows]
     out.append(Step("tendons", "Tendons threaded", lines, strip + disks, [], tendons=True))
 
-    term = design.tendon_material.termination
+    tm = plan.tendon_material
+    term = tm.termination
     crimp = [r for r in bom if r["part"] == "crimp sleeve"]
     if term.kind == "knot":
         how = (f"tie a knot about {term.diameter:g} mm across in each tendon's base end and pull it into its "
@@ -172,7 +174,7 @@ def steps(folder: Path, manifest: dict, design, bom: list[dict] | None = None) -
 
     ups = take_up(manifest)
     if ups:
-        ea, comp = design.tendon_material.axial_stiffness_n, design.tendon_material.tie_off_compliance_mm_per_n
+        ea, comp = tm.axial_stiffness_n, tm.tie_off_compliance_mm_per_n
         rest = {r["part"].removeprefix("tendon "): (float(r["rest_length_mm"]), r) for r in tendon_rows}
         lines = [f"Turn each channel's worm with a {next(iter(ups.values()))['hex_key_mm']:g} mm hex key. One worm "
                  f"turn turns the wheel by starts/teeth of a turn, and its drum winds that share of its "
@@ -186,7 +188,7 @@ def steps(folder: Path, manifest: dict, design, bom: list[dict] | None = None) -
             lines.append(f"Channel {ch} ({u['worm']}): 2π × {u['winding_radius_mm']:.3f} mm × {u['starts']} / "
                          f"{u['teeth']} = **{u['take_up_mm']:.3f} mm per worm turn**; {tension}.")
         lines.append(f"Take up the slack of every channel, then tension the stiffening channels and the actuating "
-                     f"channel ({design.tensioner.actuating_channel}) last, a quarter turn at a time; the worm "
+                     f"channel ({plan.tensioner.actuating_channel}) last, a quarter turn at a time; the worm "
                      f"self-locks, so the tension stays when the key comes off.")
         inside = [n for n in tensioner if n not in names(lambda p: p["role"] == "tensioner_housing")]
         out.append(Step("tension", "Tensioning", lines, strip + disks[-1:] + inside,   # the housing hides the worms
@@ -197,17 +199,17 @@ def steps(folder: Path, manifest: dict, design, bom: list[dict] | None = None) -
     return out
 
 
-def picture_jobs(folder: Path, manifest: dict, design) -> list[dict]:
+def picture_jobs(folder: Path, manifest: dict, plan) -> list[dict]:
     """What the pictures stage draws for the guide: per step its file, title, parts shown and highlighted.
     Those come from the manifest alone, not the bill of materials: the pictures stage runs beside
     the checks, before bom.csv is written."""
     return [{"file": s.picture, "title": f"{i}. {s.title}", "shown": s.shown, "highlight": s.highlight,
-             "tendons": s.tendons} for i, s in enumerate(steps(folder, manifest, design, bom=[]), start=1)]
+             "tendons": s.tendons} for i, s in enumerate(steps(folder, manifest, plan, bom=[]), start=1)]
 
 
 # --------------------------------------------------------------------------- the documents
 
-def _markdown(manifest: dict, design, ss: list[Step], pictures: bool) -> str:
+def _markdown(manifest: dict, ss: list[Step], pictures: bool) -> str:
     L = [f"# Assembly guide: {manifest['design']}", "",
          f"From `{manifest.get('params_file', '')}`, hwgen {manifest.get('hwgen_version', '')}. Counts, sizes and "
          f"lengths are rows of the bill of materials (`bom.md`, `bom.csv`), cited as [BOM #item]; the print plates "
@@ -247,14 +249,14 @@ def _html(folder: Path, manifest: dict, ss: list[Step], pictures: bool) -> str:
     return "\n".join(H) + "\n"
 
 
-def write_guide(folder: Path, manifest: dict, design) -> dict:
+def write_guide(folder: Path, manifest: dict, plan) -> dict:
     """guide/assembly.md and guide/assembly.html (pictures embedded) into the folder, from
     bom.csv, the manifest and the step pictures the pictures stage drew; recorded in the manifest."""
     folder = Path(folder)
-    ss = steps(folder, manifest, design)
+    ss = steps(folder, manifest, plan)
     pictures = all((folder / s.picture).is_file() for s in ss)
     (folder / FOLDER).mkdir(exist_ok=True)
-    (folder / FOLDER / MD).write_text(_markdown(manifest, design, ss, pictures), encoding="utf-8")
+    (folder / FOLDER / MD).write_text(_markdown(manifest, ss, pictures), encoding="utf-8")
     (folder / FOLDER / HTML).write_text(_html(folder, manifest, ss, pictures), encoding="utf-8")
     files = manifest.setdefault("files", {})
     for key, name in (("guide_md", MD), ("guide_html", HTML)):

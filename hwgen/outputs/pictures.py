@@ -243,12 +243,13 @@ def _child_main() -> int:
     return 0
 
 
-def draw(folder: Path, manifest: dict, design, svg_table: list[dict], steps: list[dict] | None = None) -> None:
-    """The pictures and the drawing (``svg_table``: the parts table of the bill of materials),
+def draw(folder: Path, manifest: dict, render, svg_table: list[dict], steps: list[dict] | None = None) -> None:
+    """The pictures and the drawing as the plan's ``render`` settings say (width, explode, bend;
+    ``svg_table``: the parts table of the bill of materials),
     and the assembly guide's step pictures (``steps``); a missing or crashing backend is
     recorded in ``manifest["render"]``, never raised."""
     folder = Path(folder)
-    settings = Settings(design.render.width_px, design.render.explode_mm, design.render.bend_deg)
+    settings = Settings(render.width_px, render.explode_mm, render.bend_deg)
     entry: dict = {"settings": settings.__dict__}
     for name in OUTPUTS:                 # never leave pictures of an earlier design beside this one
         (folder / name).unlink(missing_ok=True)

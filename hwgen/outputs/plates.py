@@ -245,9 +245,9 @@ def printed_parts(manifest: dict) -> list[dict]:
     return [e for e in manifest["parts"] if not is_purchased(e)]
 
 
-def layout(folder: Path, manifest: dict, design) -> tuple[list[Oriented], list[dict], list[str]]:
-    """Every printed part oriented, the plates (name -> corner x, y and turned) and the parts on none."""
-    proc, settings = design.process, design.plates
+def layout(folder: Path, manifest: dict, proc, settings) -> tuple[list[Oriented], list[dict], list[str]]:
+    """Every printed part oriented, the plates (name -> corner x, y and turned) and the parts on none;
+    ``proc``: the plan's process (technology, build volume), ``settings``: its plates settings."""
     oriented = []
     for p, mesh in part_meshes(folder, [ManifestPart.of(e) for e in printed_parts(manifest)]):
         oriented.append(orient(p.name, p.role, np.asarray(mesh.vertices), np.asarray(mesh.faces),
@@ -258,16 +258,15 @@ def layout(folder: Path, manifest: dict, design) -> tuple[list[Oriented], list[d
     return oriented, plates, sorted(too_tall) + nowhere
 
 
-def write_plates(folder: Path, manifest: dict, design) -> dict:
-    """plates/plate_NN.3mf and plates/plates.md into the folder; the summary goes into the
-    manifest (``plates``) and is returned."""
+def write_plates(folder: Path, manifest: dict, proc, settings) -> dict:
+    """plates/plate_NN.3mf and plates/plates.md into the folder (``proc``, ``settings``: as
+    :func:`layout` takes them); the summary goes into the manifest (``plates``) and is returned."""
     folder = Path(folder)
-    oriented, plates, nowhere = layout(folder, manifest, design)
+    oriented, plates, nowhere = layout(folder, manifest, proc, settings)
     by_name = {o.name: o for o in oriented}
     (folder / FOLDER).mkdir(exist_ok=True)
-    proc = design.process
     summary = {"technology": proc.technology, "printer": proc.name, "bed_mm": list(proc.build_volume),
-               "gap_mm": design.plates.gap_mm, "edge_margin_mm": design.plates.edge_margin_mm,
+               "gap_mm": settings.gap_mm, "edge_margin_mm": settings.edge_margin_mm,
                "plates": [], "not_placed": nowhere,
                "parts": {o.name: {"orientation": o.how, "reason": o.reason} for o in oriented}}
     for k, plate in enumerate(plates, start=1):

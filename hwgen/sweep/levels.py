@@ -103,9 +103,9 @@ def _lengths(good: list[Resolved]) -> dict[int, dict | str]:
 def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
     d = r.design
     plan = make_plan(d)
-    feasibility.check_plan(plan)
+    feasibility.check_plan(plan, d)
     centre = {t["name"]: t["centre_mm"] for t in json.loads(row["per_tendon"])}
-    taut_rows = robust(plan, options.get("robust_samples", 200))
+    taut_rows = robust(plan, d.disks.slot_clearance, options.get("robust_samples", 200))
     fails = [row["message"]] if row["message"] else []
     warns = []
     budgeted = [t for t in taut_rows if t["budget_mm"] is not None]
@@ -144,7 +144,6 @@ def robot(plan: Plan) -> mc.Robot:
     """The robot the plan describes, as the taut-path model sees it: one hole per physical hole,
     each tendon from its seat on the base disk to its drum's tangent point (or, without a tensioner
     layout, straight on beyond the tip disk)."""
-    d = plan.design
     names = [p.name for p in plan.paths]
     ND = len(plan.disks)
     chain = np.full((len(names), ND), -1)
@@ -175,33 +174,33 @@ def robot(plan: Plan) -> mc.Robot:
             end.append([x, tip.thickness / 2 + lengths.END_RUN_MM, z])
     return mc.Robot(np.asarray(plan.stations, float), np.asarray(disk), np.asarray(xz, float),
                     np.asarray(axis, float), np.asarray(dia, float), chain, np.asarray(anchor, float),
-                    np.asarray(end, float), d.tendon_material.diameter, d.backbone.length)
+                    np.asarray(end, float), plan.tendon_material.diameter, plan.backbone.length)
 
 
-def slot_scatter(plan: Plan) -> mc.Scatter:
+def slot_scatter(plan: Plan, c: float) -> mc.Scatter:
     """The process's stated scatter and the play each disk's slot is designed with: the strip may
-    shift ``slot_clearance`` each way in x and z, and tilt by the clearance across the length that
-    holds it (pitch and yaw: 2c over the disk and its hub; roll: 2c over the strip's width).
-    ``hwgen check`` measures that play in each disk's STL instead."""
-    d = plan.design
-    c = d.disks.slot_clearance
-    tilt = np.array([[math.degrees(math.atan2(2 * c, s.engagement)), math.degrees(math.atan2(2 * c, d.backbone.height)),
+    shift ``c`` (disks.slot_clearance) each way in x and z, and tilt by the clearance across the
+    length that holds it (pitch and yaw: 2c over the disk and its hub; roll: 2c over the strip's
+    width). ``hwgen check`` measures that play in each disk's STL instead."""
+    h = plan.backbone.height
+    tilt = np.array([[math.degrees(math.atan2(2 * c, s.engagement)), math.degrees(math.atan2(2 * c, h)),
                       math.degrees(math.atan2(2 * c, s.engagement))] for s in plan.disks])
     play = np.full((len(plan.disks), 2), c)
-    p = d.process
-    return mc.Scatter(p.position_sigma, p.diameter_sigma, d.jig.station_tolerance_mm, tilt, play)
+    p = plan.process
+    return mc.Scatter(p.position_sigma, p.diameter_sigma, plan.jig.station_tolerance_mm, tilt, play)
 
 
-def robust(plan: Plan, samples: int) -> list[dict]:
+def robust(plan: Plan, slot_clearance: float, samples: int) -> list[dict]:
     """Each tendon's taut path (nominal print) and its ``check.robust`` statistic over ``samples``
-    as-built samples (seeded with ``check.seed``), over hwgen check's sweep."""
-    d = plan.design
-    ang = lengths.check_angles(d.check_angle_deg, d.check.step_deg)
-    res = mc.run(robot(plan), slot_scatter(plan), ang, samples, d.check.seed)
+    as-built samples (seeded with ``check.seed``), over hwgen check's sweep; the disks' play from
+    ``slot_clearance`` (:func:`slot_scatter`)."""
+    s = plan.check
+    ang = lengths.check_angles(s.max_angle_deg, s.step_deg)
+    res = mc.run(robot(plan), slot_scatter(plan, slot_clearance), ang, samples, s.seed)
     out = []
     for k, p in enumerate(plan.paths):
         nominal = float(np.abs(res.nominal[k]).max())
-        at = mc.percentile(res.worst[:, k], d.check.robust) if samples else nominal
+        at = mc.percentile(res.worst[:, k], s.robust) if samples else nominal
         out.append({"name": p.name, "budget_mm": p.budget_mm, "taut_built_mm": nominal, "robust_mm": at})
     return out
 
