@@ -1,7 +1,9 @@
 """From parameters to a buildable plan: holes per disk, merges, backbone holes (numpy only).
 
 The plan is everything the part builders need, as frozen plain data, plus the design report
-(shared and overlapping eyelets, tendons crossing the backbone). Nothing here imports CadQuery.
+(shared and overlapping eyelets, tendons crossing the backbone) and the YAML's settings the
+checks and outputs read (:mod:`hwgen.model.settings`): the stages after the model see the design
+only through it. Nothing here imports CadQuery.
 """
 from __future__ import annotations
 
