@@ -6,6 +6,7 @@ import json
 import numpy as np
 import pytest
 
+from hwgen.cad.manifest import ManifestPart
 from hwgen.checks.meshes import load_mesh
 from hwgen.checks.sections import disk_mid_section, section_loops
 from hwgen.pipeline import load
@@ -37,7 +38,7 @@ def test_eyelet_centres_match_routing(built, name):
     worst, in_slot = 0.0, []
     for part in disks:
         i = part["station"]
-        sec = disk_mid_section(folder / part["files"]["stl"]["path"], np.array(part["placement"]))
+        sec = disk_mid_section(ManifestPart.of(part).stl_in(folder), np.array(part["placement"]))
         assert sec.y_mid == pytest.approx(d.stations[i], abs=1e-6)
         slot = max(sec.inner, key=lambda lp: lp.extent[0])
         holes = [lp for lp in sec.inner if lp is not slot]
@@ -63,7 +64,7 @@ def test_slot_and_thickness_measured(built, name):
     c = d.disks.slot_clearance
     for part in _disks(_manifest(folder)):
         i = part["station"]
-        sec = disk_mid_section(folder / part["files"]["stl"]["path"], np.array(part["placement"]))
+        sec = disk_mid_section(ManifestPart.of(part).stl_in(folder), np.array(part["placement"]))
         end = i in (0, d.disks.count - 1)
         assert sec.thickness == pytest.approx(d.disks.end_thickness if end else d.disks.thickness, abs=1e-6)
         assert sec.outline.extent[0] == pytest.approx(d.disks.outer_diameter, abs=0.02)
@@ -78,7 +79,7 @@ def test_slot_and_thickness_measured(built, name):
 def test_meshes_watertight_and_print_oriented(built, name):
     folder = built(name)
     for part in _manifest(folder)["parts"]:
-        mesh = load_mesh(folder / part["files"]["stl"]["path"])
+        mesh = load_mesh(ManifestPart.of(part).stl_in(folder))
         assert mesh.is_watertight and mesh.is_volume, part["name"]
         assert mesh.volume == pytest.approx(part["volume_mm3"], rel=2e-3), part["name"]
         # a flat face rests on the plate: the largest one, but for the housing, which stands on
@@ -112,7 +113,7 @@ def test_step_files_reimport_as_valid_solids(built):
     from hwgen.cad import mass_properties
     folder = built("prototype")
     for part in _manifest(folder)["parts"]:
-        shape = cq.importers.importStep(str(folder / part["files"]["step"]["path"])).val()
+        shape = cq.importers.importStep(str(folder / ManifestPart.of(part).step)).val()
         assert shape.isValid(), part["name"]
         assert len(shape.Solids()) == 1, part["name"]
         assert mass_properties(shape)[0] == pytest.approx(part["volume_mm3"], rel=1e-6), part["name"]
@@ -147,7 +148,7 @@ def test_backbone_template_and_strip_have_every_crossing(built):
                for c in ezdxf.readfile(folder / "backbone_template.dxf").modelspace().query("CIRCLE")}
     assert circles == expected
     part = next(p for p in _manifest(folder)["parts"] if p["role"] == "backbone")
-    mesh = load_mesh(folder / part["files"]["stl"]["path"])
+    mesh = load_mesh(ManifestPart.of(part).stl_in(folder))
     loops = section_loops(mesh, np.array(part["placement"]), [0, 0, mesh.bounds[:, 2].mean()], [0, 0, 1],
                           axes=(0, 1))
     holes = {(round(lp.centroid[0], 3), round(lp.centroid[1], 3)) for lp in loops[1:]}
@@ -184,7 +185,7 @@ def test_masses_are_volume_times_density(built):
         rho = d.backbone.density_g_cm3 if p["role"] == "backbone" else 1.15   # standard_resin in materials.csv
         assert p["density_g_cm3"] == pytest.approx(rho), p["name"]
         assert p["mass_g"] == pytest.approx(p["volume_mm3"] / 1000 * rho, rel=1e-9), p["name"]
-        mesh = load_mesh(folder / p["files"]["stl"]["path"])
+        mesh = load_mesh(ManifestPart.of(p).stl_in(folder))
         com = np.asarray(p["placement"])[:3, :3] @ mesh.center_mass + np.asarray(p["placement"])[:3, 3]
         assert np.allclose(com, p["center_of_mass_mm"], atol=0.05), p["name"]
     mass = json.loads((folder / "report.json").read_text())["mass"]

@@ -16,6 +16,7 @@ import pytest
 import yaml
 
 from hwgen import cache
+from hwgen.cad.manifest import manifest_parts
 from hwgen.model.specs import Hole
 
 from .conftest import PARAMS
@@ -171,8 +172,8 @@ def test_editing_one_tendon_rebuilds_exactly_the_parts_whose_specs_changed(tmp_p
     # so none of the tensioner's parts is made again
     assert old.disks[-1] == new.disks[-1] and cache.key(old.tensioner_layout) == cache.key(new.tensioner_layout)
     assert not [n for n in second.built if n.startswith("tensioner")]
-    moved = {p["name"] for p, q in zip(first.manifest["parts"], second.manifest["parts"])
-             if p["files"]["stl"]["sha256"] != q["files"]["stl"]["sha256"]}
+    moved = {p.name for p, q in zip(manifest_parts(first.manifest), manifest_parts(second.manifest))
+             if p.files["stl"].sha256 != q.files["stl"].sha256}
     assert moved <= set(changed)
     # what was reused is what a fresh build of the edited design makes: no unit's inputs miss
     # something its builder reads (for this edit)

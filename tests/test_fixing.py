@@ -12,6 +12,7 @@ import shutil
 import numpy as np
 import pytest
 
+from hwgen.cad.manifest import ManifestPart
 from hwgen.cad.disk import build_disk
 from hwgen.cad.export import write_stl
 from hwgen.checks.meshes import load_mesh, to_manifold
@@ -71,7 +72,7 @@ def _seat_rows(folder, design, stl=None):
 
     man = _manifest(folder)
     part = next(p for p in man["parts"] if p["name"] == "disk_00")
-    stl = stl or folder / part["files"]["stl"]["path"]
+    stl = stl or ManifestPart.of(part).stl_in(folder)
     mesh = load_mesh(stl)
     disk = measure_disk(stl, part["placement"], "disk_00", 0, mesh)
     rd = next(r for r in man["design_report"]["disks"] if r["index"] == 0)
@@ -140,7 +141,7 @@ def test_each_hub_has_a_glue_port_into_the_slot(built):
         x, off, dia = spec.hub.port
         y = spec.y + spec.hub.side * (spec.thickness / 2 + off)
         p = parts[spec.name]
-        segs = section_robot(load_mesh(folder / p["files"]["stl"]["path"]), p["placement"], 1, y)
+        segs = section_robot(load_mesh(ManifestPart.of(p).stl_in(folder)), p["placement"], 1, y)
         z = spec.slot_height / 2 + spec.hub.wall / 2                   # in the top wall
         pts = np.array([[x, z], [x + dia, z]])
         solid = np.sum([inside_many(lp, pts) for lp in chain_loops(segs[:, :, [0, 2]])], axis=0) % 2 == 1
@@ -216,11 +217,11 @@ def test_mount_and_jig_are_closed_fit_the_printer_and_clear_what_they_hold(built
     assert not any("jig_2" in p and "tensioner_housing" in p for p in pairs)    # never there at once
     # and again with manifold3d directly: the jig shares nothing with the disks and the strip
     parts = {p["name"]: p for p in man["parts"]}
-    jig = [to_manifold(load_mesh(folder / parts[n]["files"]["stl"]["path"]), parts[n]["placement"])
+    jig = [to_manifold(load_mesh(ManifestPart.of(parts[n]).stl_in(folder)), parts[n]["placement"])
            for n in ("jig_1", "jig_2")]
     held = [n for n in parts if n.startswith("disk_")] + ["backbone"]
     for n in held:
-        m = to_manifold(load_mesh(folder / parts[n]["files"]["stl"]["path"]), parts[n]["placement"])
+        m = to_manifold(load_mesh(ManifestPart.of(parts[n]).stl_in(folder)), parts[n]["placement"])
         assert max((j ^ m).volume() for j in jig) < 1e-3, n
 
 
@@ -234,7 +235,7 @@ def test_the_jig_sets_each_disk_at_its_station(built):
     x = 34.5                                               # inside the +x comb, where the disks' rims go
     solid = np.zeros(len(ys), bool)
     for n in ("jig_1", "jig_2"):
-        mesh = load_mesh(folder / parts[n]["files"]["stl"]["path"])
+        mesh = load_mesh(ManifestPart.of(parts[n]).stl_in(folder))
         segs = section_robot(mesh, parts[n]["placement"], 2, 0.0)
         for lp in chain_loops(segs[:, :, [0, 1]]):
             solid ^= inside_many(lp, np.column_stack([np.full(len(ys), x), ys]))
@@ -254,7 +255,7 @@ def test_the_mount_bolts_to_the_table_grid(built):
 
     folder = built("prototype")
     part = next(p for p in _manifest(folder)["parts"] if p["name"] == "base_mount")
-    mesh = load_mesh(folder / part["files"]["stl"]["path"])
+    mesh = load_mesh(ManifestPart.of(part).stl_in(folder))
     z = mesh.bounds[0, 2] + 2.0                                          # inside the foot
     segs = section_robot(mesh, np.eye(4), 2, z)
     loops = sorted(chain_loops(segs[:, :, [0, 1]]), key=lambda lp: -section_moments([lp])["area"])

@@ -12,6 +12,7 @@ import re
 import numpy as np
 import pytest
 
+from hwgen.cad.manifest import ManifestPart
 from hwgen.outputs.guide import CITATION
 
 REST = re.compile(r"rest ([\d.]+) mm \[BOM #(\d+)\]")
@@ -63,7 +64,7 @@ def _drum_radius(folder, wheel: dict) -> float:
     of the first winding zone, as the circle of the same area."""
     import trimesh
     from hwgen.checks.sections import section_loops
-    mesh = trimesh.load_mesh(str(folder / wheel["files"]["stl"]["path"]))
+    mesh = trimesh.load_mesh(str(ManifestPart.of(wheel).stl_in(folder)))
     P = np.asarray(wheel["placement"], float)
     assert abs(abs(P[2, 2]) - 1) < 1e-9                 # the file's z is the wheel's axis, robot z
     z_robot = float(np.mean(wheel["winding_zones_z_mm"][0]))

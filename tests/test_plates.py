@@ -10,6 +10,7 @@ from itertools import combinations
 import numpy as np
 import pytest
 
+from hwgen.cad.manifest import ManifestPart
 from hwgen.outputs import plates
 from tests import clients
 
@@ -148,7 +149,7 @@ def test_flat_parts_lie_on_their_face_and_tilted_parts_are_tilted(laid_out):
     for plate in summary["plates"]:
         for name, V, F in plates.read_3mf(folder / plate["file"]):
             entry = next(e for e in manifest["parts"] if e["name"] == name)
-            stl = trimesh.load_mesh(str(folder / entry["files"]["stl"]["path"]))
+            stl = trimesh.load_mesh(str(ManifestPart.of(entry).stl_in(folder)))
             if kinds[name] == "flat":       # the same heights as in the file: on the same face
                 assert np.ptp(V[:, 2]) == pytest.approx(np.ptp(stl.vertices[:, 2]), abs=1e-3), name
             else:

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from hwgen.cad.manifest import ManifestPart
 from hwgen.checks.axes import fit_axis
 from hwgen.checks.gear_mesh import GAP_TOL_MM, INTERFERENCE_TOL_MM3, count_teeth, gear_checks, measure_pair, mesh_measure, toward
 from hwgen.checks.meshes import load_mesh, placed_manifold, placed_mesh
@@ -57,7 +58,7 @@ def test_worm_and_wheel_files_are_closed_solids(proto):
     folder, man, _ = proto
     for role in ("tensioner_worm", "tensioner_wheel", "tensioner_clamp", "tensioner_drive", "tensioner_housing"):
         for q in (x for x in man["parts"] if x["role"] == role):
-            mesh = load_mesh(folder / q["files"]["stl"]["path"])
+            mesh = load_mesh(ManifestPart.of(q).stl_in(folder))
             assert mesh.is_watertight and mesh.is_winding_consistent and mesh.is_volume, q["name"]
             assert mesh.volume == pytest.approx(q["volume_mm3"], rel=0.01), q["name"]
             assert mesh.body_count == 1, q["name"]
@@ -70,7 +71,7 @@ def test_step_files_of_worm_and_wheel_are_valid_solids(proto):
     folder, man, _ = proto
     for role in ("tensioner_worm", "tensioner_wheel"):
         q = _by_role(man, role)["C1"]
-        shape = cq.importers.importStep(str(folder / q["files"]["step"]["path"])).val()
+        shape = cq.importers.importStep(str(folder / ManifestPart.of(q).step)).val()
         assert shape.isValid() and len(shape.Solids()) == 1
         assert mass_properties(shape)[0] == pytest.approx(q["volume_mm3"], rel=1e-4)
 
@@ -81,7 +82,7 @@ def test_worm_has_a_thread_and_wheel_has_teeth(proto):
     folder, man, p = proto
     pair = worm_pair(_design().tensioner)
     worm_q = _by_role(man, "tensioner_worm")["C1"]
-    worm = load_mesh(folder / worm_q["files"]["stl"]["path"])
+    worm = load_mesh(ManifestPart.of(worm_q).stl_in(folder))
     z_mid = worm.bounds[1, 2] - pair.worm_length / 2          # the thread ends at the far end
     # the axial section (file plane Y = 0): turn file Y onto Z and slice with manifold3d
     turn = np.array([[1.0, 0, 0, 0], [0, 0, 1.0, 0], [0, -1.0, 0, 0], [0, 0, 0, 1.0]])
@@ -151,8 +152,8 @@ def test_mesh_holds_through_the_motion_and_only_with_the_right_sense(proto):
     folder, man, p = proto
     pair = worm_pair(_design().tensioner)
     worm, wheel = _by_role(man, "tensioner_worm")["H"], _by_role(man, "tensioner_wheel")["H"]
-    wm_mesh = load_mesh(folder / worm["files"]["stl"]["path"])
-    wh_mesh = load_mesh(folder / wheel["files"]["stl"]["path"])
+    wm_mesh = load_mesh(ManifestPart.of(worm).stl_in(folder))
+    wh_mesh = load_mesh(ManifestPart.of(wheel).stl_in(folder))
     import manifold3d as m3d
 
     def man3(mesh, m):
@@ -226,7 +227,7 @@ def test_moved_wheels_and_an_edited_mesh_are_caught(proto, tmp_path):
     wheels["C2"]["placement"] = toward(wheels["C2"], worms["C2"], 0.1).tolist()
     ph = np.asarray(wheels["H"]["placement"])
     away = toward(wheels["H"], worms["H"], -1.0)[:3, 3] - ph[:3, 3]      # unit vector from the worm, robot frame
-    stl = work / wheels["H"]["files"]["stl"]["path"]
+    stl = ManifestPart.of(wheels["H"]).stl_in(work)
     mesh = load_mesh(stl)
     mesh.apply_translation(0.05 * ph[:3, :3].T @ away)                  # the same move, in the file's frame
     mesh.export(stl)
@@ -312,7 +313,7 @@ def test_tensioner_parts_fit_the_printer(proto):
     vol = np.asarray(p.process.build_volume)
     for q in man["parts"]:
         if q["role"].startswith("tensioner"):
-            b = load_mesh(folder / q["files"]["stl"]["path"]).bounds
+            b = load_mesh(ManifestPart.of(q).stl_in(folder)).bounds
             assert np.all(b[1] - b[0] <= vol), (q["name"], b)
             assert b[0, 2] == pytest.approx(0.0, abs=1e-3), q["name"]   # rests on the build plate
 

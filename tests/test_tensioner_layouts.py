@@ -11,6 +11,8 @@ import numpy as np
 import pytest
 import yaml
 
+from hwgen.cad.manifest import ManifestPart
+
 from .conftest import PARAMS
 from .robots import random_robot, reordered, turned_over
 
@@ -122,7 +124,7 @@ def test_odd_tensioners_build_with_a_housing_in_one_piece(odd_build):
     channels = set(doc["tensioner"]["channels"])
     assert {p["channel"] for p in parts if p["role"] == "tensioner_worm"} == channels
     (housing,) = [p for p in parts if p["role"] == "tensioner_housing"]
-    mesh = load_mesh(res.folder / housing["files"]["stl"]["path"])
+    mesh = load_mesh(ManifestPart.of(housing).stl_in(res.folder))
     assert mesh.is_watertight and mesh.body_count == 1
     runs = {r["tendon"]: r for p in parts for r in p.get("tendon_runs", [])}
     assert set(runs) == {t.name for t in res.plan.paths}

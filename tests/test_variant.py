@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 import yaml
 
+from hwgen.cad.manifest import ManifestPart
 from hwgen.pipeline import build
 from hwgen.checks.sections import disk_mid_section
 from hwgen.pipeline import load
@@ -40,7 +41,7 @@ def test_nine_disk_robot_with_mirrored_tendon(tmp_path):
     assert np.allclose(paths["C_m"].points, paths["C"].points * [1, -1])
     for part in disks:
         i = part["station"]
-        sec = disk_mid_section(folder / part["files"]["stl"]["path"], np.array(part["placement"]))
+        sec = disk_mid_section(ManifestPart.of(part).stl_in(folder), np.array(part["placement"]))
         assert abs(sec.y_mid - 22.5 * i) < 1e-6
         holes = [lp for lp in sec.inner if lp.extent[0] < 10]
         for p in paths.values():
