@@ -16,7 +16,10 @@ default :data:`DEFAULT_SIZE`); every build and check trims it when it ends.
 
 Every write goes to a temporary file in the entry's own folder and is renamed over the name
 (:func:`os.replace`), so two builds sharing a cache never see half an entry: the last writer of
-a record wins, and both wrote the same thing. Nothing here knows about parts or CAD; it only
+a record wins, and both wrote the same thing. So that they do not make the same entry twice at
+once, a build takes the entry's lock first (:meth:`Store.lock`, :meth:`Store.try_lock`: an
+``flock`` on ``locks/ab/abcd….lock``, let go when its holder ends, even when killed) and reads
+the entry again once it has it. Nothing here knows about parts or CAD; it only
 hashes plain data (frozen dataclasses, pydantic models, numpy arrays, JSON values) and stores
 bytes.
 """
@@ -29,7 +32,7 @@ import json
 import os
 import tempfile
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager, nullcontext
 from contextvars import ContextVar
 from functools import lru_cache
 from pathlib import Path
@@ -169,6 +172,7 @@ class Store:
         if not self.enabled or not self.root.is_dir():
             return 0, 0
         entries, total = [], 0
+        self._drop_free_locks()
         for kind in ("objects", "records"):
             for sub in os.scandir(self.root / kind) if (self.root / kind).is_dir() else ():
                 for e in os.scandir(sub.path) if sub.is_dir() else ():
@@ -188,6 +192,58 @@ class Store:
                 continue
             removed, freed = removed + 1, freed + size
         return removed, freed
+
+    # one maker of an entry at a time
+    def try_lock(self, name: str):
+        """A context holding the lock on entry ``name`` (a record's key), or None when another
+        process holds it: that one is making the entry now, and the caller does other work first.
+        Without a store there is nothing to share and the lock is always free."""
+        if not self.enabled:
+            return nullcontext()
+        return self._lock(name, blocking=False)
+
+    def lock(self, name: str):
+        """A context holding the lock on entry ``name``, waiting for it while another process
+        holds it (it is making the entry: read it again once inside)."""
+        if not self.enabled:
+            return nullcontext()
+        return self._lock(name, blocking=True)
+
+    def _lock(self, name: str, blocking: bool):
+        try:
+            import fcntl
+        except ImportError:                       # no flock (Windows): builds may make an entry twice
+            return nullcontext()
+        path = self._path("locks", name, ".lock")
+        stack = ExitStack()
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            f = stack.enter_context(open(path, "a"))
+            fcntl.flock(f, fcntl.LOCK_EX | (0 if blocking else fcntl.LOCK_NB))
+        except BlockingIOError:
+            stack.close()
+            return None
+        except OSError:                           # a store that cannot hold locks shares no work
+            stack.close()
+            return nullcontext()
+        stack.callback(fcntl.flock, f, fcntl.LOCK_UN)
+        return stack
+
+    def _drop_free_locks(self) -> None:
+        """Remove the lock files no process holds (one is left per entry ever made)."""
+        try:
+            import fcntl
+        except ImportError:
+            return
+        top = self.root / "locks"
+        for sub in os.scandir(top) if top.is_dir() else ():
+            for e in os.scandir(sub.path) if sub.is_dir() else ():
+                try:
+                    with open(e.path, "a") as f:
+                        fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                        os.unlink(e.path)
+                except OSError:
+                    continue
 
     def _drop(self, path: Path, what: str) -> None:
         self.corrupt.append(what)

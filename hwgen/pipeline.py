@@ -436,17 +436,27 @@ _BUILT_HERE: dict[str, list] = {}     # in a worker process: the solids of the u
 
 def _unit_in_worker(plan: Plan, index: int, key: str, store: cache.Store, salt: dict) -> tuple[str, object]:
     """Build and export the ``index``-th unit of the plan in a worker process (its solids stay
-    there for :func:`_assembly_in_worker`). A DesignError or InputError comes back as its fields
-    (they do not pickle as themselves)."""
+    there for :func:`_assembly_in_worker`) and keep it in the cache, under the unit's lock:
+    ("busy", None) when another build holds it (it is making this unit now), ("kept", None) when
+    another build has kept it meanwhile. A DesignError or
+    InputError comes back as its fields (they do not pickle as themselves)."""
     try:
-        family, first, unit = list(units(plan))[index]
-        with kept_in(store, salt):
-            parts = list(build_unit(plan, family, first, unit))
-        _BUILT_HERE[key] = [p.solid for p in parts]
-        with tempfile.TemporaryDirectory(prefix="hwgen-unit-") as tmp:
-            (Path(tmp) / "stl").mkdir()
-            (Path(tmp) / "step").mkdir()
-            return "ok", _export_unit(plan, parts, Path(tmp), brep=True)
+        lock = store.try_lock(key)
+        if lock is None:
+            return "busy", None
+        with lock:
+            if _unit_from_cache(store, key) is not None:
+                return "kept", None                  # by another build, while this one looked
+            family, first, unit = list(units(plan))[index]
+            with kept_in(store, salt):
+                parts = list(build_unit(plan, family, first, unit))
+            _BUILT_HERE[key] = [p.solid for p in parts]
+            with tempfile.TemporaryDirectory(prefix="hwgen-unit-") as tmp:
+                (Path(tmp) / "stl").mkdir()
+                (Path(tmp) / "step").mkdir()
+                exported = _export_unit(plan, parts, Path(tmp), brep=True)
+            _keep_unit(store, key, exported)      # before the lock goes: a build waiting for it reads it
+            return "ok", exported
     except DesignError as e:
         return "design", (e.path, e.message)
     except InputError as e:
@@ -525,11 +535,9 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
         workers = None
         if jobs >= 1 and (any(t[4] is None for t in todo) or (select is None and assembly is None)):
             workers = stack.enter_context(_Workers(jobs))
-        elsewhere = {i: workers.unit(plan, i, t[3], store, salt) for i, t in enumerate(todo)
-                     if t[4] is None} if workers else {}
         with kept_in(store, salt):
-            _place_units(plan, folder, todo, elsewhere, store, select, entries, built, units_done, density, total,
-                         progress)
+            _place_units(plan, folder, todo, workers, store, salt, select, entries, built, units_done, density,
+                         total, progress)
         if select is None and assembly is None:
             if workers is not None:
                 breps = {sha: rec["breps"][sha] for _, rec, _ in units_done for sha in rec.get("breps", {})}
@@ -579,34 +587,87 @@ def _record(rec: dict) -> dict:
     return {k: v for k, v in rec.items() if k not in ("blobs", "breps")}
 
 
-def _place_units(plan: Plan, folder: Path, todo, elsewhere: dict, store: cache.Store, select, entries: list,
-                 built: list, units_done: list, density: float, total: int, progress) -> None:
-    """Each unit's files into the folder and its parts' entries, in build order: from the cache,
-    from a worker, or built here."""
-    for i, (family, first, unit, key, rec) in enumerate(todo):
-        parts = None
-        in_place = False                 # the files are in the folder already
-        if rec is None:
-            if i in elsewhere:
-                exported = _result(elsewhere.pop(i).result())
-            else:
-                parts = list(build_unit(plan, family, first, unit))
-                exported = _export_unit(plan, parts, folder, brep=store.enabled)
-                in_place = True
-            rec = _keep_unit(store, key, exported)
+def _place_units(plan: Plan, folder: Path, todo, workers: _Workers | None, store: cache.Store, salt: dict, select,
+                 entries: list, built: list, units_done: list, density: float, total: int, progress) -> None:
+    """Each unit's files into the folder and its parts' entries (in build order, whatever order
+    the units were made in): from the cache, from a worker, or built here.
+
+    A unit not in the cache is made under its lock (:meth:`cache.Store.try_lock`), taken when its
+    turn comes. A unit whose lock another build holds (it is making that unit now) waits until
+    every other unit is done; this build then waits for the lock, which frees once the other has
+    kept the unit, and reads it from the cache (or makes it, when the other did not finish)."""
+    elsewhere = {i: workers.unit(plan, i, t[3], store, salt) for i, t in enumerate(todo)
+                 if t[4] is None} if workers else {}
+    done: dict[int, tuple[dict, list | None]] = {}     # unit -> (record with its bytes, parts built here)
+    placed: dict[int, list] = {}                       # unit -> its parts' entries
+    count = [0]
+    theirs = []
+    for wait in (False, True):
+        for i in theirs if wait else range(len(todo)):
+            made = _made(plan, folder, todo[i], elsewhere.pop(i, None), workers, i, store, salt, built, wait)
+            if made is None:
+                theirs.append(i)
+                continue
+            done[i] = made
+            placed[i] = _place(plan, folder, made, select, density, count, total, progress)
+    entries += [e for i in range(len(todo)) for e in placed[i]]
+    units_done += [(todo[i][3], *done[i]) for i in range(len(todo))]
+
+
+def _made(plan: Plan, folder: Path, t, future, workers: _Workers | None, index: int, store: cache.Store, salt: dict,
+          built: list, wait: bool) -> tuple[dict, list | None] | None:
+    """A unit's record (with its bytes) and, when built in this process, its parts (their files
+    are then in the folder already): from the cache, from a worker (``future``, or one submitted
+    now), or built here. None, without ``wait``, when another build is making it."""
+    family, first, unit, key, rec = t
+    if rec is not None:
+        return rec, None
+    if workers is None:
+        lock = store.lock(key) if wait else store.try_lock(key)
+        if lock is None:
+            return None
+        with lock:
+            rec = _unit_from_cache(store, key)      # kept by another build while this one looked
+            if rec is not None:
+                return rec, None
+            parts = list(build_unit(plan, family, first, unit))
+            rec = _keep_unit(store, key, _export_unit(plan, parts, folder, brep=store.enabled))
+        built += [p["name"] for p in rec["parts"]]
+        return rec, parts
+    while rec is None:
+        kind, value = future.result() if future is not None else ("busy", None)
+        if kind == "kept":
+            rec = _unit_from_cache(store, key)
+        elif kind != "busy":
+            rec = _keep_unit(store, key, _result((kind, value)))
             built += [p["name"] for p in rec["parts"]]
-        for p in rec["parts"]:
-            files = {"stl": folder / "stl" / f"{p['name']}.stl", "step": folder / "step" / f"{p['name']}.step"}
-            hashes = {kind: p["files"][kind] for kind in files}
-            for kind, path in files.items():
-                if select is not None and not select(p["name"]):
-                    path.unlink(missing_ok=True)        # built for the manifest, not asked for
-                elif not in_place:
-                    path.write_bytes(rec["blobs"][hashes[kind]])
-            entries.append(entry(p, p["measured"], files, folder, plan.process.material, density, hashes))
-            if progress:
-                progress(p["name"], len(entries), total)
-        units_done.append((key, rec, parts))
+        elif not wait:
+            return None
+        else:
+            with store.lock(key):                   # until the build making it has kept it
+                rec = _unit_from_cache(store, key)
+        future = workers.unit(plan, index, key, store, salt) if rec is None else None
+    return rec, None
+
+
+def _place(plan: Plan, folder: Path, unit: tuple[dict, list | None], select, density: float, count: list,
+           total: int, progress) -> list[dict]:
+    """A unit's files written into the folder (unless it was built there), and its parts' entries."""
+    rec, parts = unit
+    out = []
+    for p in rec["parts"]:
+        files = {"stl": folder / "stl" / f"{p['name']}.stl", "step": folder / "step" / f"{p['name']}.step"}
+        hashes = {kind: p["files"][kind] for kind in files}
+        for kind, path in files.items():
+            if select is not None and not select(p["name"]):
+                path.unlink(missing_ok=True)        # built for the manifest, not asked for
+            elif parts is None:
+                path.write_bytes(rec["blobs"][hashes[kind]])
+        out.append(entry(p, p["measured"], files, folder, plan.process.material, density, hashes))
+        count[0] += 1
+        if progress:
+            progress(p["name"], count[0], total)
+    return out
 
 
 def _assembly_from_cache(store: cache.Store, key: str) -> bytes | None:

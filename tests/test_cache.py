@@ -63,6 +63,30 @@ def test_store_verifies_what_it_reads_and_writes_whole_entries(tmp_path):
     assert off.put_bytes(b"x") == hashlib.sha256(b"x").hexdigest() and off.get_bytes(off.put_bytes(b"x")) is None
 
 
+def test_an_entry_being_made_by_another_process_is_locked_until_it_ends(tmp_path):
+    """While another process holds an entry's lock, try_lock says so (None) and lock() waits;
+    the lock frees when its holder ends, even killed; trim() removes the lock files nobody holds."""
+    store = cache.Store(tmp_path)
+    holder = subprocess.Popen([sys.executable, "-c", (
+        "import sys, time\nfrom hwgen import cache\n"
+        "with cache.Store(sys.argv[1]).lock('ab12'):\n    print('held', flush=True)\n    time.sleep(60)\n"),
+        str(tmp_path)], stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        assert store.try_lock("ab12") is None
+        with store.try_lock("cd34"):                    # another entry is free
+            pass
+    finally:
+        holder.kill()
+        holder.wait()
+    with store.lock("ab12"):                            # the killed holder let it go
+        assert cache.Store(tmp_path).try_lock("ab12") is None       # held here now, by another descriptor
+    assert list((tmp_path / cache.LAYOUT / "locks").rglob("*.lock"))
+    store.trim(10 ** 9)
+    assert not list((tmp_path / cache.LAYOUT / "locks").rglob("*.lock"))
+    assert cache.Store(None).try_lock("ab12") is not None              # no store, nothing to share
+
+
 def test_a_cache_that_cannot_be_written_turns_itself_off(tmp_path):
     a_file = tmp_path / "a_file"
     a_file.write_text("not a folder")
@@ -318,25 +342,29 @@ def test_hwgen_check_of_files_it_measured_before_answers_from_the_cache(built, t
 
 @pytest.mark.slow
 def test_two_builds_sharing_one_empty_cache_at_once_both_finish_whole(tmp_path):
-    """Two processes build the prototype at once into one empty cache (each writes every entry,
-    the same bytes, renamed over each other), one in itself, one in a worker process (``jobs=1``,
-    as the CLI does: it never imports CadQuery itself): both finish, with the same files; a third
-    build then takes everything from the cache and writes those bytes again."""
-    code = ("import sys\nfrom hwgen.pipeline import build, load\n"
+    """Two processes build the prototype at once into one empty cache, one in itself, one in a
+    worker process (``jobs=1``, as the CLI does: it never imports CadQuery itself): both finish,
+    with the same files, and between them they make each part once (a unit the other is making
+    waits for its lock and is read from the cache); a third build then takes everything from the
+    cache and writes those bytes again."""
+    code = ("import json, sys\nfrom hwgen.pipeline import build, load\n"
             "if __name__ == '__main__':\n"
             "    r = build(load(sys.argv[1]), sys.argv[2], post_build=False, cache_dir=sys.argv[3], jobs=int(sys.argv[4]))\n"
-            "    print(len(r.built), 'cadquery' in sys.modules)")
+            "    print(json.dumps(r.built), 'cadquery' in sys.modules)")
     runs = [subprocess.Popen([sys.executable, "-c", code, str(PARAMS / "prototype.yaml"), str(tmp_path / out),
                               str(tmp_path / "cache"), jobs], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
             for out, jobs in (("a", "0"), ("b", "1"))]
-    imported = []
+    imported, built = [], []
     for r in runs:
         stdout, stderr = r.communicate(timeout=600)
         assert r.returncode == 0, stderr
-        imported.append(stdout.split()[-1])
+        made, cq = stdout.strip().splitlines()[-1].rsplit(" ", 1)
+        imported.append(cq)
+        built += json.loads(made)
     assert imported == ["True", "False"]
     a, b = _tree(tmp_path / "a" / "prototype"), _tree(tmp_path / "b" / "prototype")
     assert a == b
+    assert sorted(built) == sorted(Path(f).stem for f in a if f.startswith("stl/"))
     assert not list((tmp_path / "cache").rglob(".tmp-*"))
     from hwgen.pipeline import build, load
     third = build(load(PARAMS / "prototype.yaml"), tmp_path / "c", post_build=False, cache_dir=tmp_path / "cache")

@@ -38,10 +38,18 @@ def kept(kind: str, inputs, make: Callable[[], object]):
         return make()
     store, salt = active
     key = cache.key("solid", kind, inputs, salt)
+    solid = _read(store, key)
+    if solid is not None:
+        return solid
+    with store.lock(key):                # another build making it now: wait, then read it
+        solid = _read(store, key)
+        if solid is None:
+            solid = make()
+            store.put_record(key, {"brep": store.put_bytes(write_brep(solid))})
+    return solid
+
+
+def _read(store: cache.Store, key: str):
     rec = store.get_record(key)
     data = store.get_bytes(rec["brep"]) if isinstance(rec, dict) and isinstance(rec.get("brep"), str) else None
-    if data is not None:
-        return read_brep(data)
-    solid = make()
-    store.put_record(key, {"brep": store.put_bytes(write_brep(solid))})
-    return solid
+    return None if data is None else read_brep(data)

@@ -107,17 +107,19 @@ def _eyelets_outside(d: Design) -> list[tuple[str, str]]:
         table = t.routing.table
         pts = np.asarray(table, dtype=float) if table is not None else sample_function(
             t.routing.function, d.stations, d.backbone.length)
-        for j, (x, z) in enumerate(pts):
-            p = f"tendons[{i}].routing.table[{j}]" if table is not None else f"tendons[{i}].routing.function"
-            if math.hypot(x, z) >= r_out:
-                out.append((p, f"eyelet at station {j} (x={x:g}, z={z:g}) lies outside the disk "
-                               f"(radius {r_out:g} mm)"))
-                break
-            if math.hypot(x, z) + hole / 2 >= r_out:
-                out.append((p, f"eyelet at station {j} (x={x:g}, z={z:g}) needs a hole of at least Ø{hole:g} mm "
-                               f"for the Ø{d.tendon_material.diameter:g} mm tendon, which breaks through the rim "
-                               f"(radius {r_out:g} mm)"))
-                break
+        r = np.hypot(pts[:, 0], pts[:, 1])
+        over = np.flatnonzero(r + hole / 2 >= r_out)        # the first eyelet outside, or whose hole breaks out
+        if not over.size:
+            continue
+        j = int(over[0])
+        x, z = (float(v) for v in pts[j])
+        p = f"tendons[{i}].routing.table[{j}]" if table is not None else f"tendons[{i}].routing.function"
+        if r[j] >= r_out:
+            out.append((p, f"eyelet at station {j} (x={x:g}, z={z:g}) lies outside the disk (radius {r_out:g} mm)"))
+        else:
+            out.append((p, f"eyelet at station {j} (x={x:g}, z={z:g}) needs a hole of at least Ø{hole:g} mm "
+                           f"for the Ø{d.tendon_material.diameter:g} mm tendon, which breaks through the rim "
+                           f"(radius {r_out:g} mm)"))
     return out
 
 

@@ -103,12 +103,11 @@ def _sweeps(design: Design, paths: list[TendonPath]) -> dict[str, Sweep]:
 def _worst_angles(sweep: Sweep, axes: np.ndarray) -> np.ndarray:
     """(N,) largest angle between the tendon and the given axes over the sweep, rad."""
     into, out = sweep
-    worst = np.zeros(into.shape[1])
+    least = np.full(into.shape[1], np.inf)          # the smallest |cos|: arccos falls, so the largest angle
     for seg in (into, out):
         cos = np.abs(np.einsum("kni,ni->kn", seg, axes))
-        ang = np.arccos(np.clip(cos, -1, 1))
-        worst = np.fmax(worst, np.nanmax(np.where(np.isnan(ang), -1, ang), axis=0))
-    return worst
+        least = np.fmin(least, np.min(np.where(np.isnan(cos), np.inf, cos), axis=0))
+    return np.where(np.isinf(least), 0.0, np.arccos(np.clip(least, -1, 1)))
 
 
 def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, np.ndarray],

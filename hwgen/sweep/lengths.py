@@ -68,20 +68,24 @@ def centre_lengths(stations, kappa, xz: np.ndarray) -> np.ndarray:
 
 def _directions(stations, kappa, xz):
     """Unit segment directions into and out of each disk in its own frame: (..., K, N, 3) each, NaN
-    where there is no segment (as :func:`hwgen.model.kinematics.segment_directions_local`)."""
-    x, z = xz[..., None, :, 0], xz[..., None, :, 1]
-    X, Y, Z = _placed(stations, kappa, x, z)
-    seg = np.stack([np.diff(X, axis=-1), np.diff(Y, axis=-1), np.diff(Z, axis=-1)], axis=-1)   # (..., K, N-1, 3)
-    seg /= np.linalg.norm(seg, axis=-1, keepdims=True)
-    R, _ = kin.frames(stations, kappa)
-    c, s = R[..., 1, 1], R[..., 2, 1]                        # (K, N)
-    shape = seg.shape[:-2] + (len(stations), 3)
-    into, out = np.full(shape, np.nan), np.full(shape, np.nan)
+    where there is no segment (as :func:`hwgen.model.kinematics.segment_directions_local`).
 
-    def local(v, cc, ss):                                    # R_x(θ)ᵀ v
-        return np.stack([v[..., 0], cc * v[..., 1] + ss * v[..., 2], -ss * v[..., 1] + cc * v[..., 2]], axis=-1)
-    into[..., 1:, :] = local(seg, c[:, 1:], s[:, 1:])
-    out[..., :-1, :] = local(seg, c[:, :-1], s[:, :-1])
+    The robot bends about x, so a segment's x run does not change with the curvature: it is
+    worked out once, and each component is filled in place rather than stacked."""
+    R, p = kin.frames(stations, kappa)                       # (K, N, 3, 3), (K, N, 3)
+    c, s = R[..., 1, 1], R[..., 2, 1]                        # (K, N)
+    x, z = xz[..., None, :, 0], xz[..., None, :, 1]          # (..., 1, N)
+    dx = np.diff(x, axis=-1)                                 # (..., 1, N-1)
+    dy, dz = np.diff(p[..., 1] - s * z, axis=-1), np.diff(p[..., 2] + c * z, axis=-1)   # (..., K, N-1)
+    n = np.sqrt(dx * dx + dy * dy + dz * dz)
+    dx, dy, dz = dx / n, dy / n, dz / n
+    shape = dy.shape[:-1] + (len(stations), 3)
+    into, out = np.empty(shape), np.empty(shape)
+    into[..., 0, :] = out[..., -1, :] = np.nan               # no segment into the base disk, none out of the tip
+    for v, at, cc, ss in ((into, np.s_[1:], c[:, 1:], s[:, 1:]), (out, np.s_[:-1], c[:, :-1], s[:, :-1])):
+        v[..., at, 0] = dx                                   # R_x(θ)ᵀ (dx, dy, dz)
+        v[..., at, 1] = cc * dy + ss * dz
+        v[..., at, 2] = -ss * dy + cc * dz
     return into, out
 
 
@@ -125,8 +129,8 @@ def _holes(ds: list[Design], paths: list[list[TendonPath]], stations, xz: np.nda
         w = np.zeros(axes.shape[:2])
         for seg in (into[u], out[u]):
             cos = np.abs(np.einsum("uknj,unj->ukn", seg, axes))
-            ang = np.arccos(np.clip(cos, -1, 1))
-            w = np.fmax(w, np.nanmax(np.where(np.isnan(ang), -1, ang), axis=1))
+            least = np.min(np.where(np.isnan(cos), np.inf, cos), axis=1)     # the largest angle: arccos falls
+            w = np.fmax(w, np.where(np.isinf(least), -1, np.arccos(np.clip(least, -1, 1))))
         return w
 
     uworst = worst_against(np.arange(len(uxz)), own)
