@@ -120,6 +120,22 @@ def test_prototype_passes_every_check_and_build_writes_report(built):
     assert summary.startswith("# prototype: PASS") and "| C2 | C2 |" in summary
 
 
+def test_report_json_has_the_keys_its_type_names(built):
+    """report.json as both shipped designs write it, read back through read_report: every key the
+    Report type names and no other, and each check, tendon, eyelet and the sweep with their
+    records' keys (the writer and the type cannot drift apart)."""
+    from typing import get_type_hints
+
+    from hwgen.checks.report import CheckRecord, EyeletRecord, Report, SweepRecord, TendonRecord, read_report
+    for name in ("prototype", "paper-table2"):
+        rep = read_report(built(name))
+        assert set(rep) == set(get_type_hints(Report)), name
+        assert set(rep["sweep"]) == set(get_type_hints(SweepRecord))
+        for records, kind in ((rep["checks"], CheckRecord), (rep["tendons"], TendonRecord),
+                              (rep["eyelets"], EyeletRecord)):
+            assert records and all(set(r) == set(get_type_hints(kind)) for r in records), (name, kind.__name__)
+
+
 def test_paper_table2_build_and_check_exit_1(built, tmp_path):
     root, folder = _copy(built, tmp_path, "paper-table2")
     assert "## Failed" in (folder / "summary.md").read_text()

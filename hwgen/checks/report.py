@@ -8,18 +8,92 @@ from __future__ import annotations
 import json
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from typing import Any, TypedDict
 
 from .. import atomic
 
 REPORT = "report.json"
 
 
-def write_report(report: dict, folder: Path) -> None:
+# ---------------------------------------------------------------- report.json, typed
+# The report stays the JSON object it is on disk (what a build hands its outputs in memory is
+# what they read back from the file); these types say which keys it has and what each holds.
+
+class CheckRecord(TypedDict):
+    """One check (:class:`hwgen.checks.base.Check` as JSON)."""
+    id: str
+    severity: str                 # "error", "warning" or "info"
+    passed: bool
+    message: str
+    measured: float | None
+    limit: float | None
+    where: dict[str, Any]         # part(s), tendon(s), channel, station: what :func:`place` prints
+
+
+class SweepRecord(TypedDict):
+    max_angle_deg: float
+    step_deg: float
+    angles_deg: list[float]
+
+
+class TendonRecord(TypedDict):
+    """A tendon's length over the sweep: eq. (2) through the measured hole centres, the taut path."""
+    name: str
+    channel: str
+    source: str                   # "geometry": from the files
+    rest_length_mm: float
+    delta_at_max_mm: float
+    delta_at_min_mm: float
+    max_abs_delta_mm: float
+    budget_mm: float | None
+    centreline_passed: bool
+    taut_rest_length_mm: float
+    taut_max_abs_delta_mm: float
+    robust_mm: float | None
+    passed: bool
+    stations_from_backbone: list[int]
+    stations_from_design: list[int]
+    delta_mm: list[float]
+    taut_delta_mm: list[float]
+
+
+class EyeletRecord(TypedDict):
+    """A designed eyelet and where it was found."""
+    station: int
+    part: str
+    tendons: list[str]
+    status: str
+    design_xz_mm: list[float]
+    measured_xz_mm: list[float] | None
+    offset_mm: float | None
+    diameter_mm: float | None
+    axis: list[float] | None
+
+
+class Report(TypedDict):
+    """report.json. The sections from ``mass`` on are the studies' own documents, each stating
+    its model and assumptions (see the checks that write them)."""
+    design: str
+    ok: bool                      # no failing error-severity check
+    hwgen_version: str
+    sweep: SweepRecord
+    checks: list[CheckRecord]
+    tendons: list[TendonRecord]
+    pairs: list[dict[str, Any]]   # the antagonistic pair's take-up
+    eyelets: list[EyeletRecord]
+    mass: dict[str, Any]          # checks.parts.mass_summary
+    as_built: dict[str, Any]      # disks on the strip, the taut paths as built (checks.taut)
+    seats: list[dict[str, Any]]   # checks.anchors
+    gravity: dict[str, Any]       # checks.gravity
+    tension: dict[str, Any]       # checks.tension
+
+
+def write_report(report: Report, folder: Path) -> None:
     """report.json into the folder, whole or not at all."""
     atomic.write_json(Path(folder) / REPORT, report)
 
 
-def read_report(folder: Path) -> dict | None:
+def read_report(folder: Path) -> Report | None:
     """The report a build's checks wrote into ``folder``; None when there is none, or it is not
     a JSON object (unreadable, cut short)."""
     try:

@@ -24,6 +24,7 @@ from .lengths import length_checks, pair_take_up, sweep_angles, tendon_lengths
 from .meshes import one_load_per_mesh
 from .parts import build_volume_checks, interference_checks, load_parts, mass_summary, mesh_checks
 from .printing import printing_checks
+from .report import Report
 from .seating import hub_checks, measure_fit, tilt_checks
 from .taut import as_built
 from .tendon_runs import tendon_checks
@@ -84,21 +85,16 @@ def _strip_clamp_checks(manifest: dict) -> list[Check]:
             for p in manifest["parts"] if "strip_clamp" in p.get("layout_search", {})]
 
 
-def run_checks(folder: str | Path, manifest: dict, plan) -> dict:
+def run_checks(folder: str | Path, manifest: dict, plan) -> Report:
     """Measure the design in ``folder`` against the intent in its manifest; return the report
     (see :func:`_run_checks`). Every STL is read once and handed to every check that needs it."""
     with one_load_per_mesh():
         return _run_checks(folder, manifest, plan)
 
 
-def _run_checks(folder: str | Path, manifest: dict, plan) -> dict:
-    """Measure the design in ``folder`` against the intent in its manifest; return the report.
-
-    Keys: ``design``, ``ok`` (no failing error), ``checks`` (Check records as dicts),
-    ``tendons`` (per tendon: rest length, change at ±max, largest change, budget, pass, and
-    the change at every swept angle), ``pairs`` (take-up of the antagonistic pair),
-    ``eyelets`` (each designed eyelet: where it was found), ``sweep``.
-    """
+def _run_checks(folder: str | Path, manifest: dict, plan) -> Report:
+    """Measure the design in ``folder`` against the intent in its manifest; return the report
+    (:class:`hwgen.checks.report.Report`: every key and what it holds)."""
     folder = Path(folder)
     s = plan.check
     rep_in = manifest["design_report"]
