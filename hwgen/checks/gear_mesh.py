@@ -40,6 +40,8 @@ GAP_MIN_SHARE = 0.25          # the closest gap must be this share of the flank 
 CENTER_TOL_MM = 0.005         # axes fitted to STL crests at 0.01 mm chord: a few µm RMS
 SHAFT_ANGLE_TOL_DEG = 0.02
 GAP_SEARCH_MM = 1.0           # min_gap search length between worm and wheel, beyond the centre offset
+NEAR_GAP_MM = 0.2             # searched first: a gap found within it is the one the longer search finds
+#                               (the closest pair of triangles is among the pairs nearer than it), 4× faster
 SWEEP_STEPS = 6               # worm angles over one thread period for interference and gap
 SENSE_ANGLES = (math.pi / 3, 2 * math.pi / 3)   # worm angles at which the wheel's turning sense is told
 ZONE_GAP_MM = 0.05            # a flank point this close to the worm carries load (≈ the Hertz approach at break load)
@@ -67,7 +69,10 @@ def toward(wheel: dict, worm: dict, distance: float) -> np.ndarray:
 
 def mesh_measure(worm_m, wheel_m, search: float = GAP_SEARCH_MM) -> tuple[float, float]:
     """(interference volume mm³, closest gap mm) of two placed solids."""
-    return float((worm_m ^ wheel_m).volume()), float(worm_m.min_gap(wheel_m, search))
+    gap = worm_m.min_gap(wheel_m, min(NEAR_GAP_MM, search))
+    if gap >= min(NEAR_GAP_MM, search):
+        gap = worm_m.min_gap(wheel_m, search)
+    return float((worm_m ^ wheel_m).volume()), float(gap)
 
 
 # ---- teeth and tooth form from sections ---------------------------------------------------
