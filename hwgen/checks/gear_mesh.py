@@ -142,6 +142,7 @@ class Meshing:
         self.period = 2 * math.pi / starts           # the worm's turn that moves the wheel one tooth
         self._worm_m, self._wheel_m = to_manifold(worm), to_manifold(wheel)
         self._distance = None
+        self._near = None
         self.sense = 1
         vols = {}
         for s in (1, -1):
@@ -176,20 +177,30 @@ class Meshing:
         """Points on the wheel's flanks that lead when it turns by flank·δ, on faces that come
         within ZONE_REACH_MM of the worm's crest cylinder during the motion: (points, their
         radius from the wheel axis, the cosine between normal and motion, position along the axis)."""
-        ha, wa = self.wheel_axis, self.worm_axis
-        c = np.asarray(self.wheel.triangles_center)
-        motion = np.cross(ha.direction, c - ha.point)
-        motion /= np.linalg.norm(motion, axis=1)[:, None]
-        leading = (np.asarray(self.wheel.face_normals) * motion).sum(axis=1) * flank > 0.2
-        near = np.zeros(len(c), bool)
-        for psi in np.linspace(0, self.period, 4 * ZONE_STEPS + 1):
-            hm = self.poses(psi)[1]
-            near |= wa.radial(c @ hm[:3, :3].T + hm[:3, 3])[0] < wa.radius + ZONE_REACH_MM
-        pts, nrm = sample_surface(self.wheel, spacing, near & leading)
+        ha = self.wheel_axis
+        near, facing = self._near_faces()
+        pts, nrm = sample_surface(self.wheel, spacing, near & (facing * flank > 0.2))
         rr, along = ha.radial(pts)
         motion = np.cross(ha.direction, pts - ha.point) / rr[:, None]
         cos_t = np.maximum((nrm * motion).sum(axis=1) * flank, 0.2)
         return pts, rr, cos_t, along
+
+    def _near_faces(self) -> tuple[np.ndarray, np.ndarray]:
+        """(the wheel's faces that come within ZONE_REACH_MM of the worm's crest cylinder during
+        the motion, each face's normal · its direction of motion): the same for both flanks, so
+        worked out once."""
+        if self._near is None:
+            ha, wa = self.wheel_axis, self.worm_axis
+            c = np.asarray(self.wheel.triangles_center)
+            motion = np.cross(ha.direction, c - ha.point)
+            motion /= np.linalg.norm(motion, axis=1)[:, None]
+            facing = (np.asarray(self.wheel.face_normals) * motion).sum(axis=1)
+            near = np.zeros(len(c), bool)
+            for psi in np.linspace(0, self.period, 4 * ZONE_STEPS + 1):
+                hm = self.poses(psi)[1]
+                near |= wa.radial(c @ hm[:3, :3].T + hm[:3, 3])[0] < wa.radius + ZONE_REACH_MM
+            self._near = near, facing
+        return self._near
 
     def contact(self, flank: int, steps: int = ZONE_STEPS, gap: float = ZONE_GAP_MM,
                 spacing: float = ZONE_SPACING_MM) -> dict:
