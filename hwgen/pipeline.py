@@ -31,6 +31,7 @@ import json
 import os
 import shutil
 import tempfile
+import threading
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import ExitStack, contextmanager
@@ -199,8 +200,15 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
     store = cache.Store(cache.default_dir() if cache_dir is True else (cache_dir or None))
     limit = _limit()                    # bad input before anything is written
     select = None if parts is None else (lambda name: fnmatch.fnmatchcase(name, parts))
+    ahead = _Ahead(store, plan) if post_build and select is None and store.enabled else None
     with output_errors(out_root), new_folder(target) as tmp:
-        manifest, built = _write_files(loaded, plan, tmp, total, progress, store, select, jobs)
+        token = _WHILE_WORKERS_BUILD.set(ahead)
+        try:
+            manifest, built = _write_files(loaded, plan, tmp, total, progress, store, select, jobs)
+        finally:
+            _WHILE_WORKERS_BUILD.reset(token)
+        if ahead is not None:
+            ahead.join()
         if select is not None:
             written = [p["name"] for p in manifest["parts"] if select(p["name"])]
             if not written:
@@ -231,6 +239,39 @@ def _limit() -> int:
 def _trim(store: cache.Store, limit: int) -> None:
     """The cache back within ``limit`` bytes (:func:`_limit`), least recently used first."""
     store.trim(limit)
+
+
+class _Ahead:
+    """What the checks need from the plan alone, worked out in a thread of this process while
+    worker processes build the parts (this process would only wait for them): the tension checks'
+    statics sweeps (:func:`hwgen.checks.tension.sweeps`, seconds of scipy), kept in the cache as
+    the checks remember them, so the checks find them there. The values are the ones the checks
+    would compute themselves; a failure here is left for the checks to meet and report."""
+
+    def __init__(self, store: cache.Store, plan: Plan):
+        self.store, self.plan, self.thread = store, plan, None
+
+    def start(self) -> None:
+        if self.thread is None:
+            self.thread = threading.Thread(target=self._run, name="hwgen-ahead", daemon=True)
+            self.thread.start()
+
+    def _run(self) -> None:
+        from .checks.tension import sweeps
+        with cache.using(self.store):
+            try:
+                sweeps(self.plan)
+            except Exception:       # the checks run it again and report what it raises
+                pass
+
+    def join(self) -> None:
+        if self.thread is not None:
+            self.thread.join()
+
+
+# set by a build whose checks will run: started by the worker pool (:class:`_Workers`) when there are parts to build
+_WHILE_WORKERS_BUILD: contextvars.ContextVar[_Ahead | None] = contextvars.ContextVar("hwgen_while_workers_build",
+                                                                                       default=None)
 
 
 # ---------------------------------------------------------------- the stages after the files, through the cache
@@ -499,6 +540,9 @@ class _Workers:
         self.pool = ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"))
 
     def __enter__(self):
+        ahead = _WHILE_WORKERS_BUILD.get()
+        if ahead is not None:
+            ahead.start()           # this process waits for the workers meanwhile
         return self
 
     def __exit__(self, *exc):

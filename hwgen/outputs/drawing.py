@@ -44,14 +44,25 @@ def _projector(ren, W: int, H: int):
     return project, DEPTH_TOL_MM / (far - near)
 
 
+MAX3_ROWS = 256      # _max3 works through the depth buffer this many rows at a time, in place (copies of the
+#                      whole 3200-pixel buffer were the renderer's largest allocations)
+
+
 def _max3(z: np.ndarray) -> np.ndarray:
-    """Largest depth in each pixel's 3x3 neighbourhood (edges lie on the border of their faces)."""
-    p = np.pad(z, 1, mode="edge")
-    out = z.copy()
-    for dy in (0, 1, 2):
-        for dx in (0, 1, 2):
-            np.maximum(out, p[dy:dy + z.shape[0], dx:dx + z.shape[1]], out=out)
-    return out
+    """Largest depth in each pixel's 3x3 neighbourhood (edges lie on the border of their faces;
+    beyond the image's border the border pixel counts again), written over ``z`` and returned."""
+    rows = z.shape[0]
+    above = None                # the row above the block, as it was
+    for i0 in range(0, rows, MAX3_ROWS):
+        i1 = min(i0 + MAX3_ROWS, rows)
+        src = np.vstack([z[i0:i0 + 1] if above is None else above, z[i0:i1], z[min(i1, rows - 1)][None]])
+        p = np.pad(src, ((0, 0), (1, 1)), mode="edge")
+        above = src[-2:-1]
+        block = z[i0:i1]
+        for dy in (0, 1, 2):
+            for dx in (0, 1, 2):
+                np.maximum(block, p[dy:dy + i1 - i0, dx:dx + z.shape[1]], out=block)
+    return z
 
 
 def visible_runs(segments: np.ndarray, project, zmax: np.ndarray, tol: float):
@@ -141,8 +152,9 @@ def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: d
     posed: list[Posed] = [pose_rigid(p, placements[p.name], d) for p in parts]
     ren, W, H = renderer.draw(posed, colours, view, None, edges=False, shading=False, margin=0.02,
                               aspect_range=(0.3, 2.0), width=DEPTH_WIDTH_PX)
-    zmax = _max3(renderer.depth(W, H)[::-1])     # bottom-up rows, as display coordinates
+    zmax = _max3(renderer.depth(W, H, rows_up=True))     # bottom-up rows, as display coordinates
     project, tol = _projector(ren, W, H)
+    renderer.release()                  # the scene is read: its memory goes before the lines are found
     scale = PAGE_WIDTH / W
 
     def to_page(p: np.ndarray) -> np.ndarray:

@@ -44,6 +44,10 @@ INSTALL_HINT = (
 LABEL_GAP_MM = 6.0          # disk numbers sit this far above the disk's top on screen
 OUTPUTS = ("exploded.png", "assembled.png", "bent.png", "jig.png", "exploded.svg")
 EXIT_NO_BACKEND = 3      # the child's exit code for RenderUnavailable
+# Mesa's llvmpipe rasterises in the drawing thread itself (unless the user sets it otherwise): its
+# rasteriser threads' scene memory made about a tenth of the renderer's peak, the pictures have the
+# same bytes, and the checks drawn beside them keep the other core
+RASTER_THREADS_ENV = "LP_NUM_THREADS"
 
 
 class RenderFailed(RuntimeError):
@@ -209,6 +213,7 @@ def run_child(folder: Path, manifest: dict, settings: Settings, svg_table: list[
                       "svg_table": svg_table, "steps": steps})
     attempts = [dict(os.environ)]
     attempts[0].pop("DISPLAY", None)            # offscreen: EGL first, never a stale X display
+    attempts[0].setdefault(RASTER_THREADS_ENV, "0")
     if os.environ.get("DISPLAY"):
         attempts.append(dict(os.environ))       # then the display's own OpenGL, if there is one
     errors, backend = [], True

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -49,28 +50,35 @@ class ScenePart:
     placement: np.ndarray           # 4x4 file -> robot
     station: int | None = None
     meta: dict = field(default_factory=dict)
-    _mesh: object = None
+    _edges: "EdgeData | None" = None
 
     @property
     def mesh(self):
         """trimesh.Trimesh in file coordinates (vertices merged, so edges have two faces)."""
-        if self._mesh is None:
-            import trimesh
-            self._mesh = trimesh.Trimesh(self.vertices, self.faces, process=False)
-        return self._mesh
+        import trimesh
+        return trimesh.Trimesh(self.vertices, self.faces, process=False)
+
+    @property
+    def edge_data(self) -> "EdgeData":
+        """What the edges are drawn from, worked out once from :attr:`mesh` (whose many other
+        cached arrays, most of a part's memory in the renderer, then go)."""
+        if self._edges is None:
+            m = self.mesh
+            self._edges = EdgeData(np.asarray(m.face_normals), np.asarray(m.face_adjacency),
+                                   np.asarray(m.face_adjacency_edges),
+                                   m.face_adjacency_edges[m.face_adjacency_angles > math.radians(FEATURE_ANGLE_DEG)])
+        return self._edges
 
     def feature_edges(self) -> np.ndarray:
         """(k, 2) vertex pairs of edges sharper than FEATURE_ANGLE_DEG."""
-        m = self.mesh
-        sharp = m.face_adjacency_angles > math.radians(FEATURE_ANGLE_DEG)
-        return m.face_adjacency_edges[sharp]
+        return self.edge_data.feature
 
     def silhouette_edges(self, rotation: np.ndarray, view_dir: np.ndarray) -> np.ndarray:
         """(k, 2) vertex pairs between a face turned toward the viewer and one turned away."""
-        m = self.mesh
-        n = m.face_normals @ rotation.T @ view_dir
-        a, b = m.face_adjacency.T
-        return m.face_adjacency_edges[(n[a] > 0) != (n[b] > 0)]
+        e = self.edge_data
+        n = e.face_normals @ rotation.T @ view_dir
+        a, b = e.face_adjacency.T
+        return e.adjacency_edges[(n[a] > 0) != (n[b] > 0)]
 
     def centre(self) -> np.ndarray:
         """Bounding-box centre in robot coordinates (straight, assembled)."""
@@ -80,6 +88,14 @@ class ScenePart:
     def world_bounds(self) -> np.ndarray:
         w = transform(self.vertices, self.placement)
         return np.array([w.min(axis=0), w.max(axis=0)])
+
+
+class EdgeData(NamedTuple):
+    """A part's faces' normals and adjacency (trimesh's), and its feature edges."""
+    face_normals: np.ndarray        # (m, 3)
+    face_adjacency: np.ndarray      # (j, 2) faces that share an edge
+    adjacency_edges: np.ndarray     # (j, 2) the vertices of that edge
+    feature: np.ndarray             # (k, 2) vertex pairs of edges sharper than FEATURE_ANGLE_DEG
 
 
 def transform(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:

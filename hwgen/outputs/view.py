@@ -264,13 +264,15 @@ class Renderer:
         img = vtk_to_numpy(arr).reshape(H, W, -1)[:, :, :3]
         return img[::-1].copy()     # OpenGL rows run bottom-up
 
-    def depth(self, W: int, H: int) -> np.ndarray:
-        """Depth buffer (H, W), rows top-down, values 0 (near) .. 1 (far/background)."""
+    def depth(self, W: int, H: int, rows_up: bool = False) -> np.ndarray:
+        """Depth buffer (H, W), rows top-down (``rows_up``: bottom-up, as OpenGL reads them, and
+        not copied), values 0 (near) .. 1 (far/background)."""
         from vtkmodules.util.numpy_support import vtk_to_numpy
         from vtkmodules.vtkCommonCore import vtkFloatArray
         arr = vtkFloatArray()
         self.window.GetZbufferData(0, 0, W - 1, H - 1, arr)
-        return vtk_to_numpy(arr).reshape(H, W)[::-1].copy()
+        z = vtk_to_numpy(arr).reshape(H, W)
+        return z if rows_up else z[::-1].copy()
 
 
 def _trim_heap() -> None:
