@@ -479,8 +479,8 @@ def _unit_in_worker(plan: Plan, index: int, key: str, store: cache.Store, salt: 
     """Build and export the ``index``-th unit of the plan in a worker process (its solids stay
     there for :func:`_assembly_in_worker`) and keep it in the cache, under the unit's lock:
     ("busy", None) when another build holds it (it is making this unit now), ("kept", None) when
-    another build has kept it meanwhile. A DesignError or
-    InputError comes back as its fields (they do not pickle as themselves)."""
+    another build has kept it meanwhile. A DesignError or InputError comes back as its fields
+    (they do not pickle as themselves)."""
     try:
         lock = store.try_lock(key)
         if lock is None:
