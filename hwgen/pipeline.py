@@ -34,7 +34,7 @@ import tempfile
 import threading
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
-from contextlib import ExitStack, contextmanager
+from contextlib import ExitStack, contextmanager, nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -47,7 +47,7 @@ from .cad.families import build_unit, kernel_errors, part_count, units
 from .errors import DesignError, InputError, clip
 from .cad.manifest import (MANIFEST, describe, design_report, entry, manifest_files, measure, read_manifest, sha256,
                            write_manifest)
-from .cad.memo import kept_in
+from .cad.memo import Busy, kept_in, setting_aside
 from .checks.report import REPORT, read_report, write_report, write_summary
 from .model import feasibility
 from .model.plan import Plan, make_plan
@@ -475,21 +475,22 @@ def _solids(store: cache.Store, rec: dict) -> list | None:
 _BUILT_HERE: dict[str, list] = {}     # in a worker process: the solids of the units it built, by unit key
 
 
-def _unit_in_worker(plan: Plan, index: int, key: str, store: cache.Store, salt: dict) -> tuple[str, object]:
+def _unit_in_worker(plan: Plan, index: int, key: str, store: cache.Store, salt: dict,
+                    wait: bool) -> tuple[str, object]:
     """Build and export the ``index``-th unit of the plan in a worker process (its solids stay
     there for :func:`_assembly_in_worker`) and keep it in the cache, under the unit's lock:
-    ("busy", None) when another build holds it (it is making this unit now), ("kept", None) when
-    another build has kept it meanwhile. A DesignError or InputError comes back as its fields
-    (they do not pickle as themselves)."""
+    ("busy", None), unless ``wait``, when another build holds it or a solid it needs (it is making
+    that now), ("kept", None) when another build has kept it meanwhile. A DesignError or
+    InputError comes back as its fields (they do not pickle as themselves)."""
     try:
-        lock = store.try_lock(key)
+        lock = store.lock(key) if wait else store.try_lock(key)
         if lock is None:
             return "busy", None
         with lock:
             if _unit_from_cache(store, key) is not None:
                 return "kept", None                  # by another build, while this one looked
             family, first, unit = list(units(plan))[index]
-            with kept_in(store, salt):
+            with kept_in(store, salt), (nullcontext() if wait else setting_aside()):
                 parts = list(build_unit(plan, family, first, unit))
             _BUILT_HERE[key] = [p.solid for p in parts]
             with tempfile.TemporaryDirectory(prefix="hwgen-unit-") as tmp:
@@ -498,6 +499,8 @@ def _unit_in_worker(plan: Plan, index: int, key: str, store: cache.Store, salt: 
                 exported = _export_unit(plan, parts, Path(tmp), brep=True)
             _keep_unit(store, key, exported)      # before the lock goes: a build waiting for it reads it
             return "ok", exported
+    except Busy:
+        return "busy", None
     except DesignError as e:
         return "design", (e.path, e.message)
     except InputError as e:
@@ -548,8 +551,8 @@ class _Workers:
     def __exit__(self, *exc):
         self.pool.shutdown(wait=True, cancel_futures=True)
 
-    def unit(self, plan: Plan, index: int, key: str, store: cache.Store, salt: dict):
-        return self.pool.submit(_unit_in_worker, plan, index, key, store, salt)
+    def unit(self, plan: Plan, index: int, key: str, store: cache.Store, salt: dict, wait: bool = False):
+        return self.pool.submit(_unit_in_worker, plan, index, key, store, salt, wait)
 
     def assembly(self, loaded, plan: Plan, done, breps, store: cache.Store, salt: dict) -> bytes:
         return _result(self.pool.submit(_assembly_in_worker, loaded, plan, done, breps, store, salt).result())
@@ -639,15 +642,20 @@ def _place_units(plan: Plan, folder: Path, todo, workers: _Workers | None, store
     A unit not in the cache is made under its lock (:meth:`cache.Store.try_lock`), taken when its
     turn comes. A unit whose lock another build holds (it is making that unit now) waits until
     every other unit is done; this build then waits for the lock, which frees once the other has
-    kept the unit, and reads it from the cache (or makes it, when the other did not finish)."""
-    elsewhere = {i: workers.unit(plan, i, t[3], store, salt) for i, t in enumerate(todo)
-                 if t[4] is None} if workers else {}
+    kept the unit, and reads it from the cache (or makes it, when the other did not finish). So
+    is a unit that needs a kept solid another build is making (the throated wheel's gear).
+
+    The tensioner's units are made first: they take most of the parts' time, and a build that
+    finds their gear being made has the other units to make meanwhile."""
+    order = sorted(range(len(todo)), key=lambda i: todo[i][0].name != "tensioner")
+    elsewhere = {i: workers.unit(plan, i, todo[i][3], store, salt) for i in order
+                 if todo[i][4] is None} if workers else {}
     done: dict[int, tuple[dict, list | None]] = {}     # unit -> (record with its bytes, parts built here)
     placed: dict[int, list] = {}                       # unit -> its parts' entries
     count = [0]
     theirs = []
     for wait in (False, True):
-        for i in theirs if wait else range(len(todo)):
+        for i in theirs if wait else order:
             made = _made(plan, folder, todo[i], elsewhere.pop(i, None), workers, i, store, salt, built, wait)
             if made is None:
                 theirs.append(i)
@@ -674,23 +682,26 @@ def _made(plan: Plan, folder: Path, t, future, workers: _Workers | None, index: 
             rec = _unit_from_cache(store, key)      # kept by another build while this one looked
             if rec is not None:
                 return rec, None
-            parts = list(build_unit(plan, family, first, unit))
+            try:
+                with nullcontext() if wait else setting_aside():
+                    parts = list(build_unit(plan, family, first, unit))
+            except Busy:
+                return None
             rec = _keep_unit(store, key, _export_unit(plan, parts, folder, brep=store.enabled))
         built += [p["name"] for p in rec["parts"]]
         return rec, parts
     while rec is None:
-        kind, value = future.result() if future is not None else ("busy", None)
+        if future is None:
+            future = workers.unit(plan, index, key, store, salt, wait)
+        kind, value = future.result()
+        future = None
+        if kind == "busy":                          # only without wait
+            return None
         if kind == "kept":
-            rec = _unit_from_cache(store, key)
-        elif kind != "busy":
+            rec = _unit_from_cache(store, key)      # gone again (trimmed): made on the next turn
+        else:
             rec = _keep_unit(store, key, _result((kind, value)))
             built += [p["name"] for p in rec["parts"]]
-        elif not wait:
-            return None
-        else:
-            with store.lock(key):                   # until the build making it has kept it
-                rec = _unit_from_cache(store, key)
-        future = workers.unit(plan, index, key, store, salt) if rec is None else None
     return rec, None
 
 

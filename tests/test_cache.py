@@ -87,6 +87,27 @@ def test_an_entry_being_made_by_another_process_is_locked_until_it_ends(tmp_path
     assert cache.Store(None).try_lock("ab12") is not None              # no store, nothing to share
 
 
+def test_a_kept_solid_another_build_is_making_is_set_aside_not_made(tmp_path):
+    """Under setting_aside(), a kept solid whose lock another process holds raises Busy without
+    making it (the pipeline then builds its other units first and comes back)."""
+    from hwgen.cad.memo import Busy, kept, kept_in, setting_aside
+    store, salt = cache.Store(tmp_path), {"salt": 1}
+    k = cache.key("solid", "gear", 7, salt)
+    holder = subprocess.Popen([sys.executable, "-c", (
+        "import sys, time\nfrom hwgen import cache\n"
+        "with cache.Store(sys.argv[1]).lock(sys.argv[2]):\n    print('held', flush=True)\n    time.sleep(60)\n"),
+        str(tmp_path), k], stdout=subprocess.PIPE, text=True)
+    made = []
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        with kept_in(store, salt), setting_aside(), pytest.raises(Busy):
+            kept("gear", 7, lambda: made.append(1))
+    finally:
+        holder.kill()
+        holder.wait()
+    assert made == []
+
+
 def test_a_cache_that_cannot_be_written_turns_itself_off(tmp_path):
     a_file = tmp_path / "a_file"
     a_file.write_text("not a folder")

@@ -18,6 +18,12 @@ from .. import cache
 from .export import read_brep, write_brep
 
 _ACTIVE: ContextVar[tuple[cache.Store, object] | None] = ContextVar("hwgen_kept_solids", default=None)
+_SET_ASIDE: ContextVar[bool] = ContextVar("hwgen_set_aside_when_busy", default=False)
+
+
+class Busy(Exception):
+    """A kept solid another build is making now, met under :func:`setting_aside`: the caller sets
+    the part it was building aside and comes back to it."""
 
 
 @contextmanager
@@ -31,6 +37,16 @@ def kept_in(store: cache.Store, salt) -> Iterator[None]:
         _ACTIVE.reset(token)
 
 
+@contextmanager
+def setting_aside() -> Iterator[None]:
+    """Within: a kept solid whose lock another build holds raises :class:`Busy` instead of waiting."""
+    token = _SET_ASIDE.set(True)
+    try:
+        yield
+    finally:
+        _SET_ASIDE.reset(token)
+
+
 def kept(kind: str, inputs, make: Callable[[], object]):
     """``make()``, or the solid it made last time for the same ``kind`` and ``inputs``."""
     active = _ACTIVE.get()
@@ -41,7 +57,10 @@ def kept(kind: str, inputs, make: Callable[[], object]):
     solid = _read(store, key)
     if solid is not None:
         return solid
-    with store.lock(key):                # another build making it now: wait, then read it
+    lock = store.try_lock(key) if _SET_ASIDE.get() else store.lock(key)   # waits while another makes it
+    if lock is None:
+        raise Busy(kind)
+    with lock:
         solid = _read(store, key)
         if solid is None:
             solid = make()
