@@ -108,6 +108,31 @@ def test_a_kept_solid_another_build_is_making_is_set_aside_not_made(tmp_path):
     assert made == []
 
 
+@pytest.mark.slow
+def test_a_tensioner_unit_whose_gear_another_build_is_making_is_set_aside(tmp_path):
+    """The real path: building the prototype's tensioner unit while another process holds its
+    wheel gear's lock raises Busy out of the unit's builder (not a kernel failure), under
+    setting_aside(); the pipeline then makes the other units first."""
+    from hwgen import pipeline
+    from hwgen.cad.families import build_unit, units
+    from hwgen.cad.memo import Busy, kept_in, setting_aside
+    plan = pipeline.design_plan(pipeline.load(PARAMS / "prototype.yaml"))
+    store, salt = cache.Store(tmp_path), pipeline._salt()
+    k = cache.key("solid", "throated wheel gear", plan.tensioner_layout.pair, salt)
+    holder = subprocess.Popen([sys.executable, "-c", (
+        "import sys, time\nfrom hwgen import cache\n"
+        "with cache.Store(sys.argv[1]).lock(sys.argv[2]):\n    print('held', flush=True)\n    time.sleep(120)\n"),
+        str(tmp_path), k], stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        family, first, unit = next(u for u in units(plan) if u[0].name == "tensioner")
+        with kept_in(store, salt), setting_aside(), pytest.raises(Busy):
+            list(build_unit(plan, family, first, unit))
+    finally:
+        holder.kill()
+        holder.wait()
+
+
 def test_a_cache_that_cannot_be_written_turns_itself_off(tmp_path):
     a_file = tmp_path / "a_file"
     a_file.write_text("not a folder")

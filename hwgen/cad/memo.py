@@ -21,9 +21,10 @@ _ACTIVE: ContextVar[tuple[cache.Store, object] | None] = ContextVar("hwgen_kept_
 _SET_ASIDE: ContextVar[bool] = ContextVar("hwgen_set_aside_when_busy", default=False)
 
 
-class Busy(Exception):
+class Busy(BaseException):
     """A kept solid another build is making now, met under :func:`setting_aside`: the caller sets
-    the part it was building aside and comes back to it."""
+    the part it was building aside and comes back to it. A signal, not a failure: it derives from
+    BaseException so that no handler of the kernel's failures (``except Exception``) takes it."""
 
 
 @contextmanager
