@@ -479,7 +479,7 @@ def _unit_in_worker(plan: Plan, index: int, key: str, store: cache.Store, salt: 
                     wait: bool) -> tuple[str, object]:
     """Build and export the ``index``-th unit of the plan in a worker process (its solids stay
     there for :func:`_assembly_in_worker`) and keep it in the cache, under the unit's lock:
-    ("busy", None), unless ``wait``, when another build holds it or a solid it needs (it is making
+    ("ok", its record with its bytes, as :func:`_keep_unit` gives it); ("busy", None), unless ``wait``, when another build holds it or a solid it needs (it is making
     that now), ("kept", None) when another build has kept it meanwhile. A DesignError or
     InputError comes back as its fields (they do not pickle as themselves)."""
     try:
@@ -497,8 +497,9 @@ def _unit_in_worker(plan: Plan, index: int, key: str, store: cache.Store, salt: 
                 (Path(tmp) / "stl").mkdir()
                 (Path(tmp) / "step").mkdir()
                 exported = _export_unit(plan, parts, Path(tmp), brep=True)
-            _keep_unit(store, key, exported)      # before the lock goes: a build waiting for it reads it
-            return "ok", exported
+            # kept before the lock goes (a build waiting for it reads it); the record, with its
+            # bytes, is what the calling process places
+            return "ok", _keep_unit(store, key, exported)
     except Busy:
         return "busy", None
     except DesignError as e:
@@ -700,7 +701,7 @@ def _made(plan: Plan, folder: Path, t, future, workers: _Workers | None, index: 
         if kind == "kept":
             rec = _unit_from_cache(store, key)      # gone again (trimmed): made on the next turn
         else:
-            rec = _keep_unit(store, key, _result((kind, value)))
+            rec = _result((kind, value))            # kept by the worker
             built += [p["name"] for p in rec["parts"]]
     return rec, None
 
