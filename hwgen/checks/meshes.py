@@ -27,6 +27,15 @@ def one_load_per_mesh() -> Iterator[None]:
         _SHELF.reset(token)
 
 
+def drop_solids() -> None:
+    """Let go of the manifold3d solids made so far in this check run (the meshes stay): the checks
+    that intersect whole parts are done, and the solids are most of the run's memory; a later check
+    that asks again gets a new one."""
+    shelf = _SHELF.get()
+    if shelf is not None:
+        shelf["manifolds"].clear()
+
+
 def load_mesh(path: str | Path):
     import trimesh
     shelf = _SHELF.get()
