@@ -94,6 +94,8 @@ def canonical(obj) -> object:
     if hasattr(obj, "model_dump") and hasattr(type(obj), "model_fields"):      # pydantic
         return {"model": type(obj).__qualname__, "fields": canonical(obj.model_dump(mode="json"))}
     if isinstance(obj, dict):
+        if all(type(k) is str for k in obj):          # the common case, ordered without a JSON text per entry
+            return {"dict": [[k, canonical(obj[k])] for k in sorted(obj)]}
         return {"dict": sorted(([canonical(k), canonical(v)] for k, v in obj.items()), key=json.dumps)}
     if isinstance(obj, (list, tuple)):
         return [canonical(v) for v in obj]

@@ -193,15 +193,16 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
 
     ``jobs``: worker processes that build the parts not in the cache and the assembly (0: all in
     this process, which then holds the CAD kernel's memory through the checks)."""
-    plan = design_plan(loaded)
+    store = cache.Store(cache.default_dir() if cache_dir is True else (cache_dir or None))
+    layout_key = cache.key("tensioner layout", loaded.design, __version__, cache.code())
+    plan = design_plan(loaded, _kept_layout(store, layout_key))
     total = part_count(plan)
     out_root = Path(out_root)
     target = out_root / loaded.name
-    store = cache.Store(cache.default_dir() if cache_dir is True else (cache_dir or None))
     limit = _limit()                    # bad input before anything is written
     select = None if parts is None else (lambda name: fnmatch.fnmatchcase(name, parts))
     ahead = _Ahead(store, plan) if post_build and select is None and store.enabled else None
-    with output_errors(out_root), new_folder(target) as tmp:
+    with output_errors(out_root), new_folder(target) as tmp, _hashing_once():
         token = _WHILE_WORKERS_BUILD.set(ahead)
         try:
             manifest, built = _write_files(loaded, plan, tmp, total, progress, store, select, jobs)
@@ -222,10 +223,30 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
             with cache.using(store):
                 _after_files(store, plan, tmp, target, manifest, done, reused)
         write_manifest(tmp, manifest)
+    chosen = tensioner_record(manifest)
+    if chosen is not None:
+        store.put_record(layout_key, {"search": chosen})
     _trim(store, limit)
     notes = [f"damaged entries rebuilt: {', '.join(store.corrupt)}"] if store.corrupt else []
     notes += [f"not written, so not used: {store.unwritable}"] if store.unwritable else []
     return BuildResult(target, manifest, plan, done.get("checks"), built, reused, notes)
+
+
+@contextmanager
+def _hashing_once() -> Iterator[None]:
+    token = _HASHED.set({})
+    try:
+        yield
+    finally:
+        _HASHED.reset(token)
+
+
+def _kept_layout(store: cache.Store, key: str) -> dict | None:
+    """The tensioner layout's search record a build of this very design (and code) kept: the plan
+    lays out the arrangement it names instead of searching again (as ``hwgen check`` does from the
+    manifest; the same layout and record), a fifth of a second of a rebuild with nothing changed."""
+    rec = store.get_record(key)
+    return rec["search"] if isinstance(rec, dict) and isinstance(rec.get("search"), dict) else None
 
 
 def _limit() -> int:
@@ -315,7 +336,26 @@ STAGE_RESULT = {"checks": REPORT}       # a stage whose return value is this fil
 
 
 def _files(folder: Path) -> dict[str, str]:
-    return {str(p.relative_to(folder)): sha256(p) for p in sorted(folder.rglob("*")) if p.is_file()}
+    """Every file in ``folder`` (relative path) with its sha256."""
+    return {str(p.relative_to(folder)): _hashed(p) for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+# within one build: (device, inode, size, mtime, ctime) -> sha256 of a file hashed before
+_HASHED: contextvars.ContextVar[dict | None] = contextvars.ContextVar("hwgen_hashed", default=None)
+
+
+def _hashed(path: Path) -> str:
+    """The file's sha256; within a build, read again only when its inode, size or times changed
+    since the build last hashed it (every stage keys on every file in the folder: the STEP files
+    are read once, not once per stage)."""
+    seen = _HASHED.get()
+    if seen is None:
+        return sha256(path)
+    st = path.stat()
+    k = (st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
+    if k not in seen:
+        seen[k] = sha256(path)
+    return seen[k]
 
 
 def _cached_stage(store: cache.Store, name: str, stage, plan: Plan, folder: Path, manifest: dict,

@@ -9,12 +9,17 @@ The result is the line drawing of the PNG's view, to scale, in about a second.
 from __future__ import annotations
 
 from pathlib import Path
-from xml.sax.saxutils import escape
+from html import escape as _escape
 
 import numpy as np
 
 from .scene import Posed, ScenePart, pose_rigid
 from .view import ISOMETRIC, Renderer
+
+
+def escape(text: str) -> str:
+    """&, < and > as entities (quotes as they are): the SVG's text and attribute values."""
+    return _escape(text, quote=False)
 
 DEPTH_WIDTH_PX = 3200        # depth buffer width: ~0.2 mm per pixel for the prototype's exploded view
 SAMPLE_PX = 0.8              # edges are tested every this many pixels
