@@ -157,16 +157,17 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
           parts: str = typer.Option(None, "--parts", show_default=False,
                                     help="write only the parts whose names match this pattern ('disk_*'); "
                                          "no assembly, checks or pictures"),
-          jobs: int = typer.Option(1, "--jobs", "-j", min=0, envvar="HWGEN_JOBS", help="worker processes that build the parts not in "
-                                                                  "the cache and the assembly (0: in this process, "
-                                                                  "which then holds the CAD kernel's memory through "
-                                                                  "the checks)")
+          jobs: int | None = typer.Option(None, "--jobs", "-j", min=0, envvar="HWGEN_JOBS", show_default=False,
+                                   help="worker processes that build the parts not in the cache and the assembly "
+                                        "(default: one per core, at most 4, no more than there are parts to "
+                                        "build; 0: in this process, which then holds the CAD kernel's memory "
+                                        "through the checks)")
           ) -> None:
     """Build every part (STL, STEP), assembly.step, the backbone DXF and manifest.json."""
     loaded = _load(params)
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from .pipeline import build as run_build
+    from .pipeline import build as run_build, default_jobs
 
     with Progress(TextColumn("{task.description}", markup=False), BarColumn(), MofNCompleteColumn(),
                   TimeElapsedColumn(), console=err, disable=quiet, transient=True) as bar:
@@ -176,7 +177,7 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
             bar.update(task, total=total, completed=done, description=f"built {name}")
 
         result = run_build(loaded, out_dir, progress, cache_dir=_cache(cache_dir, no_cache, cache_size), parts=parts,
-                           jobs=jobs)
+                           jobs=default_jobs() if jobs is None else jobs)
     n = len(result.manifest["parts"])
     for note in result.cache_notes:
         say("warning:", "yellow", f"part cache: {note}")

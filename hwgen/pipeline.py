@@ -29,6 +29,7 @@ import fnmatch
 import hashlib
 import json
 import os
+import queue
 import shutil
 import tempfile
 import threading
@@ -206,6 +207,10 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
         token = _WHILE_WORKERS_BUILD.set(ahead)
         try:
             manifest, built = _write_files(loaded, plan, tmp, total, progress, store, select, jobs)
+        except BaseException:
+            if ahead is not None:
+                ahead.abandon()
+            raise
         finally:
             _WHILE_WORKERS_BUILD.reset(token)
         if ahead is not None:
@@ -249,6 +254,19 @@ def _kept_layout(store: cache.Store, key: str) -> dict | None:
     return rec["search"] if isinstance(rec, dict) and isinstance(rec.get("search"), dict) else None
 
 
+MAX_DEFAULT_JOBS = 4     # workers a build starts unless told: each holds the CAD kernel (0.4-0.8 GB)
+
+
+def default_jobs() -> int:
+    """Worker processes a build uses unless told: one per core this process may run on (at most
+    :data:`MAX_DEFAULT_JOBS`); a build starts no more than it has units to build."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cores = os.cpu_count() or 1
+    return max(1, min(cores, MAX_DEFAULT_JOBS))
+
+
 def _limit() -> int:
     try:
         return cache.size_limit()
@@ -263,31 +281,52 @@ def _trim(store: cache.Store, limit: int) -> None:
 
 
 class _Ahead:
-    """What the checks need from the plan alone, worked out in a thread of this process while
-    worker processes build the parts (this process would only wait for them): the tension checks'
-    statics sweeps (:func:`hwgen.checks.tension.sweeps`, seconds of scipy), kept in the cache as
-    the checks remember them, so the checks find them there. The values are the ones the checks
-    would compute themselves; a failure here is left for the checks to meet and report."""
+    """What the checks need from the plan alone, or from a few parts' files, worked out in a thread
+    of this process while worker processes build the parts (this process would only wait for
+    them): the tension checks' statics sweeps (:func:`hwgen.checks.tension.sweeps`, seconds of
+    scipy), then the gear checks of the tensioner's worms and wheels as soon as their files are in
+    the folder (:meth:`placed`; seconds of manifold3d). Both are kept in the cache as the checks
+    remember them, so the checks find them there: the values are the ones the checks would compute
+    themselves. A failure here is left for the checks to meet and report."""
 
     def __init__(self, store: cache.Store, plan: Plan):
         self.store, self.plan, self.thread = store, plan, None
+        self.jobs: queue.SimpleQueue = queue.SimpleQueue()
 
     def start(self) -> None:
         if self.thread is None:
             self.thread = threading.Thread(target=self._run, name="hwgen-ahead", daemon=True)
             self.thread.start()
 
+    def placed(self, family: str, folder: Path, entries: list[dict]) -> None:
+        """A unit's files are in ``folder`` (its manifest ``entries``): the gear checks of the
+        tensioner's, ahead of the other checks (they read the worms' and wheels' files and
+        entries alone)."""
+        if self.thread is not None and family == "tensioner":
+            self.jobs.put((folder, {"parts": [dict(e) for e in entries]}))
+
     def _run(self) -> None:
+        from .checks.gear_mesh import gear_checks
         from .checks.tension import sweeps
         with cache.using(self.store):
             try:
                 sweeps(self.plan)
             except Exception:       # the checks run it again and report what it raises
                 pass
+            while (job := self.jobs.get()) is not None:
+                try:
+                    gear_checks(*job, self.plan)
+                except Exception:
+                    pass
 
     def join(self) -> None:
         if self.thread is not None:
+            self.jobs.put(None)
             self.thread.join()
+
+    def abandon(self) -> None:
+        """The build failed: the thread ends after what it is doing, unwaited for."""
+        self.jobs.put(None)
 
 
 # set by a build whose checks will run: started by the worker pool (:class:`_Workers`) when there are parts to build
@@ -470,8 +509,9 @@ def _export_unit(plan: Plan, parts, where: Path, brep: bool) -> list[dict]:
         with kernel_errors(plan, part, "write the files of"):
             export.write_stl(part.solid, stl)
             export.write_step(part.solid, step, part.name)
-            measured = _json(measure(part))
             same = next((j for j in range(k) if parts[j].solid is part.solid), None)
+            # a solid measured once (the throated wheels of one size: a second each, to MASS_EPS)
+            measured = _json(measure(part)) if same is None else out[same]["measured"]
             solid = export.write_brep(part.solid) if brep and same is None else None
         out.append({"part": _json(describe(part)), "measured": measured, "same_solid_as": same,
                     "stl": stl.read_bytes(), "step": step.read_bytes(), "brep": solid})
@@ -606,8 +646,9 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
     whose key is in the cache is copied from it, the others are built (and kept). Returns the
     manifest and the names of the parts built afresh. With ``select``, only the parts it takes
     get their files, and the assembly and the DXF are not written. With ``jobs`` ≥ 1, the units
-    to build and the assembly are made in that many worker processes (:class:`_Workers`), started
-    only when there is something to make; 0: in this process."""
+    to build and the assembly are made in worker processes (:class:`_Workers`): as many as there
+    are units to build, at most ``jobs``, started only when there is something to make; 0: in this
+    process."""
     (folder / "stl").mkdir()
     (folder / "step").mkdir()
     entries, built, units_done = [], [], []
@@ -621,8 +662,9 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
     assembly = None if select is not None else _assembly_from_cache(store, asm_key)
     with ExitStack() as stack:
         workers = None
-        if jobs >= 1 and (any(t[4] is None for t in todo) or (select is None and assembly is None)):
-            workers = stack.enter_context(_Workers(jobs))
+        to_make = sum(t[4] is None for t in todo)
+        if jobs >= 1 and (to_make or (select is None and assembly is None)):
+            workers = stack.enter_context(_Workers(max(1, min(jobs, to_make))))
         with kept_in(store, salt):
             _place_units(plan, folder, todo, workers, store, salt, select, entries, built, units_done, density,
                          total, progress)
@@ -689,6 +731,7 @@ def _place_units(plan: Plan, folder: Path, todo, workers: _Workers | None, store
     The tensioner's units are made first: they take most of the parts' time, and a build that
     finds their gear being made has the other units to make meanwhile."""
     order = sorted(range(len(todo)), key=lambda i: todo[i][0].name != "tensioner")
+    ahead = _WHILE_WORKERS_BUILD.get()
     elsewhere = {i: workers.unit(plan, i, todo[i][3], store, salt) for i in order
                  if todo[i][4] is None} if workers else {}
     done: dict[int, tuple[dict, list | None]] = {}     # unit -> (record with its bytes, parts built here)
@@ -703,6 +746,8 @@ def _place_units(plan: Plan, folder: Path, todo, workers: _Workers | None, store
                 continue
             done[i] = made
             placed[i] = _place(plan, folder, made, select, density, count, total, progress)
+            if ahead is not None and select is None:
+                ahead.placed(todo[i][0].name, folder, placed[i])
     entries += [e for i in range(len(todo)) for e in placed[i]]
     units_done += [(todo[i][3], *done[i]) for i in range(len(todo))]
 
