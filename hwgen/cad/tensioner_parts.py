@@ -57,7 +57,8 @@ def build_tensioner(lay: TensionerLayout, *, min_wall: float, tendon_diameter: f
     running = lay.shaft_diameter + lay.running_fit
     # the drive's hex goes into the worm's line to line: the resin's own scatter (±0.05 mm) makes
     # it snug; modelled without overlap so the parts' interference check stays meaningful
-    worm = worm_solid(pair, lay.worm_near_end, DRIVE_HEX, running, lay.worm_pin - POST + 0.5)
+    worm_inputs = (pair, lay.worm_near_end, DRIVE_HEX, running, lay.worm_pin - POST + 0.5)
+    worm = kept("worm", worm_inputs, lambda: worm_solid(*worm_inputs))     # the thread's sweep: a second or so
     drive = drive_solid(lay)
     gear = kept("throated wheel gear", pair, lambda: gear_solid(pair))      # the costly boolean, kept between builds
     clamp = clamp_solid()
