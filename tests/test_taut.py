@@ -140,6 +140,16 @@ def test_quantile_interval_is_the_binomial_order_statistics_and_covers():
     assert hits >= 0.9 * 400 - 2 * np.sqrt(400 * 0.09)
 
 
+def test_binomial_quantile_is_scipy_stats_binom_ppf():
+    """The interval's binomial quantile, from scipy.special's CDF (a build need not import
+    scipy.stats), is scipy.stats' own over sample counts from 1 to 20 000 and the tails used."""
+    from scipy.stats import binom
+    for n in [*range(1, 120), 999, 1000, 1001, 4096, 10_000, 20_000]:
+        for q in (0.5, 0.95, 0.99):
+            for p in (0.005, 0.025, 0.05, 0.95, 0.975, 0.995):
+                assert mc.binomial_quantile(p, n, q) == int(binom.ppf(p, n, q)), (p, n, q)
+
+
 def test_stop_rule_stops_when_clear_of_the_budget_or_precise_enough():
     from hwgen.checks.taut import enough_samples
     from hwgen.params import CheckSettings
