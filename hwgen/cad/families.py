@@ -205,10 +205,13 @@ def build_unit(plan: Plan, family: Family, first: int, unit: Unit) -> Iterator[P
     """The parts of one unit; a failure of the kernel is a DesignError naming the part."""
     parts = unit.build()
     index = first
+    sound = []                  # the solids found sound so far (a unit's parts often share one)
     while True:
         try:
             part = next(parts)
-            _sound(part)
+            if not any(part.solid is s for s in sound):
+                _sound(part)
+                sound.append(part.solid)
         except StopIteration:
             break
         except (DesignError, InputError):
