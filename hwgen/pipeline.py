@@ -203,10 +203,19 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
     limit = _limit()                    # bad input before anything is written
     select = None if parts is None else (lambda name: fnmatch.fnmatchcase(name, parts))
     ahead = _Ahead(store, plan) if post_build and select is None and store.enabled else None
-    with output_errors(out_root), new_folder(target) as tmp, _hashing_once():
+    with output_errors(out_root), new_folder(target) as tmp, _hashing_once(), ExitStack() as stack:
+        side: dict[str, tuple] = {}
+
+        def placed(early: dict) -> None:
+            # every part's files are in: the stages beside the others start now, while the
+            # assembly is written and the checks' work ahead finishes
+            pool = stack.enter_context(ThreadPoolExecutor(max_workers=max(1, len(BESIDE))))
+            side.update(_start_beside(store, plan, tmp, target, early, stack, pool))
+
         token = _WHILE_WORKERS_BUILD.set(ahead)
         try:
-            manifest, built = _write_files(loaded, plan, tmp, total, progress, store, select, jobs)
+            manifest, built = _write_files(loaded, plan, tmp, total, progress, store, select, jobs,
+                                           placed if post_build and select is None else None)
         except BaseException:
             if ahead is not None:
                 ahead.abandon()
@@ -226,7 +235,7 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
         done, reused = {}, []
         if post_build:
             with cache.using(store):
-                _after_files(store, plan, tmp, target, manifest, done, reused)
+                _after_files(store, plan, tmp, manifest, done, reused, side)
         write_manifest(tmp, manifest)
     chosen = tensioner_record(manifest)
     if chosen is not None:
@@ -340,33 +349,41 @@ BESIDE = ("pictures",)     # stages that read only the parts' files and the mani
 #                            run in a thread beside the others (the renderer is a child process of its own)
 
 
-def _after_files(store: cache.Store, plan: Plan, folder: Path, target: Path, manifest: dict, done: dict,
-                 reused: list[str]) -> None:
-    """The stages after the files, in the order of :data:`AFTER_FILES`; those in :data:`BESIDE`
-    start first, each in a folder of hard links to the part files with a copy of the manifest,
-    and their new files and manifest fields join ``folder`` and ``manifest`` at their place in
-    the order, so the outputs are those of the stages run one after the other."""
+def _start_beside(store: cache.Store, plan: Plan, folder: Path, target: Path, manifest: dict, stack: ExitStack,
+                  pool: ThreadPoolExecutor) -> dict[str, tuple]:
+    """The stages in :data:`BESIDE` started in ``pool``, each in a folder of hard links to the part
+    files with a copy of the manifest (a build starts them as soon as every part's files are in
+    ``folder``: they read nothing else); :func:`_after_files` takes what they made."""
     side: dict[str, tuple] = {}
-    with ExitStack() as stack, ThreadPoolExecutor(max_workers=max(1, len(BESIDE))) as pool:
-        for name, stage in AFTER_FILES:
-            if name in BESIDE:
-                where = stack.enter_context(side_folder(folder, target))
-                m, got = _json(manifest), []
+    for name, stage in AFTER_FILES:
+        if name in BESIDE:
+            where = stack.enter_context(side_folder(folder, target))
+            m, got = _json(manifest), []
+            with cache.using(store):
                 job = contextvars.copy_context().run
-                side[name] = (where, _files(where), _json(m), m, got,
-                              pool.submit(job, _cached_stage, store, name, stage, plan, where, m, got, None))
-        for name, stage in AFTER_FILES:
-            if name not in side:
-                done[name] = _cached_stage(store, name, stage, plan, folder, manifest, reused, done.get("checks"))
-                continue
-            where, before, original, m, got, future = side[name]
-            done[name] = future.result()
-            for path in _files(where):
-                if path not in before:
-                    (folder / path).parent.mkdir(parents=True, exist_ok=True)
-                    os.replace(where / path, folder / path)
-            manifest.update({k: v for k, v in m.items() if k not in original or original[k] != v})
-            reused += got
+            side[name] = (where, _files(where), _json(m), m, got,
+                          pool.submit(job, _cached_stage, store, name, stage, plan, where, m, got, None))
+    return side
+
+
+def _after_files(store: cache.Store, plan: Plan, folder: Path, manifest: dict, done: dict, reused: list[str],
+                 side: dict[str, tuple]) -> None:
+    """The stages after the files, in the order of :data:`AFTER_FILES`; those in :data:`BESIDE`
+    were started before (``side``: :func:`_start_beside`), and their new files and manifest fields
+    join ``folder`` and ``manifest`` at their place in the order, so the outputs are those of the
+    stages run one after the other."""
+    for name, stage in AFTER_FILES:
+        if name not in side:
+            done[name] = _cached_stage(store, name, stage, plan, folder, manifest, reused, done.get("checks"))
+            continue
+        where, before, original, m, got, future = side[name]
+        done[name] = future.result()
+        for path in _files(where):
+            if path not in before:
+                (folder / path).parent.mkdir(parents=True, exist_ok=True)
+                os.replace(where / path, folder / path)
+        manifest.update({k: v for k, v in m.items() if k not in original or original[k] != v})
+        reused += got
 
 
 # the stages the cache keeps, and what each reads besides the folder, the manifest and the plan
@@ -641,11 +658,13 @@ class _Workers:
 
 def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: int, progress,
                  store: cache.Store, select: Callable[[str], bool] | None = None,
-                 jobs: int = 0) -> tuple[dict, list[str]]:
+                 jobs: int = 0, placed: Callable[[dict], None] | None = None) -> tuple[dict, list[str]]:
     """Every part's STL and STEP, assembly.step, backbone_template.dxf and the manifest; a unit
     whose key is in the cache is copied from it, the others are built (and kept). Returns the
     manifest and the names of the parts built afresh. With ``select``, only the parts it takes
-    get their files, and the assembly and the DXF are not written. With ``jobs`` ≥ 1, the units
+    get their files, and the assembly and the DXF are not written. ``placed`` is called with the
+    manifest as it stands once every part's files are in the folder (no assembly or template in
+    its files yet). With ``jobs`` ≥ 1, the units
     to build and the assembly are made in worker processes (:class:`_Workers`): as many as there
     are units to build, at most ``jobs``, started only when there is something to make; 0: in this
     process."""
@@ -668,6 +687,8 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
         with kept_in(store, salt):
             _place_units(plan, folder, todo, workers, store, salt, select, entries, built, units_done, density,
                          total, progress)
+        if placed is not None:
+            placed(_manifest(loaded, plan, {}, entries))
         if select is None and assembly is None:
             if workers is not None:
                 breps = {sha: rec["breps"][sha] for _, rec, _ in units_done for sha in rec.get("breps", {})}
@@ -687,6 +708,12 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
         files = {"assembly": {"path": "assembly.step", "sha256": sha256(folder / "assembly.step")},
                  "backbone_template": {"path": "backbone_template.dxf",
                                        "sha256": sha256(folder / "backbone_template.dxf")}}
+    return _manifest(loaded, plan, files, entries), built
+
+
+def _manifest(loaded: params.LoadedDesign, plan: Plan, files: dict, entries: list[dict]) -> dict:
+    """The manifest of the files written: the design, the whole design's files, each part's entry and
+    the design report."""
     return {
         "design": loaded.name,
         "hwgen_version": __version__,
@@ -695,7 +722,7 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
         "files": files,
         "parts": entries,
         "design_report": design_report(plan),
-    }, built
+    }
 
 
 def _backbone_dxf(store: cache.Store, plan: Plan, path: Path, salt: dict) -> None:
