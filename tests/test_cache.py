@@ -186,12 +186,12 @@ def test_cached_build_has_the_bytes_of_a_fresh_one(fresh):
         p.unlink()
     third = build(loaded, root / "third", post_build=False, cache_dir=root / "cache")
     assert third.built == [] and _tree(third.folder) == first
-    # the tensioner built again (its entry gone) around the throated gear kept from the first build
+    # the tensioner built again (its entry gone) around the throated gear and the worm kept from the first build
     tensioner = next(p for p in _records(root / "cache", "parts")
                      if json.loads(p.read_text())["record"]["parts"][0]["role"].startswith("tensioner"))
     names = [q["name"] for q in json.loads(tensioner.read_text())["record"]["parts"]]
     tensioner.unlink()
-    assert len(_records(root / "cache", "brep")) == 1                     # the gear
+    assert len(_records(root / "cache", "brep")) == 2                     # the gear and the worm
     fourth = build(loaded, root / "fourth", post_build=False, cache_dir=root / "cache")
     assert fourth.built == names and _tree(fourth.folder) == first
 
