@@ -354,7 +354,9 @@ def _plain(obj):
 def remembered(kind: str, inputs, compute: Callable[[], object]):
     """``compute()`` as JSON gives it back, or what it gave last time for ``kind`` and ``inputs``
     (and this code, :func:`code`) when a store is active (:func:`using`). The value is the same
-    either way: a fresh one goes through JSON too."""
+    either way: a fresh one goes through JSON too. It is computed under the entry's lock: a caller
+    that finds another process or thread computing it waits and reads what that one kept (a
+    build's checks meet the work its own thread began ahead of them)."""
     store = _ACTIVE.get()
     if store is None or not store.enabled:
         return json.loads(json.dumps(compute(), default=_plain))
@@ -362,6 +364,10 @@ def remembered(kind: str, inputs, compute: Callable[[], object]):
     rec = store.get_record(k)
     if isinstance(rec, dict) and "value" in rec:
         return rec["value"]
-    value = json.loads(json.dumps(compute(), default=_plain))
-    store.put_record(k, {"value": value})
+    with store.lock(k):
+        rec = store.get_record(k)
+        if isinstance(rec, dict) and "value" in rec:
+            return rec["value"]
+        value = json.loads(json.dumps(compute(), default=_plain))
+        store.put_record(k, {"value": value})
     return value

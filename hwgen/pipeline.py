@@ -222,8 +222,6 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
             raise
         finally:
             _WHILE_WORKERS_BUILD.reset(token)
-        if ahead is not None:
-            ahead.join()
         if select is not None:
             written = [p["name"] for p in manifest["parts"] if select(p["name"])]
             if not written:
@@ -233,9 +231,13 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
             manifest["parts_written"] = {"pattern": parts, "names": written}
             post_build = False
         done, reused = {}, []
-        if post_build:
-            with cache.using(store):
-                _after_files(store, plan, tmp, manifest, done, reused, side)
+        try:
+            if post_build:
+                with cache.using(store):
+                    _after_files(store, plan, tmp, manifest, done, reused, side)
+        finally:
+            if ahead is not None:
+                ahead.join()        # the checks met what it did (waiting for the entry it was making), or did it
         write_manifest(tmp, manifest)
     chosen = tensioner_record(manifest)
     if chosen is not None:
@@ -294,9 +296,12 @@ class _Ahead:
     of this process while worker processes build the parts (this process would only wait for
     them): the tension checks' statics sweeps (:func:`hwgen.checks.tension.sweeps`, seconds of
     scipy), then the gear checks of the tensioner's worms and wheels as soon as their files are in
-    the folder (:meth:`placed`; seconds of manifold3d). Both are kept in the cache as the checks
-    remember them, so the checks find them there: the values are the ones the checks would compute
-    themselves. A failure here is left for the checks to meet and report."""
+    the folder (:meth:`placed`; seconds of manifold3d, which lets go of the interpreter's lock).
+    Both are kept in the cache as the checks remember them, so the checks find them there, or
+    wait for the one being made (:func:`hwgen.cache.remembered` computes under the entry's lock):
+    the values are the ones the checks would compute themselves. The thread goes on beside the
+    stages after the files; the build joins it at its end. A failure here is left for the checks
+    to meet and report."""
 
     def __init__(self, store: cache.Store, plan: Plan):
         self.store, self.plan, self.thread = store, plan, None
@@ -315,6 +320,7 @@ class _Ahead:
             self.jobs.put((folder, {"parts": [dict(e) for e in entries]}))
 
     def _run(self) -> None:
+        from .checks import run as _      # the checks' modules and libraries, imported while this process waits
         from .checks.gear_mesh import gear_checks
         from .checks.tension import sweeps
         with cache.using(self.store):
@@ -632,8 +638,9 @@ def _result(kind_value):
 class _Workers:
     """Worker processes for the CAD kernel (``jobs`` of them, spawned: a fork of a process that
     has built CadQuery geometry hangs). This process then never imports CadQuery: its memory
-    holds the checks alone, and the workers' memory is returned when they end, before the checks
-    start. Each worker pays the CadQuery import (2-4 s) that this process would have paid."""
+    holds the checks alone, and the workers' memory is returned as they end, while the checks
+    start (their exit is not waited for). Each worker pays the CadQuery import (2-4 s) that this
+    process would have paid."""
 
     def __init__(self, jobs: int):
         import multiprocessing
@@ -647,13 +654,15 @@ class _Workers:
         return self
 
     def __exit__(self, *exc):
-        self.pool.shutdown(wait=True, cancel_futures=True)
+        # not waited for: a worker's exit (the CAD kernel's memory handed back) takes a second or
+        # more, and nothing after needs it; the workers end on their own
+        self.pool.shutdown(wait=False, cancel_futures=True)
 
     def unit(self, plan: Plan, index: int, key: str, store: cache.Store, salt: dict, wait: bool = False):
         return self.pool.submit(_unit_in_worker, plan, index, key, store, salt, wait)
 
-    def assembly(self, loaded, plan: Plan, done, breps, store: cache.Store, salt: dict) -> bytes:
-        return _result(self.pool.submit(_assembly_in_worker, loaded, plan, done, breps, store, salt).result())
+    def assembly(self, loaded, plan: Plan, done, breps, store: cache.Store, salt: dict):
+        return self.pool.submit(_assembly_in_worker, loaded, plan, done, breps, store, salt)
 
 
 def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: int, progress,
@@ -692,8 +701,9 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
         if select is None and assembly is None:
             if workers is not None:
                 breps = {sha: rec["breps"][sha] for _, rec, _ in units_done for sha in rec.get("breps", {})}
-                assembly = workers.assembly(loaded, plan, [(k, _record(r)) for k, r, _ in units_done], breps, store,
-                                            salt)
+                job = workers.assembly(loaded, plan, [(k, _record(r)) for k, r, _ in units_done], breps, store, salt)
+                _backbone_dxf(store, plan, folder / "backbone_template.dxf", salt)    # meanwhile
+                assembly = _result(job.result())
             else:
                 with kept_in(store, salt):
                     _assemble(loaded, plan, folder / "assembly.step", store,
@@ -704,7 +714,8 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
             (folder / "assembly.step").write_bytes(assembly)
     files = {}
     if select is None:
-        _backbone_dxf(store, plan, folder / "backbone_template.dxf", salt)
+        if not (folder / "backbone_template.dxf").exists():
+            _backbone_dxf(store, plan, folder / "backbone_template.dxf", salt)
         files = {"assembly": {"path": "assembly.step", "sha256": sha256(folder / "assembly.step")},
                  "backbone_template": {"path": "backbone_template.dxf",
                                        "sha256": sha256(folder / "backbone_template.dxf")}}
