@@ -223,6 +223,32 @@ def test_the_exact_hessian_is_the_central_difference_of_the_gradient(design):
             assert np.array_equal(exact, exact.T)
 
 
+def test_the_exact_hessian_holds_for_joints_of_one_two_and_three_axes_and_tendons_on_any_stations():
+    """What the shipped designs do not have: spans rigid about some axes only (joints with one or
+    two coordinates), tendons through different stations (three sets of eyelets), one that starts
+    after the base and ends before the tip."""
+    from hwgen.model.sag import Span
+    held = st.Stiffening(flex=(Span(100.0, 150.0, math.inf), Span(200.0, 210.0, 3 * EI)),
+                         torsion=(Span(30.0, 60.0, math.inf),), stiff=(Span(100.0, 120.0, math.inf),))
+    s = np.array([20.0, 95.0, 180.0, 260.0])
+    mid = st.TendonLine("C", "C", tuple(s), np.column_stack([10 * np.sin(s / 30), np.full_like(s, -5.0)]), 2.0)
+    tendons = (routed("A", lambda s: np.full_like(s, 12.0), 4.0, n_disks=9),
+               routed("B", lambda s: 8 * np.cos(s / 40.0), 3.0, n_disks=13), mid)
+    model = st.Model(st.Robot(L, SECTION, held, tendons, ((50.0, 3.0), (180.0, 5.0)), 40.0, (20.0, -3.0)), 3.0)
+    axes = np.bincount(np.bincount(model.dof_joint))
+    assert axes[1] > 0 and axes[2] > 0 and axes[3] > 0 and len(model._chord_groups) == 3
+    K = np.diag(model.dof_stiff)
+    for q in (np.zeros(model.n_dof), 0.3 * model.dof_stiff.min() / model.dof_stiff
+              * np.random.default_rng(1).standard_normal(model.n_dof)):
+        length = _lengths(model, q)
+        loads = st.Loads(tendons={"A": ("tension", 3.0), "B": ("locked", length["B"] - 0.5),
+                                  "C": ("locked", length["C"] - 0.2)},
+                         gravity=(0.1, 0.2, -0.97), forces=((L, (0.1, 0.2, 0.3)),))
+        ref = model.difference_hessian(q, loads)
+        scale = np.abs(ref - K).max()
+        assert scale > 10.0 and np.abs(model.hessian(q, loads) - ref).max() < 1e-7 * scale
+
+
 def test_the_gradient_is_the_central_difference_of_the_energy():
     model = _shipped_model("prototype")
     q = _configurations(model)["bent"]
