@@ -151,6 +151,149 @@ def test_a_locked_tendon_never_pushes():
     assert eq.point_stiffness(L, UP) == pytest.approx(3 * EI / L ** 3, rel=0.01)
 
 
+# ------------------------------------------------------------------ the derivatives against differences
+
+def _shipped_model(name):
+    from hwgen import params
+    from hwgen.model import stiffness as sf
+    from hwgen.model.plan import make_plan
+    desc = sf.describe(make_plan(params.read(f"params/{name}.yaml").design))
+    return st.Model(desc.robot, sf.SWEEP_H_MAX)
+
+
+def _lengths(model, q):
+    P, R, _, _, _ = model.forward(q[None])
+    return {k: float(v[0]) for k, v in model._point_forces(P, R, st.Loads())[3].items()}
+
+
+def _load_cases(model, q):
+    """Every tendon mode (locked ones 0.4 mm into stretch or short of it at q), alone and together
+    with the weights (tip mass included) and forces."""
+    names = [t.name for t in model.robot.tendons]
+    length = _lengths(model, q)
+    L_ = model.robot.length
+    forces = ((L_, (0.4, -0.3, 0.6)), (float(model.nodes_s[len(model.nodes_s) // 3]), (-1.0, 0.2, 0.1)))
+    return {
+        "slack": st.Loads(),
+        "tension": st.Loads(tendons={n: ("tension", 2.0 + i) for i, n in enumerate(names)}),
+        "locked, stretched": st.Loads(tendons={n: ("locked", length[n] - 0.4) for n in names}),
+        "locked, not stretched": st.Loads(tendons={n: ("locked", length[n] + 0.4) for n in names}),
+        "gravity": st.Loads(gravity=(0.2, -0.3, -0.93)),
+        "forces": st.Loads(forces=forces),
+        "all": st.Loads(tendons={names[0]: ("tension", 4.0), names[1]: ("locked", length[names[1]] - 0.3),
+                                 names[2]: ("locked", length[names[2]] + 0.3)},
+                        gravity=(0.0, 0.0, -1.0), forces=forces),
+    }
+
+
+def _configurations(model):
+    """The straight robot and two random bends: each joint turned by about what a bend of
+    ``scale`` rad per most flexible joint asks of it (its stiffness against the most flexible's)."""
+    rng = np.random.default_rng(18)
+    soft = model.dof_stiff.min() / model.dof_stiff
+    return {"straight": np.zeros(model.n_dof), "slightly bent": 1e-3 * soft * rng.standard_normal(model.n_dof),
+            "bent": 0.3 * soft * rng.standard_normal(model.n_dof)}
+
+
+@pytest.mark.parametrize("design", ["prototype", "paper-table2"])
+def test_the_exact_hessian_is_the_central_difference_of_the_gradient(design):
+    """Both shipped designs, every tendon mode, the weights with the tip assembly's, point forces,
+    straight and bent: the exact Hessian against the central difference it replaced (relative error
+    ~1e-9), measured on the part the loads add to the joints' stiffness (the diagonal K is exact in
+    both and would hide an error a thousand times over)."""
+    model = _shipped_model(design)
+    assert model.robot.tip_mass > 0 and model.n_dof > 200
+    K = np.diag(model.dof_stiff)
+    for cname, q in _configurations(model).items():
+        for lname, loads in _load_cases(model, q).items():
+            exact = model.hessian(q, loads)
+            ref = model.difference_hessian(q, loads)
+            scale = np.abs(ref - K).max()
+            P, R, _, _, _ = model.forward(q[None])
+            tensions = model._point_forces(P, R, loads)[4]
+            if lname in ("slack", "locked, not stretched"):                   # no tendon pulls: K alone
+                assert all(v[0] == 0.0 for v in tensions.values())
+                assert np.abs(exact - K).max() == 0.0 and scale < 1e-5, (cname, lname)
+                continue
+            if lname == "locked, stretched":
+                assert all(v[0] > 0.0 for v in tensions.values())
+            assert scale > 10.0, (cname, lname)                       # the loads' part is there to be wrong
+            err = np.abs(exact - ref).max()
+            assert err < 1e-7 * scale, (cname, lname, err, scale)            # measured: ≤ 5e-9
+            assert np.array_equal(exact, exact.T)
+
+
+def test_the_exact_hessian_holds_for_joints_of_one_two_and_three_axes_and_tendons_on_any_stations():
+    """What the shipped designs do not have: spans rigid about some axes only (joints with one or
+    two coordinates), tendons through different stations (three sets of eyelets), one that starts
+    after the base and ends before the tip."""
+    from hwgen.model.sag import Span
+    held = st.Stiffening(flex=(Span(100.0, 150.0, math.inf), Span(200.0, 210.0, 3 * EI)),
+                         torsion=(Span(30.0, 60.0, math.inf),), stiff=(Span(100.0, 120.0, math.inf),))
+    s = np.array([20.0, 95.0, 180.0, 260.0])
+    mid = st.TendonLine("C", "C", tuple(s), np.column_stack([10 * np.sin(s / 30), np.full_like(s, -5.0)]), 2.0)
+    tendons = (routed("A", lambda s: np.full_like(s, 12.0), 4.0, n_disks=9),
+               routed("B", lambda s: 8 * np.cos(s / 40.0), 3.0, n_disks=13), mid)
+    model = st.Model(st.Robot(L, SECTION, held, tendons, ((50.0, 3.0), (180.0, 5.0)), 40.0, (20.0, -3.0)), 3.0)
+    axes = np.bincount(np.bincount(model.dof_joint))
+    assert axes[1] > 0 and axes[2] > 0 and axes[3] > 0 and len(model._chord_groups) == 3
+    K = np.diag(model.dof_stiff)
+    for q in (np.zeros(model.n_dof), 0.3 * model.dof_stiff.min() / model.dof_stiff
+              * np.random.default_rng(1).standard_normal(model.n_dof)):
+        length = _lengths(model, q)
+        loads = st.Loads(tendons={"A": ("tension", 3.0), "B": ("locked", length["B"] - 0.5),
+                                  "C": ("locked", length["C"] - 0.2)},
+                         gravity=(0.1, 0.2, -0.97), forces=((L, (0.1, 0.2, 0.3)),))
+        ref = model.difference_hessian(q, loads)
+        scale = np.abs(ref - K).max()
+        assert scale > 10.0 and np.abs(model.hessian(q, loads) - ref).max() < 1e-7 * scale
+
+
+def test_the_gradient_is_the_central_difference_of_the_energy():
+    model = _shipped_model("prototype")
+    q = _configurations(model)["bent"]
+    loads = _load_cases(model, q)["all"]
+    h = 1e-7
+    dirs = np.random.default_rng(3).standard_normal((4, model.n_dof)) * model.dof_stiff.min() / model.dof_stiff
+    V, g = model.energy_and_gradient(np.concatenate([q[None] + h * dirs, q[None] - h * dirs, q[None]]), loads)
+    numeric = (V[:4] - V[4:8]) / (2 * h)
+    assert np.allclose(dirs @ g[-1], numeric, rtol=1e-6, atol=1e-6 * np.abs(numeric).max())
+
+
+def test_the_right_jacobians_derivative_is_its_difference_both_sides_of_the_series():
+    rng = np.random.default_rng(5)
+    axes = rng.standard_normal((7, 3))
+    axes /= np.linalg.norm(axes, axis=1)[:, None]
+    th = axes * np.array([0.0, 1e-9, 1e-4, 0.99 * st.SERIES_ANGLE, 1.01 * st.SERIES_ANGLE, 1.0, 3.0])[:, None]
+    exact = st._jr_derivative(th)
+    h = 1e-6
+    for b in range(3):
+        e = np.zeros(3)
+        e[b] = h
+        ref = (st._exp_and_jr(th + e)[1] - st._exp_and_jr(th - e)[1]) / (2 * h)
+        assert np.abs(exact[:, b] - ref).max() < 1e-8, b
+
+
+def test_the_kinematics_scan_is_the_chain_walked_segment_by_segment():
+    """The prefix scan against the plain walk along the rod: a half segment along the frame
+    before each joint, the joint, a half segment along the frame after."""
+    model = _shipped_model("prototype")
+    q = _configurations(model)["bent"]
+    P, R, O, W, th = (x[0] for x in model.forward(q[None]))
+    E, Jr = st._exp_and_jr(th)
+    p, r = np.zeros(3), np.eye(3)
+    for m, ln in enumerate(model.seg_len):
+        j = model.joint_of_seg[m]
+        if j < 0:
+            p = p + ln * r[:, 1]
+        else:
+            p = p + 0.5 * ln * r[:, 1]
+            r = r @ E[j]
+            assert np.allclose(O[j], p, rtol=0, atol=1e-10) and np.allclose(W[j], r @ Jr[j], rtol=0, atol=1e-13)
+            p = p + 0.5 * ln * r[:, 1]
+        assert np.allclose(P[m + 1], p, rtol=0, atol=1e-10) and np.allclose(R[m + 1], r, rtol=0, atol=1e-13)
+
+
 # ------------------------------------------------------------------ the prototype, from its plan
 
 COARSE_MM = 3.0          # segments of the prototype's strip in these tests: the relations, not the figures
