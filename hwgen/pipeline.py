@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__, cache, params
+from . import __version__, cache, heap, params
 from .atomic import new_folder, side_folder, snapshot, write_json
 from .cad import Part, export
 from .cad.families import build_unit, kernel_errors, part_count, units
@@ -328,11 +328,13 @@ class _Ahead:
                 sweeps(self.plan)
             except Exception:       # the checks run it again and report what it raises
                 pass
+            heap.trim()
             while (job := self.jobs.get()) is not None:
                 try:
                     gear_checks(*job, self.plan)
                 except Exception:
                     pass
+                heap.trim()         # this thread's arena, before the checks' meshes come in
 
     def join(self) -> None:
         if self.thread is not None:

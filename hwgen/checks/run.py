@@ -21,6 +21,7 @@ from .eyelets import backbone_section, locate_eyelets, measure_disk
 from .gear_mesh import gear_checks, gear_pairs
 from .gravity import gravity_checks
 from .lengths import length_checks, pair_take_up, sweep_angles, tendon_lengths
+from .. import heap
 from .meshes import drop_solids, one_load_per_mesh
 from .parts import build_volume_checks, interference_checks, load_parts, mass_summary, mesh_checks
 from .printing import printing_checks
@@ -130,6 +131,7 @@ def _run_checks(folder: str | Path, manifest: dict, plan) -> Report:
     checks += build_volume_checks(parts, proc.build_volume)
     checks += printing_checks(parts, proc.technology)
     drop_solids()           # the whole parts' solids are done with: the Monte Carlo's memory comes next
+    heap.trim()
     mass, c = mass_summary(parts, manifest)
     checks += c
     checks += gear_checks(folder, manifest, plan)

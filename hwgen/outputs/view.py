@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import heap
 from .scene import Posed
 
 BACKEND_ENV = "HWGEN_RENDER_BACKEND"   # "none": behave as if no OpenGL backend worked (tests, CI)
@@ -246,7 +247,7 @@ class Renderer:
             if img.min() == img.max():
                 raise RenderUnavailable(f"the offscreen {self.backend} drew nothing (no working OpenGL context)")
             write_png(img, path)
-        _trim_heap()                    # what building and drawing the scene freed
+        heap.trim()                     # what building and drawing the scene freed
         return ren, W, H
 
     def release(self) -> None:
@@ -254,7 +255,7 @@ class Renderer:
         and hand the freed heap back to the system: a process that draws one picture after another
         then holds one scene at a time, not the largest it ever drew plus what the heap kept."""
         self.window.GetRenderers().RemoveAllItems()
-        _trim_heap()
+        heap.trim()
 
     def rgb(self, W: int, H: int) -> np.ndarray:
         from vtkmodules.util.numpy_support import vtk_to_numpy
@@ -275,14 +276,6 @@ class Renderer:
         return z if rows_up else z[::-1].copy()
 
 
-def _trim_heap() -> None:
-    """glibc's malloc_trim(0): the pages freed by VTK and numpy go back to the system (glibc keeps
-    them otherwise, and the renderer's resident memory only grows); nothing where there is no glibc."""
-    import ctypes
-    try:
-        ctypes.CDLL("libc.so.6").malloc_trim(0)
-    except (OSError, AttributeError):
-        pass
 
 
 def write_png(img: np.ndarray, path: Path) -> None:
