@@ -16,6 +16,7 @@ import json
 import os
 import signal
 import sys
+import threading
 import warnings
 from contextlib import contextmanager, nullcontext
 from pathlib import Path
@@ -95,9 +96,18 @@ def _bad_input(file, path: str, message: str) -> typer.Exit:
 def _errors(params: Path | None):
     """The one error path of every command (see the module's docstring)."""
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")       # numpy and library warnings are not for the user
-            yield
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")       # numpy and library warnings are not for the user
+                yield
+        except (typer.Exit, typer.Abort):
+            raise
+        except Exception:
+            if _STOPPING.is_set():
+                # the signal landed in code that made another error of it (an extension module's
+                # import says "initialization failed"): the stop, not that error, is the news
+                raise KeyboardInterrupt from None
+            raise
     except (typer.Exit, typer.Abort):
         raise
     except InputError as e:
@@ -474,14 +484,19 @@ def schema() -> None:
     sys.stdout.write(json.dumps(json_schema(), indent=2) + "\n")
 
 
+_STOPPING = threading.Event()       # set by SIGTERM or SIGINT: whatever error follows is the stop
+
+
 def _terminate(signum, frame):
-    """SIGTERM ends a command like Ctrl-C: the temporary folder of a build is removed on the way out."""
+    """SIGTERM (and Ctrl-C) end a command: the temporary folder of a build is removed on the way out."""
+    _STOPPING.set()
     raise KeyboardInterrupt
 
 
 def main() -> None:
     # standalone mode: typer.Exit(code) exits with that code, usage errors exit 2
     signal.signal(signal.SIGTERM, _terminate)
+    signal.signal(signal.SIGINT, _terminate)
     app()
 
 

@@ -513,3 +513,24 @@ def test_a_manifest_edited_into_nonsense_is_rebuilt_not_a_crash(built, tmp_path,
                         type("R", (), {"report": {"ok": True, "checks": []}})())
     rep, _, why = pipeline.check(loaded, tmp_path)
     assert rebuilt and why == "manifest.json is not one hwgen wrote"
+
+
+def test_an_error_made_of_a_stop_signal_is_the_stop(capsys):
+    """A SIGTERM that lands while an extension module is imported comes back as that import's
+    ImportError ("initialization failed"), which a unit's kernel-failure handler would report as
+    bad input (exit 2): once a stop was asked for, any error is the stop (exit 130, outputs as
+    they were). Before the signal, the same error is the internal error it is."""
+    import typer
+
+    from hwgen import cli
+    for stopping, code in ((False, cli.EXIT_BUG), (True, 130)):
+        if stopping:
+            cli._STOPPING.set()
+        try:
+            with pytest.raises(typer.Exit) as e:
+                with cli._errors(None):
+                    raise ImportError("initialization failed")
+        finally:
+            cli._STOPPING.clear()
+        assert e.value.exit_code == code
+    assert "interrupted" in capsys.readouterr().err
