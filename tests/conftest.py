@@ -86,6 +86,10 @@ def own_cache(tmp_path, monkeypatch):
     return path
 
 
+# first: pytest-xdist's worker reads the xdist_group marks in its own pytest_collection_modifyitems (it
+# appends "@group" to each node id, which --dist loadgroup schedules by); a hook of a conftest runs
+# after it unless it asks to run first, and the marks added here would come too late to group anything
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     for item in items:
         if BUILDS in getattr(item, "fixturenames", ()):
