@@ -48,6 +48,15 @@ os.environ["HWGEN_CACHE_SIZE"] = "1T"
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / "params"
 BUILDS = "built"          # the fixture that makes a test slow wherever it is asked for
+# The tests of each tier that take longest on their own, measured in November 2026 (the slow ones
+# 25 to 90 s of CPU, the gear stability run, also long, is a group; the quick ones 20 to 60 s of
+# wall on a loaded machine): each starts before the others of its tier. A name that no longer
+# matches only loses its place in the queue.
+LONGEST = ("tests/test_reproducible.py::", "tests/test_any_robot.py::test_lab_robots_build_without_breaking",
+           "tests/test_variant.py::", "tests/test_sweep.py::test_build_level",
+           "tests/test_cache.py::test_two_builds_sharing",
+           "tests/test_fuzz.py::test_random_mutations", "tests/test_hostile.py::test_a_kernel_failure",
+           "tests/test_hostile.py::test_an_empty_solid")
 
 
 @pytest.fixture(scope="session", autouse=True)
@@ -86,6 +95,10 @@ def own_cache(tmp_path, monkeypatch):
     return path
 
 
+# first: pytest-xdist's worker reads the xdist_group marks in its own pytest_collection_modifyitems (it
+# appends "@group" to each node id, which --dist loadgroup schedules by); a hook of a conftest runs
+# after it unless it asks to run first, and the marks added here would come too late to group anything
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     for item in items:
         if BUILDS in getattr(item, "fixturenames", ()):
@@ -93,9 +106,12 @@ def pytest_collection_modifyitems(config, items):
         if _module_fixtures(item):
             item.add_marker(pytest.mark.xdist_group(item.module.__name__))
     if WORKER:
-        # the slow tests first, the many quick ones after: they fill whichever worker is done
-        # first, instead of one long build being the last test of one worker while the other waits
-        items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+        # the slow tests first, the longest of them before the others, the many quick ones after:
+        # they fill whichever worker is done first, instead of one long build being the last test
+        # of one worker while the other waits (--dist loadgroup hands out the groups first, then
+        # the other tests in this order)
+        items.sort(key=lambda item: (item.get_closest_marker("slow") is None,
+                                     not item.nodeid.startswith(LONGEST)))
 
 
 def _module_fixtures(item) -> list[str]:

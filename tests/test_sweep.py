@@ -402,14 +402,20 @@ def test_sweep_on_a_real_dask_cluster_matches_the_local_run(tmp_path):
 # ---------------------------------------------------------------- the build level (CAD)
 
 @pytest.mark.slow
-def test_build_level_keeps_the_files_asked_for_and_records_refusals(tmp_path):
+def test_build_level_keeps_the_files_asked_for_and_records_refusals(built, tmp_path):
     """Two variants of a small robot (the prototype on 5 disks) through the whole pipeline: C1 as
-    shipped (kept, with hwgen check's report) and C1 beyond the disks' rim (a row, nothing built)."""
+    shipped (kept, with hwgen check's report) and C1 beyond the disks' rim (a row, nothing built).
+    Through the session's part cache once it holds the prototype: the variant's tensioner is the
+    prototype's (the same tip eyelets and gears), so its units and their gear measurements are
+    read from the cache, and the disks, strip, fixtures and every check are made for the variant
+    (a cache returns the bytes a fresh build writes: tests/test_cache.py)."""
+    built("prototype")
     f = _sweep_file(tmp_path, {"level": "build", "keep": [0], "robust_samples": 50, "mode": "zip", "axes": [
         {"path": "disks.count", "values": [5, 5]}, {"path": "disks.spacing", "values": [67.5, 67.5]},
         {"path": "tendons[1].routing.function.a", "values": [25, 80]}]})
-    r = _cli("sweep", str(f), "--out", str(tmp_path / "out"), "--scheduler", "inline", "-q",
-             "--cache-dir", str(tmp_path / "cache"), timeout=900)
+    # no pictures in the kept build: nothing here reads one
+    r = _cli("sweep", str(f), "--out", str(tmp_path / "out"), "--scheduler", "inline", "-q", timeout=900,
+             env={**os.environ, "HWGEN_RENDER_BACKEND": "none"})
     assert r.returncode == 0, r.stderr
     rows = {row["variant"]: row for row in _rows(tmp_path / "out" / "sweeps" / "t" / "build")}
     ok, bad = rows[0], rows[1]

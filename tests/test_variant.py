@@ -17,7 +17,9 @@ from .conftest import PARAMS
 
 
 @pytest.mark.slow
-def test_nine_disk_robot_with_mirrored_tendon(tmp_path):
+def test_nine_disk_robot_with_mirrored_tendon(tmp_path, monkeypatch):
+    # the whole build, its checks too; no pictures: nothing here reads one
+    monkeypatch.setenv("HWGEN_RENDER_BACKEND", "none")
     doc = yaml.safe_load((PARAMS / "prototype.yaml").read_text())
     doc["design"] = "short9"
     doc["backbone"]["length"] = 180
