@@ -46,9 +46,10 @@ from .atomic import new_folder, side_folder, snapshot, write_json
 from .cad import Part, export
 from .cad.families import build_unit, kernel_errors, part_count, units
 from .errors import DesignError, InputError, clip
-from .cad.manifest import (MANIFEST, describe, design_report, entry, manifest_files, measure, read_manifest, sha256,
-                           write_manifest)
+from .cad.manifest import (MANIFEST, ManifestPart, describe, design_report, entry, manifest_files, measure,
+                           read_manifest, sha256, write_manifest)
 from .cad.memo import Busy, kept_in, setting_aside
+from .checks.meshes import reading_early
 from .checks.report import REPORT, read_report, write_report, write_summary
 from .model import feasibility
 from .model.plan import Plan, make_plan
@@ -233,11 +234,12 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
         done, reused = {}, []
         try:
             if post_build:
-                with cache.using(store):
+                with cache.using(store), reading_early(ahead.meshes if ahead is not None else {}):
                     _after_files(store, plan, tmp, manifest, done, reused, side)
         finally:
             if ahead is not None:
                 ahead.join()        # the checks met what it did (waiting for the entry it was making), or did it
+                ahead.meshes.clear()
         write_manifest(tmp, manifest)
     chosen = tensioner_record(manifest)
     if chosen is not None:
@@ -294,9 +296,10 @@ def _trim(store: cache.Store, limit: int) -> None:
 class _Ahead:
     """What the checks need from the plan alone, or from a few parts' files, worked out in a thread
     of this process while worker processes build the parts (this process would only wait for
-    them): the tension checks' statics sweeps (:func:`hwgen.checks.tension.sweeps`, seconds of
-    scipy), then the gear checks of the tensioner's worms and wheels as soon as their files are in
-    the folder (:meth:`placed`; seconds of manifold3d, which lets go of the interpreter's lock).
+    them): the tension checks' statics sweeps (:func:`hwgen.checks.tension.sweeps`), then, as
+    each unit's files come into the folder (:meth:`placed`), its STLs read for the checks
+    (:func:`hwgen.checks.meshes.read_early`) and the gear checks of the tensioner's worms and
+    wheels (seconds of manifold3d, which lets go of the interpreter's lock).
     Both are kept in the cache as the checks remember them, so the checks find them there, or
     wait for the one being made (:func:`hwgen.cache.remembered` computes under the entry's lock):
     the values are the ones the checks would compute themselves. The thread goes on beside the
@@ -306,6 +309,7 @@ class _Ahead:
     def __init__(self, store: cache.Store, plan: Plan):
         self.store, self.plan, self.thread = store, plan, None
         self.jobs: queue.SimpleQueue = queue.SimpleQueue()
+        self.meshes: dict = {}          # the parts' STLs read early, for the checks (checks.meshes.reading_early)
 
     def start(self) -> None:
         if self.thread is None:
@@ -316,11 +320,14 @@ class _Ahead:
         """A unit's files are in ``folder`` (its manifest ``entries``): the gear checks of the
         tensioner's, ahead of the other checks (they read the worms' and wheels' files and
         entries alone)."""
-        if self.thread is not None and family == "tensioner":
-            self.jobs.put((folder, {"parts": [dict(e) for e in entries]}))
+        if self.thread is not None:
+            self.jobs.put(("meshes", folder, [dict(e) for e in entries]))
+            if family == "tensioner":
+                self.jobs.put(("gears", folder, {"parts": [dict(e) for e in entries]}))
 
     def _run(self) -> None:
         from .checks import run as _      # the checks' modules and libraries, imported while this process waits
+        from .checks.meshes import read_early
         from .checks.gear_mesh import gear_checks
         from .checks.tension import sweeps
         with cache.using(self.store):
@@ -329,12 +336,18 @@ class _Ahead:
             except Exception:       # the checks run it again and report what it raises
                 pass
             heap.trim()
-            while (job := self.jobs.get()) is not None:
-                try:
-                    gear_checks(*job, self.plan)
-                except Exception:
-                    pass
-                heap.trim()         # this thread's arena, before the checks' meshes come in
+            with reading_early(self.meshes):
+                while (job := self.jobs.get()) is not None:
+                    kind, folder, what = job
+                    try:
+                        if kind == "meshes":
+                            for e in what:
+                                read_early(ManifestPart.of(e).stl_in(folder))
+                        else:
+                            gear_checks(folder, what, self.plan)
+                            heap.trim()         # this thread's arena, before the checks' meshes come in
+                    except Exception:
+                        pass
 
     def join(self) -> None:
         if self.thread is not None:

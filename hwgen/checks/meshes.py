@@ -13,6 +13,7 @@ import numpy as np
 from ..cad.manifest import ManifestPart
 
 _SHELF: ContextVar[dict | None] = ContextVar("hwgen_mesh_shelf", default=None)
+_EARLY: ContextVar[dict | None] = ContextVar("hwgen_meshes_read_early", default=None)
 
 
 @contextmanager
@@ -36,15 +37,43 @@ def drop_solids() -> None:
         shelf["manifolds"].clear()
 
 
+@contextmanager
+def reading_early(early: dict) -> Iterator[None]:
+    """Within: :func:`read_early` keeps the meshes it reads in ``early`` (shared between the thread
+    that reads them while the parts are being made and the checks), and the first
+    :func:`one_load_per_mesh` run that asks for one of them takes it from there."""
+    token = _EARLY.set(early)
+    try:
+        yield
+    finally:
+        _EARLY.reset(token)
+
+
+def read_early(path: str | Path) -> None:
+    """Read an STL the checks will read, before they ask (see :func:`reading_early`)."""
+    import trimesh
+    early = _EARLY.get()
+    if early is not None:
+        key = _file_key(path)
+        if key not in early:
+            early[key] = trimesh.load_mesh(str(path), process=True)
+
+
+def _file_key(path: str | Path) -> tuple:
+    st = os.stat(path)
+    return os.path.realpath(path), st.st_ino, st.st_size, st.st_mtime_ns
+
+
 def load_mesh(path: str | Path):
     import trimesh
     shelf = _SHELF.get()
     if shelf is None:
         return trimesh.load_mesh(str(path), process=True)
-    st = os.stat(path)
-    key = (os.path.realpath(path), st.st_ino, st.st_size, st.st_mtime_ns)
+    key = _file_key(path)
     if key not in shelf["meshes"]:
-        shelf["meshes"][key] = trimesh.load_mesh(str(path), process=True)
+        early = _EARLY.get()
+        got = early.pop(key, None) if early is not None else None
+        shelf["meshes"][key] = got if got is not None else trimesh.load_mesh(str(path), process=True)
     return shelf["meshes"][key]
 
 
