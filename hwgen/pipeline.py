@@ -300,8 +300,8 @@ class _Ahead:
     each unit's files come into the folder (:meth:`placed`), its STLs read for the checks
     (:func:`hwgen.checks.meshes.read_early`) and the gear checks of the tensioner's worms and
     wheels (seconds of manifold3d, which lets go of the interpreter's lock).
-    Both are kept in the cache as the checks remember them, so the checks find them there, or
-    wait for the one being made (:func:`hwgen.cache.remembered` computes under the entry's lock):
+    The sweeps and the gear checks are kept in the cache as the checks remember them, so the
+    checks find them there, or wait for the one being made (:func:`hwgen.cache.remembered` computes under the entry's lock):
     the values are the ones the checks would compute themselves. The thread goes on beside the
     stages after the files; the build joins it at its end. A failure here is left for the checks
     to meet and report."""
@@ -317,9 +317,9 @@ class _Ahead:
             self.thread.start()
 
     def placed(self, family: str, folder: Path, entries: list[dict]) -> None:
-        """A unit's files are in ``folder`` (its manifest ``entries``): the gear checks of the
-        tensioner's, ahead of the other checks (they read the worms' and wheels' files and
-        entries alone)."""
+        """A unit's files are in ``folder`` (its manifest ``entries``): its STLs read for the
+        checks and, for the tensioner, its gear checks (they read the worms' and wheels' files and
+        entries alone), ahead of the other checks."""
         if self.thread is not None:
             self.jobs.put(("meshes", folder, [dict(e) for e in entries]))
             if family == "tensioner":
