@@ -713,11 +713,14 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
                          total, progress)
         if placed is not None:
             placed(_manifest(loaded, plan, {}, entries))
+        job = None
+        if select is None and assembly is None and workers is not None:
+            breps = {sha: rec["breps"][sha] for _, rec, _ in units_done for sha in rec.get("breps", {})}
+            job = workers.assembly(loaded, plan, [(k, _record(r)) for k, r, _ in units_done], breps, store, salt)
+        if select is None:
+            _backbone_dxf(store, plan, folder / "backbone_template.dxf", salt)    # while a worker writes the assembly
         if select is None and assembly is None:
-            if workers is not None:
-                breps = {sha: rec["breps"][sha] for _, rec, _ in units_done for sha in rec.get("breps", {})}
-                job = workers.assembly(loaded, plan, [(k, _record(r)) for k, r, _ in units_done], breps, store, salt)
-                _backbone_dxf(store, plan, folder / "backbone_template.dxf", salt)    # meanwhile
+            if job is not None:
                 assembly = _result(job.result())
             else:
                 with kept_in(store, salt):
@@ -729,8 +732,6 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
             (folder / "assembly.step").write_bytes(assembly)
     files = {}
     if select is None:
-        if not (folder / "backbone_template.dxf").exists():
-            _backbone_dxf(store, plan, folder / "backbone_template.dxf", salt)
         files = {"assembly": {"path": "assembly.step", "sha256": sha256(folder / "assembly.step")},
                  "backbone_template": {"path": "backbone_template.dxf",
                                        "sha256": sha256(folder / "backbone_template.dxf")}}
