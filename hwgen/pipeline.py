@@ -109,9 +109,12 @@ def output_errors(out_root: Path) -> Iterator[None]:
 
 def run_checks(folder: Path, manifest: dict, plan: Plan) -> dict:
     """:func:`hwgen.checks.run.run_checks`, imported when the checks run: it brings scipy's
-    optimisers (about a second), which a build whose stages all come from the cache never needs."""
+    optimisers (about a second), which a build whose stages all come from the cache never needs.
+    In a build, with what the work ahead measured on these very files while assembly.step was
+    written (:meth:`_Ahead.measure`), when it did."""
     from .checks.run import run_checks as run
-    return run(folder, manifest, plan)
+    ahead = _MEASURED_AHEAD.get()
+    return run(folder, manifest, plan, ahead.measured(folder, manifest) if ahead is not None else None)
 
 
 def checks_stage(plan: Plan, folder: Path, manifest: dict, no_report: None) -> dict:
@@ -203,7 +206,7 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
     target = out_root / loaded.name
     limit = _limit()                    # bad input before anything is written
     select = None if parts is None else (lambda name: fnmatch.fnmatchcase(name, parts))
-    ahead = _Ahead(store, plan) if post_build and select is None and store.enabled else None
+    ahead = _Ahead(store, plan) if post_build and select is None else None
     with output_errors(out_root), new_folder(target) as tmp, _hashing_once(), ExitStack() as stack:
         side: dict[str, tuple] = {}
 
@@ -213,10 +216,16 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
             pool = stack.enter_context(ThreadPoolExecutor(max_workers=max(1, len(BESIDE))))
             side.update(_start_beside(store, plan, tmp, target, early, stack, pool))
 
+        def measurable(early: dict) -> None:
+            # and the strip's template: the checks measure them while the assembly is written
+            ahead.measure(tmp, early, _measure_key(tmp, early))
+
         token = _WHILE_WORKERS_BUILD.set(ahead)
         try:
+            whole = post_build and select is None
             manifest, built = _write_files(loaded, plan, tmp, total, progress, store, select, jobs,
-                                           placed if post_build and select is None else None)
+                                           placed if whole else None,
+                                           measurable if whole and ahead is not None else None)
         except BaseException:
             if ahead is not None:
                 ahead.abandon()
@@ -234,8 +243,12 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
         done, reused = {}, []
         try:
             if post_build:
-                with cache.using(store), reading_early(ahead.meshes if ahead is not None else {}):
-                    _after_files(store, plan, tmp, manifest, done, reused, side)
+                measured = _MEASURED_AHEAD.set(ahead)
+                try:
+                    with cache.using(store), reading_early(ahead.meshes if ahead is not None else {}):
+                        _after_files(store, plan, tmp, manifest, done, reused, side)
+                finally:
+                    _MEASURED_AHEAD.reset(measured)
         finally:
             if ahead is not None:
                 ahead.join()        # the checks met what it did (waiting for the entry it was making), or did it
@@ -299,17 +312,23 @@ class _Ahead:
     them): the tension checks' statics sweeps (:func:`hwgen.checks.tension.sweeps`), then, as
     each unit's files come into the folder (:meth:`placed`), its STLs read for the checks
     (:func:`hwgen.checks.meshes.read_early`) and the gear checks of the tensioner's worms and
-    wheels (seconds of manifold3d, which lets go of the interpreter's lock).
+    wheels (seconds of manifold3d, which lets go of the interpreter's lock). Once every part's
+    files and the strip's template are in (:meth:`measure`), a second thread measures every
+    check that reads them (:func:`hwgen.checks.run.measure`) while a worker writes
+    assembly.step, beside the gear checks it will meet.
     The sweeps and the gear checks are kept in the cache as the checks remember them, so the
     checks find them there, or wait for the one being made (:func:`hwgen.cache.remembered` computes under the entry's lock):
-    the values are the ones the checks would compute themselves. The thread goes on beside the
-    stages after the files; the build joins it at its end. A failure here is left for the checks
+    the values are the ones the checks would compute themselves; without a cache
+    (``--no-cache``) they are left to the measurement. The threads go on beside the
+    stages after the files; the build joins them at its end. A failure here is left for the checks
     to meet and report."""
 
     def __init__(self, store: cache.Store, plan: Plan):
         self.store, self.plan, self.thread = store, plan, None
         self.jobs: queue.SimpleQueue = queue.SimpleQueue()
         self.meshes: dict = {}          # the parts' STLs read early, for the checks (checks.meshes.reading_early)
+        self.measuring: threading.Thread | None = None
+        self.found: tuple[str, object] | None = None      # (key of the files measured, checks.run.Measured)
 
     def start(self) -> None:
         if self.thread is None:
@@ -322,8 +341,36 @@ class _Ahead:
         entries alone), ahead of the other checks."""
         if self.thread is not None:
             self.jobs.put(("meshes", folder, [dict(e) for e in entries]))
-            if family == "tensioner":
+            if family == "tensioner" and self.store.enabled:
                 self.jobs.put(("gears", folder, {"parts": [dict(e) for e in entries]}))
+
+    def measure(self, folder: Path, manifest: dict, key: str) -> None:
+        """Every part's files and the strip's template are in ``folder`` (``manifest``: the parts'
+        entries and the design report, as the checks will read them; ``key``: :func:`_measure_key`
+        of the two): every check that reads them, measured now in a thread of its own; the checks
+        take it (:meth:`measured`) when their files and manifest give the same key."""
+        if self.thread is None:
+            return
+        manifest = _json(manifest)
+
+        def run() -> None:
+            from .checks.run import measure
+            with cache.using(self.store), reading_early(self.meshes):
+                try:
+                    self.found = (key, measure(folder, manifest, self.plan))
+                except Exception:       # the checks measure again and report what fails
+                    pass
+        self.measuring = threading.Thread(target=run, name="hwgen-measure", daemon=True)
+        self.measuring.start()
+
+    def measured(self, folder: Path, manifest: dict):
+        """What :meth:`measure` found (waiting for it), when it measured the files now in
+        ``folder`` against ``manifest`` (:func:`_measure_key`); None when it measured others, was
+        not asked, or failed."""
+        if self.measuring is None:
+            return None
+        self.measuring.join()
+        return self.found[1] if self.found is not None and self.found[0] == _measure_key(folder, manifest) else None
 
     def _run(self) -> None:
         from .checks import run as _      # the checks' modules and libraries, imported while this process waits
@@ -331,11 +378,12 @@ class _Ahead:
         from .checks.gear_mesh import gear_checks
         from .checks.tension import sweeps
         with cache.using(self.store):
-            try:
-                sweeps(self.plan)
-            except Exception:       # the checks run it again and report what it raises
-                pass
-            heap.trim()
+            if self.store.enabled:
+                try:
+                    sweeps(self.plan)
+                except Exception:       # the checks run it again and report what it raises
+                    pass
+                heap.trim()
             with reading_early(self.meshes):
                 while (job := self.jobs.get()) is not None:
                     kind, folder, what = job
@@ -353,10 +401,26 @@ class _Ahead:
         if self.thread is not None:
             self.jobs.put(None)
             self.thread.join()
+        if self.measuring is not None:
+            self.measuring.join()
 
     def abandon(self) -> None:
-        """The build failed: the thread ends after what it is doing, unwaited for."""
+        """The build failed: the threads end after what they are doing, unwaited for."""
         self.jobs.put(None)
+
+
+def _measure_key(folder: Path, manifest: dict) -> str:
+    """What :func:`hwgen.checks.run.measure` reads: every file in the folder but assembly.step (which
+    only the files' own checks read), the manifest but its ``files`` (of which it reads only the
+    strip template's path) and the environment the checks read."""
+    from .checks.run import backbone_template
+    return cache.key("measured", {p: sha for p, sha in _files(folder).items() if p != "assembly.step"},
+                     {k: v for k, v in manifest.items() if k != "files"}, backbone_template(manifest),
+                     {e: os.environ.get(e) for e in STAGE_ENV["checks"]})
+
+
+# set by a build for its checks: the work ahead that measured its files while assembly.step was written
+_MEASURED_AHEAD: contextvars.ContextVar[_Ahead | None] = contextvars.ContextVar("hwgen_measured_ahead", default=None)
 
 
 # set by a build whose checks will run: started by the worker pool (:class:`_Workers`) when there are parts to build
@@ -682,13 +746,14 @@ class _Workers:
 
 def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: int, progress,
                  store: cache.Store, select: Callable[[str], bool] | None = None,
-                 jobs: int = 0, placed: Callable[[dict], None] | None = None) -> tuple[dict, list[str]]:
+                 jobs: int = 0, placed: Callable[[dict], None] | None = None,
+                 measurable: Callable[[dict], None] | None = None) -> tuple[dict, list[str]]:
     """Every part's STL and STEP, assembly.step, backbone_template.dxf and the manifest; a unit
     whose key is in the cache is copied from it, the others are built (and kept). Returns the
     manifest and the names of the parts built afresh. With ``select``, only the parts it takes
     get their files, and the assembly and the DXF are not written. ``placed`` is called with the
     manifest as it stands once every part's files are in the folder (no assembly or template in
-    its files yet). With ``jobs`` ≥ 1, the units
+    its files yet), ``measurable`` with the same once the strip's template is in too. With ``jobs`` ≥ 1, the units
     to build and the assembly are made in worker processes (:class:`_Workers`): as many as there
     are units to build, at most ``jobs``, started only when there is something to make; 0: in this
     process."""
@@ -719,6 +784,8 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
             job = workers.assembly(loaded, plan, [(k, _record(r)) for k, r, _ in units_done], breps, store, salt)
         if select is None:
             _backbone_dxf(store, plan, folder / "backbone_template.dxf", salt)    # while a worker writes the assembly
+            if measurable is not None:
+                measurable(_manifest(loaded, plan, {}, entries))
         if select is None and assembly is None:
             if job is not None:
                 assembly = _result(job.result())

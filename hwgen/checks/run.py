@@ -7,6 +7,7 @@ pipeline's business (:func:`hwgen.pipeline.check`), not this module's.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -86,20 +87,50 @@ def _strip_clamp_checks(manifest: dict) -> list[Check]:
             for p in manifest["parts"] if "strip_clamp" in p.get("layout_search", {})]
 
 
-def run_checks(folder: str | Path, manifest: dict, plan) -> Report:
+def run_checks(folder: str | Path, manifest: dict, plan, measured: Measured | None = None) -> Report:
     """Measure the design in ``folder`` against the intent in its manifest; return the report
-    (see :func:`_run_checks`). Every STL is read once and handed to every check that needs it."""
-    with one_load_per_mesh():
-        return _run_checks(folder, manifest, plan)
-
-
-def _run_checks(folder: str | Path, manifest: dict, plan) -> Report:
-    """Measure the design in ``folder`` against the intent in its manifest; return the report
-    (:class:`hwgen.checks.report.Report`: every key and what it holds)."""
+    (:class:`hwgen.checks.report.Report`: every key and what it holds): the files' own checks
+    (every file of the manifest present and as the build wrote it), then what :func:`measure`
+    finds, or ``measured``, what it found on these very files before (a build measures them
+    while it writes assembly.step, which no check but the files' own reads)."""
     folder = Path(folder)
+    checks = _file_checks(folder, manifest)
+    m = measured if measured is not None else measure(folder, manifest, plan)
+    report = _report(manifest["design"], checks + m.checks, m.angles, plan.check.step_deg, m.tls, m.pair, m.emap,
+                     m.taut)
+    report.update(m.sections)
+    return report
+
+
+class Measured(NamedTuple):
+    """What :func:`measure` found: its checks and what the report gathers from them."""
+    checks: list[Check]
+    angles: np.ndarray
+    tls: list
+    pair: dict | None
+    emap: object
+    taut: dict
+    sections: dict          # the report's mass, as_built, seats, gravity and tension
+
+
+def backbone_template(manifest: dict) -> str:
+    """The strip's DXF template's path in the folder, as the manifest names it."""
+    return manifest.get("files", {}).get("backbone_template", {}).get("path", "backbone_template.dxf")
+
+
+def measure(folder: str | Path, manifest: dict, plan) -> Measured:
+    """Every check but the files' own, measured from the parts' STLs and the strip's DXF template
+    (:func:`backbone_template`; the only entry of the manifest's ``files`` read) against the
+    manifest's parts and design report. Every STL is read once and handed to every check that
+    needs it."""
+    with one_load_per_mesh():
+        return _measure(Path(folder), manifest, plan)
+
+
+def _measure(folder: Path, manifest: dict, plan) -> Measured:
     s = plan.check
     rep_in = manifest["design_report"]
-    checks: list[Check] = _file_checks(folder, manifest)
+    checks: list[Check] = []
     parts, c = load_parts(folder, manifest)
     checks += c
     disks, c = _measure_disks(folder, manifest, {p.name: p.mesh for p in parts}, s.position_tol_mm)
@@ -123,9 +154,8 @@ def _run_checks(folder: str | Path, manifest: dict, plan) -> Report:
     checks += wall_checks(emap, rep_in, proc.min_wall)
     checks += hole_checks(emap, proc.min_hole, td, angles, L, tip_exits(manifest))
     checks += tendon_pair_checks(emap, rep_in, td, angles, L)
-    checks += backbone_checks(emap, folder / manifest.get("files", {}).get("backbone_template", {}).get(
-        "path", "backbone_template.dxf"), bb_outline, bb_holes, td, s.position_tol_mm, rep_in.get("findings", []),
-        strip_t, angles, L)
+    checks += backbone_checks(emap, folder / backbone_template(manifest), bb_outline, bb_holes, td,
+                              s.position_tol_mm, rep_in.get("findings", []), strip_t, angles, L)
     checks += mesh_checks(parts)
     checks += interference_checks(parts, s.interference_tol_mm3)
     checks += build_volume_checks(parts, proc.build_volume)
@@ -149,19 +179,19 @@ def _run_checks(folder: str | Path, manifest: dict, plan) -> Report:
     gravity, c = gravity_checks(parts, manifest, plan, fits, None if bb_outline is None else bb_outline.extent[0],
                                 strip_t, L)
     checks += c
-    report = _report(manifest["design"], checks, angles, s.step_deg, tls, pair, emap, taut)
-    report["mass"] = _plain(mass)
-    report["as_built"] = _plain({
-        "about": "what the files let each disk do on the strip (measured from its STL) and how well the jig sets "
-                 "its station (design data: jig.station_tolerance_mm), for a study of as-built tendon lengths",
-        "station_tolerance_mm": plan.jig.station_tolerance_mm,
-        "max_tilt_deg": plan.hub.max_tilt_deg,
-        "disks": [f.to_json() for f in fits],
-        "taut": taut})
-    report["seats"] = _plain(seats)
-    report["gravity"] = _plain(gravity)
-    report["tension"] = _plain(tension)
-    return report
+    return Measured(checks, angles, tls, pair, emap, taut, {
+        "mass": _plain(mass),
+        "as_built": _plain({
+            "about": "what the files let each disk do on the strip (measured from its STL) and how well the jig "
+                     "sets its station (design data: jig.station_tolerance_mm), for a study of as-built tendon "
+                     "lengths",
+            "station_tolerance_mm": plan.jig.station_tolerance_mm,
+            "max_tilt_deg": plan.hub.max_tilt_deg,
+            "disks": [f.to_json() for f in fits],
+            "taut": taut}),
+        "seats": _plain(seats),
+        "gravity": _plain(gravity),
+        "tension": _plain(tension)})
 
 
 def _seating(parts, emap, bb_outline, strip_t, plan, angles):
