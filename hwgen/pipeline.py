@@ -48,7 +48,7 @@ from .cad.families import build_unit, kernel_errors, part_count, units
 from .errors import DesignError, InputError, clip
 from .cad.manifest import (MANIFEST, ManifestPart, describe, design_report, entry, manifest_files, measure,
                            read_manifest, sha256, write_manifest)
-from .cad.memo import Busy, kept_in, setting_aside
+from .cad.memo import Busy, kept_in, made_as, setting_aside
 from .checks.meshes import reading_early
 from .checks.report import REPORT, read_report, write_report, write_summary
 from .model import feasibility
@@ -327,6 +327,8 @@ class _Ahead:
         self.store, self.plan, self.thread = store, plan, None
         self.jobs: queue.SimpleQueue = queue.SimpleQueue()
         self.meshes: dict = {}          # the parts' STLs read early, for the checks (checks.meshes.reading_early)
+        self.tensioner: dict[int, list] = {}    # the tensioner's units placed so far (their parts), and its parts
+        self.tensioner_parts = sum(u.count for f, _, u in units(plan) if f.name == "tensioner")
         self.measuring: threading.Thread | None = None
         self.found: tuple[str, object] | None = None      # (key of the files measured, checks.run.Measured)
 
@@ -335,14 +337,17 @@ class _Ahead:
             self.thread = threading.Thread(target=self._run, name="hwgen-ahead", daemon=True)
             self.thread.start()
 
-    def placed(self, family: str, folder: Path, entries: list[dict]) -> None:
-        """A unit's files are in ``folder`` (its manifest ``entries``): its STLs read for the
-        checks and, for the tensioner, its gear checks (they read the worms' and wheels' files and
-        entries alone), ahead of the other checks."""
+    def placed(self, index: int, family: str, folder: Path, entries: list[dict]) -> None:
+        """The ``index``-th unit's files are in ``folder`` (its manifest ``entries``): its STLs read for the
+        checks and, once the tensioner's last unit is in, its gear checks (they read the worms'
+        and wheels' files and entries alone), ahead of the other checks."""
         if self.thread is not None:
             self.jobs.put(("meshes", folder, [dict(e) for e in entries]))
-            if family == "tensioner" and self.store.enabled:
-                self.jobs.put(("gears", folder, {"parts": [dict(e) for e in entries]}))
+            if family == "tensioner":
+                self.tensioner[index] = [dict(e) for e in entries]
+                if sum(map(len, self.tensioner.values())) == self.tensioner_parts and self.store.enabled:
+                    self.jobs.put(("gears", folder, {"parts": [e for i in sorted(self.tensioner)
+                                                               for e in self.tensioner[i]]}))
 
     def measure(self, folder: Path, manifest: dict, key: str) -> None:
         """Every part's files and the strip's template are in ``folder`` (``manifest``: the parts'
@@ -377,6 +382,8 @@ class _Ahead:
         from .checks.meshes import read_early
         from .checks.gear_mesh import gear_checks
         from .checks.tension import sweeps
+        from .outputs.plots import _pyplot
+        _pyplot()                           # and the checks' plots' (a fifth of a second)
         with cache.using(self.store):
             if self.store.enabled:
                 try:
@@ -430,8 +437,8 @@ _WHILE_WORKERS_BUILD: contextvars.ContextVar[_Ahead | None] = contextvars.Contex
 
 # ---------------------------------------------------------------- the stages after the files, through the cache
 
-BESIDE = ("pictures",)     # stages that read only the parts' files and the manifest's parts and design report:
-#                            run in a thread beside the others (the renderer is a child process of its own)
+BESIDE = ("plates", "pictures")     # stages that read only the parts' files and the manifest's parts and design
+#                                     report: run in threads beside the others (the renderer is a child process)
 
 
 def _start_beside(store: cache.Store, plan: Plan, folder: Path, target: Path, manifest: dict, stack: ExitStack,
@@ -467,7 +474,13 @@ def _after_files(store: cache.Store, plan: Plan, folder: Path, manifest: dict, d
             if path not in before:
                 (folder / path).parent.mkdir(parents=True, exist_ok=True)
                 os.replace(where / path, folder / path)
-        manifest.update({k: v for k, v in m.items() if k not in original or original[k] != v})
+        for k, v in m.items():
+            if k in original and original[k] == v:
+                continue
+            if k == "files":        # the files it added join the folder's own
+                manifest.setdefault(k, {}).update({f: e for f, e in v.items() if original.get(k, {}).get(f) != e})
+            else:
+                manifest[k] = v
         reused += got
 
 
@@ -602,9 +615,10 @@ def _unit_from_cache(store: cache.Store, key: str) -> dict | None:
         return None
 
 
-def _export_unit(plan: Plan, parts, where: Path, brep: bool) -> list[dict]:
+def _export_unit(plan: Plan, parts, where: Path) -> list[dict]:
     """Each part of a freshly built unit: its description and measurements, its STL and STEP
-    (written under ``where``) as bytes, and (``brep``) its solid as BREP bytes, once per solid."""
+    (written under ``where``) as bytes, and its solid as BREP bytes, once per solid (what the
+    cache keeps to put the assembly together, and by which it knows parts of one solid)."""
     out = []
     for k, part in enumerate(parts):
         stl, step = where / "stl" / f"{part.name}.stl", where / "step" / f"{part.name}.step"
@@ -614,9 +628,10 @@ def _export_unit(plan: Plan, parts, where: Path, brep: bool) -> list[dict]:
             same = next((j for j in range(k) if parts[j].solid is part.solid), None)
             # a solid measured once (the throated wheels of one size: a second each, to MASS_EPS)
             measured = _json(measure(part)) if same is None else out[same]["measured"]
-            solid = export.write_brep(part.solid) if brep and same is None else None
+            solid = export.write_brep(part.solid) if same is None else None
         out.append({"part": _json(describe(part)), "measured": measured, "same_solid_as": same,
-                    "stl": stl.read_bytes(), "step": step.read_bytes(), "brep": solid})
+                    "made_as": made_as(part.solid), "stl": stl.read_bytes(), "step": step.read_bytes(),
+                    "brep": solid})
     return out
 
 
@@ -630,7 +645,8 @@ def _keep_unit(store: cache.Store, key: str, exported: list[dict]) -> dict:
         if e["brep"] is not None:
             files["brep"] = store.put_bytes(e["brep"])
             breps[files["brep"]] = e["brep"]
-        records.append({**e["part"], "measured": e["measured"], "files": files, "same_solid_as": e["same_solid_as"]})
+        records.append({**e["part"], "measured": e["measured"], "files": files, "same_solid_as": e["same_solid_as"],
+                        "made_as": e["made_as"]})
     rec = {"parts": records}
     store.put_record(key, rec)
     return {**rec, "blobs": blobs, "breps": breps}
@@ -658,7 +674,7 @@ _BUILT_HERE: dict[str, list] = {}     # in a worker process: the solids of the u
 
 
 def _unit_in_worker(plan: Plan, index: int, key: str, store: cache.Store, salt: dict,
-                    wait: bool) -> tuple[str, object]:
+                    wait: bool, solids: cache.Store) -> tuple[str, object]:
     """Build and export the ``index``-th unit of the plan in a worker process (its solids stay
     there for :func:`_assembly_in_worker`) and keep it in the cache, under the unit's lock:
     ("ok", its record with its bytes, as :func:`_keep_unit` gives it); ("busy", None), unless ``wait``, when another build holds it or a solid it needs (it is making
@@ -672,13 +688,13 @@ def _unit_in_worker(plan: Plan, index: int, key: str, store: cache.Store, salt: 
             if _unit_from_cache(store, key) is not None:
                 return "kept", None                  # by another build, while this one looked
             family, first, unit = list(units(plan))[index]
-            with kept_in(store, salt), (nullcontext() if wait else setting_aside()):
+            with kept_in(solids, salt), (nullcontext() if wait else setting_aside()):
                 parts = list(build_unit(plan, family, first, unit))
             _BUILT_HERE[key] = [p.solid for p in parts]
             with tempfile.TemporaryDirectory(prefix="hwgen-unit-") as tmp:
                 (Path(tmp) / "stl").mkdir()
                 (Path(tmp) / "step").mkdir()
-                exported = _export_unit(plan, parts, Path(tmp), brep=True)
+                exported = _export_unit(plan, parts, Path(tmp))
             # kept before the lock goes (a build waiting for it reads it); the record, with its
             # bytes, is what the calling process places
             return "ok", _keep_unit(store, key, exported)
@@ -691,14 +707,14 @@ def _unit_in_worker(plan: Plan, index: int, key: str, store: cache.Store, salt: 
 
 
 def _assembly_in_worker(loaded, plan: Plan, done: list[tuple[str, dict]], breps: dict[str, bytes], store: cache.Store,
-                        salt: dict) -> tuple[str, object]:
+                        salt: dict, solids: cache.Store) -> tuple[str, object]:
     """assembly.step's bytes, written in a worker from the units ``done`` ((key, record) in build
     order): the solids this worker built, else read back from their BREP (``breps`` or the
     cache), else built again."""
     try:
         with tempfile.TemporaryDirectory(prefix="hwgen-assembly-") as tmp:
             path = Path(tmp) / "assembly.step"
-            with kept_in(store, salt):
+            with kept_in(solids, salt):
                 _assemble(loaded, plan, path, store, [(k, {**r, "breps": breps}, _BUILT_HERE.get(k)) for k, r in done])
             return "ok", path.read_bytes()
     except DesignError as e:
@@ -721,10 +737,11 @@ class _Workers:
     start (their exit is not waited for). Each worker pays the CadQuery import (2-4 s) that this
     process would have paid."""
 
-    def __init__(self, jobs: int):
+    def __init__(self, jobs: int, solids: cache.Store):
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
         self.pool = ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"))
+        self.solids = solids        # where the workers keep and find the solids units share (cad.memo.kept)
 
     def __enter__(self):
         ahead = _WHILE_WORKERS_BUILD.get()
@@ -738,10 +755,10 @@ class _Workers:
         self.pool.shutdown(wait=False, cancel_futures=True)
 
     def unit(self, plan: Plan, index: int, key: str, store: cache.Store, salt: dict, wait: bool = False):
-        return self.pool.submit(_unit_in_worker, plan, index, key, store, salt, wait)
+        return self.pool.submit(_unit_in_worker, plan, index, key, store, salt, wait, self.solids)
 
     def assembly(self, loaded, plan: Plan, done, breps, store: cache.Store, salt: dict):
-        return self.pool.submit(_assembly_in_worker, loaded, plan, done, breps, store, salt)
+        return self.pool.submit(_assembly_in_worker, loaded, plan, done, breps, store, salt, self.solids)
 
 
 def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: int, progress,
@@ -769,11 +786,15 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
     asm_key = cache.key("assembly", loaded.name, [t[3] for t in todo], salt)
     assembly = None if select is not None else _assembly_from_cache(store, asm_key)
     with ExitStack() as stack:
+        # the solids several units share (the tensioner's worm and gear): in the cache, or without
+        # one in a store of this build's own, so that each is made once whichever process needs it
+        solids = store if store.enabled else cache.Store(
+            Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="hwgen-solids-"))))
         workers = None
         to_make = sum(t[4] is None for t in todo)
         if jobs >= 1 and (to_make or (select is None and assembly is None)):
-            workers = stack.enter_context(_Workers(max(1, min(jobs, to_make))))
-        with kept_in(store, salt):
+            workers = stack.enter_context(_Workers(max(1, min(jobs, to_make)), solids))
+        with kept_in(solids, salt):
             _place_units(plan, folder, todo, workers, store, salt, select, entries, built, units_done, density,
                          total, progress)
         if placed is not None:
@@ -790,7 +811,7 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
             if job is not None:
                 assembly = _result(job.result())
             else:
-                with kept_in(store, salt):
+                with kept_in(solids, salt):
                     _assemble(loaded, plan, folder / "assembly.step", store,
                               [(k, r, None if ps is None else [p.solid for p in ps]) for k, r, ps in units_done])
                 assembly = (folder / "assembly.step").read_bytes()
@@ -849,12 +870,17 @@ def _place_units(plan: Plan, folder: Path, todo, workers: _Workers | None, store
     kept the unit, and reads it from the cache (or makes it, when the other did not finish). So
     is a unit that needs a kept solid another build is making (the throated wheel's gear).
 
-    The tensioner's units are made first: they take most of the parts' time, and a build that
-    finds their gear being made has the other units to make meanwhile."""
-    order = sorted(range(len(todo)), key=lambda i: todo[i][0].name != "tensioner")
+    The first of the tensioner's units to make goes first: it makes the worm and the throated
+    gear every channel shares (most of the parts' time), while the other workers make the other
+    families' units. The tensioner's other units come last and wait for the shared solids
+    instead of being set aside: by then the gear is made, or nearly (a build that finds it being
+    made by another has had the other units to make meanwhile)."""
+    tensioner = [i for i in range(len(todo)) if todo[i][0].name == "tensioner"]
+    first = [i for i in tensioner if todo[i][4] is None][:1]
+    order = first + [i for i in range(len(todo)) if i not in tensioner] + [i for i in tensioner if i not in first]
     ahead = _WHILE_WORKERS_BUILD.get()
-    elsewhere = {i: workers.unit(plan, i, todo[i][3], store, salt) for i in order
-                 if todo[i][4] is None} if workers else {}
+    elsewhere = {i: workers.unit(plan, i, todo[i][3], store, salt, wait=i in tensioner and i not in first)
+                 for i in order if todo[i][4] is None} if workers else {}
     done: dict[int, tuple[dict, list | None]] = {}     # unit -> (record with its bytes, parts built here)
     placed: dict[int, list] = {}                       # unit -> its parts' entries
     count = [0]
@@ -868,7 +894,7 @@ def _place_units(plan: Plan, folder: Path, todo, workers: _Workers | None, store
             done[i] = made
             placed[i] = _place(plan, folder, made, select, density, count, total, progress)
             if ahead is not None and select is None:
-                ahead.placed(todo[i][0].name, folder, placed[i])
+                ahead.placed(i, todo[i][0].name, folder, placed[i])
     entries += [e for i in range(len(todo)) for e in placed[i]]
     units_done += [(todo[i][3], *done[i]) for i in range(len(todo))]
 
@@ -894,7 +920,7 @@ def _made(plan: Plan, folder: Path, t, future, workers: _Workers | None, index: 
                     parts = list(build_unit(plan, family, first, unit))
             except Busy:
                 return None
-            rec = _keep_unit(store, key, _export_unit(plan, parts, folder, brep=store.enabled))
+            rec = _keep_unit(store, key, _export_unit(plan, parts, folder))
         built += [p["name"] for p in rec["parts"]]
         return rec, parts
     while rec is None:
@@ -939,14 +965,24 @@ def _assembly_from_cache(store: cache.Store, key: str) -> bytes | None:
 
 def _assemble(loaded, plan: Plan, path: Path, store: cache.Store, units_done) -> None:
     """assembly.step put together from the units' solids (built now, or read back from the
-    cache's BREP; built again if that is gone)."""
-    parts = []
+    cache's BREP; built again if that is gone). Parts of one solid (a unit's parts sharing one;
+    solids kept under one key, :func:`hwgen.cad.memo.made_as`: the tensioner's worms, drive
+    shafts, clamps, its wheels of one spool layout, in whichever unit or process they were made)
+    are given one solid, which the file holds once and places once per part."""
+    parts, one = [], {}         # one: kept key -> the solid every part of that key is given
     for (family, first, unit), (_, rec, solids) in zip(units(plan), units_done):
         solids = solids if solids is not None else _solids(store, rec)
         if solids is None:
             solids = [p.solid for p in build_unit(plan, family, first, unit)]
+        mine = []
+        for p, s in zip(rec["parts"], solids):
+            if p.get("same_solid_as") is not None:
+                s = mine[p["same_solid_as"]]
+            elif p.get("made_as"):
+                s = one.setdefault(p["made_as"], s)
+            mine.append(s)
         parts += [Part(p["name"], p["role"], s, np.asarray(p["placement"], float), tuple(p["color"]))
-                  for p, s in zip(rec["parts"], solids)]
+                  for p, s in zip(rec["parts"], mine)]
     with kernel_errors(plan, None, "write assembly.step"):
         export.write_assembly(parts, loaded.name, path)
 

@@ -186,14 +186,17 @@ def test_cached_build_has_the_bytes_of_a_fresh_one(fresh):
         p.unlink()
     third = build(loaded, root / "third", post_build=False, cache_dir=root / "cache")
     assert third.built == [] and _tree(third.folder) == first
-    # the tensioner built again (its entry gone) around the throated gear and the worm kept from the first build
-    tensioner = next(p for p in _records(root / "cache", "parts")
-                     if json.loads(p.read_text())["record"]["parts"][0]["role"].startswith("tensioner"))
-    names = [q["name"] for q in json.loads(tensioner.read_text())["record"]["parts"]]
-    tensioner.unlink()
-    assert len(_records(root / "cache", "brep")) == 2                     # the gear and the worm
+    # the tensioner built again (its units' entries gone) around the solids kept from the first build:
+    # the throated gear, the worm, the drive shaft, the clamp plate and a wheel per spool layout
+    tensioner = [p for p in _records(root / "cache", "parts")
+                 if json.loads(p.read_text())["record"]["parts"][0]["role"].startswith("tensioner")]
+    names = [q["name"] for p in tensioner for q in json.loads(p.read_text())["record"]["parts"]]
+    for p in tensioner:
+        p.unlink()
+    wheels = {first[f"stl/{n}.stl"] for n in names if n.startswith("tensioner_wheel")}
+    assert len(_records(root / "cache", "brep")) == 4 + len(wheels)
     fourth = build(loaded, root / "fourth", post_build=False, cache_dir=root / "cache")
-    assert fourth.built == names and _tree(fourth.folder) == first
+    assert sorted(fourth.built) == sorted(names) and _tree(fourth.folder) == first
 
 
 @pytest.mark.slow
@@ -350,15 +353,28 @@ def test_parts_writes_only_the_parts_it_names_and_the_whole_manifest(built, tmp_
 
 
 @pytest.mark.slow
-def test_parts_built_in_worker_processes_have_the_bytes_of_a_serial_build(fresh, tmp_path):
-    """--jobs 2 without a cache: every unit is built in a spawned worker, the assembly is put
-    together in one of them (from its own solids and the other's BREP); every file has the bytes
-    of the build in one process."""
+def test_parts_built_in_worker_processes_have_the_bytes_of_a_serial_build(fresh, built, tmp_path, monkeypatch):
+    """--jobs 2 without a cache: every unit is built in a spawned worker (the tensioner's channels
+    in both, around the solids they share), the assembly is put together in one of them (from
+    its own solids and the other's BREP); every file has the bytes of the build in one process.
+    The checks are measured once, in the build's own thread while a worker writes the assembly,
+    and their report has the bytes of a build's in one process."""
+    import threading
+
+    from hwgen.checks import run
+    from hwgen.outputs.pictures import BACKEND_ENV
     from hwgen.pipeline import build
+    monkeypatch.setenv(BACKEND_ENV, "none")
+    measured_in = []
+    real = run.measure
+    monkeypatch.setattr(run, "measure", lambda *a: measured_in.append(threading.current_thread().name) or real(*a))
     loaded, _, first = fresh
-    res = build(loaded, tmp_path / "out", post_build=False, cache_dir=None, jobs=2)
+    res = build(loaded, tmp_path / "out", cache_dir=None, jobs=2)
     assert sorted(res.built) == sorted(p["name"] for p in res.manifest["parts"])
-    assert _tree(res.folder) == first
+    tree = _tree(res.folder)
+    assert {f: tree.get(f) for f in first if f != "manifest.json"} == {f: first[f] for f in first if f != "manifest.json"}
+    assert measured_in == ["hwgen-measure"]
+    assert (res.folder / "report.json").read_bytes() == (built("prototype") / "report.json").read_bytes()
 
 
 @pytest.mark.slow

@@ -1,7 +1,7 @@
 """Which parts a design has, in build order. Each family turns the plan into Parts.
 
-Each family is built in units (:class:`Unit`): a disk each, the strip, the whole tensioner (its
-parts share solids), each fixture. A unit names the frozen values its builder reads (its
+Each family is built in units (:class:`Unit`): a disk each, the strip, each channel of the
+tensioner and its housing, each fixture. A unit names the frozen values its builder reads (its
 ``inputs``), so the part cache (:mod:`hwgen.cache`, used by :mod:`hwgen.pipeline`) can key its
 files by them: a unit whose inputs did not change is not built again. A builder that starts to
 read something new must name it in its unit's inputs.
@@ -76,12 +76,25 @@ def _backbone_units(plan: Plan) -> list[Unit]:
 
 
 def _tensioner_units(plan: Plan) -> list[Unit]:
+    """A unit per channel (its worm, drive shaft, wheel and clamps: they share the kept worm and
+    gear, so the channels can be made in several processes at once), then the housing."""
+    lay = plan.require_tensioner_layout()
     tip = plan.disks[-1]
-    # what build_tensioner reads: the layout (with the tensioner section's values it needs), the
-    # printer's wall, the tendon, and the tip disk's screws and thickness
-    inputs = (plan.require_tensioner_layout(), plan.min_wall, plan.tendon_diameter,
-              len(tip.mount_holes), tip.thickness)
-    return [Unit(inputs, _tensioner_count(plan), lambda: _tensioner(plan))]
+
+    def channel(u):
+        def run():
+            from .tensioner_parts import channel_parts
+            yield from channel_parts(lay, u, min_wall=plan.min_wall, tendon_diameter=plan.tendon_diameter)
+        # what channel_parts reads: the layout (with the tensioner section's values it needs), the
+        # printer's wall and the tendon; and which channel
+        return Unit((lay, plan.min_wall, plan.tendon_diameter, "channel", u.channel), 3 + len(u.clamps), run)
+
+    def housing():
+        from .tensioner_parts import housing_part
+        yield housing_part(lay, tip_screws=len(tip.mount_holes), tip_thickness=tip.thickness)
+    # what housing_part reads: the layout and the tip disk's screws and thickness
+    return [channel(u) for u in lay.units] + [Unit((lay, len(tip.mount_holes), tip.thickness, "housing"), 1,
+                                                    housing)]
 
 
 def _mount_units(plan: Plan) -> list[Unit]:

@@ -11,6 +11,7 @@ made as before.
 """
 from __future__ import annotations
 
+import weakref
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
@@ -20,6 +21,8 @@ from .export import read_brep, write_brep
 
 _ACTIVE: ContextVar[tuple[cache.Store, object] | None] = ContextVar("hwgen_kept_solids", default=None)
 _SET_ASIDE: ContextVar[bool] = ContextVar("hwgen_set_aside_when_busy", default=False)
+# each solid kept() gave, with the key it is kept under
+_MADE_AS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 class Busy(BaseException):
@@ -57,17 +60,24 @@ def kept(kind: str, inputs, make: Callable[[], object]):
     store, salt = active
     key = cache.key("solid", kind, inputs, salt)
     solid = _read(store, key)
-    if solid is not None:
-        return solid
-    lock = store.try_lock(key) if _SET_ASIDE.get() else store.lock(key)   # waits while another makes it
-    if lock is None:
-        raise Busy(kind)
-    with lock:
-        solid = _read(store, key)
-        if solid is None:
-            solid = make()
-            store.put_record(key, {"brep": store.put_bytes(write_brep(solid))})
+    if solid is None:
+        lock = store.try_lock(key) if _SET_ASIDE.get() else store.lock(key)   # waits while another makes it
+        if lock is None:
+            raise Busy(kind)
+        with lock:
+            solid = _read(store, key)
+            if solid is None:
+                solid = make()
+                store.put_record(key, {"brep": store.put_bytes(write_brep(solid))})
+    _MADE_AS[solid] = key
     return solid
+
+
+def made_as(solid) -> str | None:
+    """The key :func:`kept` gave ``solid`` under (its kind, inputs and salt), None for a solid it did
+    not give: parts whose solids have one key have one solid, made in whichever unit or process
+    (the assembly holds it once)."""
+    return _MADE_AS.get(solid)
 
 
 def _read(store: cache.Store, key: str):

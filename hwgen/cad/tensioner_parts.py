@@ -24,7 +24,6 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 
-import cadquery as cq
 import numpy as np
 
 from ..model.gearing import GearDesignError
@@ -49,36 +48,55 @@ def build_tensioner(lay: TensionerLayout, *, min_wall: float, tendon_diameter: f
                     tip_thickness: float) -> Iterator[Part]:
     """The tensioner's parts as ``lay`` places them: the process's ``min_wall`` (the gears'
     thinnest tip), the tendon's diameter, and the tip disk's screw count and thickness (the
-    screws' grip)."""
-    pair = lay.pair
-    problems = pair.problems(lay.friction_coefficient, min_wall)
-    if problems:
-        raise GearDesignError("; ".join(f"tensioner.{f}: {m}" for f, m in problems))
-    running = lay.shaft_diameter + lay.running_fit
-    # the drive's hex goes into the worm's line to line: the resin's own scatter (±0.05 mm) makes
-    # it snug; modelled without overlap so the parts' interference check stays meaningful
-    worm_inputs = (pair, lay.worm_near_end, DRIVE_HEX, running, lay.worm_pin - POST + 0.5)
-    worm = kept("worm", worm_inputs, lambda: worm_solid(*worm_inputs))     # the thread's sweep: a second or so
-    drive = drive_solid(lay)
-    gear = kept("throated wheel gear", pair, lambda: gear_solid(pair))      # the costly boolean, kept between builds
-    clamp = clamp_solid()
-    wheels: dict[tuple, cq.Solid] = {}
+    screws' grip). Channel by channel (:func:`channel_parts`, sharing their solids), then the
+    housing (:func:`housing_part`)."""
+    shared: dict = {}
     for u in lay.units:
-        key = tuple(np.round(np.array([*u.z_part, *u.z_gear, *np.ravel(u.zones), *np.ravel(u.clamps)])
-                             - u.z_part[0], 6))
-        if key not in wheels:
-            wheels[key] = wheel_solid(lay, u, gear, running)
-        meta = {"channel": u.channel, "tendons": list(u.tendons)}
-        wp = lay.worm_placement(u)
-        yield Part(f"tensioner_worm_{u.channel}", "tensioner_worm", worm, wp, WORM_COLOR,
-                   meta={**meta, "mesh_with": f"tensioner_wheel_{u.channel}", "hex_key_mm": lay.hex_key,
-                         "hardware": [_dowel(lay.shaft_diameter, lay.worm_pin, "pressed into the far post")],
-                         **pair.summary()})
-        yield Part(f"tensioner_drive_{u.channel}", "tensioner_drive", drive, lay.drive_placement(u), DRIVE_COLOR,
-                   meta={"channel": u.channel, "hex_key_mm": lay.hex_key,
-                         "drives": f"tensioner_worm_{u.channel}"})
-        yield _wheel_part(lay, u, wheels[key], meta, tendon_diameter)
-        yield from _clamp_parts(lay, u, clamp, meta)
+        yield from channel_parts(lay, u, min_wall=min_wall, tendon_diameter=tendon_diameter, shared=shared)
+    yield housing_part(lay, tip_screws=tip_screws, tip_thickness=tip_thickness)
+
+
+def channel_parts(lay: TensionerLayout, u: Unit, *, min_wall: float, tendon_diameter: float,
+                  shared: dict | None = None) -> Iterator[Part]:
+    """One channel's worm, drive shaft, wheel and clamp plate(s), as ``lay`` places them. The worm,
+    the gear and the wheel are kept between builds and between the processes of one
+    (:func:`hwgen.cad.memo.kept`: the thread's sweep and the gear's boolean, seconds); ``shared`` holds the solids already made for other channels (one
+    worm, drive and clamp for all, one wheel per distinct spool layout)."""
+    shared = {} if shared is None else shared
+    pair = lay.pair
+    if "worm" not in shared:
+        problems = pair.problems(lay.friction_coefficient, min_wall)
+        if problems:
+            raise GearDesignError("; ".join(f"tensioner.{f}: {m}" for f, m in problems))
+        # the drive's hex goes into the worm's line to line: the resin's own scatter (±0.05 mm) makes
+        # it snug; modelled without overlap so the parts' interference check stays meaningful
+        worm_inputs = (pair, lay.worm_near_end, DRIVE_HEX, lay.shaft_diameter + lay.running_fit,
+                       lay.worm_pin - POST + 0.5)
+        shared["worm"] = kept("worm", worm_inputs, lambda: worm_solid(*worm_inputs))   # the thread's sweep: a second or so
+        shared["drive"] = kept("drive shaft", lay, lambda: drive_solid(lay))
+        shared["gear"] = kept("throated wheel gear", pair, lambda: gear_solid(pair))   # the costly boolean
+        shared["clamp"] = kept("clamp plate", (), clamp_solid)
+    # channels whose spool layouts are alike, measured from the part's own end, have one wheel; it is
+    # kept too, so a channel made in another process has the very solid of the first
+    key = ("wheel", *np.round(np.array([*u.z_part, *u.z_gear, *np.ravel(u.zones), *np.ravel(u.clamps)])
+                              - u.z_part[0], 6))
+    if key not in shared:
+        shared[key] = kept("throated wheel", (lay, key),
+                           lambda: wheel_solid(lay, u, shared["gear"], lay.shaft_diameter + lay.running_fit))
+    meta = {"channel": u.channel, "tendons": list(u.tendons)}
+    yield Part(f"tensioner_worm_{u.channel}", "tensioner_worm", shared["worm"], lay.worm_placement(u), WORM_COLOR,
+               meta={**meta, "mesh_with": f"tensioner_wheel_{u.channel}", "hex_key_mm": lay.hex_key,
+                     "hardware": [_dowel(lay.shaft_diameter, lay.worm_pin, "pressed into the far post")],
+                     **pair.summary()})
+    yield Part(f"tensioner_drive_{u.channel}", "tensioner_drive", shared["drive"], lay.drive_placement(u),
+               DRIVE_COLOR, meta={"channel": u.channel, "hex_key_mm": lay.hex_key,
+                                  "drives": f"tensioner_worm_{u.channel}"})
+    yield _wheel_part(lay, u, shared[key], meta, tendon_diameter)
+    yield from _clamp_parts(lay, u, shared["clamp"], meta)
+
+
+def housing_part(lay: TensionerLayout, *, tip_screws: int, tip_thickness: float) -> Part:
+    """The housing, standing on its base bars, with the hardware that holds it and the strip's tip."""
     hp = housing_placement(lay)
     inv = np.linalg.inv(hp)
     n_tip = tip_screws
@@ -86,14 +104,14 @@ def build_tensioner(lay: TensionerLayout, *, min_wall: float, tendon_diameter: f
     set_screw = {"nut": _hw("hex nut ISO 4032", "M3", 2, STEEL, "for the strip's set screws, in a side slot"),
                  "insert": _hw("heat-set insert", f"M3 × {INSERT['M3'][1]:g}", 2, BRASS,
                                "for the strip's set screws, melted in")}
-    yield Part("tensioner_housing", "tensioner_housing", housing_solid(lay).moved(location(inv)), hp, HOUSING_COLOR,
-               meta={"channel": "all", "channels": [u.channel for u in lay.units], "layout_search": lay.search,
-                     "hardware": [
-                         {**_hw("socket head cap screw ISO 4762", tip.screw, n_tip, STEEL,
-                                "through the tip disk into the housing"), "tip_mount": True},
-                         tip.held_by(n_tip, "takes the tip-disk screws, in a side slot"),
-                         _hw("set screw ISO 4026", f"M3 × {SET_SCREW:g}", 2, STEEL, "clamps the strip's tip"),
-                         set_screw[lay.fastening]]})
+    return Part("tensioner_housing", "tensioner_housing", housing_solid(lay).moved(location(inv)), hp, HOUSING_COLOR,
+                meta={"channel": "all", "channels": [u.channel for u in lay.units], "layout_search": lay.search,
+                      "hardware": [
+                          {**_hw("socket head cap screw ISO 4762", tip.screw, n_tip, STEEL,
+                                 "through the tip disk into the housing"), "tip_mount": True},
+                          tip.held_by(n_tip, "takes the tip-disk screws, in a side slot"),
+                          _hw("set screw ISO 4026", f"M3 × {SET_SCREW:g}", 2, STEEL, "clamps the strip's tip"),
+                          set_screw[lay.fastening]]})
 
 
 def _wheel_part(lay: TensionerLayout, u: Unit, solid, meta: dict, tendon_d: float) -> Part:
