@@ -128,6 +128,8 @@ def processes(params_path: Path) -> None:
         bare = {**env, BACKEND_ENV: "none"}
         rows.append(_process("cold build, --no-cache, no pictures", [*build, "--no-cache"], bare,
                              f"{BACKEND_ENV}=none")[:5])
+        rows.append(_process("cold build, no pictures", [*build[:-3], "--cache-dir", str(tmp / "bare-cache"), "-q"],
+                             bare, f"empty part cache; {BACKEND_ENV}=none")[:5])
         text = params.read_text()
         if EDIT_FROM in text:
             params.write_text(text.replace(EDIT_FROM, EDIT_TO))

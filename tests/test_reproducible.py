@@ -76,8 +76,8 @@ def test_killed_concurrent_and_repeated_builds(built, tmp_path):
     one whole build, and what they publish has the same bytes in every file (STEP, STL, DXF, PNG,
     SVG, JSON, CSV) as the session's build, made in this process after other builds. The killed
     builds build afresh too (from the cache they would be done before the kill). SIGKILL comes as
-    soon as the build's new folder is begun: the build is under way (making the tensioner's units,
-    which come first: about 14 s of the kernel before the first STL), and what it leaves behind is
+    soon as the build's new folder is begun: the build is under way (making the tensioner's first
+    channel, which comes first: seconds of the kernel before its first STL), and what it leaves behind is
     that folder whatever it holds by then. So does SIGTERM: it may land while the CAD kernel is
     being imported, whose import then fails; the stop is still what the build reports (exit 130,
     ``cli._STOPPING``), not a kernel failure."""
