@@ -615,24 +615,44 @@ def _unit_from_cache(store: cache.Store, key: str) -> dict | None:
         return None
 
 
-def _export_unit(plan: Plan, parts, where: Path) -> list[dict]:
+def _export_unit(plan: Plan, parts, where: Path, solids: cache.Store) -> list[dict]:
     """Each part of a freshly built unit: its description and measurements, its STL and STEP
     (written under ``where``) as bytes, and its solid as BREP bytes, once per solid (what the
-    cache keeps to put the assembly together, and by which it knows parts of one solid)."""
+    cache keeps to put the assembly together, and by which it knows parts of one solid). A solid
+    kept in ``solids`` (:func:`hwgen.cad.memo.made_as`) whose STL and measurements another unit
+    has kept there gets those (a throated wheel's are a second of tessellation and MASS_EPS
+    integration; every channel of one spool layout has the same)."""
     out = []
     for k, part in enumerate(parts):
         stl, step = where / "stl" / f"{part.name}.stl", where / "step" / f"{part.name}.step"
+        kept_as = made_as(part.solid)
         with kernel_errors(plan, part, "write the files of"):
-            export.write_stl(part.solid, stl)
-            export.write_step(part.solid, step, part.name)
             same = next((j for j in range(k) if parts[j].solid is part.solid), None)
+            mesh_key = cache.key("kept solid's mesh", kept_as) if kept_as and same is None else None
+            got = _kept_mesh(solids, mesh_key) if mesh_key else None
+            if got is not None:
+                stl.write_bytes(got[0])
+            else:
+                export.write_stl(part.solid, stl)
+            export.write_step(part.solid, step, part.name)
             # a solid measured once (the throated wheels of one size: a second each, to MASS_EPS)
-            measured = _json(measure(part)) if same is None else out[same]["measured"]
+            measured = out[same]["measured"] if same is not None else got[1] if got is not None else \
+                _json(measure(part))
             solid = export.write_brep(part.solid) if same is None else None
+        if mesh_key and got is None:
+            solids.put_record(mesh_key, {"stl": solids.put_bytes(stl.read_bytes()), "measured": measured})
         out.append({"part": _json(describe(part)), "measured": measured, "same_solid_as": same,
-                    "made_as": made_as(part.solid), "stl": stl.read_bytes(), "step": step.read_bytes(),
-                    "brep": solid})
+                    "made_as": kept_as, "stl": stl.read_bytes(), "step": step.read_bytes(), "brep": solid})
     return out
+
+
+def _kept_mesh(solids: cache.Store, key: str) -> tuple[bytes, dict] | None:
+    """(STL bytes, measurements) kept for a kept solid by the unit that exported it first."""
+    rec = solids.get_record(key)
+    if not isinstance(rec, dict) or not isinstance(rec.get("stl"), str) or not isinstance(rec.get("measured"), dict):
+        return None
+    data = solids.get_bytes(rec["stl"])
+    return None if data is None else (data, rec["measured"])
 
 
 def _keep_unit(store: cache.Store, key: str, exported: list[dict]) -> dict:
@@ -694,7 +714,7 @@ def _unit_in_worker(plan: Plan, index: int, key: str, store: cache.Store, salt: 
             with tempfile.TemporaryDirectory(prefix="hwgen-unit-") as tmp:
                 (Path(tmp) / "stl").mkdir()
                 (Path(tmp) / "step").mkdir()
-                exported = _export_unit(plan, parts, Path(tmp))
+                exported = _export_unit(plan, parts, Path(tmp), solids)
             # kept before the lock goes (a build waiting for it reads it); the record, with its
             # bytes, is what the calling process places
             return "ok", _keep_unit(store, key, exported)
@@ -796,7 +816,7 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
             workers = stack.enter_context(_Workers(max(1, min(jobs, to_make)), solids))
         with kept_in(solids, salt):
             _place_units(plan, folder, todo, workers, store, salt, select, entries, built, units_done, density,
-                         total, progress)
+                         total, progress, solids)
         if placed is not None:
             placed(_manifest(loaded, plan, {}, entries))
         job = None
@@ -860,7 +880,8 @@ def _record(rec: dict) -> dict:
 
 
 def _place_units(plan: Plan, folder: Path, todo, workers: _Workers | None, store: cache.Store, salt: dict, select,
-                 entries: list, built: list, units_done: list, density: float, total: int, progress) -> None:
+                 entries: list, built: list, units_done: list, density: float, total: int, progress,
+                 solids: cache.Store) -> None:
     """Each unit's files into the folder and its parts' entries (in build order, whatever order
     the units were made in): from the cache, from a worker, or built here.
 
@@ -887,7 +908,7 @@ def _place_units(plan: Plan, folder: Path, todo, workers: _Workers | None, store
     theirs = []
     for wait in (False, True):
         for i in theirs if wait else order:
-            made = _made(plan, folder, todo[i], elsewhere.pop(i, None), workers, i, store, salt, built, wait)
+            made = _made(plan, folder, todo[i], elsewhere.pop(i, None), workers, i, store, salt, built, wait, solids)
             if made is None:
                 theirs.append(i)
                 continue
@@ -900,7 +921,7 @@ def _place_units(plan: Plan, folder: Path, todo, workers: _Workers | None, store
 
 
 def _made(plan: Plan, folder: Path, t, future, workers: _Workers | None, index: int, store: cache.Store, salt: dict,
-          built: list, wait: bool) -> tuple[dict, list | None] | None:
+          built: list, wait: bool, solids: cache.Store) -> tuple[dict, list | None] | None:
     """A unit's record (with its bytes) and, when built in this process, its parts (their files
     are then in the folder already): from the cache, from a worker (``future``, or one submitted
     now), or built here. None, without ``wait``, when another build is making it."""
@@ -920,7 +941,7 @@ def _made(plan: Plan, folder: Path, t, future, workers: _Workers | None, index: 
                     parts = list(build_unit(plan, family, first, unit))
             except Busy:
                 return None
-            rec = _keep_unit(store, key, _export_unit(plan, parts, folder))
+            rec = _keep_unit(store, key, _export_unit(plan, parts, folder, solids))
         built += [p["name"] for p in rec["parts"]]
         return rec, parts
     while rec is None:
