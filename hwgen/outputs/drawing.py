@@ -13,7 +13,7 @@ from html import escape as _escape
 
 import numpy as np
 
-from .scene import Posed, ScenePart, pose_rigid
+from .scene import Posed
 from .view import ISOMETRIC, Renderer
 
 
@@ -149,12 +149,11 @@ def _anchor_member(members: dict[str, list[np.ndarray]], to_page, axis: np.ndarr
     return min(good, key=lambda v: abs(np.mean(v @ axis) - mid))
 
 
-def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: dict, colours: dict,
-                       table: list[dict], path: Path, title: str) -> dict:
-    """Draw the exploded assembly as visible lines with one balloon per family and a parts table."""
+def write_exploded_svg(renderer: Renderer, posed: list[Posed], colours: dict, table: list[dict], path: Path,
+                       title: str) -> dict:
+    """Draw the exploded assembly as visible lines with one balloon per family and a parts table
+    (``posed``: the parts rigidly posed as exploded.png shows them, seen along ISOMETRIC)."""
     view = ISOMETRIC
-    _, _, d = view.axes()
-    posed: list[Posed] = [pose_rigid(p, placements[p.name], d) for p in parts]
     ren, W, H = renderer.draw(posed, colours, view, None, edges=False, shading=False, margin=0.02,
                               aspect_range=(0.3, 2.0), width=DEPTH_WIDTH_PX)
     zmax = _max3(renderer.depth(W, H, rows_up=True))     # bottom-up rows, as display coordinates
@@ -165,7 +164,7 @@ def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: d
     def to_page(p: np.ndarray) -> np.ndarray:
         return np.column_stack([PAGE_MARGIN + p[:, 0] * scale, PAGE_MARGIN + 40 + (H - p[:, 1]) * scale])
 
-    groups, visible_pts, n_runs = _visible_lines(posed, placements, d, project, zmax, tol, to_page)
+    groups, visible_pts, n_runs = _visible_lines(posed, project, zmax, tol, to_page)
     balloons, page_pts = _balloons(table, visible_pts, to_page)
     parts_table, (x1, y1) = _parts_table(table, page_pts)
     xmax, ymax = page_pts.max(axis=0)
@@ -187,15 +186,14 @@ def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: d
             "depth_px": [W, H], "bytes": Path(path).stat().st_size}
 
 
-def _visible_lines(posed: list[Posed], placements: dict, d: np.ndarray, project, zmax, tol, to_page):
+def _visible_lines(posed: list[Posed], project, zmax, tol, to_page):
     """Each part's visible feature and silhouette edges as SVG paths; the visible points per
     family and part (for the balloons) and how many runs were drawn."""
     groups, visible_pts, n_runs = [], {}, 0
     for ps in posed:
         p = ps.part
-        R = placements[p.name][:3, :3]
         body = []
-        for pairs, width in ((p.feature_edges(), LINE_WIDTH), (p.silhouette_edges(R, d), OUTLINE_WIDTH)):
+        for pairs, width in ((p.feature_edges(), LINE_WIDTH), (ps.silhouette, OUTLINE_WIDTH)):
             runs, pts = visible_runs(ps.vertices[pairs], project, zmax, tol)
             n_runs += len(runs)
             if len(runs):

@@ -50,15 +50,25 @@ def _polydata(vertices: np.ndarray, cells: np.ndarray, lines: bool = False):
     return pd
 
 
-def _surface_actor(V, F, rgb, shading: bool = True):
-    _, _, filters, rc = _vtk()
+def _surface(V, F):
+    """A part's triangles with their normals, split along edges sharper than SMOOTH_ANGLE_DEG:
+    what a surface actor draws. The filter runs once here; the result can be drawn again."""
+    _, dm, filters, _ = _vtk()
     normals = filters.vtkPolyDataNormals()
     normals.SetInputData(_polydata(V, F))
     normals.SetFeatureAngle(SMOOTH_ANGLE_DEG)
     normals.SplittingOn()
     normals.ConsistencyOff()
+    normals.Update()
+    out = dm.vtkPolyData()
+    out.ShallowCopy(normals.GetOutput())
+    return out
+
+
+def _surface_actor(surface, rgb, shading: bool = True):
+    _, _, _, rc = _vtk()
     mapper = rc.vtkPolyDataMapper()
-    mapper.SetInputConnection(normals.GetOutputPort())
+    mapper.SetInputData(surface)
     actor = rc.vtkActor()
     actor.SetMapper(mapper)
     prop = actor.GetProperty()
@@ -191,7 +201,9 @@ class Renderer:
         lw = max(1.0, self.width / 1000)
         for ps in posed:
             rgb = colours[ps.part.role]
-            ren.AddActor(_surface_actor(ps.vertices, ps.faces, rgb, shading))
+            if "surface" not in ps.drawn:    # kept with the pose: its next picture reuses it
+                ps.drawn["surface"] = _surface(ps.vertices, ps.faces)
+            ren.AddActor(_surface_actor(ps.drawn["surface"], rgb, shading))
             if edges and len(ps.edges):
                 ren.AddActor(_line_actor(ps.edges, edge_colour(rgb), lw))
         for pts, rgb in (tubes or {}).values():
