@@ -78,7 +78,7 @@ def visible_runs(segments: np.ndarray, project, zmax: np.ndarray, tol: float):
     b = project(segments[:, 1])
     n = np.maximum(1, np.ceil(np.linalg.norm((b - a)[:, :2], axis=1) / SAMPLE_PX).astype(int))
     idx = np.repeat(np.arange(len(a)), n)
-    k = np.concatenate([np.arange(m) for m in n])
+    k = np.arange(len(idx)) - np.repeat(np.cumsum(n) - n, n)     # each sample's index within its edge
     t = ((k + 0.5) / n[idx])[:, None]
     s = a[idx] + t * (b[idx] - a[idx])
     H, W = zmax.shape
@@ -96,32 +96,38 @@ def visible_runs(segments: np.ndarray, project, zmax: np.ndarray, tol: float):
 
 
 def chain(segments: np.ndarray, decimals: int = 2) -> list[np.ndarray]:
-    """Join segments that share end points into polylines (fewer, shorter path commands)."""
-    keys = [tuple(np.round(p, decimals)) for p in segments.reshape(-1, 2)]
-    ends: dict[tuple, list[int]] = {}
-    for i, key in enumerate(keys):
-        ends.setdefault(key, []).append(i // 2)
-    used = np.zeros(len(segments), bool)
+    """Join segments that share end points (equal when rounded to ``decimals``) into polylines
+    (fewer, shorter path commands): from each segment not yet used, forward from its second end,
+    then back from its first, each time taking the first unused segment that meets the tip."""
+    if len(segments) == 0:
+        return []
+    ends_xy = segments.reshape(-1, 2)
+    # one integer per distinct rounded point (+ 0.0 makes -0.0 the same point as 0.0)
+    _, inverse = np.unique(np.round(ends_xy, decimals) + 0.0, axis=0, return_inverse=True)
+    key = inverse.ravel().tolist()
+    ends: dict[int, list[int]] = {}
+    for i, k in enumerate(key):
+        ends.setdefault(k, []).append(i // 2)
+    used = [False] * len(segments)
     lines = []
     for s in range(len(segments)):
         if used[s]:
             continue
         used[s] = True
-        pts = [segments[s, 0], segments[s, 1]]
+        seq = [2 * s, 2 * s + 1]            # end points (rows of ends_xy) of the polyline, in order
         for forward in (True, False):
             while True:
-                tip = tuple(np.round(pts[-1] if forward else pts[0], decimals))
-                nxt = next((o for o in ends.get(tip, []) if not used[o]), None)
+                tip = key[seq[-1] if forward else seq[0]]
+                nxt = next((o for o in ends.get(tip, ()) if not used[o]), None)
                 if nxt is None:
                     break
                 used[nxt] = True
-                a, b = segments[nxt]
-                far = b if tuple(np.round(a, decimals)) == tip else a
+                far = 2 * nxt + 1 if key[2 * nxt] == tip else 2 * nxt
                 if forward:
-                    pts.append(far)
+                    seq.append(far)
                 else:
-                    pts.insert(0, far)
-        lines.append(np.asarray(pts))
+                    seq.insert(0, far)
+        lines.append(ends_xy[seq])
     return lines
 
 
@@ -129,7 +135,7 @@ def _path(lines: list[np.ndarray], to_page) -> str:
     out = []
     for ln in lines:
         q = to_page(ln)
-        out.append("M" + " L".join(f"{x:.1f} {y:.1f}" for x, y in q))
+        out.append("M" + " L".join(f"{x:.1f} {y:.1f}" for x, y in q.tolist()))
     return " ".join(out)
 
 
