@@ -48,6 +48,10 @@ EXIT_NO_BACKEND = 3      # the child's exit code for RenderUnavailable
 # rasteriser threads' scene memory made about a tenth of the renderer's peak, the pictures have the
 # same bytes, and the checks drawn beside them keep the other core
 RASTER_THREADS_ENV = "LP_NUM_THREADS"
+# OpenBLAS likewise: its threads for the small products here (a part's face normals turned to the
+# view, (m, 3) @ (3, 3)) cost more than they do, about a second of the child's CPU on the prototype,
+# most of it waiting for the other core; one thread gives the same bytes
+BLAS_THREADS_ENV = "OPENBLAS_NUM_THREADS"
 
 
 class RenderFailed(RuntimeError):
@@ -216,6 +220,8 @@ def run_child(folder: Path, manifest: dict, settings: Settings, svg_table: list[
     attempts[0].setdefault(RASTER_THREADS_ENV, "0")
     if os.environ.get("DISPLAY"):
         attempts.append(dict(os.environ))       # then the display's own OpenGL, if there is one
+    for env in attempts:
+        env.setdefault(BLAS_THREADS_ENV, "1")
     errors, backend = [], True
     for env in attempts:
         try:
