@@ -290,6 +290,12 @@ class Renderer:
 
 
 
+# zlib's level for the PNGs. Measured on the twelve pictures of each shipped design (1000-1800 px
+# wide): Pillow's optimize=True (level 9) took 1.45 s of CPU for 1.92 MB; level 6, 0.37 s for 1.86 MB
+# (level 9 alone 1.41 s, 1.83 MB; level 5, 0.34 s, 1.87 MB). The pixels are the same at any level.
+PNG_COMPRESS_LEVEL = 6
+
+
 def write_png(img: np.ndarray, path: Path) -> None:
     from PIL import Image
-    Image.fromarray(img).save(path, optimize=True)
+    Image.fromarray(img).save(path, compress_level=PNG_COMPRESS_LEVEL)
