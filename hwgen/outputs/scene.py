@@ -51,6 +51,9 @@ class ScenePart:
     station: int | None = None
     meta: dict = field(default_factory=dict)
     _edges: "EdgeData | None" = None
+    # what the renderer made of the part in its file's coordinates (its surface with normals): every
+    # rigid pose of it is drawn from that, moved, not worked out again
+    drawn: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def mesh(self):
@@ -293,6 +296,7 @@ class Posed:
     faces: np.ndarray
     edges: np.ndarray           # (k, 2, 3) world segments
     silhouette: np.ndarray | None = None    # (j, 2) vertex pairs of the silhouette edges (a rigid pose's)
+    matrix: np.ndarray | None = None        # 4x4 file -> world of a rigid pose (None: the part was bent)
     # what the renderer made of this pose (its surface with normals), kept as long as the pose
     drawn: dict = field(default_factory=dict, repr=False, compare=False)
 
@@ -306,7 +310,7 @@ def pose_rigid(p: ScenePart, matrix: np.ndarray, view_dir: np.ndarray) -> Posed:
     V = transform(p.vertices, matrix)
     silhouette = p.silhouette_edges(matrix[:3, :3], view_dir)
     pairs = np.vstack([p.feature_edges(), silhouette])
-    return Posed(p, V, p.faces, V[pairs], silhouette)
+    return Posed(p, V, p.faces, V[pairs], silhouette, np.asarray(matrix, dtype=float))
 
 
 def pose_bent(p: ScenePart, stations, kappa: float, view_dir: np.ndarray) -> Posed:

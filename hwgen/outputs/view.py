@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import heap
-from .scene import Posed
+from .scene import Posed, transform
 
 BACKEND_ENV = "HWGEN_RENDER_BACKEND"   # "none": behave as if no OpenGL backend worked (tests, CI)
 SMOOTH_ANGLE_DEG = 20.0     # shading is smooth across edges flatter than this (STL facets are 11.5°)
@@ -63,6 +63,45 @@ def _surface(V, F):
     out = dm.vtkPolyData()
     out.ShallowCopy(normals.GetOutput())
     return out
+
+
+def _moved(surface, matrix: np.ndarray):
+    """A surface (points, normals, triangles) moved rigidly by a 4x4 matrix: its points and normals
+    turned, its triangles and the split along its sharp edges as they were."""
+    from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+    core, dm, _, _ = _vtk()
+    R = matrix[:3, :3]
+    out = dm.vtkPolyData()
+    out.ShallowCopy(surface)
+    pts = core.vtkPoints()
+    pts.SetData(numpy_to_vtk(transform(vtk_to_numpy(surface.GetPoints().GetData()), matrix), deep=True))
+    out.SetPoints(pts)
+    n0 = surface.GetPointData().GetNormals()
+    n = numpy_to_vtk(np.ascontiguousarray(vtk_to_numpy(n0).astype(np.float64) @ R.T, dtype=np.float32), deep=True)
+    n.SetName(n0.GetName())
+    pd = dm.vtkPointData()
+    pd.ShallowCopy(surface.GetPointData())
+    pd.SetNormals(n)
+    out.GetPointData().ShallowCopy(pd)
+    return out
+
+
+def _is_rotation(R: np.ndarray) -> bool:
+    return bool(np.allclose(R.T @ R, np.eye(3), atol=1e-9) and np.linalg.det(R) > 0)
+
+
+def _posed_surface(ps: Posed):
+    """The surface a pose is drawn with, made once per pose; a rigid pose's is the part's own
+    (made once per part, in its file's coordinates) moved."""
+    if "surface" not in ps.drawn:
+        if ps.matrix is not None and _is_rotation(ps.matrix[:3, :3]):
+            own = ps.part.drawn.get("surface")
+            if own is None:
+                own = ps.part.drawn["surface"] = _surface(ps.part.vertices, ps.part.faces)
+            ps.drawn["surface"] = _moved(own, ps.matrix)
+        else:
+            ps.drawn["surface"] = _surface(ps.vertices, ps.faces)
+    return ps.drawn["surface"]
 
 
 def _surface_actor(surface, rgb, shading: bool = True):
@@ -201,9 +240,7 @@ class Renderer:
         lw = max(1.0, self.width / 1000)
         for ps in posed:
             rgb = colours[ps.part.role]
-            if "surface" not in ps.drawn:    # kept with the pose: its next picture reuses it
-                ps.drawn["surface"] = _surface(ps.vertices, ps.faces)
-            ren.AddActor(_surface_actor(ps.drawn["surface"], rgb, shading))
+            ren.AddActor(_surface_actor(_posed_surface(ps), rgb, shading))
             if edges and len(ps.edges):
                 ren.AddActor(_line_actor(ps.edges, edge_colour(rgb), lw))
         for pts, rgb in (tubes or {}).values():
