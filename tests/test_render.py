@@ -329,8 +329,11 @@ def test_a_moved_surface_is_the_surface_made_in_place():
     from hwgen.outputs import view
     p = _cylinder_part()
     M = _rigid(37.0, (1, 2, 0.5), (5.0, -80.0, 12.0))
-    moved = view._moved(view._surface(p.vertices, p.faces), M)
+    own = view._surface(p.vertices, p.faces)
+    n_own = vtk_to_numpy(own.GetPointData().GetNormals()).copy()
+    moved = view._moved(own, M)
     here = view._surface(scene.transform(p.vertices, M), p.faces)
+    assert np.array_equal(vtk_to_numpy(own.GetPointData().GetNormals()), n_own)     # the part's own is kept
     assert moved.GetNumberOfPoints() == here.GetNumberOfPoints() > len(p.vertices)     # split at the rims
     assert np.array_equal(vtk_to_numpy(moved.GetPolys().GetConnectivityArray()),
                           vtk_to_numpy(here.GetPolys().GetConnectivityArray()))

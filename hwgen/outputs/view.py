@@ -79,10 +79,7 @@ def _moved(surface, matrix: np.ndarray):
     n0 = surface.GetPointData().GetNormals()
     n = numpy_to_vtk(np.ascontiguousarray(vtk_to_numpy(n0).astype(np.float64) @ R.T, dtype=np.float32), deep=True)
     n.SetName(n0.GetName())
-    pd = dm.vtkPointData()
-    pd.ShallowCopy(surface.GetPointData())
-    pd.SetNormals(n)
-    out.GetPointData().ShallowCopy(pd)
+    out.GetPointData().SetNormals(n)        # the copy's own point data: the part's surface keeps its normals
     return out
 
 
