@@ -288,3 +288,88 @@ def test_bent_picture_says_whether_the_hardware_reaches_the_pose(proto):
         if p["role"] == "tensioner_wheel" and p["channel"] == "A":
             p["winding"] = "opposite"
     assert pictures.reachable_note(m2).startswith("the worm of channel A bends the robot")
+
+
+def test_chain_joins_segments_into_polylines():
+    """Every segment lands in exactly one polyline, its ends consecutive there; segments that meet
+    (given either way round and in any order) are one line."""
+    from hwgen.outputs.drawing import chain
+    square = np.array([[[0, 0], [10, 0]], [[10, 10], [10, 0]], [[0, 10], [10, 10]], [[0, 0], [0, 10]]], float)
+    lines = chain(square[[2, 0, 3, 1]])
+    assert len(lines) == 1 and len(lines[0]) == 5
+    assert tuple(lines[0][0]) == tuple(lines[0][-1])        # closed
+    rng = np.random.default_rng(3)
+    grid = rng.integers(0, 6, (300, 2, 2)).astype(float) + rng.normal(0, 1e-4, (300, 2, 2))   # within rounding
+    grid = grid[np.linalg.norm(np.round(grid[:, 0]) - np.round(grid[:, 1]), axis=1) > 0]
+    lines = chain(grid)
+    pieces = sorted(tuple(sorted(map(tuple, np.round(ln[i:i + 2], 2)))) for ln in lines for i in range(len(ln) - 1))
+    assert pieces == sorted(tuple(sorted(map(tuple, np.round(s, 2)))) for s in grid)
+    assert len(lines) < len(grid) / 3                       # and they do join
+
+
+def _cylinder_part(name="c", role="disk"):
+    import trimesh
+    m = trimesh.creation.cylinder(10, 4, sections=48)
+    return scene.ScenePart(name, role, np.asarray(m.vertices), np.asarray(m.faces), np.eye(4))
+
+
+def _rigid(angle_deg, axis, shift):
+    from scipy.spatial.transform import Rotation
+    M = np.eye(4)
+    M[:3, :3] = Rotation.from_rotvec(np.radians(angle_deg) * np.asarray(axis, float) / np.linalg.norm(axis)).as_matrix()
+    M[:3, 3] = shift
+    return M
+
+
+def test_a_moved_surface_is_the_surface_made_in_place():
+    """A part's surface made once in its file's coordinates and moved rigidly has the points,
+    normals and triangles of the one vtkPolyDataNormals makes from the moved triangles."""
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    from hwgen.outputs import view
+    p = _cylinder_part()
+    M = _rigid(37.0, (1, 2, 0.5), (5.0, -80.0, 12.0))
+    own = view._surface(p.vertices, p.faces)
+    n_own = vtk_to_numpy(own.GetPointData().GetNormals()).copy()
+    moved = view._moved(own, M)
+    here = view._surface(scene.transform(p.vertices, M), p.faces)
+    assert np.array_equal(vtk_to_numpy(own.GetPointData().GetNormals()), n_own)     # the part's own is kept
+    assert moved.GetNumberOfPoints() == here.GetNumberOfPoints() > len(p.vertices)     # split at the rims
+    assert np.array_equal(vtk_to_numpy(moved.GetPolys().GetConnectivityArray()),
+                          vtk_to_numpy(here.GetPolys().GetConnectivityArray()))
+    assert np.allclose(vtk_to_numpy(moved.GetPoints().GetData()), vtk_to_numpy(here.GetPoints().GetData()), atol=1e-9)
+    n_moved = vtk_to_numpy(moved.GetPointData().GetNormals())
+    assert np.allclose(n_moved, vtk_to_numpy(here.GetPointData().GetNormals()), atol=1e-6)
+    assert moved.GetPointData().GetNormals().GetName() == here.GetPointData().GetNormals().GetName()
+
+
+def test_a_pose_drawn_again_looks_the_same(tmp_path):
+    """Drawn a second time (its surface kept), as another family (the surface shared) or moved from
+    the part's own surface rather than made in the pose: the same picture, and the PNG holds it."""
+    from hwgen.outputs import view
+    try:
+        r = view.Renderer(400)
+    except view.RenderUnavailable as e:
+        pytest.skip(str(e))
+    p = _cylinder_part()
+    M = _rigid(50.0, (0.3, 1, 0.2), (0.0, 0.0, 0.0))
+    d = np.asarray(view.ISOMETRIC.toward_camera, float)
+    d /= np.linalg.norm(d)
+    colours = {"disk": (0.8, 0.6, 0.2), "grey": (0.8, 0.6, 0.2)}
+
+    def picture(posed, name):
+        r.draw([posed], colours, view.ISOMETRIC, tmp_path / name)
+        return np.asarray(Image.open(tmp_path / name).convert("RGB"), dtype=int)
+
+    posed = scene.pose_rigid(p, M, d)
+    first = picture(posed, "a.png")
+    assert "surface" in posed.drawn and "surface" in p.drawn        # the pose's, moved from the part's own
+    assert np.array_equal(picture(posed, "b.png"), first)
+    again = posed.as_role("grey")
+    assert again.drawn is posed.drawn
+    assert np.array_equal(picture(again, "c.png"), first)
+    in_place = scene.Posed(p, posed.vertices, posed.faces, posed.edges)      # no matrix: the filter in the pose
+    diff = np.abs(picture(in_place, "d.png") - first).max(axis=2)
+    assert diff.max() <= 1 and (diff > 0).mean() < 1e-3
+    assert (first.min(axis=2) < 200).mean() > 0.05                  # the part is there
+    r.release()

@@ -13,7 +13,7 @@ from html import escape as _escape
 
 import numpy as np
 
-from .scene import Posed, ScenePart, pose_rigid
+from .scene import Posed
 from .view import ISOMETRIC, Renderer
 
 
@@ -78,7 +78,7 @@ def visible_runs(segments: np.ndarray, project, zmax: np.ndarray, tol: float):
     b = project(segments[:, 1])
     n = np.maximum(1, np.ceil(np.linalg.norm((b - a)[:, :2], axis=1) / SAMPLE_PX).astype(int))
     idx = np.repeat(np.arange(len(a)), n)
-    k = np.concatenate([np.arange(m) for m in n])
+    k = np.arange(len(idx)) - np.repeat(np.cumsum(n) - n, n)     # each sample's index within its edge
     t = ((k + 0.5) / n[idx])[:, None]
     s = a[idx] + t * (b[idx] - a[idx])
     H, W = zmax.shape
@@ -96,32 +96,38 @@ def visible_runs(segments: np.ndarray, project, zmax: np.ndarray, tol: float):
 
 
 def chain(segments: np.ndarray, decimals: int = 2) -> list[np.ndarray]:
-    """Join segments that share end points into polylines (fewer, shorter path commands)."""
-    keys = [tuple(np.round(p, decimals)) for p in segments.reshape(-1, 2)]
-    ends: dict[tuple, list[int]] = {}
-    for i, key in enumerate(keys):
-        ends.setdefault(key, []).append(i // 2)
-    used = np.zeros(len(segments), bool)
+    """Join segments that share end points (equal when rounded to ``decimals``) into polylines
+    (fewer, shorter path commands): from each segment not yet used, forward from its second end,
+    then back from its first, each time taking the first unused segment that meets the tip."""
+    if len(segments) == 0:
+        return []
+    ends_xy = segments.reshape(-1, 2)
+    # one integer per distinct rounded point (+ 0.0 makes -0.0 the same point as 0.0)
+    _, inverse = np.unique(np.round(ends_xy, decimals) + 0.0, axis=0, return_inverse=True)
+    key = inverse.ravel().tolist()
+    ends: dict[int, list[int]] = {}
+    for i, k in enumerate(key):
+        ends.setdefault(k, []).append(i // 2)
+    used = [False] * len(segments)
     lines = []
     for s in range(len(segments)):
         if used[s]:
             continue
         used[s] = True
-        pts = [segments[s, 0], segments[s, 1]]
+        seq = [2 * s, 2 * s + 1]            # end points (rows of ends_xy) of the polyline, in order
         for forward in (True, False):
             while True:
-                tip = tuple(np.round(pts[-1] if forward else pts[0], decimals))
-                nxt = next((o for o in ends.get(tip, []) if not used[o]), None)
+                tip = key[seq[-1] if forward else seq[0]]
+                nxt = next((o for o in ends.get(tip, ()) if not used[o]), None)
                 if nxt is None:
                     break
                 used[nxt] = True
-                a, b = segments[nxt]
-                far = b if tuple(np.round(a, decimals)) == tip else a
+                far = 2 * nxt + 1 if key[2 * nxt] == tip else 2 * nxt
                 if forward:
-                    pts.append(far)
+                    seq.append(far)
                 else:
-                    pts.insert(0, far)
-        lines.append(np.asarray(pts))
+                    seq.insert(0, far)
+        lines.append(ends_xy[seq])
     return lines
 
 
@@ -129,7 +135,7 @@ def _path(lines: list[np.ndarray], to_page) -> str:
     out = []
     for ln in lines:
         q = to_page(ln)
-        out.append("M" + " L".join(f"{x:.1f} {y:.1f}" for x, y in q))
+        out.append("M" + " L".join(f"{x:.1f} {y:.1f}" for x, y in q.tolist()))
     return " ".join(out)
 
 
@@ -149,12 +155,11 @@ def _anchor_member(members: dict[str, list[np.ndarray]], to_page, axis: np.ndarr
     return min(good, key=lambda v: abs(np.mean(v @ axis) - mid))
 
 
-def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: dict, colours: dict,
-                       table: list[dict], path: Path, title: str) -> dict:
-    """Draw the exploded assembly as visible lines with one balloon per family and a parts table."""
+def write_exploded_svg(renderer: Renderer, posed: list[Posed], colours: dict, table: list[dict], path: Path,
+                       title: str) -> dict:
+    """Draw the exploded assembly as visible lines with one balloon per family and a parts table
+    (``posed``: the parts rigidly posed as exploded.png shows them, seen along ISOMETRIC)."""
     view = ISOMETRIC
-    _, _, d = view.axes()
-    posed: list[Posed] = [pose_rigid(p, placements[p.name], d) for p in parts]
     ren, W, H = renderer.draw(posed, colours, view, None, edges=False, shading=False, margin=0.02,
                               aspect_range=(0.3, 2.0), width=DEPTH_WIDTH_PX)
     zmax = _max3(renderer.depth(W, H, rows_up=True))     # bottom-up rows, as display coordinates
@@ -165,7 +170,7 @@ def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: d
     def to_page(p: np.ndarray) -> np.ndarray:
         return np.column_stack([PAGE_MARGIN + p[:, 0] * scale, PAGE_MARGIN + 40 + (H - p[:, 1]) * scale])
 
-    groups, visible_pts, n_runs = _visible_lines(posed, placements, d, project, zmax, tol, to_page)
+    groups, visible_pts, n_runs = _visible_lines(posed, project, zmax, tol, to_page)
     balloons, page_pts = _balloons(table, visible_pts, to_page)
     parts_table, (x1, y1) = _parts_table(table, page_pts)
     xmax, ymax = page_pts.max(axis=0)
@@ -187,15 +192,14 @@ def write_exploded_svg(renderer: Renderer, parts: list[ScenePart], placements: d
             "depth_px": [W, H], "bytes": Path(path).stat().st_size}
 
 
-def _visible_lines(posed: list[Posed], placements: dict, d: np.ndarray, project, zmax, tol, to_page):
+def _visible_lines(posed: list[Posed], project, zmax, tol, to_page):
     """Each part's visible feature and silhouette edges as SVG paths; the visible points per
     family and part (for the balloons) and how many runs were drawn."""
     groups, visible_pts, n_runs = [], {}, 0
     for ps in posed:
         p = ps.part
-        R = placements[p.name][:3, :3]
         body = []
-        for pairs, width in ((p.feature_edges(), LINE_WIDTH), (p.silhouette_edges(R, d), OUTLINE_WIDTH)):
+        for pairs, width in ((p.feature_edges(), LINE_WIDTH), (ps.silhouette, OUTLINE_WIDTH)):
             runs, pts = visible_runs(ps.vertices[pairs], project, zmax, tol)
             n_runs += len(runs)
             if len(runs):

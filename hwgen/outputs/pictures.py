@@ -21,7 +21,7 @@ import os
 import subprocess
 import sys
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -48,6 +48,10 @@ EXIT_NO_BACKEND = 3      # the child's exit code for RenderUnavailable
 # rasteriser threads' scene memory made about a tenth of the renderer's peak, the pictures have the
 # same bytes, and the checks drawn beside them keep the other core
 RASTER_THREADS_ENV = "LP_NUM_THREADS"
+# OpenBLAS likewise: its threads for the small products here (a part's face normals turned to the
+# view, (m, 3) @ (3, 3)) cost more than they do, about a second of the child's CPU on the prototype,
+# most of it waiting for the other core; one thread gives the same bytes
+BLAS_THREADS_ENV = "OPENBLAS_NUM_THREADS"
 
 
 class RenderFailed(RuntimeError):
@@ -95,6 +99,7 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
     st = np.asarray(report["stations_mm"], dtype=float)
     colours = family_colours(manifest)
     tcol = tendon_colours(report)
+    aids = load_parts(folder, manifest, fixtures=True)
     timings["load_s"] = time.perf_counter() - t0
     fam_legend = [(f"{family_label(role)} ({sum(p.role == role for p in parts)})", colours[role]) for role in colours]
     images = {}
@@ -103,15 +108,17 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
     d = np.asarray(ISOMETRIC.toward_camera, float)
     d /= np.linalg.norm(d)
     ex = exploded_placements(parts, st, settings.explode_mm, ISOMETRIC.toward_camera)
-    posed = [pose_rigid(p, ex[p.name], d) for p in parts]
-    _, W, H = r.draw(posed, colours, ISOMETRIC, folder / "exploded.png", labels=station_labels(posed, ISOMETRIC),
+    exploded = [pose_rigid(p, ex[p.name], d) for p in parts]     # drawn again as exploded.svg
+    _, W, H = r.draw(exploded, colours, ISOMETRIC, folder / "exploded.png", labels=station_labels(exploded, ISOMETRIC),
                      texts=_legend(fam_legend, f"{manifest['design']}: exploded, "
                                                f"{settings.explode_mm:g} mm between disks"))
     images["exploded.png"] = {"width": W, "height": H}
     timings["exploded_s"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    posed = [pose_rigid(p, p.placement, d) for p in parts]
+    # every part where the manifest places it: drawn again by the jig and the guide's steps
+    placed = {p.name: pose_rigid(p, p.placement, d) for p in parts + aids}
+    posed = [placed[p.name] for p in parts]
     straight = {n: (pts, tcol[n]) for n, pts in tendon_polylines(report, 0.0).items()}
     _, W, H = r.draw(posed, colours, ISOMETRIC, folder / "assembled.png", tubes=straight,
                      texts=_legend(fam_legend + [(n, tcol[n]) for n in straight], f"{manifest['design']}: assembled"))
@@ -131,13 +138,12 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
     images["bent.png"] = {"width": W, "height": H}
     timings["bent_s"] = time.perf_counter() - t
 
-    aids = load_parts(folder, manifest, fixtures=True)
     if aids:
         t = time.perf_counter()
         holds = {n for a in aids for n in a.meta.get("holds", [])}
         shown = [p for p in parts if p.name in holds] + aids
         jig_colours = family_colours(manifest, fixtures=True)
-        posed = [pose_rigid(p, p.placement, d) for p in shown]
+        posed = [placed[p.name] for p in shown]
         roles = [role for role in jig_colours if any(p.role == role for p in shown)]
         legend = [(f"{family_label(role)} ({sum(p.role == role for p in shown)})", jig_colours[role]) for role in roles]
         _, W, H = r.draw(posed, jig_colours, ISOMETRIC, folder / "jig.png",
@@ -152,11 +158,11 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
     if steps:
         t = time.perf_counter()
         for job in steps:
-            images[job["file"]] = draw_step(r, folder, manifest, job, parts + (aids or []), tcol)
+            images[job["file"]] = draw_step(r, folder, manifest, job, placed, tcol)
         timings["guide_s"] = time.perf_counter() - t
     if svg_table is not None:
         t = time.perf_counter()
-        result["svg"] = write_exploded_svg(r, parts, ex, colours, svg_table, folder / "exploded.svg",
+        result["svg"] = write_exploded_svg(r, exploded, colours, svg_table, folder / "exploded.svg",
                                            title=f"{manifest['design']}: exploded assembly")
         timings["svg_s"] = time.perf_counter() - t
     return result
@@ -165,18 +171,16 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
 CONTEXT_ROLE, CONTEXT_GREY = "(context)", (0.86, 0.86, 0.86)   # a guide picture's parts not of its step
 
 
-def draw_step(r: Renderer, folder: Path, manifest: dict, job: dict, parts: list, tcol: dict) -> dict:
-    """One step of the assembly guide: the parts it shows, assembled, those of the step in their
+def draw_step(r: Renderer, folder: Path, manifest: dict, job: dict, placed: dict[str, Posed], tcol: dict) -> dict:
+    """One step of the assembly guide: the parts it shows, assembled (``placed``: every part posed
+    where the manifest places it, seen along the isometric view), those of the step in their
     family's colour and the others light grey, the tendons when it says so."""
-    by_name = {p.name: p for p in parts}
     colours = family_colours(manifest, fixtures=True) | {CONTEXT_ROLE: CONTEXT_GREY}
-    d = np.asarray(ISOMETRIC.toward_camera, float)
-    d /= np.linalg.norm(d)
     posed = []
     for name in job["shown"]:
-        p = by_name.get(name)
-        if p is not None:
-            posed.append(pose_rigid(p if name in job["highlight"] else replace(p, role=CONTEXT_ROLE), p.placement, d))
+        ps = placed.get(name)
+        if ps is not None:
+            posed.append(ps if name in job["highlight"] else ps.as_role(CONTEXT_ROLE))
     tubes = {n: (pts, tcol[n]) for n, pts in tendon_polylines(manifest["design_report"], 0.0).items()} \
         if job["tendons"] else None
     (Path(folder) / job["file"]).parent.mkdir(parents=True, exist_ok=True)
@@ -216,6 +220,8 @@ def run_child(folder: Path, manifest: dict, settings: Settings, svg_table: list[
     attempts[0].setdefault(RASTER_THREADS_ENV, "0")
     if os.environ.get("DISPLAY"):
         attempts.append(dict(os.environ))       # then the display's own OpenGL, if there is one
+    for env in attempts:
+        env.setdefault(BLAS_THREADS_ENV, "1")
     errors, backend = [], True
     for env in attempts:
         try:

@@ -12,7 +12,7 @@ lit (:func:`confusable`); then it gets the next colour of FAMILY_PALETTE that ca
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import NamedTuple
 
@@ -51,6 +51,9 @@ class ScenePart:
     station: int | None = None
     meta: dict = field(default_factory=dict)
     _edges: "EdgeData | None" = None
+    # what the renderer made of the part in its file's coordinates (its surface with normals): every
+    # rigid pose of it is drawn from that, moved, not worked out again
+    drawn: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def mesh(self):
@@ -285,18 +288,29 @@ def subdivide_segments(a: np.ndarray, b: np.ndarray, pitch: float) -> tuple[np.n
 
 @dataclass
 class Posed:
-    """One part as drawn: world triangles and world edge segments."""
+    """One part as drawn: world triangles and world edge segments. A pose drawn in several
+    pictures (the assembled one: the guide's steps, the jig) is made once and handed to each."""
 
     part: ScenePart
     vertices: np.ndarray
     faces: np.ndarray
     edges: np.ndarray           # (k, 2, 3) world segments
+    silhouette: np.ndarray | None = None    # (j, 2) vertex pairs of the silhouette edges (a rigid pose's)
+    matrix: np.ndarray | None = None        # 4x4 file -> world of a rigid pose (None: the part was bent)
+    # what the renderer made of this pose (its surface with normals), kept as long as the pose
+    drawn: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def as_role(self, role: str) -> "Posed":
+        """The same pose drawn as another family (a guide step's context parts): what the renderer
+        made of it is shared, not made again."""
+        return replace(self, part=replace(self.part, role=role))
 
 
 def pose_rigid(p: ScenePart, matrix: np.ndarray, view_dir: np.ndarray) -> Posed:
     V = transform(p.vertices, matrix)
-    pairs = np.vstack([p.feature_edges(), p.silhouette_edges(matrix[:3, :3], view_dir)])
-    return Posed(p, V, p.faces, V[pairs])
+    silhouette = p.silhouette_edges(matrix[:3, :3], view_dir)
+    pairs = np.vstack([p.feature_edges(), silhouette])
+    return Posed(p, V, p.faces, V[pairs], silhouette, np.asarray(matrix, dtype=float))
 
 
 def pose_bent(p: ScenePart, stations, kappa: float, view_dir: np.ndarray) -> Posed:
