@@ -311,11 +311,11 @@ class _Ahead:
     of this process while worker processes build the parts (this process would only wait for
     them): the tension checks' statics sweeps (:func:`hwgen.checks.tension.sweeps`), then, as
     each unit's files come into the folder (:meth:`placed`), its STLs read for the checks
-    (:func:`hwgen.checks.meshes.read_early`) and the gear checks of the tensioner's worms and
-    wheels (seconds of manifold3d, which lets go of the interpreter's lock). Once every part's
-    files and the strip's template are in (:meth:`measure`), a second thread measures every
-    check that reads them (:func:`hwgen.checks.run.measure`) while a worker writes
-    assembly.step, beside the gear checks it will meet.
+    (:func:`hwgen.checks.meshes.read_early`). Once every part's files and the strip's template
+    are in (:meth:`measure`), a second thread measures every check that reads them
+    (:func:`hwgen.checks.run.measure`) while a worker writes assembly.step, and this one runs the
+    gear checks of the tensioner's worms and wheels beside it (seconds of manifold3d, which lets
+    go of the interpreter's lock), which the measurement meets.
     The sweeps and the gear checks are kept in the cache as the checks remember them, so the
     checks find them there, or wait for the one being made (:func:`hwgen.cache.remembered` computes under the entry's lock):
     the values are the ones the checks would compute themselves; without a cache
@@ -329,7 +329,8 @@ class _Ahead:
         self.meshes: dict = {}          # the parts' STLs read early, for the checks (checks.meshes.reading_early)
         self.tensioner: dict[int, list] = {}    # the tensioner's units placed so far (their parts), and its parts
         self.tensioner_parts = sum(u.count for f, _, u in units(plan) if f.name == "tensioner")
-        self.measuring: threading.Thread | None = None
+        self.measuring: threading.Thread | None = None     # the measurement (:meth:`measure`), once asked for
+        self.started = threading.Event()                    # ... and started
         self.found: tuple[str, object] | None = None      # (key of the files measured, checks.run.Measured)
 
     def start(self) -> None:
@@ -338,35 +339,37 @@ class _Ahead:
             self.thread.start()
 
     def placed(self, index: int, family: str, folder: Path, entries: list[dict]) -> None:
-        """The ``index``-th unit's files are in ``folder`` (its manifest ``entries``): its STLs read for the
-        checks and, once the tensioner's last unit is in, its gear checks (they read the worms'
-        and wheels' files and entries alone), ahead of the other checks."""
+        """The ``index``-th unit's files are in ``folder`` (its manifest ``entries``): its STLs read
+        for the checks (and a tensioner unit's entries kept for its gear checks, which read the
+        worms' and wheels' files and entries alone)."""
         if self.thread is not None:
             self.jobs.put(("meshes", folder, [dict(e) for e in entries]))
             if family == "tensioner":
                 self.tensioner[index] = [dict(e) for e in entries]
-                if sum(map(len, self.tensioner.values())) == self.tensioner_parts and self.store.enabled:
-                    self.jobs.put(("gears", folder, {"parts": [e for i in sorted(self.tensioner)
-                                                               for e in self.tensioner[i]]}))
 
     def measure(self, folder: Path, manifest: dict, key: str) -> None:
         """Every part's files and the strip's template are in ``folder`` (``manifest``: the parts'
         entries and the design report, as the checks will read them; ``key``: :func:`_measure_key`
-        of the two): every check that reads them, measured now in a thread of its own; the checks
-        take it (:meth:`measured`) when their files and manifest give the same key."""
+        of the two): every check that reads them, measured in a thread of its own, started once
+        this thread has read the STLs placed so far (each is read once), which then runs the
+        tensioner's gear checks beside it; the checks take the measurement (:meth:`measured`)
+        when their files and manifest give the same key."""
         if self.thread is None:
             return
-        manifest = _json(manifest)
+        self.measuring = threading.Thread(target=self._measure, args=(folder, _json(manifest), key),
+                                          name="hwgen-measure", daemon=True)
+        self.jobs.put(("measure", folder, None))
+        gears = [e for i in sorted(self.tensioner) for e in self.tensioner[i]]
+        if self.store.enabled and len(gears) == self.tensioner_parts:
+            self.jobs.put(("gears", folder, {"parts": gears}))
 
-        def run() -> None:
-            from .checks.run import measure
-            with cache.using(self.store), reading_early(self.meshes):
-                try:
-                    self.found = (key, measure(folder, manifest, self.plan))
-                except Exception:       # the checks measure again and report what fails
-                    pass
-        self.measuring = threading.Thread(target=run, name="hwgen-measure", daemon=True)
-        self.measuring.start()
+    def _measure(self, folder: Path, manifest: dict, key: str) -> None:
+        from .checks.run import measure
+        with cache.using(self.store), reading_early(self.meshes):
+            try:
+                self.found = (key, measure(folder, manifest, self.plan))
+            except Exception:       # the checks measure again and report what fails
+                pass
 
     def measured(self, folder: Path, manifest: dict):
         """What :meth:`measure` found (waiting for it), when it measured the files now in
@@ -374,6 +377,9 @@ class _Ahead:
         not asked, or failed."""
         if self.measuring is None:
             return None
+        while not self.started.wait(1.0):
+            if not self.thread.is_alive():
+                return None
         self.measuring.join()
         return self.found[1] if self.found is not None and self.found[0] == _measure_key(folder, manifest) else None
 
@@ -398,6 +404,9 @@ class _Ahead:
                         if kind == "meshes":
                             for e in what:
                                 read_early(ManifestPart.of(e).stl_in(folder))
+                        elif kind == "measure":
+                            self.measuring.start()
+                            self.started.set()
                         else:
                             gear_checks(folder, what, self.plan)
                             heap.trim()         # this thread's arena, before the checks' meshes come in
@@ -408,7 +417,7 @@ class _Ahead:
         if self.thread is not None:
             self.jobs.put(None)
             self.thread.join()
-        if self.measuring is not None:
+        if self.started.is_set():
             self.measuring.join()
 
     def abandon(self) -> None:
@@ -437,8 +446,8 @@ _WHILE_WORKERS_BUILD: contextvars.ContextVar[_Ahead | None] = contextvars.Contex
 
 # ---------------------------------------------------------------- the stages after the files, through the cache
 
-BESIDE = ("plates", "pictures")     # stages that read only the parts' files and the manifest's parts and design
-#                                     report: run in threads beside the others (the renderer is a child process)
+BESIDE = ("pictures",)     # stages that read only the parts' files and the manifest's parts and design report:
+#                            run in a thread beside the others (the renderer is a child process of its own)
 
 
 def _start_beside(store: cache.Store, plan: Plan, folder: Path, target: Path, manifest: dict, stack: ExitStack,
@@ -474,13 +483,7 @@ def _after_files(store: cache.Store, plan: Plan, folder: Path, manifest: dict, d
             if path not in before:
                 (folder / path).parent.mkdir(parents=True, exist_ok=True)
                 os.replace(where / path, folder / path)
-        for k, v in m.items():
-            if k in original and original[k] == v:
-                continue
-            if k == "files":        # the files it added join the folder's own
-                manifest.setdefault(k, {}).update({f: e for f, e in v.items() if original.get(k, {}).get(f) != e})
-            else:
-                manifest[k] = v
+        manifest.update({k: v for k, v in m.items() if k not in original or original[k] != v})
         reused += got
 
 
