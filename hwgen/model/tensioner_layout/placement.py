@@ -89,14 +89,14 @@ def _tangent_point(p: np.ndarray, c: np.ndarray, r: float, toward: int) -> np.nd
     """Tangent point on circle (c, r) of a line from p: on the side of smaller x when
     ``toward`` is -1, of larger x when +1."""
     d = c - p
-    dist = np.linalg.norm(d)
+    dist = np.sqrt(d.dot(d))                 # what np.linalg.norm(d) computes, without its checks
     if dist <= r:
         raise NoFit("tendon eyelet inside its spool")
     base = math.atan2(d[1], d[0])
     off = math.asin(r / dist)
     tlen = math.sqrt(dist ** 2 - r ** 2)
-    pts = [p + tlen * np.array([math.cos(base + s * off), math.sin(base + s * off)]) for s in (1, -1)]
-    return min(pts, key=lambda t: -toward * t[0])
+    pts = [(p[0] + tlen * math.cos(base + s * off), p[1] + tlen * math.sin(base + s * off)) for s in (1, -1)]
+    return np.array(min(pts, key=lambda t: -toward * t[0]))
 
 
 def _tangent_points(p: np.ndarray, c: np.ndarray, r: float, toward: np.ndarray) -> np.ndarray:
@@ -154,70 +154,93 @@ def _frame(x_u: float, arr: Arrangement, centers_y, stacks, eyelets: Eyelets, wi
 
 # ---------------------------------------------------------------- clearance of the tendon runs
 
-@dataclass(frozen=True)
-class _Obstacles:
-    """Every part outline that a tendon in a plane z may meet, for N candidate x_u at once:
-    circles (x, y, r) and rectangles (x0, x1, y0, y1), each with the z range it occupies, the
-    channel it belongs to (its own tendons may pass it only when ``foreign``) and a name. Only
-    the outlines' x depends on the candidate; the rest is shared."""
-
-    circles: np.ndarray          # (N, n, 3)
-    c_z: np.ndarray              # (n, 2)
-    c_owner: list[str]
-    c_foreign: np.ndarray        # (n,) bool: an obstacle only to other channels' tendons
-    c_names: list[str]
-    rects: np.ndarray            # (N, m, 4)
-    r_z: np.ndarray              # (m, 2)
-    r_names: list[str]
+# The positions across x that the parts' outlines stand at (|x|, before their column's sign): each
+# one moves with x_u, by the arithmetic of _along_x, element by element.
+POSITIONS = ("axis", "bar", "worm far", "worm near", "spine in", "spine out", "flange", "spine far", "post in",
+             "post out", "clamp x0", "clamp x1")
 
 
-def _obstacles(units: tuple[Unit, ...], x_u: np.ndarray, clamp, sz: Sizes) -> _Obstacles:
-    """The outlines at each wheel-axis |x| in ``x_u`` (N,) of the units as ``units`` stack them in
-    y and z (their x is not read: every part's x follows from x_u, by :func:`_along_x`)."""
-    pair = sz.pair
+def _across(x_u: np.ndarray, clamp, sz: Sizes) -> np.ndarray:
+    """The POSITIONS at each x_u (N,): (len(POSITIONS), N). "spine far" stands for the spine's
+    unbounded outer side (ten times its outer face); the strip clamp's ends do not move."""
     ax = _along_x(x_u, sz)
-    C, R = [], []            # (name, x, the rest of the outline, z0, z1[, owner, foreign]); x are arrays (N,)
-    reach = CLAMP_PLATE[2] + CLAMP_HEAD
-    for u in units:
-        s = u.side
-        cx, cy = s * x_u, u.center[1]
-        ch = u.channel
+    c0, c1 = (clamp[0], clamp[1]) if clamp is not None else (0.0, 0.0)
+    return np.stack(np.broadcast_arrays(x_u, np.abs(x_u) - BOSS, ax.far, ax.near, ax.spine[0], ax.spine[1],
+                                        ax.spine[1] + DRIVE_FLANGE[1], ax.spine[1] * 10, ax.post[0], ax.post[1],
+                                        c0, c1))
 
-        def rect(name, x0, x1, y0, y1, z0, z1):
-            xa, xb = s * x0, s * x1
-            R.append((f"{ch} {name}", (np.minimum(xa, xb), np.maximum(xa, xb)), (min(y0, y1), max(y0, y1)), z0, z1))
-        C.append((f"{ch} spool", cx, (cy, max(sz.r_f, sz.hub_r)), *u.z_part, ch, True))
-        C.append((f"{ch} wheel", cx, (cy, pair.outside_radius), *u.z_gear, ch, True))
-        C += [(f"{ch} cap", cx, (cy, pair.rf2), *cap, ch, True) for cap in u.caps]
-        C += [(f"{ch} clamp", cx, (cy, pair.rf2), min(zc, zc + sg * reach), max(zc, zc + sg * reach), ch, False)
-              for zc, sg in u.clamps]
-        C.append((f"{ch} boss", cx, (cy, BOSS), u.z_part[1], u.upper_shelf[1], ch, False))
-        C.append((f"{ch} boss", cx, (cy, BOSS), u.lower_bar[0], u.z_part[0], ch, False))
-        rect("worm", ax.far, ax.near, u.worm_y - pair.ra1, u.worm_y + pair.ra1,
-             u.worm_z - pair.ra1, u.worm_z + pair.ra1)
-        rf = DRIVE_FLANGE[0] / 2
-        rect("drive shaft", ax.spine[1], ax.spine[1] + DRIVE_FLANGE[1], u.worm_y - rf, u.worm_y + rf,
-             u.worm_z - rf, u.worm_z + rf)
-        rect("post", ax.post[0], ax.post[1], u.worm_y - POST / 2, u.worm_y + POST / 2,
-             u.worm_z - POST / 2, u.upper_shelf[1])
-        rect("shelf", ax.post[0], ax.spine[1], cy - s * BOSS, u.worm_y + s * POST / 2, *u.upper_shelf)
-        rect("bar", abs(cx) - BOSS, ax.spine[1], cy - BOSS, cy + BOSS, *u.lower_bar)
-    for s in (1, -1):
-        xa, xb = s * ax.spine[0], s * ax.spine[1] * 10
-        R.append(("spine", (np.minimum(xa, xb), np.maximum(xa, xb)), (sz.y_face, 1e9), -1e9, 1e9))
-    if clamp is not None:
-        R.append(("strip clamp", (np.full(x_u.shape, clamp[0]), np.full(x_u.shape, clamp[1])), clamp[2:4],
-                  clamp[4], clamp[5]))
-    n = len(x_u)
-    circles = np.empty((n, len(C), 3))
-    circles[:, :, 0] = np.stack([c[1] for c in C], axis=1)
-    circles[:, :, 1:] = [c[2] for c in C]
-    rects = np.empty((n, len(R), 4))
-    rects[:, :, 0:2] = np.stack([np.stack(r[1], axis=-1) for r in R], axis=1)
-    rects[:, :, 2:] = [r[2] for r in R]
-    return _Obstacles(circles, np.array([c[3:5] for c in C], float).reshape(-1, 2),
-                      [c[5] for c in C], np.array([c[6] for c in C], bool), [c[0] for c in C],
-                      rects, np.array([r[3:5] for r in R], float).reshape(-1, 2), [r[0] for r in R])
+
+class _Parts:
+    """Every part outline that a tendon in a plane z may meet: circles (x, y, r) and rectangles
+    (x0, x1, y0, y1), each with the z range it occupies, the channel it belongs to (its own
+    tendons may pass it only when ``foreign``) and a name; for units stacked in y and z as
+    ``units`` stack them (their x is not read). Only the outlines' x move with x_u: a circle's
+    centre is its unit's wheel axis, a rectangle's ends are two of the POSITIONS, each on its
+    unit's side of x = 0."""
+
+    def __init__(self, units: tuple[Unit, ...], clamp, sz: Sizes):
+        pair = sz.pair
+        C, R = [], []       # (name, side, y, r, z0, z1, owner, foreign); (name, side, ends, y0, y1, z0, z1)
+        reach = CLAMP_PLATE[2] + CLAMP_HEAD
+        for u in units:
+            s, cy, ch = u.side, u.center[1], u.channel
+
+            def rect(name, ends, y0, y1, z0, z1):
+                R.append((f"{ch} {name}", s, ends, min(y0, y1), max(y0, y1), z0, z1))
+            C.append((f"{ch} spool", s, cy, max(sz.r_f, sz.hub_r), *u.z_part, ch, True))
+            C.append((f"{ch} wheel", s, cy, pair.outside_radius, *u.z_gear, ch, True))
+            C += [(f"{ch} cap", s, cy, pair.rf2, *cap, ch, True) for cap in u.caps]
+            C += [(f"{ch} clamp", s, cy, pair.rf2, min(zc, zc + sg * reach), max(zc, zc + sg * reach), ch, False)
+                  for zc, sg in u.clamps]
+            C.append((f"{ch} boss", s, cy, BOSS, u.z_part[1], u.upper_shelf[1], ch, False))
+            C.append((f"{ch} boss", s, cy, BOSS, u.lower_bar[0], u.z_part[0], ch, False))
+            rect("worm", ("worm far", "worm near"), u.worm_y - pair.ra1, u.worm_y + pair.ra1,
+                 u.worm_z - pair.ra1, u.worm_z + pair.ra1)
+            rf = DRIVE_FLANGE[0] / 2
+            rect("drive shaft", ("spine out", "flange"), u.worm_y - rf, u.worm_y + rf, u.worm_z - rf, u.worm_z + rf)
+            rect("post", ("post in", "post out"), u.worm_y - POST / 2, u.worm_y + POST / 2,
+                 u.worm_z - POST / 2, u.upper_shelf[1])
+            rect("shelf", ("post in", "spine out"), cy - s * BOSS, u.worm_y + s * POST / 2, *u.upper_shelf)
+            rect("bar", ("bar", "spine out"), cy - BOSS, cy + BOSS, *u.lower_bar)
+        for s in (1, -1):
+            R.append(("spine", s, ("spine in", "spine far"), sz.y_face, 1e9, -1e9, 1e9))
+        if clamp is not None:
+            R.append(("strip clamp", 1, ("clamp x0", "clamp x1"), clamp[2], clamp[3], clamp[4], clamp[5]))
+        self.clamp, self.sz = clamp, sz
+        self.c_names, self.c_owner = [c[0] for c in C], [c[6] for c in C]
+        self.c_side = np.array([c[1] for c in C], float)
+        self.c_yr = np.array([c[2:4] for c in C], float).reshape(-1, 2)
+        self.c_z = np.array([c[4:6] for c in C], float).reshape(-1, 2)
+        self.c_foreign = np.array([c[7] for c in C], bool)
+        self.r_names = [r[0] for r in R]
+        self.r_side = np.array([r[1] for r in R], float)
+        self.r_ends = np.array([[POSITIONS.index(e) for e in r[2]] for r in R], int).reshape(-1, 2)
+        self.r_y = np.array([r[3:5] for r in R], float).reshape(-1, 2)
+        self.r_z = np.array([r[5:7] for r in R], float).reshape(-1, 2)
+
+    def at(self, x_u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The circles (N, n, 3) and rectangles (N, m, 4) at each wheel-axis |x| in ``x_u`` (N,)."""
+        n = len(x_u)
+        circles = np.empty((n, len(self.c_side), 3))
+        circles[..., 0] = x_u[:, None] * self.c_side                  # the wheel axis on its unit's side
+        circles[..., 1:] = self.c_yr
+        ends = self.r_side[:, None, None] * _across(x_u, self.clamp, self.sz)[self.r_ends]    # (m, 2, N)
+        rects = np.empty((n, len(self.r_side), 4))
+        rects[..., 0] = np.minimum(ends[:, 0], ends[:, 1]).T
+        rects[..., 1] = np.maximum(ends[:, 0], ends[:, 1]).T
+        rects[..., 2:] = self.r_y
+        return circles, rects
+
+    def pairs(self, z: np.ndarray, channels: list[str]) -> tuple[np.ndarray, ...]:
+        """Which runs (in the planes z, of the channels named) must clear which outlines: those whose
+        z range, widened by what a tendon needs, holds the run's plane, but not the run's own drum.
+        (run, circle) and (run, rectangle) index pairs, run by run: jc, kc, jr, kr."""
+        need = self.sz.need
+        zc = np.asarray(z, float)[:, None]
+        own = np.array([[o == ch for o in self.c_owner] for ch in channels], bool).reshape(len(channels), -1)
+        cm = (self.c_z[None, :, 0] - need < zc) & (zc < self.c_z[None, :, 1] + need) & ~(self.c_foreign & own)
+        rm = (self.r_z[None, :, 0] - need < zc) & (zc < self.r_z[None, :, 1] + need)
+        return (*np.nonzero(cm), *np.nonzero(rm))
 
 
 def _seg_point_dist(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> np.ndarray:
@@ -265,22 +288,16 @@ class _Nearest:
     obstacle: np.ndarray         # (N,) index into the circles or the rectangles
 
 
-def _nearest(a: np.ndarray, b: np.ndarray, z: np.ndarray, channels: list[str], ob: _Obstacles,
-             need: float) -> _Nearest:
-    """Every run (a to b, (N, r, 2), in the planes z (r,), of the channels named) against every
-    outline of ``ob`` it must clear, for each candidate at once. A run must clear an outline whose
-    z range, widened by ``need``, holds its plane (the same for every candidate), unless it is its
-    own channel's drum; only those pairs are measured. Ties go to the first run, then the first
-    outline, circles before rectangles, in the order :func:`_obstacles` lists them."""
-    zc = z[:, None]
-    own = np.array([[o == ch for o in ob.c_owner] for ch in channels], bool).reshape(len(channels), -1)
-    cm = (ob.c_z[None, :, 0] - need < zc) & (zc < ob.c_z[None, :, 1] + need) & ~(ob.c_foreign[None, :] & own)
-    rm = (ob.r_z[None, :, 0] - need < zc) & (zc < ob.r_z[None, :, 1] + need)
-    jc, kc = np.nonzero(cm)                  # (run, circle) pairs, run by run
-    jr, kr = np.nonzero(rm)
-    dc = _seg_point_dist(a[:, jc], b[:, jc], ob.circles[:, kc, :2]) - ob.circles[:, kc, 2] - need     # (N, pairs)
-    dr = _seg_rect_dist(a[:, jr], b[:, jr], ob.rects[:, kr]) - need
-    n = len(a)
+def _nearest(parts: _Parts, pairs: tuple[np.ndarray, ...], a: np.ndarray, b: np.ndarray, x_u: np.ndarray) -> _Nearest:
+    """For each candidate x_u (N,), its runs (a to b, (N, r, 2)) against the outlines of ``parts``
+    each must clear (``pairs``, from :meth:`_Parts.pairs`). Ties go to the first run, then the
+    first outline, circles before rectangles, in the order :class:`_Parts` lists them."""
+    circles, rects = parts.at(x_u)
+    jc, kc, jr, kr = pairs
+    need = parts.sz.need
+    dc = _seg_point_dist(a[:, jc], b[:, jc], circles[:, kc, :2]) - circles[:, kc, 2] - need     # (N, pairs)
+    dr = _seg_rect_dist(a[:, jr], b[:, jr], rects[:, kr]) - need
+    n = len(x_u)
     ic = np.argmin(dc, axis=1) if len(jc) else np.zeros(n, int)
     ir = np.argmin(dr, axis=1) if len(jr) else np.zeros(n, int)
     vc = dc[np.arange(n), ic] if len(jc) else np.full(n, np.inf)
@@ -294,27 +311,26 @@ def _nearest(a: np.ndarray, b: np.ndarray, z: np.ndarray, channels: list[str], o
     return _Nearest(clearance, circle, np.where(circle, jc[ic], jr[ir]), np.where(circle, kc[ic], kr[ir]))
 
 
-def _failure(near: _Nearest, i: int, ob: _Obstacles, tendons: list[str]) -> Failure:
+def _failure(near: _Nearest, i: int, parts: _Parts, tendons: list[str]) -> Failure:
     """Candidate i's nearest miss as a :class:`Failure`."""
     value = float(near.clearance[i])
     if not math.isfinite(value):
         return Failure(math.inf, "", "", "part")
     tendon = tendons[int(near.run[i])]
     if near.circle[i]:
-        return Failure(value, tendon, ob.c_names[int(near.obstacle[i])], "part")
-    name = ob.r_names[int(near.obstacle[i])]
+        return Failure(value, tendon, parts.c_names[int(near.obstacle[i])], "part")
+    name = parts.r_names[int(near.obstacle[i])]
     return Failure(value, tendon, name, "clamp" if name == "strip clamp" else "part")
 
 
 def _clearance(fr: Frame, clamp, sz: Sizes) -> Failure:
     """The smallest distance from any tendon's free span to a part it must not touch, beyond
-    what it needs, and which (every run against every obstacle at once)."""
-    ob = _obstacles(fr.units, np.array([fr.x_u]), clamp, sz)
-    a = np.array([[r.start[:2] for r in fr.runs]]).reshape(1, -1, 2)
-    b = np.array([[r.end[:2] for r in fr.runs]]).reshape(1, -1, 2)
-    z = np.array([r.start[2] for r in fr.runs], float)
-    near = _nearest(a, b, z, [r.channel for r in fr.runs], ob, sz.need)
-    return _failure(near, 0, ob, [r.tendon for r in fr.runs])
+    what it needs, and which (every run against every part at once)."""
+    parts = _Parts(fr.units, clamp, sz)
+    pairs = parts.pairs([r.start[2] for r in fr.runs], [r.channel for r in fr.runs])
+    a = np.array([r.start[:2] for r in fr.runs], float).reshape(1, -1, 2)
+    b = np.array([r.end[:2] for r in fr.runs], float).reshape(1, -1, 2)
+    return _failure(_nearest(parts, pairs, a, b, np.array([fr.x_u])), 0, parts, [r.tendon for r in fr.runs])
 
 
 def x_floor(eyelets: Eyelets, sz: Sizes) -> float:
@@ -347,20 +363,18 @@ class _Scan:
 
     def __init__(self, base: Frame, clamp, sz: Sizes):
         self.clamp, self.sz = clamp, sz
-        self.units = base.units                # their y and z, and the runs' eyelets: the same at every x_u
-        unit = {u.channel: u for u in base.units}
+        unit = {u.channel: u for u in base.units}      # their y and z, and the runs' eyelets: the same at every x_u
         runs = base.runs
+        self.parts = _Parts(base.units, clamp, sz)
+        self.pairs = self.parts.pairs([r.start[2] for r in runs], [r.channel for r in runs])
         self.start = np.array([r.start[:2] for r in runs], float).reshape(-1, 2)
-        self.z = np.array([r.start[2] for r in runs], float)
         self.side = [unit[r.channel].side for r in runs]
         self.center_y = [unit[r.channel].center[1] for r in runs]
         self.toward = [-unit[r.channel].side * r.sense for r in runs]
-        self.channels = [r.channel for r in runs]
         self.tendons = [r.tendon for r in runs]
 
-    def _nearest(self, xs: np.ndarray, exact: bool = False) -> tuple[_Nearest, _Obstacles]:
+    def _nearest(self, xs: np.ndarray, exact: bool = False) -> _Nearest:
         """The nearest miss at each x_u in ``xs``; ``exact``: with the runs as :func:`_frame` lays them out."""
-        ob = _obstacles(self.units, xs, self.clamp, self.sz)
         start = np.broadcast_to(self.start, (len(xs), *self.start.shape))
         if exact:
             ends = np.array([[_tangent_point(self.start[j], np.array((s * x, cy)), self.sz.r_w, t)
@@ -370,7 +384,7 @@ class _Scan:
             centres = np.stack(np.broadcast_arrays(np.multiply.outer(xs, self.side), np.array(self.center_y)),
                                axis=-1)
             ends = _tangent_points(start, centres, self.sz.r_w, np.array(self.toward, float))
-        return _nearest(start, ends, self.z, self.channels, ob, self.sz.need), ob
+        return _nearest(self.parts, self.pairs, start, ends, xs)
 
     def good(self, xs) -> np.ndarray:
         """Whether the arrangement fits at each of the x_u in ``xs``: (N,) bool."""
@@ -380,23 +394,23 @@ class _Scan:
         placed = ax.post[0] >= UNIT_GAP / 2
         if clamp is not None:
             placed &= ax.spine[0] >= clamp[1] + sz.clamp_room
-        near, _ = self._nearest(xs)
+        near = self._nearest(xs)
         clear = near.clearance >= 0
         doubt = np.flatnonzero(placed & ~(np.abs(near.clearance) > SCAN_TOLERANCE))    # near zero, or undefined
         if len(doubt):
-            clear[doubt] = self._nearest(xs[doubt], exact=True)[0].clearance >= 0
+            clear[doubt] = self._nearest(xs[doubt], exact=True).clearance >= 0
         return placed & clear
 
     def closest_miss(self, xs) -> Failure:
         """Of the x_u in ``xs``, the one whose nearest miss is the largest (the first of equals),
         and that miss."""
         xs = np.asarray(xs, float)
-        c = self._nearest(xs)[0].clearance
+        c = self._nearest(xs).clearance
         top = np.max(np.where(np.isnan(c), -np.inf, c))
         doubt = np.flatnonzero(~(c < top - 2 * SCAN_TOLERANCE))     # could be the largest, or undefined
-        near, ob = self._nearest(xs[doubt], exact=True)
+        near = self._nearest(xs[doubt], exact=True)
         c = np.where(np.isnan(near.clearance), -np.inf, near.clearance)
-        return _failure(near, int(np.argmax(c)), ob, self.tendons)      # argmax: the first of equals
+        return _failure(near, int(np.argmax(c)), self.parts, self.tendons)      # argmax: the first of equals
 
 
 def _widen(arr, centers_y, stacks, eyelets, winding, clamp, sz: Sizes) -> tuple[float, Frame]:
