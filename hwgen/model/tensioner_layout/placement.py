@@ -297,18 +297,26 @@ def _nearest(parts: _Parts, pairs: tuple[np.ndarray, ...], a: np.ndarray, b: np.
     need = parts.sz.need
     dc = _seg_point_dist(a[:, jc], b[:, jc], circles[:, kc, :2]) - circles[:, kc, 2] - need     # (N, pairs)
     dr = _seg_rect_dist(a[:, jr], b[:, jr], rects[:, kr]) - need
-    n = len(x_u)
-    ic = np.argmin(dc, axis=1) if len(jc) else np.zeros(n, int)
-    ir = np.argmin(dr, axis=1) if len(jr) else np.zeros(n, int)
-    vc = dc[np.arange(n), ic] if len(jc) else np.full(n, np.inf)
-    vr = dr[np.arange(n), ir] if len(jr) else np.full(n, np.inf)
+    vc, ic = _least(dc)
+    vr, ir = _least(dr)
     circle = ~(vr < vc)                                                # a rectangle only when strictly nearer
     clearance = np.where(np.isnan(vc) | np.isnan(vr), np.nan, np.where(circle, vc, vr))
-    if not len(jc):
-        jc = kc = np.zeros(1, int)
-    if not len(jr):
-        jr = kr = np.zeros(1, int)
-    return _Nearest(clearance, circle, np.where(circle, jc[ic], jr[ir]), np.where(circle, kc[ic], kr[ir]))
+    return _Nearest(clearance, circle, np.where(circle, _pick(jc, ic), _pick(jr, ir)),
+                    np.where(circle, _pick(kc, ic), _pick(kr, ir)))
+
+
+def _least(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per row of d (N, pairs): the least value (inf when there are no pairs) and the first pair
+    that holds it."""
+    if d.shape[1] == 0:
+        return np.full(len(d), np.inf), np.zeros(len(d), int)
+    i = np.argmin(d, axis=1)
+    return d[np.arange(len(d)), i], i
+
+
+def _pick(index: np.ndarray, i: np.ndarray) -> np.ndarray:
+    """index[i], or 0 where there are no pairs (their value is inf, and nothing is named)."""
+    return index[i] if len(index) else np.zeros_like(i)
 
 
 def _failure(near: _Nearest, i: int, parts: _Parts, tendons: list[str]) -> Failure:
