@@ -58,7 +58,7 @@ X_COARSE = 2.0
 X_SEARCH = 80.0
 MAX_LIFTS = 30
 EVERY_ORDER_UP_TO = 3     # channels up to which every order along y is tried; beyond, orders by geometry
-MAX_SOLVES = 32           # arrangements solved at most, in order of their lower bound (each takes ~0.2 s)
+MAX_SOLVES = 32           # arrangements solved at most, in order of their lower bound (each takes a few ms)
 
 
 @dataclass(frozen=True)
