@@ -1,9 +1,11 @@
 """The throated wheel with its spool drum, and the clamp plate that pinches a tendon on it.
 
-The throated wheel: a blank of revolution minus one tooth-space tool per tooth, cut in one
-boolean. A tool's flanks and root are one bicubic B-spline surface through the tooth-space
-outlines that :meth:`WormPair.level_outline` generates plane by plane (the same points and
-parameters at every level), closed by a ruled top above the blank and two planar caps.
+The throated wheel: a blank of revolution minus one tooth-space tool per tooth. A tool's
+flanks and root are one bicubic B-spline surface through the tooth-space outlines that
+:meth:`WormPair.level_outline` generates plane by plane (the same points and parameters at
+every level), closed by a ruled top above the blank and two planar caps. Every tooth space is
+the same, so the cut is made once, in one tooth's sector of the blank, and the sector turned
+round (the blank minus every tool in one boolean, ten times the work, only where that fails).
 """
 from __future__ import annotations
 
@@ -162,20 +164,29 @@ def _whole_cut(pair: WormPair, tool: cq.Solid) -> cq.Solid:
 
 
 SECTOR_AREA_TOL = 1e-9     # relative: a sector's sides are untouched by its tool when their area is
+SECTOR_MAX_SLABS = 9       # most slabs a sector's sides are stepped in to follow the teeth's twist
+SECTOR_SIDE_ROOM = 0.75    # a side keeps within this fraction of the tooth's half-angle of its centre
+SECTOR_SAMPLES = 5         # levels per slab (ends included) at which that is required
 
 
 def _by_sectors(pair: WormPair, tool: cq.Solid) -> cq.Solid | None:
-    """The wheel as teeth copies of one sector: the blank between the half-planes through the
-    axis at 0 and 360°/teeth (through two tooth centres at mid-width) minus the one tool
-    between them, turned round and glued face to face, the faces on one surface then made
-    one again (no seams between sectors). Its tooth spaces are the very ones the whole cut
-    makes. None where that does not hold: where the tool reaches a side of its sector (the
-    teeth twist across the face by the lead angle, and thin tips leave no room for it: several
-    tools then cut each sector), or where the glued copies are not one valid solid."""
+    """The wheel as teeth copies of one sector: the blank between two sides that pass through
+    neighbouring teeth, minus the one tool between them, turned round and glued face to face,
+    the faces on one surface then made one again (no seams between sectors). Its tooth spaces
+    are the very ones the whole cut makes. The teeth twist across the face by the lead angle,
+    so a side is stepped: in slabs along Z, each a half-plane through the axis at the angle
+    that keeps it in the tooth's middle over its slab (:func:`_slabs`). None where this does
+    not hold: no few slabs keep inside the teeth, the tool still reaches a side (the sides
+    lose area in the cut), or the glued copies are not one valid solid."""
+    slabs = _slabs(pair)
+    if slabs is None:
+        return None
     step = 360.0 / pair.teeth
-    sector = _blank(pair).intersect(_wedge(pair, step))
+    blank = _blank(pair).rotate(_v(0, 0, 0), _v(0, 0, 1), 180.0)     # its seams away from the sector
+    sector = blank.intersect(_wedge(pair, slabs, step))
     piece = _one_piece(sector.cut(tool).Solids(), pair, "a tooth's sector")
-    if abs(_side_area(piece, step) - _side_area(sector, step)) > SECTOR_AREA_TOL * _side_area(sector, step):
+    sides = _side_area(sector, pair)
+    if abs(_side_area(piece, pair) - sides) > SECTOR_AREA_TOL * sides:
         return None
     copies = [piece.rotate(_v(0, 0, 0), _v(0, 0, 1), k * step) for k in range(pair.teeth)]
     glue = BRepAlgoAPI_Fuse()
@@ -193,27 +204,59 @@ def _by_sectors(pair: WormPair, tool: cq.Solid) -> cq.Solid | None:
     return solids[0]
 
 
-def _wedge(pair: WormPair, step: float) -> cq.Solid:
-    """A prism over the blank's height between the half-planes at 0 and ``step`` degrees: a
-    triangle whose far side stays outside the blank, extruded."""
-    h = pair.face_width / 2 + TOOL
+def _slabs(pair: WormPair) -> list[tuple[float, float, float]] | None:
+    """(z from, z to, angle in degrees) of the fewest equal slabs (an odd count, at most
+    SECTOR_MAX_SLABS) across the face in each of which one half-plane through the axis stays
+    within SECTOR_SIDE_ROOM of the tooth's half-angle of its centre, at the pitch and tip radii
+    of SECTOR_SAMPLES levels; the angle is the middle of what every level allows. The end
+    slabs reach TOOL beyond the faces. None if no count does."""
+    h = pair.face_width / 2
+    for n in range(1, SECTOR_MAX_SLABS + 1, 2):
+        edges = np.linspace(-h, h, n + 1)
+        slabs = []
+        for z0, z1 in zip(edges[:-1], edges[1:]):
+            lo, hi = -math.inf, math.inf
+            for z in np.linspace(z0, z1, SECTOR_SAMPLES):
+                centre, half = pair.tooth_half_angles(float(z), [pair.r2, float(pair.tip_radius(z))])
+                lo = max(lo, float(np.max(centre - SECTOR_SIDE_ROOM * half)))
+                hi = min(hi, float(np.min(centre + SECTOR_SIDE_ROOM * half)))
+            if lo > hi:
+                break
+            slabs.append((float(z0), float(z1), math.degrees((lo + hi) / 2)))
+        else:
+            z0, z1, angle = slabs[0]
+            slabs[0] = (z0 - TOOL, z1, angle)
+            z0, z1, angle = slabs[-1]
+            slabs[-1] = (z0, z1 + TOOL, angle)
+            return slabs
+    return None
+
+
+def _wedge(pair: WormPair, slabs: list[tuple[float, float, float]], step: float) -> cq.Solid:
+    """The sector's room: per slab, a prism between the half-planes at its angle and ``step``
+    degrees on (a triangle whose far side stays outside the blank, extruded), stacked."""
     r = 2 * pair.outside_radius / math.cos(math.radians(step / 2))
-    b = math.radians(step)
-    base = cq.Face.makeFromWires(cq.Wire.makePolygon([_v(0, 0, -h), _v(r, 0, -h), _v(r * math.cos(b), r * math.sin(b), -h)],
-                                                     close=True))
-    return cq.Solid.extrudeLinear(base, _v(0, 0, 2 * h))
+    prisms = []
+    for z0, z1, angle in slabs:
+        a, b = math.radians(angle), math.radians(angle + step)
+        base = cq.Face.makeFromWires(cq.Wire.makePolygon(
+            [_v(0, 0, z0), _v(r * math.cos(a), r * math.sin(a), z0), _v(r * math.cos(b), r * math.sin(b), z0)], close=True))
+        prisms.append(cq.Solid.extrudeLinear(base, _v(0, 0, z1 - z0)))
+    return prisms[0] if len(prisms) == 1 else prisms[0].fuse(*prisms[1:])
 
 
-def _side_area(solid: cq.Shape, step: float) -> float:
-    """Area of the solid's faces on the half-planes through the Z axis at 0 and ``step`` degrees."""
-    normals = [(0.0, -1.0), (-math.sin(math.radians(step)), math.cos(math.radians(step)))]
+def _side_area(solid: cq.Shape, pair: WormPair) -> float:
+    """Area of the solid's faces on its sector's sides: the planes through the Z axis, and the
+    planes across it between the faces (where the sides step)."""
+    h = pair.face_width / 2
     total = 0.0
     for f in solid.Faces():
         if f.geomType() != "PLANE":
             continue
         n, c = f.normalAt(), f.Center()
-        if abs(n.z) < 1e-9 and abs(n.x * c.x + n.y * c.y) < 1e-7 and \
-                any(abs(abs(n.x * nx + n.y * ny) - 1) < 1e-9 for nx, ny in normals):
+        through_axis = abs(n.z) < 1e-9 and abs(n.x * c.x + n.y * c.y) < 1e-7
+        across = abs(abs(n.z) - 1) < 1e-9 and abs(c.z) < h - 1e-6
+        if through_axis or across:
             total += f.Area()
     return total
 
