@@ -21,7 +21,7 @@ MU = 0.1
 MIN_WALL = 0.8
 INTERFERENCE_TOL_MM3 = 0.01
 GAP_TOL_MM = 0.02
-CASE_TIMEOUT_S = 120       # a throated wheel takes ~5 s alone, 15-25 s on a loaded 2-core machine
+CASE_TIMEOUT_S = 120       # a case (worm, wheel, meshes) takes 2.5-5 s of CPU, 5-12 s on a loaded 2-core machine
 RANDOM_CASES = 12          # the seed draws 5 that build and 7 that loading refuses
 SEED = 20261121
 
@@ -315,3 +315,65 @@ def test_random_gear_parameters_build_or_are_refused_clearly(stability_run):
     print(f"random gear cases: {kinds}, slowest build {max(r.get('seconds', 0) for _, r in random_part):.1f} s")
     # the seed draws both kinds, so both paths are exercised
     assert kinds["built"] >= 5 and kinds["rejected"] >= 5, kinds
+
+
+# ---- the wheel made by sectors: the same solid as the whole cut ---------------------------
+def _exact_volume(shape) -> float:
+    """Volume integrated to a relative error of 1e-10 (Solid.Volume()'s fixed-order rule is off
+    by about 1e-3 on these B-spline faces)."""
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+    props = GProp_GProps()
+    BRepGProp.VolumeProperties_s(shape.wrapped, props, 1e-10, True)
+    return props.Mass()
+
+
+def _tight_box(shape) -> np.ndarray:
+    from OCP.Bnd import Bnd_Box
+    from OCP.BRepBndLib import BRepBndLib
+    box = Bnd_Box()
+    BRepBndLib.AddOptimal_s(shape.wrapped, box, False, False)
+    return np.array(box.Get())
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kw", [{}, FIXED_CASES[1][0]], ids=["prototype", "module2-20teeth"])
+def test_wheel_by_sectors_is_the_whole_cut(kw):
+    """The prototype's pair (sides through the teeth's mid-width centres) and a wide face whose
+    teeth twist too far for that (stepped sides): one tooth's sector turned round gives the
+    solid the blank minus every tool gives, to 1e-6 in volume and bounding box; every vertex of
+    it lies on the whole cut's surface; no seams between sectors (no more faces than the whole
+    cut, whose faces are one per tooth and surface, plus those its seams split)."""
+    from OCP.BRepExtrema import BRepExtrema_DistShapeShape
+
+    from hwgen.cad import wheel
+    pair = _pair(**kw)
+    tool = wheel._tooth_space_tool(pair)
+    assert (len(wheel._slabs(pair)) > 1) == bool(kw)
+    fast = wheel._by_sectors(pair, tool)
+    assert fast is not None, "the sector was not used"
+    whole = wheel._whole_cut(pair, tool)
+    assert fast.isValid() and len(fast.Solids()) == 1
+    assert _exact_volume(fast) == pytest.approx(_exact_volume(whole), rel=1e-6)
+    assert np.max(np.abs(_tight_box(fast) - _tight_box(whole))) < 1e-6
+    assert len(fast.Faces()) <= len(whole.Faces())
+    shell = whole.Shells()[0].wrapped
+    far = 0.0
+    for v in fast.Vertices():
+        d = BRepExtrema_DistShapeShape(v.wrapped, shell)
+        d.Perform()
+        far = max(far, d.Value())
+    assert far < 1e-6, far
+
+
+@pytest.mark.slow
+def test_a_tool_reaching_its_sectors_side_is_seen(monkeypatch):
+    """Three starts, lead angle 9.7°: with sides through the mid-width tooth centres (one slab)
+    the twisted tool cuts into them; the sides' area tells, and the sector is not used."""
+    from hwgen.cad import wheel
+    pair = _pair(**FIXED_CASES[3][0])
+    tool = wheel._tooth_space_tool(pair)
+    assert wheel._by_sectors(pair, tool) is not None
+    monkeypatch.setattr(wheel, "SECTOR_SIDE_ROOM", 100.0)
+    assert len(wheel._slabs(pair)) == 1
+    assert wheel._by_sectors(pair, tool) is None
