@@ -407,7 +407,7 @@ def main(argv: list[str]) -> None:
     from hwgen.cad.wheel import gear_solid
     from hwgen.model.gearing import worm_pair
     pair = worm_pair(loaded.design.tensioner, loaded.design.process.min_wall)
-    with timed("build the throated wheel's gear", "blank minus every tooth-space tool in one boolean; "
+    with timed("build the throated wheel's gear", "one tooth's sector cut, turned round and glued; "
                                                  "built once per distinct pair"):
         gear_solid.__wrapped__(pair)
     with tempfile.TemporaryDirectory() as tmp:

@@ -3,9 +3,12 @@ made again.
 
 The part cache (:mod:`hwgen.pipeline`) keeps whole units; when a unit has to be built again
 because one of its inputs changed, the costly solids inside it whose own inputs did not (the
-throated wheel's gear: one boolean of the blank and every tooth space, several seconds; the
+throated wheel's gear: one tooth's sector cut and turned round, the costliest boolean; the
 worm's swept thread, about a second) come from here: an edit that moves the tensioner but not
-its gearing reuses both. A solid read back from BREP gives the same files, byte for byte, as the one it was
+its gearing reuses both. The tensioner's channels, units of their own made in several processes
+at once, share their worm, gear, drive shaft, clamp plate and wheels through it too (a build
+without a cache keeps them in a store of its own): each is made once, by whichever unit comes
+first. A solid read back from BREP gives the same files, byte for byte, as the one it was
 written from (``tests/test_cache.py``). Without an active store (:func:`kept_in`) every solid is
 made as before.
 """

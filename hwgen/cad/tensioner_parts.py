@@ -74,7 +74,7 @@ def channel_parts(lay: TensionerLayout, u: Unit, *, min_wall: float, tendon_diam
                        lay.worm_pin - POST + 0.5)
         shared["worm"] = kept("worm", worm_inputs, lambda: worm_solid(*worm_inputs))   # the thread's sweep: a second or so
         shared["drive"] = kept("drive shaft", lay, lambda: drive_solid(lay))
-        shared["gear"] = kept("throated wheel gear", pair, lambda: gear_solid(pair))   # the costly boolean
+        shared["gear"] = kept("throated wheel gear", pair, lambda: gear_solid(pair))   # the costliest boolean
         shared["clamp"] = kept("clamp plate", (), clamp_solid)
     # channels whose spool layouts are alike, measured from the part's own end, have one wheel; it is
     # kept too, so a channel made in another process has the very solid of the first
