@@ -218,7 +218,7 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
 
         def measurable(early: dict) -> None:
             # and the strip's template: the checks measure them while the assembly is written
-            ahead.measure(tmp, early, _measure_key(tmp, early))
+            ahead.measure(tmp, early)
 
         token = _WHILE_WORKERS_BUILD.set(ahead)
         try:
@@ -347,15 +347,16 @@ class _Ahead:
             if family == "tensioner":
                 self.tensioner[index] = [dict(e) for e in entries]
 
-    def measure(self, folder: Path, manifest: dict, key: str) -> None:
+    def measure(self, folder: Path, manifest: dict) -> None:
         """Every part's files and the strip's template are in ``folder`` (``manifest``: the parts'
-        entries and the design report, as the checks will read them; ``key``: :func:`_measure_key`
-        of the two): every check that reads them, measured in a thread of its own, started once
+        entries and the design report, as the checks will read them): every check that reads
+        them, measured in a thread of its own (when this one runs: parts were built), started once
         this thread has read the STLs placed so far (each is read once), which then runs the
         tensioner's gear checks beside it; the checks take the measurement (:meth:`measured`)
         when their files and manifest give the same key."""
         if self.thread is None:
             return
+        key = _measure_key(folder, manifest)
         self.measuring = threading.Thread(target=self._measure, args=(folder, _json(manifest), key),
                                           name="hwgen-measure", daemon=True)
         self.jobs.put(("measure", folder, None))
