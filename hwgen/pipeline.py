@@ -313,9 +313,10 @@ class _Ahead:
     each unit's files come into the folder (:meth:`placed`), its STLs read for the checks
     (:func:`hwgen.checks.meshes.read_early`). Once every part's files and the strip's template
     are in (:meth:`measure`), a second thread measures every check that reads them
-    (:func:`hwgen.checks.run.measure`) while a worker writes assembly.step, and this one runs the
-    gear checks of the tensioner's worms and wheels beside it (seconds of manifold3d, which lets
-    go of the interpreter's lock), which the measurement meets.
+    (:func:`hwgen.checks.run.measure`) while a worker writes assembly.step, and the gear checks
+    of the tensioner's worms and wheels are made beside it in a process of their own (seconds of
+    meshes and manifold3d, and a few hundred MB that would add to the measurement's here), which
+    the measurement meets in the cache.
     The sweeps and the gear checks are kept in the cache as the checks remember them, so the
     checks find them there, or wait for the one being made (:func:`hwgen.cache.remembered` computes under the entry's lock):
     the values are the ones the checks would compute themselves; without a cache
@@ -382,12 +383,12 @@ class _Ahead:
             if not self.thread.is_alive():
                 return None
         self.measuring.join()
-        return self.found[1] if self.found is not None and self.found[0] == _measure_key(folder, manifest) else None
+        found, self.found = self.found, None       # let go of it with the report (its measured disks are large)
+        return found[1] if found is not None and found[0] == _measure_key(folder, manifest) else None
 
     def _run(self) -> None:
         from .checks import run as _      # the checks' modules and libraries, imported while this process waits
         from .checks.meshes import read_early
-        from .checks.gear_mesh import gear_checks
         from .checks.tension import sweeps
         from .outputs.plots import _pyplot
         _pyplot()                           # and the checks' plots' (a fifth of a second)
@@ -409,8 +410,7 @@ class _Ahead:
                             self.measuring.start()
                             self.started.set()
                         else:
-                            gear_checks(folder, what, self.plan)
-                            heap.trim()         # this thread's arena, before the checks' meshes come in
+                            _elsewhere(_gear_checks_in_child, folder, what, self.plan, self.store)
                     except Exception:
                         pass
 
@@ -424,6 +424,24 @@ class _Ahead:
     def abandon(self) -> None:
         """The build failed: the threads end after what they are doing, unwaited for."""
         self.jobs.put(None)
+
+
+def _gear_checks_in_child(folder: Path, manifest: dict, plan: Plan, store: cache.Store) -> None:
+    """The gear checks of ``manifest``'s worms and wheels, made and kept in ``store`` as the checks
+    remember them (:func:`hwgen.checks.gear_mesh.gear_checks`), in a process of their own."""
+    from .checks.gear_mesh import gear_checks
+    with cache.using(store):
+        gear_checks(folder, manifest, plan)
+
+
+def _elsewhere(job, *args) -> None:
+    """``job(*args)`` in a spawned process, waited for: work whose result the cache hands over,
+    whose memory (meshes, their copies posed, manifold3d solids) then never adds to this
+    process's while it measures the rest."""
+    import multiprocessing
+    p = multiprocessing.get_context("spawn").Process(target=job, args=args, name="hwgen-gears", daemon=True)
+    p.start()
+    p.join()
 
 
 def _measure_key(folder: Path, manifest: dict) -> str:

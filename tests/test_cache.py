@@ -354,26 +354,28 @@ def test_parts_writes_only_the_parts_it_names_and_the_whole_manifest(built, tmp_
 
 @pytest.mark.slow
 def test_parts_built_in_worker_processes_have_the_bytes_of_a_serial_build(fresh, built, tmp_path, monkeypatch):
-    """--jobs 2 without a cache: every unit is built in a spawned worker (the tensioner's channels
-    in both, around the solids they share), the assembly is put together in one of them (from
-    its own solids and the other's BREP); every file has the bytes of the build in one process.
-    The checks are measured once, in the build's own thread while a worker writes the assembly,
+    """--jobs 2 into an empty cache of its own: every unit is built in a spawned worker (the
+    tensioner's channels in both, around the solids they share), the assembly is put together
+    in one of them (from its own solids and the other's BREP); every file has the bytes of the
+    build in one process. The checks are measured once, in the build's own thread while a
+    worker writes the assembly, the gear checks in a process of their own (never in this one),
     and their report has the bytes of a build's in one process."""
     import threading
 
-    from hwgen.checks import run
+    from hwgen.checks import gear_mesh, run
     from hwgen.outputs.pictures import BACKEND_ENV
     from hwgen.pipeline import build
     monkeypatch.setenv(BACKEND_ENV, "none")
-    measured_in = []
-    real = run.measure
+    measured_in, gears_here = [], []
+    real, real_gears = run.measure, gear_mesh._pair_checks
     monkeypatch.setattr(run, "measure", lambda *a: measured_in.append(threading.current_thread().name) or real(*a))
+    monkeypatch.setattr(gear_mesh, "_pair_checks", lambda *a: gears_here.append(1) or real_gears(*a))
     loaded, _, first = fresh
-    res = build(loaded, tmp_path / "out", cache_dir=None, jobs=2)
+    res = build(loaded, tmp_path / "out", cache_dir=tmp_path / "cache", jobs=2)
     assert sorted(res.built) == sorted(p["name"] for p in res.manifest["parts"])
     tree = _tree(res.folder)
     assert {f: tree.get(f) for f in first if f != "manifest.json"} == {f: first[f] for f in first if f != "manifest.json"}
-    assert measured_in == ["hwgen-measure"]
+    assert measured_in == ["hwgen-measure"] and gears_here == []
     assert (res.folder / "report.json").read_bytes() == (built("prototype") / "report.json").read_bytes()
 
 
