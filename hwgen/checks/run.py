@@ -164,7 +164,9 @@ def _measure(folder: Path, manifest: dict, plan) -> Measured:
     heap.trim()
     mass, c = mass_summary(parts, manifest)
     checks += c
-    checks += gear_checks(folder, manifest, plan)
+    # the gear checks' place in the report; they are measured last, when a build has had them made
+    # meanwhile (in a process of its own, kept in the cache: hwgen.pipeline._Ahead)
+    gears_at = len(checks)
     if gear_pairs(manifest):                  # no tensioner: no tendon runs to it either
         checks += tendon_checks(folder, manifest, plan)
     checks += _strip_clamp_checks(manifest)
@@ -179,6 +181,7 @@ def _measure(folder: Path, manifest: dict, plan) -> Measured:
     gravity, c = gravity_checks(parts, manifest, plan, fits, None if bb_outline is None else bb_outline.extent[0],
                                 strip_t, L)
     checks += c
+    checks[gears_at:gears_at] = gear_checks(folder, manifest, plan)
     return Measured(checks, angles, tls, pair, emap, taut, {
         "mass": _plain(mass),
         "as_built": _plain({
