@@ -209,12 +209,15 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
     ahead = _Ahead(store, plan) if post_build and select is None else None
     with output_errors(out_root), new_folder(target) as tmp, _hashing_once(), ExitStack() as stack:
         side: dict[str, tuple] = {}
+        measured = threading.Event()        # the checks' measurement is over (its meshes let go of)
+        if ahead is not None:
+            ahead.taken = measured
 
         def placed(early: dict) -> None:
             # every part's files are in: the stages beside the others start now, while the
             # assembly is written and the checks' work ahead finishes
             pool = stack.enter_context(ThreadPoolExecutor(max_workers=max(1, len(BESIDE))))
-            side.update(_start_beside(store, plan, tmp, target, early, stack, pool))
+            side.update(_start_beside(store, plan, tmp, target, early, stack, pool, measured))
 
         def measurable(early: dict) -> None:
             # and the strip's template: the checks measure them while the assembly is written
@@ -243,13 +246,14 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
         done, reused = {}, []
         try:
             if post_build:
-                measured = _MEASURED_AHEAD.set(ahead)
+                ahead_token = _MEASURED_AHEAD.set(ahead)
                 try:
                     with cache.using(store), reading_early(ahead.meshes if ahead is not None else {}):
-                        _after_files(store, plan, tmp, manifest, done, reused, side)
+                        _after_files(store, plan, tmp, manifest, done, reused, side, measured)
                 finally:
-                    _MEASURED_AHEAD.reset(measured)
+                    _MEASURED_AHEAD.reset(ahead_token)
         finally:
+            measured.set()
             if ahead is not None:
                 ahead.join()        # the checks met what it did (waiting for the entry it was making), or did it
                 ahead.meshes.clear()
@@ -326,6 +330,7 @@ class _Ahead:
 
     def __init__(self, store: cache.Store, plan: Plan):
         self.store, self.plan, self.thread = store, plan, None
+        self.taken: threading.Event | None = None     # set once the checks took the measurement (:meth:`measured`)
         self.jobs: queue.SimpleQueue = queue.SimpleQueue()
         self.meshes: dict = {}          # the parts' STLs read early, for the checks (checks.meshes.reading_early)
         self.tensioner: dict[int, list] = {}    # the tensioner's units placed so far (their parts), and its parts
@@ -383,6 +388,8 @@ class _Ahead:
             if not self.thread.is_alive():
                 return None
         self.measuring.join()
+        if self.taken is not None:
+            self.taken.set()
         found, self.found = self.found, None       # let go of it with the report (its measured disks are large)
         return found[1] if found is not None and found[0] == _measure_key(folder, manifest) else None
 
@@ -465,15 +472,18 @@ _WHILE_WORKERS_BUILD: contextvars.ContextVar[_Ahead | None] = contextvars.Contex
 
 # ---------------------------------------------------------------- the stages after the files, through the cache
 
-BESIDE = ("pictures",)     # stages that read only the parts' files and the manifest's parts and design report:
-#                            run in a thread beside the others (the renderer is a child process of its own)
+BESIDE = ("plates", "pictures")     # stages that read only the parts' files and the manifest's parts and design
+#                                     report: run in threads beside the others (the renderer is a child process)
+AFTER_MEASURED = ("plates",)        # ... once the checks' measurement is over: its meshes and theirs, read from
+#                                     the same files, would be in memory at once
 
 
 def _start_beside(store: cache.Store, plan: Plan, folder: Path, target: Path, manifest: dict, stack: ExitStack,
-                  pool: ThreadPoolExecutor) -> dict[str, tuple]:
+                  pool: ThreadPoolExecutor, measured: threading.Event) -> dict[str, tuple]:
     """The stages in :data:`BESIDE` started in ``pool``, each in a folder of hard links to the part
     files with a copy of the manifest (a build starts them as soon as every part's files are in
-    ``folder``: they read nothing else); :func:`_after_files` takes what they made."""
+    ``folder``: they read nothing else; those in :data:`AFTER_MEASURED` wait for ``measured``);
+    :func:`_after_files` takes what they made."""
     side: dict[str, tuple] = {}
     for name, stage in AFTER_FILES:
         if name in BESIDE:
@@ -481,20 +491,30 @@ def _start_beside(store: cache.Store, plan: Plan, folder: Path, target: Path, ma
             m, got = _json(manifest), []
             with cache.using(store):
                 job = contextvars.copy_context().run
+            gate = measured if name in AFTER_MEASURED else None
             side[name] = (where, _files(where), _json(m), m, got,
-                          pool.submit(job, _cached_stage, store, name, stage, plan, where, m, got, None))
+                          pool.submit(job, _gated, gate, _cached_stage, store, name, stage, plan, where, m, got, None))
     return side
 
 
+def _gated(gate: threading.Event | None, fn, *args):
+    if gate is not None:
+        gate.wait()
+    return fn(*args)
+
+
 def _after_files(store: cache.Store, plan: Plan, folder: Path, manifest: dict, done: dict, reused: list[str],
-                 side: dict[str, tuple]) -> None:
+                 side: dict[str, tuple], measured: threading.Event) -> None:
     """The stages after the files, in the order of :data:`AFTER_FILES`; those in :data:`BESIDE`
     were started before (``side``: :func:`_start_beside`), and their new files and manifest fields
-    join ``folder`` and ``manifest`` at their place in the order, so the outputs are those of the
-    stages run one after the other."""
+    (and the files they list in its ``files``) join ``folder`` and ``manifest`` at their place in
+    the order, so the outputs are those of the stages run one after the other. ``measured`` is
+    set once the checks are done (or the work ahead's measurement taken, sooner)."""
     for name, stage in AFTER_FILES:
         if name not in side:
             done[name] = _cached_stage(store, name, stage, plan, folder, manifest, reused, done.get("checks"))
+            if name == "checks":
+                measured.set()
             continue
         where, before, original, m, got, future = side[name]
         done[name] = future.result()
@@ -502,7 +522,13 @@ def _after_files(store: cache.Store, plan: Plan, folder: Path, manifest: dict, d
             if path not in before:
                 (folder / path).parent.mkdir(parents=True, exist_ok=True)
                 os.replace(where / path, folder / path)
-        manifest.update({k: v for k, v in m.items() if k not in original or original[k] != v})
+        for k, v in m.items():
+            if k in original and original[k] == v:
+                continue
+            if k == "files":        # the files it added join the folder's own
+                manifest.setdefault(k, {}).update({f: e for f, e in v.items() if original.get(k, {}).get(f) != e})
+            else:
+                manifest[k] = v
         reused += got
 
 
