@@ -206,12 +206,10 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
     target = out_root / loaded.name
     limit = _limit()                    # bad input before anything is written
     select = None if parts is None else (lambda name: fnmatch.fnmatchcase(name, parts))
-    ahead = _Ahead(store, plan) if post_build and select is None else None
+    measured = threading.Event()        # the checks' measurement is over (its meshes let go of)
+    ahead = _Ahead(store, plan, measured) if post_build and select is None else None
     with output_errors(out_root), new_folder(target) as tmp, _hashing_once(), ExitStack() as stack:
         side: dict[str, tuple] = {}
-        measured = threading.Event()        # the checks' measurement is over (its meshes let go of)
-        if ahead is not None:
-            ahead.taken = measured
 
         def placed(early: dict) -> None:
             # every part's files are in: the stages beside the others start now, while the
@@ -328,9 +326,9 @@ class _Ahead:
     stages after the files; the build joins them at its end. A failure here is left for the checks
     to meet and report."""
 
-    def __init__(self, store: cache.Store, plan: Plan):
+    def __init__(self, store: cache.Store, plan: Plan, taken: threading.Event):
         self.store, self.plan, self.thread = store, plan, None
-        self.taken: threading.Event | None = None     # set once the checks took the measurement (:meth:`measured`)
+        self.taken = taken              # set once the checks took the measurement (:meth:`measured`)
         self.jobs: queue.SimpleQueue = queue.SimpleQueue()
         self.meshes: dict = {}          # the parts' STLs read early, for the checks (checks.meshes.reading_early)
         self.tensioner: dict[int, list] = {}    # the tensioner's units placed so far (their parts), and its parts
@@ -357,9 +355,9 @@ class _Ahead:
         """Every part's files and the strip's template are in ``folder`` (``manifest``: the parts'
         entries and the design report, as the checks will read them): every check that reads
         them, measured in a thread of its own (when this one runs: parts were built), started once
-        this thread has read the STLs placed so far (each is read once), which then runs the
-        tensioner's gear checks beside it; the checks take the measurement (:meth:`measured`)
-        when their files and manifest give the same key."""
+        this thread has read the STLs placed so far (each is read once), which then has the
+        tensioner's gear checks made beside it in a process of their own; the checks take the
+        measurement (:meth:`measured`) when their files and manifest give the same key."""
         if self.thread is None:
             return
         key = _measure_key(folder, manifest)
@@ -388,8 +386,7 @@ class _Ahead:
             if not self.thread.is_alive():
                 return None
         self.measuring.join()
-        if self.taken is not None:
-            self.taken.set()
+        self.taken.set()
         found, self.found = self.found, None       # let go of it with the report (its measured disks are large)
         return found[1] if found is not None and found[0] == _measure_key(folder, manifest) else None
 
