@@ -223,10 +223,9 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
 
         token = _WHILE_WORKERS_BUILD.set(ahead)
         try:
-            whole = post_build and select is None
+            whole = ahead is not None           # every part written and the stages after them to run
             manifest, built = _write_files(loaded, plan, tmp, total, progress, store, select, jobs,
-                                           placed if whole else None,
-                                           measurable if whole and ahead is not None else None)
+                                           placed if whole else None, measurable if whole else None)
         except BaseException:
             if ahead is not None:
                 ahead.abandon()

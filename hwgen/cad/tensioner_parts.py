@@ -58,10 +58,11 @@ def build_tensioner(lay: TensionerLayout, *, min_wall: float, tendon_diameter: f
 
 def channel_parts(lay: TensionerLayout, u: Unit, *, min_wall: float, tendon_diameter: float,
                   shared: dict | None = None) -> Iterator[Part]:
-    """One channel's worm, drive shaft, wheel and clamp plate(s), as ``lay`` places them. The worm,
-    the gear and the wheel are kept between builds and between the processes of one
-    (:func:`hwgen.cad.memo.kept`: the thread's sweep and the gear's boolean, seconds); ``shared`` holds the solids already made for other channels (one
-    worm, drive and clamp for all, one wheel per distinct spool layout)."""
+    """One channel's worm, drive shaft, wheel and clamp plate(s), as ``lay`` places them. Every
+    solid is kept between builds and between the processes of one (:func:`hwgen.cad.memo.kept`:
+    the thread's sweep and the gear's boolean are the costly ones), so channels made apart share
+    them; ``shared`` holds the solids already made for other channels here (one worm, drive and
+    clamp for all, one wheel per distinct spool layout)."""
     shared = {} if shared is None else shared
     pair = lay.pair
     if "worm" not in shared:
