@@ -5,6 +5,7 @@ face on the XY plane, resting on Z = 0) and the placement that maps it to robot 
 """
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -54,10 +55,25 @@ MASS_EPS = 1e-6   # relative precision of the volume integration (CadQuery's Vol
 
 
 def mass_properties(solid) -> tuple[float, tuple[float, float, float]]:
-    """Volume (mm³) and centroid (file mm) of a solid, integrated to MASS_EPS."""
-    from OCP.BRepGProp import BRepGProp
-    from OCP.GProp import GProp_GProps
-    props = GProp_GProps()
-    BRepGProp.VolumeProperties_s(solid.wrapped, props, MASS_EPS)
-    c = props.CentreOfMass()
-    return props.Mass(), (c.X(), c.Y(), c.Z())
+    """Volume (mm³) and centroid (file mm) of a solid, integrated to MASS_EPS: once per solid (a
+    throated wheel's is half a second; a part is found sound by its volume and measured for the
+    manifest by both), or as :func:`known_mass` gave them."""
+    found = _MASS.get(solid)
+    if found is None:
+        from OCP.BRepGProp import BRepGProp
+        from OCP.GProp import GProp_GProps
+        props = GProp_GProps()
+        BRepGProp.VolumeProperties_s(solid.wrapped, props, MASS_EPS)
+        c = props.CentreOfMass()
+        found = _MASS[solid] = (props.Mass(), (c.X(), c.Y(), c.Z()))
+    return found
+
+
+def known_mass(solid, found) -> None:
+    """``solid``'s :func:`mass_properties` are ``found`` (what they were for the solid it was read
+    back from: hwgen.cad.memo keeps them with it)."""
+    volume, (x, y, z) = found
+    _MASS[solid] = (float(volume), (float(x), float(y), float(z)))
+
+
+_MASS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()     # each solid's mass_properties, once found

@@ -20,7 +20,7 @@ from typing import NamedTuple
 
 from ..errors import DesignError, InputError, clip
 from ..model.plan import Plan
-from . import Part
+from . import Part, mass_properties
 
 MIN_VOLUME_MM3 = 1e-6       # a solid with less than this is an empty result, not a part
 
@@ -187,7 +187,7 @@ def _sound(part: Part) -> None:
     solid = part.solid
     if solid is None or getattr(solid, "wrapped", None) is None or solid.wrapped.IsNull():
         raise ValueError("it came out null")
-    volume = solid.Volume()
+    volume = mass_properties(solid)[0]
     if not volume > MIN_VOLUME_MM3:
         raise ValueError(f"it came out empty ({volume:.3g} mm³)")
 

@@ -20,6 +20,7 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 
 from .. import cache
+from . import known_mass, mass_properties
 from .export import read_brep, write_brep
 
 _ACTIVE: ContextVar[tuple[cache.Store, object] | None] = ContextVar("hwgen_kept_solids", default=None)
@@ -71,7 +72,10 @@ def kept(kind: str, inputs, make: Callable[[], object]):
             solid = _read(store, key)
             if solid is None:
                 solid = make()
-                store.put_record(key, {"brep": store.put_bytes(write_brep(solid))})
+                # its volume and centroid with it: whoever reads it back finds it sound and measures
+                # it for the manifest without integrating it again (half a second for a wheel)
+                volume, com = mass_properties(solid)
+                store.put_record(key, {"brep": store.put_bytes(write_brep(solid)), "mass": [volume, list(com)]})
     _MADE_AS[solid] = key
     return solid
 
@@ -86,4 +90,12 @@ def made_as(solid) -> str | None:
 def _read(store: cache.Store, key: str):
     rec = store.get_record(key)
     data = store.get_bytes(rec["brep"]) if isinstance(rec, dict) and isinstance(rec.get("brep"), str) else None
-    return None if data is None else read_brep(data)
+    if data is None:
+        return None
+    solid = read_brep(data)
+    try:
+        volume, com = rec["mass"]
+        known_mass(solid, (volume, com))
+    except (KeyError, TypeError, ValueError):
+        pass                # measured again when asked
+    return solid
