@@ -207,8 +207,13 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
     limit = _limit()                    # bad input before anything is written
     select = None if parts is None else (lambda name: fnmatch.fnmatchcase(name, parts))
     measured = threading.Event()        # the checks' measurement is over (its meshes let go of)
-    ahead = _Ahead(store, plan, measured) if post_build and select is None else None
     with output_errors(out_root), new_folder(target) as tmp, _hashing_once(), ExitStack() as stack:
+        # what this build's processes and threads hand each other (the solids its units share,
+        # the values its work ahead finds for the checks): the cache, or without one a store of the
+        # build's own that goes with it (it starts empty: every value is made afresh)
+        scratch = store if store.enabled else cache.Store(
+            Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="hwgen-scratch-"))))
+        ahead = _Ahead(scratch, plan, measured) if post_build and select is None else None
         side: dict[str, tuple] = {}
 
         def placed(early: dict) -> None:
@@ -224,7 +229,7 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
         token = _WHILE_WORKERS_BUILD.set(ahead)
         try:
             whole = ahead is not None           # every part written and the stages after them to run
-            manifest, built = _write_files(loaded, plan, tmp, total, progress, store, select, jobs,
+            manifest, built = _write_files(loaded, plan, tmp, total, progress, store, scratch, select, jobs,
                                            placed if whole else None, measurable if whole else None)
         except BaseException:
             if ahead is not None:
@@ -320,8 +325,8 @@ class _Ahead:
     the measurement meets in the cache.
     The sweeps and the gear checks are kept in the cache as the checks remember them, so the
     checks find them there, or wait for the one being made (:func:`hwgen.cache.remembered` computes under the entry's lock):
-    the values are the ones the checks would compute themselves; without a cache
-    (``--no-cache``) they are left to the measurement. The threads go on beside the
+    the values are the ones the checks would compute themselves. A build without a cache
+    (``--no-cache``) hands them over in a store of its own, which starts empty. The threads go on beside the
     stages after the files; the build joins them at its end. A failure here is left for the checks
     to meet and report."""
 
@@ -826,13 +831,15 @@ class _Workers:
 
 
 def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: int, progress,
-                 store: cache.Store, select: Callable[[str], bool] | None = None,
+                 store: cache.Store, solids: cache.Store, select: Callable[[str], bool] | None = None,
                  jobs: int = 0, placed: Callable[[dict], None] | None = None,
                  measurable: Callable[[dict], None] | None = None) -> tuple[dict, list[str]]:
     """Every part's STL and STEP, assembly.step, backbone_template.dxf and the manifest; a unit
     whose key is in the cache is copied from it, the others are built (and kept). Returns the
     manifest and the names of the parts built afresh. With ``select``, only the parts it takes
-    get their files, and the assembly and the DXF are not written. ``placed`` is called with the
+    get their files, and the assembly and the DXF are not written. ``solids``: where the solids
+    several units share (the tensioner's worm and gear) are kept, so that each is made once
+    whichever process needs it (the cache, or a build's own store). ``placed`` is called with the
     manifest as it stands once every part's files are in the folder (no assembly or template in
     its files yet), ``measurable`` with the same once the strip's template is in too. With ``jobs`` ≥ 1, the units
     to build and the assembly are made in worker processes (:class:`_Workers`): as many as there
@@ -850,10 +857,6 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
     asm_key = cache.key("assembly", loaded.name, [t[3] for t in todo], salt)
     assembly = None if select is not None else _assembly_from_cache(store, asm_key)
     with ExitStack() as stack:
-        # the solids several units share (the tensioner's worm and gear): in the cache, or without
-        # one in a store of this build's own, so that each is made once whichever process needs it
-        solids = store if store.enabled else cache.Store(
-            Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="hwgen-solids-"))))
         workers = None
         to_make = sum(t[4] is None for t in todo)
         if jobs >= 1 and (to_make or (select is None and assembly is None)):
