@@ -151,3 +151,12 @@ def test_the_step_colour_block_is_numbered_by_content(shared):
     assert canonical_styles(one) == one
     assert one.count(b"MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION") == 2
     assert b"#1 = PRODUCT('a','a','',(#2));" in one
+
+
+def test_step_zeros_lose_their_sign_only_as_whole_values():
+    """``-0.`` between separators becomes ``0.``, runs of them too; any other ``-0`` stays."""
+    from hwgen.cad.export import unsigned_zeros
+    assert unsigned_zeros(b"(-0.,-0.,-0.)") == b"(0.,0.,0.)"
+    assert unsigned_zeros(b"#5 = DIRECTION('',(1.,-0.,0.));") == b"#5 = DIRECTION('',(1.,0.,0.));"
+    for kept in (b"(-0.5,1.)", b"(1.,-0.25)", b"(1.E-0,2.)", b"( -0.,1.)", b"(-10.,1.)", b"'-0.'"):
+        assert unsigned_zeros(kept) == kept

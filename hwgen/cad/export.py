@@ -105,7 +105,9 @@ def write_step(solid, path: Path, name: str | None = None) -> None:
     path.write_bytes(unsigned_zeros(path.read_bytes()))
 
 
-_SIGNED_ZERO = re.compile(rb"(?<=[(,])-0\.(?=[,)])")
+# "-0." between ( or , and , or ): the pattern starts with its literal "-", so the search skips
+# ahead to each "-" (twenty times faster on a 15 MB assembly than a pattern opening on the look-behind)
+_SIGNED_ZERO = re.compile(rb"-(?<=[(,]-)0\.(?=[,)])")
 
 
 def unsigned_zeros(data: bytes) -> bytes:
@@ -162,49 +164,51 @@ def write_assembly(parts: list[Part], name: str, path: Path) -> None:
     writer.SetNameMode(True)
     writer.Transfer(doc, STEPControl_StepModelType.STEPControl_AsIs)
     model = writer.ChangeWriter().Model()
-    _number_occurrences(model)
-    _blank_shared_products(model)
+    occurrences = _occurrences(model)
+    _number_occurrences(occurrences)
+    _blank_shared_products(occurrences)
     _set_header(model, name)
     path = Path(path)
     _written(writer.Write(str(path)) == IFSelect_ReturnStatus.IFSelect_RetDone, path, "assembly STEP")
     path.write_bytes(canonical_styles(unsigned_zeros(path.read_bytes())))
 
 
-def _number_occurrences(model) -> None:
-    """Each part's placement in the assembly (NEXT_ASSEMBLY_USAGE_OCCURRENCE) gets the id 1, 2,
-    ... in file order; OCCT numbers them with a counter that runs on through the process."""
+def _occurrences(model) -> list:
+    """Each part's placement in the assembly (NEXT_ASSEMBLY_USAGE_OCCURRENCE), in file order: one
+    pass over the model's entities (a fifth of a second for the prototype's)."""
     from OCP.StepRepr import StepRepr_NextAssemblyUsageOccurrence
+    value = model.Value
+    return [e for e in map(value, range(1, model.NbEntities() + 1))
+            if isinstance(e, StepRepr_NextAssemblyUsageOccurrence)]
+
+
+def _number_occurrences(occurrences: list) -> None:
+    """Each part's placement in the assembly gets the id 1, 2, ... in file order; OCCT numbers
+    them with a counter that runs on through the process."""
     from OCP.TCollection import TCollection_HAsciiString
-    k = 0
-    for i in range(1, model.NbEntities() + 1):
-        entity = model.Value(i)
-        if isinstance(entity, StepRepr_NextAssemblyUsageOccurrence):
-            k += 1
-            entity.SetId(TCollection_HAsciiString(str(k)))
+    for k, entity in enumerate(occurrences, 1):
+        entity.SetId(TCollection_HAsciiString(str(k)))
 
 
 SHARED_PRODUCT_NAME = " "    # a blank id and name (OCCT replaces an empty one with its translator's banner)
 
 
-def _blank_shared_products(model) -> None:
+def _blank_shared_products(occurrences: list) -> None:
     """A product that several placements share (identical parts: one definition, several
     instances) gets a blank id and name. FreeCAD names each instance after its product (its
     name, else its id) and falls back to the instance's own name (the part's) only when both are
     blank, so every instance then shows its own name; the geometry stays shared."""
-    from OCP.StepRepr import StepRepr_NextAssemblyUsageOccurrence
     from OCP.TCollection import TCollection_HAsciiString
     products: list = []      # distinct products, in file order (OCP hands back one wrapper per entity)
     uses: list[int] = []
-    for i in range(1, model.NbEntities() + 1):
-        entity = model.Value(i)
-        if isinstance(entity, StepRepr_NextAssemblyUsageOccurrence):
-            product = entity.RelatedProductDefinition().Formation().OfProduct()
-            k = next((j for j, p in enumerate(products) if p is product), None)
-            if k is None:
-                products.append(product)
-                uses.append(0)
-                k = len(products) - 1
-            uses[k] += 1
+    for entity in occurrences:
+        product = entity.RelatedProductDefinition().Formation().OfProduct()
+        k = next((j for j, p in enumerate(products) if p is product), None)
+        if k is None:
+            products.append(product)
+            uses.append(0)
+            k = len(products) - 1
+        uses[k] += 1
     for product, n in zip(products, uses):
         if n > 1:
             product.SetId(TCollection_HAsciiString(SHARED_PRODUCT_NAME))
@@ -224,6 +228,22 @@ def _one_line(body: bytes) -> bytes:
     return re.sub(rb"\r?\n\s*", b"", body)
 
 
+_ENTITY_HEAD = re.compile(rb"#\d+\s*=\s*")
+
+
+def _entity_opening(data: bytes, head: bytes, start: int, end: int) -> int | None:
+    """Where the first line between ``start`` and ``end`` that opens an entity with ``head``
+    (``#n = HEAD``) begins: the text is searched for ``head`` itself (fast), and each find's line
+    start tried."""
+    at = data.find(head, start, end)
+    while at >= 0:
+        line = data.rfind(b"\n", 0, at) + 1
+        if line >= start and _ENTITY_HEAD.fullmatch(data, line, at):
+            return line
+        at = data.find(head, at + 1, end)
+    return None
+
+
 def canonical_styles(data: bytes) -> bytes:
     """The STEP file with its trailing colour-style block in an order fixed by content.
 
@@ -235,17 +255,15 @@ def canonical_styles(data: bytes) -> bytes:
     """
     start = data.find(b"\nDATA;")
     end = data.rfind(b"\nENDSEC;")
-    root = re.compile(rb"^#\d+\s*=\s*" + re.escape(STYLE_ROOT), re.M).search(data, max(start, 0), max(end, 0))
-    if start < 0 or end < start or root is None:
+    cut = _entity_opening(data, STYLE_ROOT, max(start, 0), max(end, 0))
+    if start < 0 or end < start or cut is None:
         return data
-    cut = root.start()
     entities = [(int(m.group(1)), m.group(2), m.start(), m.end()) for m in _ENTITY.finditer(data, cut, end)]
     block = {num: body for num, body, _, _ in entities}
     if not block:
         return data
     lowest = min(block)
-    before = [int(r) for r in _REF.findall(data, start, cut)]
-    if before and max(before) >= lowest:        # something before the block refers into it
+    if max(map(int, _REF.findall(data, start, cut)), default=-1) >= lowest:   # something before refers into it
         return data
     refs = {num: [int(r) for r in _REF.findall(body) if int(r) in block] for num, body in block.items()}
     digest: dict[int, bytes] = {}
