@@ -311,6 +311,11 @@ class Store:
 # ---------------------------------------------------------------- values remembered between runs
 
 _ACTIVE: ContextVar[Store | None] = ContextVar("hwgen_active_store", default=None)
+_RECALL_ONLY: ContextVar[bool] = ContextVar("hwgen_recall_only", default=False)
+
+
+class NotRemembered(Exception):
+    """A :func:`remembered` value that is not in the store, met under :func:`recalling_only`."""
 LIBRARIES = ("numpy", "scipy", "numba", "trimesh", "manifold3d", "matplotlib", "vtk", "pillow", "ezdxf",
              "cadquery", "cadquery-ocp")
 
@@ -323,6 +328,17 @@ def using(store: Store) -> Iterator[None]:
         yield
     finally:
         _ACTIVE.reset(token)
+
+
+@contextmanager
+def recalling_only() -> Iterator[None]:
+    """Within: a :func:`remembered` value not in the active store raises :class:`NotRemembered`
+    instead of being computed (whether work can be skipped is told without doing any of it)."""
+    token = _RECALL_ONLY.set(True)
+    try:
+        yield
+    finally:
+        _RECALL_ONLY.reset(token)
 
 
 @lru_cache(maxsize=1)
@@ -359,11 +375,15 @@ def remembered(kind: str, inputs, compute: Callable[[], object]):
     build's checks meet the work its own thread began ahead of them)."""
     store = _ACTIVE.get()
     if store is None or not store.enabled:
+        if _RECALL_ONLY.get():
+            raise NotRemembered(kind)
         return json.loads(json.dumps(compute(), default=_plain))
     k = key("remembered", kind, inputs, code())
     rec = store.get_record(k)
     if isinstance(rec, dict) and "value" in rec:
         return rec["value"]
+    if _RECALL_ONLY.get():
+        raise NotRemembered(kind)
     with store.lock(k):
         rec = store.get_record(k)
         if isinstance(rec, dict) and "value" in rec:

@@ -417,7 +417,7 @@ class _Ahead:
                         elif kind == "measure":
                             self.measuring.start()
                             self.started.set()
-                        else:
+                        elif not _gear_checks_remembered(folder, what, self.plan):
                             _elsewhere(_gear_checks_in_child, folder, what, self.plan, self.store)
                     except Exception:
                         pass
@@ -440,6 +440,19 @@ def _gear_checks_in_child(folder: Path, manifest: dict, plan: Plan, store: cache
     from .checks.gear_mesh import gear_checks
     with cache.using(store):
         gear_checks(folder, manifest, plan)
+
+
+def _gear_checks_remembered(folder: Path, manifest: dict, plan: Plan) -> bool:
+    """Whether the active store holds every measurement the gear checks of ``manifest``'s worms and
+    wheels make (an edit that moved the tensioner but kept its gearing): then no process is started
+    to make them (a second of imports for nothing)."""
+    from .checks.gear_mesh import gear_checks
+    try:
+        with cache.recalling_only():
+            gear_checks(folder, manifest, plan)
+    except cache.NotRemembered:
+        return False
+    return True
 
 
 def _elsewhere(job, *args) -> None:
