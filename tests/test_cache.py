@@ -367,9 +367,9 @@ def test_parts_built_in_worker_processes_have_the_bytes_of_a_serial_build(fresh,
     from hwgen.pipeline import build
     monkeypatch.setenv(BACKEND_ENV, "none")
     measured_in, gears_here = [], []
-    real, real_gears = run.measure, gear_mesh._pair_checks
+    real, real_gears = run.measure, gear_mesh.measure_pair
     monkeypatch.setattr(run, "measure", lambda *a: measured_in.append(threading.current_thread().name) or real(*a))
-    monkeypatch.setattr(gear_mesh, "_pair_checks", lambda *a: gears_here.append(1) or real_gears(*a))
+    monkeypatch.setattr(gear_mesh, "measure_pair", lambda *a: gears_here.append(1) or real_gears(*a))
     loaded, _, first = fresh
     res = build(loaded, tmp_path / "out", cache_dir=tmp_path / "cache", jobs=2)
     assert sorted(res.built) == sorted(p["name"] for p in res.manifest["parts"])

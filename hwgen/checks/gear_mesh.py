@@ -1,7 +1,7 @@
 """Worm-gear tensioner checks measured from the exported meshes (the tendons' free spans to their
 spools are measured in :mod:`hwgen.checks.tendon_runs`).
 
-From the files (each STL placed by its manifest placement, nothing else of the manifest):
+From the files (and each STL's manifest placement, nothing else of the manifest):
 the axes of each worm and wheel fitted to their surfaces give the centre distance and the
 shaft angle; the wheel's teeth and the worm's starts are counted in sections; the worm is
 turned through one thread period and the wheel by the counted ratio, for the interference
@@ -11,6 +11,21 @@ touches, for the backlash, and the zone where the closed flank lies within ZONE_
 the worm gives the face width that carries load; the wheel's mid-face section gives the
 tooth's Lewis form factor.
 
+Each distinct pair is measured once. Everything above is unchanged when a worm and its wheel
+are moved together by one rigid motion: the axis fits (and their RMS), the centre distance and
+shaft angle, the counts, the interference volume and the closest gap over the motion, the turns
+that close each flank, the loaded face and the form factor. So the channels whose worm files
+and wheel files have the same bytes and whose wheels lie the same way to their worms
+(:func:`relative_pose`) share one measurement, made on the first channel's files, and each
+check of another channel says so and names the channel measured. A pair is measured in its
+worm's file frame (the wheel placed by inv(worm placement) @ wheel placement, rounded:
+:func:`relative_pose`), never where the robot has it, so that its numbers are a function, to the
+last bit, of what they are remembered under (:func:`hwgen.cache.remembered`: the files and that
+pose): a measurement remembered for one place equals a fresh one at another, and a report does
+not depend on what the cache held. The meshing motion's solids hold float64 vertices
+(:func:`solid64`); as float32 (what manifold3d's Mesh takes) their rounding at the robot's 400 mm
+moved the closest gap by up to 2e-4 of itself from one channel to the next.
+
 From the design, and each message says so: the tendon break load, the winding radius, μ,
 the module, pressure and lead angles, the resin's strength, modulus and Poisson ratio. Rules
 that loading enforces (self-locking by γ < atan(μ / cos α_n), no undercut) are not checked
@@ -19,7 +34,9 @@ again here: a design that breaks them is never built.
 from __future__ import annotations
 
 import hashlib
+import json
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -50,6 +67,9 @@ ZONE_REACH_MM = 0.6           # flank faces that come this near the worm's crest
 ZONE_MARGIN_MM = 0.1          # closing a flank moves its points less than this (r·δ ≈ 0.03 mm for the prototype)
 CLOSE_TOL_RAD = 2e-6          # the wheel's turn to close a flank is iterated to this
 RING_WIDTH_MM = 0.05          # ring in a section where teeth (or starts) are counted
+POSE_DECIMALS = (12, 11)      # a wheel's pose to its worm, rounded: rotation entries to 1e-12, translation to 1e-11 mm
+#                               (its float64 product carries ~1e-13 mm at the robot's 400 mm; moving the wheel by
+#                               the rounding, ≤ 5e-12 mm, moves the 0.024 mm gap by < 1e-9 of itself)
 
 
 def toward(wheel: dict, worm: dict, distance: float) -> np.ndarray:
@@ -129,6 +149,16 @@ def tooth_form_factor(mesh, axis: Axis, module: float, n: int = 40) -> float:
 
 
 # ---- the meshing motion -----------------------------------------------------------------
+def solid64(mesh):
+    """A trimesh mesh as a manifold3d solid with float64 vertices, where it lies: the meshing motion's
+    gap and interference then do not depend on where the pair sits (float32 vertices, as
+    :func:`hwgen.checks.meshes.to_manifold` makes them, move the gap by ~5e-6 mm between channels
+    400 mm apart in the robot)."""
+    import manifold3d as m3d
+    return m3d.Manifold(m3d.Mesh64(vert_properties=np.asarray(mesh.vertices, dtype=np.float64),
+                                   tri_verts=np.asarray(mesh.faces, dtype=np.uint64)))
+
+
 class Meshing:
     """A worm and its wheel as placed in the files (robot mm). The worm turns by ψ about its
     fitted axis and the wheel by sense·ψ/ratio about its own; the ratio is counted from the
@@ -139,7 +169,7 @@ class Meshing:
         self.worm_axis, self.wheel_axis = worm_axis, wheel_axis
         self.ratio = teeth / starts
         self.period = 2 * math.pi / starts           # the worm's turn that moves the wheel one tooth
-        self._worm_m, self._wheel_m = to_manifold(worm), to_manifold(wheel)
+        self._worm_m, self._wheel_m = solid64(worm), solid64(wheel)
         self._distance = None
         self._near = None
         self.sense = 1
@@ -241,9 +271,27 @@ def gear_pairs(manifest: dict) -> dict[str, dict[str, dict]]:
     return out
 
 
-def measure_pair(folder: Path, worm: dict, wheel: dict) -> dict:
-    """Axes, counts and the meshing motion of one worm and wheel, from their files."""
-    wm, hm = placed_mesh(folder, worm), placed_mesh(folder, wheel)
+def relative_pose(worm: dict, wheel: dict) -> np.ndarray:
+    """Where the wheel's file lies in its worm's file: inv(worm placement) @ wheel placement, its
+    rotation rounded to POSE_DECIMALS[0] places and its translation (mm) to POSE_DECIMALS[1], -0.0
+    made 0.0: pairs placed apart by a rigid motion give the same array, not ones that differ in
+    their last digits (the product's rounding depends on where each pair sits)."""
+    pw, ph = (np.asarray(e["placement"], dtype=float) for e in (worm, wheel))
+    rel = np.linalg.solve(pw, ph)
+    out = np.eye(4)
+    out[:3, :3] = np.round(rel[:3, :3], POSE_DECIMALS[0])
+    out[:3, 3] = np.round(rel[:3, 3], POSE_DECIMALS[1])
+    return out + 0.0
+
+
+def measure_pair(folder: Path, worm: dict, wheel: dict, relative: np.ndarray | None = None) -> dict:
+    """Axes, counts and the meshing motion of one worm and wheel, from their files: placed by their
+    manifest placements (robot mm), or, with ``relative``, the worm as its file has it and the wheel
+    under ``relative`` (the worm's file frame, where :func:`gear_checks` measures)."""
+    if relative is None:
+        wm, hm = placed_mesh(folder, worm), placed_mesh(folder, wheel)
+    else:
+        wm, hm = placed_mesh(folder, worm, np.eye(4)), placed_mesh(folder, wheel, relative)
     wa, ha = fit_axis(wm), fit_axis(hm)
     out = {"worm": wm, "wheel": hm, "worm_axis": wa, "wheel_axis": ha,
            "center_distance": axes_distance(wa, ha), "shaft_angle": axes_angle(wa, ha),
@@ -253,24 +301,63 @@ def measure_pair(folder: Path, worm: dict, wheel: dict) -> dict:
     return out
 
 
+@dataclass
+class DistinctPair:
+    """The channels whose worm and wheel files have the same bytes and lie the same way to each
+    other (:func:`relative_pose`): one measurement serves them all, made on the first's files."""
+
+    channels: list[str]                  # sorted; the first is the one measured
+    worm: dict                           # the first channel's manifest entries
+    wheel: dict
+    files: tuple[str | None, str | None]  # sha256 of the worm's and the wheel's STL (None: unreadable)
+    pose: np.ndarray                     # :func:`relative_pose`
+
+    @property
+    def measured_on(self) -> str:
+        return self.channels[0]
+
+    def measure(self, folder: Path) -> dict:
+        """:func:`measure_pair` of the first channel's files, in its worm's file frame."""
+        return measure_pair(folder, self.worm, self.wheel, self.pose)
+
+
+def distinct_pairs(folder: Path, pairs: dict[str, dict[str, dict]]) -> list[DistinctPair]:
+    """The channels that have both a worm and a wheel, grouped by their files' bytes and the pose of
+    the wheel to its worm; in the order of each group's first channel."""
+    groups: dict[tuple, DistinctPair] = {}
+    for channel, pw in sorted(pairs.items()):
+        if set(pw) != {"worm", "wheel"}:
+            continue
+        files = tuple(_file_sha(ManifestPart.of(pw[r]).stl_in(folder)) for r in ("worm", "wheel"))
+        pose = relative_pose(pw["worm"], pw["wheel"])
+        k = (files, pose.tobytes())
+        if k in groups:
+            groups[k].channels.append(channel)
+        else:
+            groups[k] = DistinctPair([channel], pw["worm"], pw["wheel"], files, pose)
+    return list(groups.values())
+
+
 def gear_checks(folder: Path, manifest: dict, plan) -> list[Check]:
-    """Every worm and wheel measured from its file. What it finds (most of a check's time) is
-    remembered (:func:`hwgen.cache.remembered`) under the bytes of the worm and wheel files, their
-    manifest entries and the plan's values the checks read (the pair, μ, the winding radius, the
-    tendon's break load, the resin's strength and contact figures)."""
+    """Every distinct worm and wheel (:func:`distinct_pairs`) measured from its files, once. What
+    the measuring finds (most of a check's time) is remembered (:func:`hwgen.cache.remembered`) per
+    distinct pair under what it depends on: the two files' bytes, the wheel's pose to its worm and
+    the design values it reads (the center offset, beyond which the gap is not searched; for the
+    representative pair's contact and form factor, the module); not the placements in the robot nor
+    the channels' names. The checks are made from those numbers on every call (their messages name
+    each channel, and its loads: tendons × break load × winding radius)."""
     folder = Path(folder)
     pairs = gear_pairs(manifest)
     if not pairs:
         return [Check("gear.parts", "error", False, "no tensioner worm/wheel parts in the manifest")]
-    entries = [p for pw in pairs.values() for p in pw.values()]
-    files = [_file_sha(ManifestPart.of(p).stl_in(folder)) for p in entries]
-    lay = plan.require_tensioner_layout()
-    reads = (lay.pair, lay.friction_coefficient, lay.winding_radius, plan.tendon_material.break_load,
-             plan.tensioner, plan.process.material, plan.process.contact_modulus_mpa, plan.process.poisson,
-             plan.process.contact_reason)
-    found = remembered("gear checks", (files, entries, reads),
-                       lambda: [c.to_json() for c in _pair_checks(folder, manifest, plan, pairs)])
-    return [Check(**c) for c in found]
+    checks = _pair_checks(folder, manifest, plan, pairs)
+    return [Check(**c) for c in json.loads(json.dumps([c.to_json() for c in checks], default=_plain))]
+
+
+def _plain(obj):
+    if isinstance(obj, np.generic):
+        return obj.item()
+    raise TypeError(f"{type(obj).__name__} is not JSON")
 
 
 def _file_sha(path: Path) -> str | None:
@@ -280,78 +367,130 @@ def _file_sha(path: Path) -> str | None:
         return None
 
 
+class _Measurer:
+    """The remembered measurements of one call's distinct pairs; a pair measured here (its meshes,
+    axes and manifold3d solids) is kept for its contact, which then needs no second fit."""
+
+    def __init__(self, folder: Path):
+        self.folder, self.live = folder, {}
+
+    def _measured(self, d: DistinctPair) -> dict:
+        k = (d.files, d.pose.tobytes())
+        if k not in self.live:
+            self.live[k] = d.measure(self.folder)
+        return self.live[k]
+
+    def pair(self, d: DistinctPair, center_offset: float) -> dict:
+        """Centre distance, shaft angle, the fits' RMS, counts, and over one thread period the
+        largest interference and the smallest gap (searched to center_offset + GAP_SEARCH_MM)."""
+        return remembered("gear pair", (d.files, d.pose, center_offset),
+                          lambda: measure_distinct_pair(self._measured(d), center_offset + GAP_SEARCH_MM))
+
+    def contact(self, d: DistinctPair, module: float) -> dict:
+        """Each flank turned into contact (:meth:`Meshing.contact`), and the Lewis form factor."""
+        return remembered("gear contact", (d.files, d.pose, module),
+                          lambda: measure_contact(self._measured(d), module))
+
+
+def measure_distinct_pair(m: dict, search: float) -> dict:
+    """The numbers the per-channel checks read, of a pair measured by :func:`measure_pair`."""
+    out = {"center_distance": m["center_distance"], "shaft_angle": m["shaft_angle"],
+           "worm_rms": m["worm_axis"].rms, "wheel_rms": m["wheel_axis"].rms,
+           "teeth": m["teeth"], "starts": m["starts"]}
+    if "meshing" in m:
+        out["interference"], out["gap"] = m["meshing"].sweep(SWEEP_STEPS, search)
+    return out
+
+
+def measure_contact(m: dict, module: float) -> dict:
+    """Both flanks' contact (turns and loaded extents at ZONE_STEPS worm angles) and the wheel's
+    Lewis form factor, of a pair measured by :func:`measure_pair` (with its meshing motion)."""
+    return {"flanks": [m["meshing"].contact(f) for f in (1, -1)],
+            "form_factor": tooth_form_factor(m["wheel"], m["wheel_axis"], module)}
+
+
 def _pair_checks(folder: Path, manifest: dict, plan, pairs: dict) -> list[Check]:
     pair = plan.require_tensioner_layout().pair
+    measurer = _Measurer(folder)
+    distinct = distinct_pairs(folder, pairs)
+    of = {c: d for d in distinct for c in d.channels}
+    found = {d.measured_on: measurer.pair(d, pair.center_offset) for d in distinct}
     out: list[Check] = []
-    measured = {}
     flank_gap = pair.backlash()["normal_mm"] / 2
     for channel, pw in sorted(pairs.items()):
         where = {"channel": channel}
-        if set(pw) != {"worm", "wheel"}:
+        if channel not in of:
             out.append(Check("gear.parts", "error", False, f"channel {channel}: worm or wheel missing", None, None,
                              where))
             continue
-        m = measure_pair(folder, pw["worm"], pw["wheel"])
-        measured[channel] = m
+        on = of[channel].measured_on
+        m = found[on]
+        name = f"channel {channel}"
+        if on != channel:
+            name += f" (measured on channel {on}'s files, which equal {channel}'s up to a rigid motion)"
+            where = {"channel": channel, "measured_on": on}
         a, a_nom = m["center_distance"], pair.center_distance
-        fit = f"axes fitted to the crests, RMS {1e6 * m['worm_axis'].rms:.1f} / {1e6 * m['wheel_axis'].rms:.1f} nm"
+        fit = f"axes fitted to the crests, RMS {1e6 * m['worm_rms']:.1f} / {1e6 * m['wheel_rms']:.1f} nm"
         out.append(Check("gear.center_distance", "error", abs(a - a_nom) <= CENTER_TOL_MM,
-                         f"channel {channel}: worm and wheel axes {a:.4f} mm apart ({fit}); design (d1 + d2)/2 + "
+                         f"{name}: worm and wheel axes {a:.4f} mm apart ({fit}); design (d1 + d2)/2 + "
                          f"center_offset = {a_nom:.4f} mm", a, a_nom, where))
         out.append(Check("gear.shaft_angle", "error", abs(m["shaft_angle"] - 90) <= SHAFT_ANGLE_TOL_DEG,
-                         f"channel {channel}: worm and wheel axes at {m['shaft_angle']:.4f}° (90° wanted)",
+                         f"{name}: worm and wheel axes at {m['shaft_angle']:.4f}° (90° wanted)",
                          m["shaft_angle"], 90.0, where))
         for what, n, want in (("teeth", m["teeth"], pair.teeth), ("starts", m["starts"], pair.starts)):
             part = "wheel" if what == "teeth" else "worm"
             out.append(Check(f"gear.{what}", "error", n == want,
-                             f"channel {channel}: {n} {what if part == 'wheel' else 'thread starts'} counted in the "
+                             f"{name}: {n} {what if part == 'wheel' else 'thread starts'} counted in the "
                              f"{part}'s section, the design has {want}", float(n), float(want), where))
-        if "meshing" not in m:
+        if "gap" not in m:
             continue
-        vol, gap = m["meshing"].sweep(SWEEP_STEPS, pair.center_offset + GAP_SEARCH_MM)
+        vol, gap = m["interference"], m["gap"]
         out.append(Check("gear.interference", "error", vol <= INTERFERENCE_TOL_MM3,
-                         f"channel {channel}: worm and wheel overlap by at most {vol:.4f} mm³ over one thread "
+                         f"{name}: worm and wheel overlap by at most {vol:.4f} mm³ over one thread "
                          f"period ({SWEEP_STEPS} positions)", vol, INTERFERENCE_TOL_MM3, where))
         lo, hi = GAP_MIN_SHARE * flank_gap, pair.center_offset + GAP_TOL_MM
         out.append(Check("gear.gap", "error", lo <= gap <= hi,
-                         f"channel {channel}: closest gap between worm and wheel {gap:.4f} mm over one thread period "
+                         f"{name}: closest gap between worm and wheel {gap:.4f} mm over one thread period "
                          f"(from {lo:.4f} to {hi:.4f} mm wanted: the design's center_offset {pair.center_offset:g} mm "
                          f"leaves {flank_gap:.4f} mm per flank by the rack formula)", gap, lo, where))
-    out += _strength_checks(measured, manifest, plan, pair)
+    measured = {c: found[d.measured_on] for c, d in of.items()}
+    out += _strength_checks(measured, of, measurer, manifest, plan, pair)
     return out
 
 
-def _strength_checks(measured: dict, manifest: dict, plan, pair) -> list[Check]:
-    """Backlash and loaded face on the representative pair; Lewis and Hertz on every channel."""
+def _strength_checks(measured: dict, of: dict, measurer: _Measurer, manifest: dict, plan, pair) -> list[Check]:
+    """Backlash and loaded face on the representative pair (the channel with the most tendons, measured
+    on the files of the first channel of its distinct pair); Lewis and Hertz on every channel."""
     lay, ts, proc = plan.require_tensioner_layout(), plan.tensioner, plan.process
     mu, load = lay.friction_coefficient, plan.tendon_material.break_load
     wheels = {p["channel"]: p for p in manifest["parts"] if p.get("role") == "tensioner_wheel"}
-    usable = [c for c, m in measured.items() if "meshing" in m]
+    usable = [c for c, m in measured.items() if "gap" in m]
     if not usable:
         return []
     rep = max(usable, key=lambda c: (len(wheels[c].get("tendons", [])), c))
-    m = measured[rep]
-    contact = {f: m["meshing"].contact(f) for f in (1, -1)}
+    m, on = measured[rep], of[rep].measured_on
+    found = measurer.contact(of[rep], pair.module)
+    contact = dict(zip((1, -1), found["flanks"]))
     face = min(min(c["extent_mm"]) for c in contact.values())
     turn = float(np.mean(np.add(contact[1]["turn_deg"], contact[-1]["turn_deg"])))
     jt = math.radians(turn) * pair.r2
     formula = pair.backlash()
-    y = tooth_form_factor(m["wheel"], m["wheel_axis"], pair.module)
-    common = {"channel": "all", "measured_on": rep}
+    y = found["form_factor"]
+    common = {"channel": "all", "measured_on": on}
     out = [Check("gear.backlash", "info", True,
-                 f"measured on channel {rep}'s files: the wheel turns {turn:.3f}° from one flank touching the worm to "
+                 f"measured on channel {on}'s files: the wheel turns {turn:.3f}° from one flank touching the worm to "
                  f"the other (mean of {ZONE_STEPS} worm angles), j_t = {jt:.4f} mm at its pitch circle (design r2 = "
                  f"{pair.r2:g} mm); the rack formula 2·center_offset·tan α gives {formula['circumferential_mm']:.4f} mm "
                  f"({formula['wheel_deg']:.3f}°)", jt, formula["circumferential_mm"],
                  {**common, "wheel_turn_deg": turn, "formula_mm": formula["circumferential_mm"]}),
            Check("gear.loaded_face", "info", True,
-                 f"measured on channel {rep}'s files: with each flank turned into contact, the wheel lies within "
+                 f"measured on channel {on}'s files: with each flank turned into contact, the wheel lies within "
                  f"{ZONE_GAP_MM:g} mm of the worm over {face:.2f} mm of its {pair.face_width:g} mm face (least of "
                  f"{ZONE_STEPS} worm angles and both flanks); Lewis and Hertz use this face",
                  face, pair.face_width, {**common, "form_factor": y}),
            Check("gear.ratio", "info", True,
                  f"ratio {m['teeth'] / m['starts']:g}:1 ({m['teeth']} teeth, {m['starts']} start"
-                 f"{'s' if m['starts'] > 1 else ''}, counted on channel {rep}'s files)", m["teeth"] / m["starts"],
+                 f"{'s' if m['starts'] > 1 else ''}, counted on channel {on}'s files)", m["teeth"] / m["starts"],
                  None, common)]
     gamma, phi = math.degrees(pair.lead_angle), math.degrees(pair.friction_angle(mu))
     out.append(Check("gear.lead_angle", "info", True,
@@ -371,7 +510,7 @@ def _strength_checks(measured: dict, manifest: dict, plan, pair) -> list[Check]:
         sf = ts.resin_strength / sigma
         out.append(Check("gear.lewis", "error", sf >= ts.safety_factor,
                          f"channel {channel}: {loading}; Lewis tooth stress {sigma:.1f} MPa on the loaded face "
-                         f"{face:.2f} mm with Y = {y:.3f} (both measured on channel {rep}'s files), m = "
+                         f"{face:.2f} mm with Y = {y:.3f} (both measured on channel {on}'s files), m = "
                          f"{pair.module:g} mm: safety {sf:.2f} against the design's resin_strength "
                          f"{ts.resin_strength:g} MPa (need {ts.safety_factor:g})", sf, ts.safety_factor,
                          {**where, "stress_mpa": sigma, "face_mm": face, "form_factor": y}))

@@ -67,18 +67,19 @@ class SurfaceDistance:
         return np.sqrt(d2[rows, j]), idx[rows, j], q.reshape(n, k, 3)[rows, j]
 
     def __call__(self, points: np.ndarray, max_dist: float | None = None) -> np.ndarray:
-        """Signed distances; with ``max_dist``, points certainly farther get a lower bound of
-        their distance (counted as outside)."""
+        """Signed distances; with ``max_dist``, points certainly that far or farther get max_dist
+        itself, a lower bound of their distance (counted as outside)."""
         points = np.asarray(points, dtype=float)
         n = len(points)
         dist, best, close = np.full(n, np.inf), np.zeros(n, int), points.copy()
         todo = np.arange(n)
         if max_dist is not None:
-            lower = np.full(n, np.inf)
+            # a point with no bucket's centroid nearer than max_dist + that bucket's reach is at least
+            # max_dist from every triangle; the k-d trees stop looking beyond that
+            far = np.ones(n, bool)
             for sel, tree, reach in self.buckets:
-                lower = np.minimum(lower, tree.query(points, k=1)[0] - reach)
-            far = lower > max_dist
-            dist[far] = lower[far]
+                far &= np.isinf(tree.query(points, k=1, distance_upper_bound=max_dist + reach)[0])
+            dist[far] = max_dist
             todo = np.flatnonzero(~far)
         pts = points[todo]
         pending = []
