@@ -424,8 +424,8 @@ def main(argv: list[str]) -> None:
             res = build(loaded, Path(tmp) / "b", cache_dir=None)
         from hwgen.checks.gear_mesh import gear_checks
         from hwgen.cad.manifest import read_manifest
-        with timed("gear checks from the meshes", "axes, counts and sweeps per channel; backlash, loaded "
-                                                  "face and Lewis Y on one pair"):
+        with timed("gear checks from the meshes", "axes, counts and sweeps per distinct worm and wheel; "
+                                                  "backlash, loaded face and Lewis Y on one pair"):
             gear_checks(res.folder, read_manifest(res.folder), plan)
         if res.report is not None:
             _monte_carlo(res.report)

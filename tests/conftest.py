@@ -62,8 +62,8 @@ LONGEST = ("tests/test_reproducible.py::", "tests/test_any_robot.py::test_lab_ro
 @pytest.fixture(scope="session", autouse=True)
 def remembered_in_the_session_cache():
     """Checks run directly by tests (run_checks on copies of a built design) remember what they
-    may (the gear measurements, keyed by the worm and wheel files' bytes, their entries and the
-    design) in the session's cache, as `hwgen check` does in the user's."""
+    may (the gear measurements, keyed by the worm and wheel files' bytes, the wheel's pose to its
+    worm and the design values they read) in the session's cache, as `hwgen check` does in the user's."""
     from hwgen import cache
     with cache.using(cache.Store(Path(SESSION_CACHE))):
         yield

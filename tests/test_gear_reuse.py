@@ -155,3 +155,28 @@ def test_a_wheel_moved_toward_its_worm_is_measured_again(proto, counted, tmp_pat
     assert after["H"]["gear.gap"].where == {"channel": "H", "measured_on": "C1"}
     for ch in ("A", "C1", "H"):
         assert {k: c.to_json() for k, c in after[ch].items()} == {k: c.to_json() for k, c in before[ch].items()}
+
+
+def test_the_gear_process_is_started_only_for_what_is_not_remembered(proto, counted, tmp_path):
+    """A build's work ahead asks whether every gear measurement is in the store before it starts a
+    process to make them: asking measures nothing; with the measurements kept (also after the
+    channels moved, as a routing edit moves them) the answer is yes, with an empty store no."""
+    from hwgen import pipeline
+    folder, man, p = proto
+    store = cache.Store(tmp_path / "cache")
+    with cache.using(store):
+        assert not pipeline._gear_checks_remembered(folder, man, p)
+    with cache.using(cache.Store(None)):
+        assert not pipeline._gear_checks_remembered(folder, man, p)
+    assert counted == {"measure_pair": 0, "contact": 0}
+    with cache.using(store):
+        gear_checks(folder, man, p)
+    moved = copy.deepcopy(man)
+    for q in moved["parts"]:
+        if q.get("role") in ("tensioner_worm", "tensioner_wheel") and q["channel"] == "C2":
+            q["placement"] = (_rigid(0.3, (0, 1, 0), (12.0, 0.0, -3.0)) @ np.asarray(q["placement"])).tolist()
+    n = dict(counted)
+    with cache.using(store):
+        assert pipeline._gear_checks_remembered(folder, man, p)
+        assert pipeline._gear_checks_remembered(folder, moved, p)
+    assert counted == n
