@@ -52,14 +52,19 @@ def inside_many(poly: np.ndarray, pts: np.ndarray) -> np.ndarray:
 
 
 def _point_segment_distance(pts: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(n,) distance from each point to the nearest of the segments a[i]-b[i]."""
+    """(n,) distance from each point to the nearest of the segments a[i]-b[i]. Written out per
+    coordinate (plain products and sums, no (n, m, 2) temporaries), the same arithmetic in the
+    same order as the dot products it stands for."""
     ab = b - a
-    ll = np.einsum("ij,ij->i", ab, ab)
+    ax, ay = ab[:, 0], ab[:, 1]
+    ll = ax * ax + ay * ay
     ll = np.where(ll == 0, 1.0, ll)
-    ap = pts[:, None, :] - a[None, :, :]
-    t = np.clip(np.einsum("nmj,mj->nm", ap, ab) / ll, 0.0, 1.0)
-    d = ap - t[..., None] * ab[None]
-    return np.sqrt(np.einsum("nmj,nmj->nm", d, d)).min(axis=1)
+    apx = pts[:, 0:1] - a[None, :, 0]
+    apy = pts[:, 1:2] - a[None, :, 1]
+    t = np.clip((apx * ax + apy * ay) / ll, 0.0, 1.0)
+    dx = apx - t * ax
+    dy = apy - t * ay
+    return np.sqrt(dx * dx + dy * dy).min(axis=1)
 
 
 def points_to_polyline(pts: np.ndarray, poly: np.ndarray) -> np.ndarray:
