@@ -39,8 +39,11 @@ def chain_loops(segments: np.ndarray) -> list[np.ndarray]:
     the first segment not yet used and goes on, at each point, by its lowest-numbered unused
     segment; a chain that does not close is dropped."""
     keys = np.round(segments, WELD_DECIMALS)
-    flat = keys.reshape(-1, keys.shape[-1])
-    _, ids = np.unique(flat, axis=0, return_inverse=True)
+    flat = np.ascontiguousarray(keys.reshape(-1, keys.shape[-1]))
+    if flat.shape[1] == 2:          # (x, z) pairs as complex numbers: one sort of plain values, same order
+        _, ids = np.unique(flat.view(np.complex128)[:, 0], return_inverse=True)
+    else:
+        _, ids = np.unique(flat, axis=0, return_inverse=True)
     ids = ids.reshape(-1)
     n_ends = len(ids)
     # each welded point's last occurrence among the ends (segment s's ends are 2s and 2s + 1)
