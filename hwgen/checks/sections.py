@@ -47,18 +47,15 @@ def chain_loops(segments: np.ndarray) -> list[np.ndarray]:
     ids = ids.reshape(-1)
     n_ends = len(ids)
     # each welded point's last occurrence among the ends (segment s's ends are 2s and 2s + 1)
-    ids_back = ids[::-1]
-    _, first_back = np.unique(ids_back, return_index=True)
-    last_end = np.zeros(int(ids.max()) + 1 if n_ends else 0, dtype=np.intp)
-    last_end[ids_back[first_back]] = n_ends - 1 - first_back
+    last_end = np.full(int(ids.max()) + 1 if n_ends else 0, -1, dtype=np.intp)
+    np.maximum.at(last_end, ids, np.arange(n_ends))
     ends = segments.reshape(n_ends, segments.shape[-1])
     pairs = ids.reshape(-1, 2).tolist()      # plain ints: the walk below is Python
-    adj: dict[int, list[int]] = {}
+    adj: list[list[int]] = [[] for _ in range(len(last_end))]     # each point's segments, in order
     for s, (a, b) in enumerate(pairs):
-        if a == b:
-            continue
-        adj.setdefault(a, []).append(s)
-        adj.setdefault(b, []).append(s)
+        if a != b:
+            adj[a].append(s)
+            adj[b].append(s)
     used = [False] * len(pairs)
     loops = []
     for start, (first, cur) in enumerate(pairs):
@@ -67,8 +64,10 @@ def chain_loops(segments: np.ndarray) -> list[np.ndarray]:
         used[start] = True
         chain = [first, cur]
         while cur != first:
-            nxt = next((s for s in adj.get(cur, ()) if not used[s]), None)
-            if nxt is None:
+            for nxt in adj[cur]:
+                if not used[nxt]:
+                    break
+            else:
                 break  # open chain: not a closed loop, dropped
             used[nxt] = True
             a, b = pairs[nxt]
