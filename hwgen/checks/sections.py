@@ -40,7 +40,7 @@ def chain_loops(segments: np.ndarray) -> list[np.ndarray]:
     segment; a chain that does not close is dropped."""
     keys = np.round(segments, WELD_DECIMALS)
     flat = np.ascontiguousarray(keys.reshape(-1, keys.shape[-1]))
-    if flat.shape[1] == 2:          # (x, z) pairs as complex numbers: one sort of plain values, same order
+    if flat.shape[1] == 2 and flat.dtype == np.float64:   # (x, z) as complex: one sort of plain values, same order
         _, ids = np.unique(flat.view(np.complex128)[:, 0], return_inverse=True)
     else:
         _, ids = np.unique(flat, axis=0, return_inverse=True)
