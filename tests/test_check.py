@@ -493,3 +493,52 @@ def test_a_cup_in_the_print_orientation_is_caught():
     (ok,) = run(vented)
     assert ok.passed
     assert run(cup, "FDM") == []          # an FDM nozzle does not peel from a film
+
+
+def test_a_closed_void_is_counted_shell_by_shell():
+    """A block holding a sealed cavity (an inner shell wound inward) has one void; two of them two;
+    a part of two separate solid shells has none. The count is the shells of negative volume that
+    splitting the mesh into its connected pieces gives."""
+    import trimesh
+
+    from hwgen.checks.parts import LoadedPart
+    from hwgen.checks.printing import closed_voids, printing_checks
+
+    def cavity(at):
+        c = trimesh.creation.box((3, 3, 3), trimesh.transformations.translation_matrix(at))
+        c.invert()
+        return c
+    block = trimesh.creation.box((20, 20, 10))
+    one = trimesh.util.concatenate([block, cavity((-4, 0, 0))])
+    two = trimesh.util.concatenate([block, cavity((-4, 0, 0)), cavity((4, 0, 0))])
+    apart = trimesh.util.concatenate([block, trimesh.creation.box((2, 2, 2),
+                                                                  trimesh.transformations.translation_matrix((30, 0, 0)))])
+    for mesh, voids in ((block, 0), (one, 1), (two, 2), (apart, 0)):
+        assert closed_voids(mesh) == voids
+        assert voids == sum(s.volume < 0 for s in mesh.split(only_watertight=False))
+        found = [c for c in printing_checks([LoadedPart("part", "disk", mesh, np.eye(4), None)], "FDM")
+                 if c.id == "print.void"]
+        assert [c.measured for c in found] == ([float(voids)] if voids else [])
+
+
+def test_section_segments_chain_into_their_closed_loops():
+    """Segments in any order and direction, welded at shared ends, come back as closed loops that
+    walk each polygon's edges in turn; an open chain and a zero-length segment are dropped."""
+    from hwgen.checks.polygons import signed_area
+    from hwgen.checks.sections import chain_loops
+    square = np.array([[0, 0], [4, 0], [4, 4], [0, 4]], float)
+    tri = np.array([[10, 0], [12, 0], [11, 3]], float)
+    segs = [[p[i], p[(i + 1) % len(p)]] for p in (square, tri) for i in range(len(p))]
+    segs += [[[20, 0], [21, 0]], [[21, 0], [21, 1]], [[5, 5], [5, 5]]]
+    rng = np.random.default_rng(3)
+    segs = [s[::-1] if rng.random() < 0.5 else s for s in np.array(segs)]
+    segs = np.array(segs)[rng.permutation(len(segs))] + 1e-9          # welded below the rounding
+    loops = chain_loops(segs)
+    assert len(loops) == 2
+    for lp in loops:
+        ref = square if len(lp) == 4 else tri
+        assert len(lp) == len(ref) and np.allclose(sorted(map(tuple, lp)), sorted(map(tuple, ref + 1e-9)))
+        steps = np.linalg.norm(np.diff(np.vstack([lp, lp[:1]]), axis=0), axis=1)
+        assert np.allclose(sorted(steps), sorted(np.linalg.norm(np.diff(np.vstack([ref, ref[:1]]), axis=0), axis=1)))
+        assert abs(signed_area(lp)) == pytest.approx(abs(signed_area(ref)))
+    assert chain_loops(segs[:0].reshape(0, 2, 2)) == []

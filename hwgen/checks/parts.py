@@ -62,7 +62,9 @@ def mesh_checks(parts: list[LoadedPart]) -> list[Check]:
             faults.append("inconsistent winding")
         if m.is_watertight and m.volume <= 0:
             faults.append("inside out (negative volume)")
-        status = to_manifold(m).status()
+        # the solid as placed, which the interference check intersects (made once for both); its
+        # status is the mesh's topology, whatever the placement
+        status = to_manifold(m, p.placement).status()
         if status != m3d.Error.NoError:
             faults.append(f"not a manifold ({status.name})")
         vol = float(m.volume) if m.is_watertight else None

@@ -11,16 +11,24 @@ def num(v: float, digits: int = 3) -> str:
     return t[1:] if t.startswith("-") and float(t) == 0 else t
 
 
+def _after(v: np.ndarray, axis: int = 0) -> np.ndarray:
+    """Each vertex's successor around the loop, as ``np.roll(v, -1, axis)`` gives it (the same
+    new array, without np.roll's general handling)."""
+    if axis == 0:
+        return np.concatenate((v[1:], v[:1]))
+    return np.concatenate((v[:, 1:], v[:, :1]), axis=1)
+
+
 def signed_area(p: np.ndarray) -> float:
     """Area of a closed polygon (n, 2), positive when it winds counter-clockwise (shoelace)."""
     x, y = p[:, 0], p[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+    return 0.5 * float(np.dot(x, _after(y)) - np.dot(y, _after(x)))
 
 
 def area_centroid(p: np.ndarray) -> tuple[float, tuple[float, float]]:
     """Unsigned area and centroid of a closed polygon (n, 2)."""
     x, y = p[:, 0], p[:, 1]
-    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    xn, yn = _after(x), _after(y)
     cross = x * yn - xn * y
     a = cross.sum() / 2
     cx = ((x + xn) * cross).sum() / (6 * a)
@@ -32,7 +40,7 @@ def inside(poly: np.ndarray, pt) -> bool:
     """Point in polygon (even-odd rule) for a closed (n, 2) polyline."""
     x, y = float(pt[0]), float(pt[1])
     px, py = poly[:, 0], poly[:, 1]
-    qx, qy = np.roll(px, -1), np.roll(py, -1)
+    qx, qy = _after(px), _after(py)
     crosses = (py > y) != (qy > y)
     with np.errstate(divide="ignore", invalid="ignore"):
         xi = px + (y - py) * (qx - px) / (qy - py)
@@ -44,7 +52,7 @@ def inside_many(poly: np.ndarray, pts: np.ndarray) -> np.ndarray:
     pts = np.asarray(pts, dtype=float).reshape(-1, 2)
     x, y = pts[:, 0:1], pts[:, 1:2]
     px, py = poly[None, :, 0], poly[None, :, 1]
-    qx, qy = np.roll(px, -1, axis=1), np.roll(py, -1, axis=1)
+    qx, qy = _after(px, 1), _after(py, 1)
     crosses = (py > y) != (qy > y)
     with np.errstate(divide="ignore", invalid="ignore"):
         xi = px + (y - py) * (qx - px) / (qy - py)
@@ -52,19 +60,24 @@ def inside_many(poly: np.ndarray, pts: np.ndarray) -> np.ndarray:
 
 
 def _point_segment_distance(pts: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(n,) distance from each point to the nearest of the segments a[i]-b[i]."""
+    """(n,) distance from each point to the nearest of the segments a[i]-b[i]. Written out per
+    coordinate (plain products and sums, no (n, m, 2) temporaries), the same arithmetic in the
+    same order as the dot products it stands for."""
     ab = b - a
-    ll = np.einsum("ij,ij->i", ab, ab)
+    ax, ay = ab[:, 0], ab[:, 1]
+    ll = ax * ax + ay * ay
     ll = np.where(ll == 0, 1.0, ll)
-    ap = pts[:, None, :] - a[None, :, :]
-    t = np.clip(np.einsum("nmj,mj->nm", ap, ab) / ll, 0.0, 1.0)
-    d = ap - t[..., None] * ab[None]
-    return np.sqrt(np.einsum("nmj,nmj->nm", d, d)).min(axis=1)
+    apx = pts[:, 0:1] - a[None, :, 0]
+    apy = pts[:, 1:2] - a[None, :, 1]
+    t = np.clip((apx * ax + apy * ay) / ll, 0.0, 1.0)
+    dx = apx - t * ax
+    dy = apy - t * ay
+    return np.sqrt(dx * dx + dy * dy).min(axis=1)
 
 
 def points_to_polyline(pts: np.ndarray, poly: np.ndarray) -> np.ndarray:
     """Distance from each point (n, 2) to a closed polyline (m, 2): (n,)."""
-    return _point_segment_distance(pts, poly, np.roll(poly, -1, axis=0))
+    return _point_segment_distance(pts, poly, _after(poly))
 
 
 def _one_side(pts: np.ndarray, poly: np.ndarray, bound: float) -> float:
@@ -74,7 +87,7 @@ def _one_side(pts: np.ndarray, poly: np.ndarray, bound: float) -> float:
     P = pts[np.all((pts >= lo) & (pts <= hi), axis=1)]
     if len(P) == 0:
         return float("inf")
-    a, b = poly, np.roll(poly, -1, axis=0)
+    a, b = poly, _after(poly)
     reach = bound + float(np.sqrt(((b - a) ** 2).sum(axis=1)).max())
     plo, phi = P.min(axis=0) - reach, P.max(axis=0) + reach
     keep = np.all((a >= plo) & (a <= phi), axis=1)
@@ -104,7 +117,7 @@ def section_moments(loops: list[np.ndarray]) -> dict:
     for k, lp in enumerate(loops):
         depth = sum(inside(o, lp[0]) for j, o in enumerate(loops) if j != k)
         u, v = lp[:, 0], lp[:, 1]
-        un, vn = np.roll(u, -1), np.roll(v, -1)
+        un, vn = _after(u), _after(v)
         cross = u * vn - un * v
         a = cross.sum() / 2
         sign = (-1.0 if depth % 2 else 1.0) * np.sign(a)      # material counts positive whatever the winding

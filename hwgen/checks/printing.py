@@ -41,6 +41,20 @@ def cups(mesh) -> list[tuple[float, float, tuple[float, float]]]:
     return found
 
 
+def closed_voids(mesh) -> int:
+    """How many of a closed mesh's shells (its faces connected through shared edges) enclose
+    negative volume: each is a void wound inward. A mesh of one shell has its own volume's sign,
+    already known; only a mesh of several has each shell's volume summed over its own faces."""
+    import trimesh
+    labels = trimesh.graph.connected_component_labels(mesh.face_adjacency, node_count=len(mesh.faces))
+    shells = int(labels.max()) + 1 if len(labels) else 0
+    if shells <= 1:
+        return int(shells == 1 and mesh.volume < 0)
+    tri, cross = mesh.triangles, mesh.triangles_cross
+    return sum(trimesh.triangles.mass_properties(tri[k], crosses=cross[k], skip_inertia=True).volume < 0
+               for k in (labels == i for i in range(shells)))
+
+
 def printing_checks(parts: list[LoadedPart], technology: str) -> list[Check]:
     """One check per printed part: no closed void; and, for resin, no cup."""
     out = []
@@ -48,11 +62,10 @@ def printing_checks(parts: list[LoadedPart], technology: str) -> list[Check]:
         if p.role in NOT_PRINTED or not p.mesh.is_watertight:
             continue
         where = {"part": p.name}
-        shells = p.mesh.split(only_watertight=False)
-        voids = [s for s in shells if s.volume < 0]
-        if len(voids):
-            out.append(Check("print.void", "error", False, f"{p.name}: holds {len(voids)} closed void(s) that "
-                             f"cannot drain: give each a drain hole", float(len(voids)), 0.0, where))
+        voids = closed_voids(p.mesh)
+        if voids:
+            out.append(Check("print.void", "error", False, f"{p.name}: holds {voids} closed void(s) that "
+                             f"cannot drain: give each a drain hole", float(voids), 0.0, where))
         if technology != "SLA":
             continue
         found = cups(p.mesh)

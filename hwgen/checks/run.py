@@ -160,6 +160,9 @@ def _measure(folder: Path, manifest: dict, plan) -> Measured:
     checks += interference_checks(parts, s.interference_tol_mm3)
     checks += build_volume_checks(parts, proc.build_volume)
     checks += printing_checks(parts, proc.technology)
+    # the tendon runs are measured against the placed solids the interference check has just made
+    # (their place in the report is further down)
+    runs = tendon_checks(folder, manifest, plan) if gear_pairs(manifest) else []   # no tensioner: no runs
     drop_solids()           # the whole parts' solids are done with: the Monte Carlo's memory comes next
     heap.trim()
     mass, c = mass_summary(parts, manifest)
@@ -167,8 +170,7 @@ def _measure(folder: Path, manifest: dict, plan) -> Measured:
     # the gear checks' place in the report; they are measured last, when a build has had them made
     # meanwhile (in a process of its own, kept in the cache: hwgen.pipeline._Ahead)
     gears_at = len(checks)
-    if gear_pairs(manifest):                  # no tensioner: no tendon runs to it either
-        checks += tendon_checks(folder, manifest, plan)
+    checks += runs
     checks += _strip_clamp_checks(manifest)
     fits, c = _seating(parts, emap, bb_outline, strip_t, plan, angles)
     checks += c

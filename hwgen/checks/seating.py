@@ -105,18 +105,23 @@ def fit_angles(u: np.ndarray, lo: np.ndarray, hi: np.ndarray, width: float) -> t
 
 
 def _nearest(segs: np.ndarray, along: int, across: int, grid: np.ndarray, centre: float):
-    """On lines {along = g} of a cut: the nearest material boundary above and below ``centre`` in
-    the ``across`` coordinate, (len(grid),) each (±inf where there is none)."""
+    """On lines {along = g} of a cut (``grid`` ascending): the nearest material boundary above and
+    below ``centre`` in the ``across`` coordinate, (len(grid),) each (±inf where there is none).
+    Only the lines a segment spans (min <= g < max of its ends) are met, found by bisection."""
     if len(segs) == 0:
         return np.full(len(grid), np.inf), np.full(len(grid), -np.inf)
-    a0, a1 = segs[:, 0, along][:, None], segs[:, 1, along][:, None]
-    c0, c1 = segs[:, 0, across][:, None], segs[:, 1, across][:, None]
-    g = grid[None, :]
-    span = (np.minimum(a0, a1) <= g) & (g < np.maximum(a0, a1))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        c = c0 + (g - a0) / (a1 - a0) * (c1 - c0)
-    above = np.where(span & (c > centre), c, np.inf).min(axis=0)
-    below = np.where(span & (c < centre), c, -np.inf).max(axis=0)
+    a0, a1 = segs[:, 0, along], segs[:, 1, along]
+    c0, c1 = segs[:, 0, across], segs[:, 1, across]
+    first = np.searchsorted(grid, np.minimum(a0, a1), side="left")
+    count = np.maximum(np.searchsorted(grid, np.maximum(a0, a1), side="left") - first, 0)
+    i = np.repeat(np.arange(len(segs)), count)                          # (segment, line) pairs
+    j = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count) + np.repeat(first, count)
+    c = c0[i] + (grid[j] - a0[i]) / (a1[i] - a0[i]) * (c1[i] - c0[i])
+    above = np.full(len(grid), np.inf)
+    below = np.full(len(grid), -np.inf)
+    up, down = c > centre, c < centre
+    np.minimum.at(above, j[up], c[up])
+    np.maximum.at(below, j[down], c[down])
     return above, below
 
 

@@ -32,39 +32,49 @@ class Loop:
 
 
 def chain_loops(segments: np.ndarray) -> list[np.ndarray]:
-    """Chain (m, 2, d) line segments sharing endpoints into closed polylines."""
+    """Chain (m, 2, d) line segments sharing endpoints into closed polylines.
+
+    Endpoints are welded by their coordinates rounded to ``WELD_DECIMALS``; a welded point is
+    given the coordinates of its last occurrence among the segments' ends. Each loop starts at
+    the first segment not yet used and goes on, at each point, by its lowest-numbered unused
+    segment; a chain that does not close is dropped."""
     keys = np.round(segments, WELD_DECIMALS)
-    flat = keys.reshape(-1, keys.shape[-1])
-    _, ids = np.unique(flat, axis=0, return_inverse=True)
-    ids = ids.reshape(-1, 2)
-    adj: dict[int, list[int]] = {}
-    for s, (a, b) in enumerate(ids):
-        if a == b:
-            continue
-        adj.setdefault(a, []).append(s)
-        adj.setdefault(b, []).append(s)
-    used = np.zeros(len(ids), bool)
-    pts_of = {}
-    for s, (a, b) in enumerate(ids):
-        pts_of[a] = segments[s, 0]
-        pts_of[b] = segments[s, 1]
+    flat = np.ascontiguousarray(keys.reshape(-1, keys.shape[-1]))
+    if flat.shape[1] == 2 and flat.dtype == np.float64:   # (x, z) as complex: one sort of plain values, same order
+        _, ids = np.unique(flat.view(np.complex128)[:, 0], return_inverse=True)
+    else:
+        _, ids = np.unique(flat, axis=0, return_inverse=True)
+    ids = ids.reshape(-1)
+    n_ends = len(ids)
+    # each welded point's last occurrence among the ends (segment s's ends are 2s and 2s + 1)
+    last_end = np.full(int(ids.max()) + 1 if n_ends else 0, -1, dtype=np.intp)
+    np.maximum.at(last_end, ids, np.arange(n_ends))
+    ends = segments.reshape(n_ends, segments.shape[-1])
+    pairs = ids.reshape(-1, 2).tolist()      # plain ints: the walk below is Python
+    adj: list[list[int]] = [[] for _ in range(len(last_end))]     # each point's segments, in order
+    for s, (a, b) in enumerate(pairs):
+        if a != b:
+            adj[a].append(s)
+            adj[b].append(s)
+    used = [False] * len(pairs)
     loops = []
-    for start in range(len(ids)):
-        if used[start] or ids[start, 0] == ids[start, 1]:
+    for start, (first, cur) in enumerate(pairs):
+        if used[start] or first == cur:
             continue
         used[start] = True
-        first, cur = ids[start]
         chain = [first, cur]
         while cur != first:
-            nxt = next((s for s in adj.get(cur, []) if not used[s]), None)
-            if nxt is None:
+            for nxt in adj[cur]:
+                if not used[nxt]:
+                    break
+            else:
                 break  # open chain: not a closed loop, dropped
             used[nxt] = True
-            a, b = ids[nxt]
+            a, b = pairs[nxt]
             cur = b if a == cur else a
             chain.append(cur)
         if cur == first and len(chain) > 3:
-            loops.append(np.array([pts_of[k] for k in chain[:-1]]))
+            loops.append(ends[last_end[chain[:-1]]])
     return loops
 
 
