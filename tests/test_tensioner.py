@@ -422,3 +422,30 @@ def test_tendon_clearance_check_sees_a_part_in_the_way(proto):
     h["placement"][2][3] += z_run - 2.0          # the bar spans z -1.5..6 about the strip
     failed = [c for c in tendon_checks(folder, moved, p) if c.id == "tensioner.tendon_clearance" and not c.passed]
     assert failed and all(c.where["part"] == "tensioner_housing" for c in failed)
+
+
+def test_a_wheel_is_kept_under_its_own_stack_not_where_the_layout_puts_it(tmp_path):
+    """C2's amplitude 25 → 24.5 mm moves its tip eyelet and so the tensioner's layout (its runs, C2's
+    unit), but no channel's stack of drum, flanges, caps and clamps: every wheel's spec, the key it
+    is kept under, is the same, so the edit finds its wheels made. A stack that changes changes it."""
+    import dataclasses
+
+    from hwgen import cache
+    from hwgen.cad.wheel import wheel_spec
+
+    text = (PARAMS / "prototype.yaml").read_text()
+    edited = text.replace("function: {kind: cosine, a: 25, k: 3, axis: z}", "function: {kind: cosine, a: 24.5, k: 3, axis: z}")
+    assert edited != text
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    (tmp_path / "a" / "prototype.yaml").write_text(text)
+    (tmp_path / "b" / "prototype.yaml").write_text(edited)
+    la, lb = (make_plan(load(tmp_path / d / "prototype.yaml").design).require_tensioner_layout() for d in "ab")
+    assert cache.key(la) != cache.key(lb)                      # the layout moved
+    ua, ub = {u.channel: u for u in la.units}, {u.channel: u for u in lb.units}
+    bore = la.shaft_diameter + la.running_fit
+    for c in ua:
+        assert wheel_spec(la, ua[c], bore) == wheel_spec(lb, ub[c], bore)
+    u = ua["C1"]
+    taller = dataclasses.replace(u, z_part=(u.z_part[0], u.z_part[1] + 1.0))
+    assert wheel_spec(la, taller, bore) != wheel_spec(la, u, bore)

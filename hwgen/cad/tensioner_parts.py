@@ -33,7 +33,7 @@ from . import Part, location, placement
 from .housing import housing_placement, housing_solid
 from .memo import kept
 from .primitives import hardware
-from .wheel import CLAMP_ANGLE, clamp_joint, clamp_site, clamp_solid, gear_solid, wheel_solid
+from .wheel import CLAMP_ANGLE, clamp_joint, clamp_site, clamp_solid, gear_solid, wheel_solid, wheel_spec
 from .worm import drive_solid, worm_solid
 
 WORM_COLOR = (0.75, 0.76, 0.78, 1.0)
@@ -74,7 +74,8 @@ def channel_parts(lay: TensionerLayout, u: Unit, *, min_wall: float, tendon_diam
         worm_inputs = (pair, lay.worm_near_end, DRIVE_HEX, lay.shaft_diameter + lay.running_fit,
                        lay.worm_pin - POST + 0.5)
         shared["worm"] = kept("worm", worm_inputs, lambda: worm_solid(*worm_inputs))   # the thread's sweep: a second or so
-        shared["drive"] = kept("drive shaft", lay, lambda: drive_solid(lay))
+        drive_inputs = (float(lay.spine[1] - lay.spine[0]), float(lay.hex_key))    # through the spine, its key
+        shared["drive"] = kept("drive shaft", drive_inputs, lambda: drive_solid(*drive_inputs))
         shared["gear"] = kept("throated wheel gear", pair, lambda: gear_solid(pair))   # the costliest boolean
         shared["clamp"] = kept("clamp plate", (), clamp_solid)
     # channels whose spool layouts are alike, measured from the part's own end, have one wheel; it is
@@ -82,8 +83,10 @@ def channel_parts(lay: TensionerLayout, u: Unit, *, min_wall: float, tendon_diam
     key = ("wheel", *np.round(np.array([*u.z_part, *u.z_gear, *np.ravel(u.zones), *np.ravel(u.clamps)])
                               - u.z_part[0], 6))
     if key not in shared:
-        shared[key] = kept("throated wheel", (lay, key),
-                           lambda: wheel_solid(lay, u, shared["gear"], lay.shaft_diameter + lay.running_fit))
+        # kept under what it is made from, from its own end: an edit that moves the tensioner but
+        # not this stack finds it made
+        spec = wheel_spec(lay, u, lay.shaft_diameter + lay.running_fit)
+        shared[key] = kept("throated wheel", spec, lambda: wheel_solid(spec, shared["gear"]))
     meta = {"channel": u.channel, "tendons": list(u.tendons)}
     yield Part(f"tensioner_worm_{u.channel}", "tensioner_worm", shared["worm"], lay.worm_placement(u), WORM_COLOR,
                meta={**meta, "mesh_with": f"tensioner_wheel_{u.channel}", "hex_key_mm": lay.hex_key,

@@ -10,6 +10,7 @@ round (the blank minus every tool in one boolean, ten times the work, only where
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from functools import lru_cache
 
 import cadquery as cq
@@ -271,38 +272,88 @@ def _shapes(solids: list[cq.Solid]) -> TopTools_ListOfShape:
 def clamp_site(lay: TensionerLayout) -> float:
     """Radius on the wheel face of the clamp's screw, mm: midway between flange and tooth root,
     or nearer the flange if the nut trap would otherwise reach the root."""
+    return _clamp_radius(lay.flange_radius, lay.pair.rf2)
+
+
+def _clamp_radius(flange_radius: float, rf2: float) -> float:
     e = (NUT["M2"][0] + NUT_PLAY) / math.sqrt(3)
-    return min((lay.flange_radius + lay.pair.rf2) / 2, lay.pair.rf2 - e - 1.0)
+    return min((flange_radius + rf2) / 2, rf2 - e - 1.0)
+
+
+def _on_cap(unit: Unit, zc: float) -> bool:
+    return any(c[0] - 1e-9 <= zc <= c[1] + 1e-9 for c in unit.caps)
 
 
 def clamp_joint(lay: TensionerLayout, unit: Unit, zc: float) -> Fastening:
     """The clamp's M2 screw: through the plate into the gear, or into the end cap it sits on."""
-    on_cap = any(c[0] - 1e-9 <= zc <= c[1] + 1e-9 for c in unit.caps)
-    return joint(lay.fastening, "M2", CLAMP_PLATE[2], CAP if on_cap else lay.pair.face_width)
+    return _clamp_joint(lay.fastening, _on_cap(unit, zc), lay.pair.face_width)
 
 
-def wheel_solid(lay: TensionerLayout, unit: Unit, gear: cq.Solid, pin_bore: float) -> cq.Solid:
+def _clamp_joint(fastening: str, on_cap: bool, face_width: float) -> Fastening:
+    return joint(fastening, "M2", CLAMP_PLATE[2], CAP if on_cap else face_width)
+
+
+@dataclass(frozen=True)
+class WheelSpec:
+    """Everything a throated wheel is made from (:func:`wheel_solid`), along its axis from its own
+    end (Z = robot z - unit.z_part[0]) and nothing of where the layout puts it: the key it is kept
+    under (:func:`hwgen.cad.memo.kept`), so that an edit that moves the tensioner but not a
+    channel's stack of drum, flanges and clamps finds its wheel made. Each length is the very
+    difference the wheel was built from when it read the layout (f0 - z_lo, f1 - f0, ...), so
+    the solid is the same to the last bit."""
+    pair: WormPair
+    fastening: str
+    hub_radius: float
+    flange_radius: float
+    spool_radius: float
+    pin_bore: float
+    height: float                                  # z_part[1] - z_part[0]
+    gear_at: float                                 # z_gear[0] - z_part[0]
+    flanges: tuple[tuple[float, float], ...]       # (start from the end, length)
+    caps: tuple[tuple[float, float], ...]          # (start from the end, length)
+    clamps: tuple[tuple[float, int, bool, tuple[float, float]], ...]
+    #                                                (face from the end, side, on an end cap, the flange
+    #                                                 or cap its anchor hole goes through)
+    gear_on_top: bool
+
+
+def wheel_spec(lay: TensionerLayout, unit: Unit, pin_bore: float) -> WheelSpec:
+    """The wheel of ``unit`` as ``lay`` lays it out, bored for pins of ``pin_bore``."""
+    z_lo = unit.z_part[0]
+    flanges = tuple((float(f0 - z_lo), float(f1 - f0)) for f0, f1 in unit.flanges)
+    caps = tuple((float(c0 - z_lo), float(c1 - c0)) for c0, c1 in unit.caps)
+    clamps = []
+    for zc, s in unit.clamps:
+        # the anchor hole: on an end cap through the cap; on the gear's face through the flange nearest to it
+        cap = next((k for k, c in enumerate(unit.caps) if c[0] - 1e-9 <= zc <= c[1] + 1e-9), None)
+        anchor = caps[cap] if cap is not None else \
+            flanges[min(range(len(unit.flanges)), key=lambda k: abs((unit.flanges[k][0] + unit.flanges[k][1]) / 2 - zc))]
+        clamps.append((float(zc - z_lo), int(s), _on_cap(unit, zc), anchor))
+    return WheelSpec(lay.pair, lay.fastening, float(lay.hub_radius), float(lay.flange_radius),
+                     float(lay.spool_radius), float(pin_bore), float(unit.z_part[1] - z_lo),
+                     float(unit.z_gear[0] - z_lo), flanges, caps, tuple(clamps), bool(unit.gear_on_top))
+
+
+def wheel_solid(spec: WheelSpec, gear: cq.Solid) -> cq.Solid:
     """Gear + spool drum + flanges (+ end cap), bored for the pins, the clamps' screws (a nut
     trap from the far face, or an insert bore) and the tendons' anchor holes. Built with
-    Z = robot z - unit.z_part[0], then turned over when the gear is on top so that its face
+    Z from the wheel's own end, then turned over when the gear is on top so that its face
     rests on the plate."""
-    z_lo = unit.z_part[0]
-    pair = lay.pair
-    height = unit.z_part[1] - z_lo
-    pieces = [gear.translate(cq.Vector(0, 0, unit.z_gear[0] - z_lo))]
-    pieces.append(cq.Solid.makeCylinder(lay.hub_radius, height, cq.Vector(0, 0, 0)))
-    for f0, f1 in unit.flanges:
-        pieces.append(cq.Solid.makeCylinder(lay.flange_radius, f1 - f0, cq.Vector(0, 0, f0 - z_lo)))
-    for c0, c1 in unit.caps:
-        pieces.append(cq.Solid.makeCylinder(pair.rf2, c1 - c0, cq.Vector(0, 0, c0 - z_lo)))
+    pair = spec.pair
+    height = spec.height
+    pieces = [gear.translate(cq.Vector(0, 0, spec.gear_at))]
+    pieces.append(cq.Solid.makeCylinder(spec.hub_radius, height, cq.Vector(0, 0, 0)))
+    for at, length in spec.flanges:
+        pieces.append(cq.Solid.makeCylinder(spec.flange_radius, length, cq.Vector(0, 0, at)))
+    for at, length in spec.caps:
+        pieces.append(cq.Solid.makeCylinder(pair.rf2, length, cq.Vector(0, 0, at)))
     body = pieces[0].fuse(*pieces[1:])
-    tools = [cq.Solid.makeCylinder(pin_bore / 2, height + 2 * TOOL, cq.Vector(0, 0, -TOOL))]
-    rc = clamp_site(lay)
+    tools = [cq.Solid.makeCylinder(spec.pin_bore / 2, height + 2 * TOOL, cq.Vector(0, 0, -TOOL))]
+    rc = _clamp_radius(spec.flange_radius, pair.rf2)
     ang = math.radians(CLAMP_ANGLE)
     at = np.array([rc * math.cos(ang), rc * math.sin(ang)])
-    for zc, s in unit.clamps:
-        zf = zc - z_lo
-        j = clamp_joint(lay, unit, zc)
+    for zf, s, on_cap, _ in spec.clamps:
+        j = _clamp_joint(spec.fastening, on_cap, pair.face_width)
         if j.kind == "nut":
             # through the body, and a trap from its far face (where the nut goes in) to the nut's near face
             tools.append(cylinder(j.hole / 2, (*at, zf + s * TOOL), (*at, zf - s * (j.body + TOOL))))
@@ -310,19 +361,19 @@ def wheel_solid(lay: TensionerLayout, unit: Unit, gear: cq.Solid, pin_bore: floa
                               (math.cos(ang), math.sin(ang), 0.0)))
         else:
             tools.append(cylinder(j.hole / 2, (*at, zf + s * TOOL), (*at, zf - s * j.depth)))
-    tools += _lightening(lay, unit, height)
+    tools += _lightening(spec)
     # anchor holes: through the flange between each winding zone and its clamp face
-    r_anchor = lay.spool_radius + ANCHOR_HOLE / 2 + 0.3
-    for zc, s in unit.clamps:
-        # on an end cap: through the cap; on the gear's face: through the flange nearest to it
-        f = next((c for c in unit.caps if c[0] - 1e-9 <= zc <= c[1] + 1e-9), None) or \
-            min(unit.flanges, key=lambda f: abs((f[0] + f[1]) / 2 - zc))
-        tools.append(cq.Solid.makeCylinder(ANCHOR_HOLE / 2, f[1] - f[0] + 2 * TOOL,
+    r_anchor = spec.spool_radius + ANCHOR_HOLE / 2 + 0.3
+    for _, _, _, (f_at, f_length) in spec.clamps:
+        tools.append(cq.Solid.makeCylinder(ANCHOR_HOLE / 2, f_length + 2 * TOOL,
                                            cq.Vector(r_anchor * math.cos(ang), r_anchor * math.sin(ang),
-                                                     f[0] - z_lo - TOOL)))
+                                                     f_at - TOOL)))
     solid = one(body.cut(*tools), GearDesignError)
-    if unit.gear_on_top:
-        solid = one(solid.moved(location(lay.wheel_flip(unit))), GearDesignError)
+    if spec.gear_on_top:
+        flip = np.eye(4)            # TensionerLayout.wheel_flip: 180° about X, back onto Z = 0
+        flip[1, 1] = flip[2, 2] = -1.0
+        flip[2, 3] = height
+        solid = one(solid.moved(location(flip)), GearDesignError)
     return solid
 
 
@@ -330,21 +381,22 @@ LIGHTENING_WALL = 1.2        # resin left around a lightening hole or inside a h
 LIGHTENING_HOLE = 6.0        # Ø of the holes through the gear between its hub and its root, mm
 
 
-def _lightening(lay: TensionerLayout, unit: Unit, height: float) -> list[cq.Solid]:
+def _lightening(spec: WheelSpec) -> list[cq.Solid]:
     """Material the wheel does not need: the drum core hollow between the dowels' ends (the
     hollow opens into the pin bore at both ends, so resin drains), and holes through the gear
     between hub and tooth root, away from the clamp's nut and the anchor hole."""
     out = []
     engaged = PIN_ENGAGE + 1.0
-    r_in = lay.hub_radius - LIGHTENING_WALL
-    if height > 2 * engaged + 2 and r_in > (lay.shaft_diameter + lay.running_fit) / 2 + 0.5:
+    height = spec.height
+    r_in = spec.hub_radius - LIGHTENING_WALL
+    if height > 2 * engaged + 2 and r_in > spec.pin_bore / 2 + 0.5:
         out.append(cq.Solid.makeCylinder(r_in, height - 2 * engaged, cq.Vector(0, 0, engaged)))
-    r0 = lay.hub_radius + LIGHTENING_WALL + LIGHTENING_HOLE / 2
-    if r0 + LIGHTENING_HOLE / 2 + LIGHTENING_WALL <= lay.pair.rf2:
-        z0 = unit.z_gear[0] - unit.z_part[0]
+    r0 = spec.hub_radius + LIGHTENING_WALL + LIGHTENING_HOLE / 2
+    if r0 + LIGHTENING_HOLE / 2 + LIGHTENING_WALL <= spec.pair.rf2:
+        z0 = spec.gear_at
         for deg in (CLAMP_ANGLE + 90, CLAMP_ANGLE + 180, CLAMP_ANGLE + 270):      # the clamp is at CLAMP_ANGLE
             a = math.radians(deg)
-            out.append(cq.Solid.makeCylinder(LIGHTENING_HOLE / 2, lay.pair.face_width + 2 * TOOL,
+            out.append(cq.Solid.makeCylinder(LIGHTENING_HOLE / 2, spec.pair.face_width + 2 * TOOL,
                                               cq.Vector(r0 * math.cos(a), r0 * math.sin(a), z0 - TOOL)))
     return out
 

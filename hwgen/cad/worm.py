@@ -5,7 +5,6 @@ from __future__ import annotations
 import cadquery as cq
 
 from ..model.gearing import GearDesignError, WormPair
-from ..model.tensioner_layout import TensionerLayout
 from ..model.tensioner_layout.sizes import AXIAL_PLAY, DRIVE_FLANGE, DRIVE_HEX, DRIVE_HEX_LENGTH, DRIVE_SHAFT, WORM_END
 from .primitives import TOOL, hex_prism, one, wire
 
@@ -44,17 +43,17 @@ def worm_solid(pair: WormPair, near_end: float, hex_bore: float, pin_bore: float
     return one(body.cut(socket, bore, vent), GearDesignError)
 
 
-def drive_solid(lay: TensionerLayout) -> cq.Solid:
+def drive_solid(spine_length: float, hex_key: float) -> cq.Solid:
     """The drive shaft, file Z from its flange's outer face: the flange (it stops the shaft
-    against the spine) with the hex key's socket, the shaft that turns in the spine's hole,
-    and the hex end pressed into the worm."""
+    against the spine, ``spine_length`` thick, mm) with the socket of a ``hex_key`` mm key, the
+    shaft that turns in the spine's hole, and the hex end pressed into the worm."""
     fd, ft = DRIVE_FLANGE
-    shaft_len = lay.spine[1] - lay.spine[0] + AXIAL_PLAY / 2
+    shaft_len = spine_length + AXIAL_PLAY / 2
     # pieces overlap 0.01 mm inside each other so they fuse into one solid, never past the worm's face
     flange = cq.Solid.makeCylinder(fd / 2, ft, cq.Vector(0, 0, 0))
     shaft = cq.Solid.makeCylinder(DRIVE_SHAFT / 2, shaft_len + 0.01, cq.Vector(0, 0, ft - 0.01))
     hexa = hex_prism(DRIVE_HEX, (0, 0, ft + shaft_len - 0.01), (0, 0, ft + shaft_len + DRIVE_HEX_LENGTH), (1, 0, 0))
-    socket = hex_prism(lay.hex_key + HEX_CLEARANCE, (0, 0, -TOOL), (0, 0, HEX_DEPTH), (1, 0, 0))
+    socket = hex_prism(hex_key + HEX_CLEARANCE, (0, 0, -TOOL), (0, 0, HEX_DEPTH), (1, 0, 0))
     vent = cq.Solid.makeCylinder(VENT / 2, ft + shaft_len + DRIVE_HEX_LENGTH + TOOL, cq.Vector(0, 0, 0))
     return one(flange.fuse(shaft, hexa).cut(socket, vent), GearDesignError)
 
