@@ -359,6 +359,12 @@ def code() -> dict:
     return {"package": h.hexdigest(), "libraries": versions}
 
 
+def as_json(value):
+    """``value`` as JSON gives it back (numpy scalars and arrays as Python numbers and lists): what
+    :func:`remembered` hands out, fresh or kept."""
+    return json.loads(json.dumps(value, default=_plain))
+
+
 def _plain(obj):
     if isinstance(obj, np.generic):
         return obj.item()
@@ -377,7 +383,7 @@ def remembered(kind: str, inputs, compute: Callable[[], object]):
     if store is None or not store.enabled:
         if _RECALL_ONLY.get():
             raise NotRemembered(kind)
-        return json.loads(json.dumps(compute(), default=_plain))
+        return as_json(compute())
     k = key("remembered", kind, inputs, code())
     rec = store.get_record(k)
     if isinstance(rec, dict) and "value" in rec:
@@ -388,6 +394,6 @@ def remembered(kind: str, inputs, compute: Callable[[], object]):
         rec = store.get_record(k)
         if isinstance(rec, dict) and "value" in rec:
             return rec["value"]
-        value = json.loads(json.dumps(compute(), default=_plain))
+        value = as_json(compute())
         store.put_record(k, {"value": value})
     return value

@@ -280,13 +280,10 @@ def _clamp_radius(flange_radius: float, rf2: float) -> float:
     return min((flange_radius + rf2) / 2, rf2 - e - 1.0)
 
 
-def _on_cap(unit: Unit, zc: float) -> bool:
-    return any(c[0] - 1e-9 <= zc <= c[1] + 1e-9 for c in unit.caps)
-
-
 def clamp_joint(lay: TensionerLayout, unit: Unit, zc: float) -> Fastening:
     """The clamp's M2 screw: through the plate into the gear, or into the end cap it sits on."""
-    return _clamp_joint(lay.fastening, _on_cap(unit, zc), lay.pair.face_width)
+    on_cap = any(c[0] - 1e-9 <= zc <= c[1] + 1e-9 for c in unit.caps)
+    return _clamp_joint(lay.fastening, on_cap, lay.pair.face_width)
 
 
 def _clamp_joint(fastening: str, on_cap: bool, face_width: float) -> Fastening:
@@ -328,7 +325,7 @@ def wheel_spec(lay: TensionerLayout, unit: Unit, pin_bore: float) -> WheelSpec:
         cap = next((k for k, c in enumerate(unit.caps) if c[0] - 1e-9 <= zc <= c[1] + 1e-9), None)
         anchor = caps[cap] if cap is not None else \
             flanges[min(range(len(unit.flanges)), key=lambda k: abs((unit.flanges[k][0] + unit.flanges[k][1]) / 2 - zc))]
-        clamps.append((float(zc - z_lo), int(s), _on_cap(unit, zc), anchor))
+        clamps.append((float(zc - z_lo), int(s), cap is not None, anchor))
     return WheelSpec(lay.pair, lay.fastening, float(lay.hub_radius), float(lay.flange_radius),
                      float(lay.spool_radius), float(pin_bore), float(unit.z_part[1] - z_lo),
                      float(unit.z_gear[0] - z_lo), flanges, caps, tuple(clamps), bool(unit.gear_on_top))

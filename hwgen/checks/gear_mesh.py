@@ -34,14 +34,13 @@ again here: a design that breaks them is never built.
 from __future__ import annotations
 
 import hashlib
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..cache import remembered
+from ..cache import as_json, remembered
 from ..cad.manifest import ManifestPart
 from ..model.gearing import hertz_allowable
 from .axes import Axis, axes_angle, axes_distance, fit_axis
@@ -351,13 +350,7 @@ def gear_checks(folder: Path, manifest: dict, plan) -> list[Check]:
     if not pairs:
         return [Check("gear.parts", "error", False, "no tensioner worm/wheel parts in the manifest")]
     checks = _pair_checks(folder, manifest, plan, pairs)
-    return [Check(**c) for c in json.loads(json.dumps([c.to_json() for c in checks], default=_plain))]
-
-
-def _plain(obj):
-    if isinstance(obj, np.generic):
-        return obj.item()
-    raise TypeError(f"{type(obj).__name__} is not JSON")
+    return [Check(**c) for c in as_json([c.to_json() for c in checks])]
 
 
 def _file_sha(path: Path) -> str | None:
