@@ -78,15 +78,13 @@ def channel_parts(lay: TensionerLayout, u: Unit, *, min_wall: float, tendon_diam
         shared["drive"] = kept("drive shaft", drive_inputs, lambda: drive_solid(*drive_inputs))
         shared["gear"] = kept("throated wheel gear", pair, lambda: gear_solid(pair))   # the costliest boolean
         shared["clamp"] = kept("clamp plate", (), clamp_solid)
-    # channels whose spool layouts are alike, measured from the part's own end, have one wheel; it is
-    # kept too, so a channel made in another process has the very solid of the first
-    key = ("wheel", *np.round(np.array([*u.z_part, *u.z_gear, *np.ravel(u.zones), *np.ravel(u.clamps)])
-                              - u.z_part[0], 6))
+    # channels whose stacks are alike, measured from the wheel's own end, have one wheel; it is kept
+    # under that, not where the layout puts it, so a channel made in another process has the very
+    # solid of the first, and an edit that moves the tensioner but not this stack finds it made
+    spec = wheel_spec(lay, u, lay.shaft_diameter + lay.running_fit)
+    key = ("wheel", spec.alike())
     if key not in shared:
-        # kept under what it is made from, from its own end: an edit that moves the tensioner but
-        # not this stack finds it made
-        spec = wheel_spec(lay, u, lay.shaft_diameter + lay.running_fit)
-        shared[key] = kept("throated wheel", spec, lambda: wheel_solid(spec, shared["gear"]))
+        shared[key] = kept("throated wheel", key[1], lambda: wheel_solid(spec, shared["gear"]))
     meta = {"channel": u.channel, "tendons": list(u.tendons)}
     yield Part(f"tensioner_worm_{u.channel}", "tensioner_worm", shared["worm"], lay.worm_placement(u), WORM_COLOR,
                meta={**meta, "mesh_with": f"tensioner_wheel_{u.channel}", "hex_key_mm": lay.hex_key,

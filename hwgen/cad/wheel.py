@@ -313,6 +313,19 @@ class WheelSpec:
     #                                                 or cap its anchor hole goes through)
     gear_on_top: bool
 
+    def alike(self) -> WheelSpec:
+        """The spec with every length rounded to 1e-6 mm: channels whose stacks differ only in the
+        rounding of their positions (the same drum, flanges and clamps) have one wheel, made from the
+        spec of whichever comes first, in whichever process; the key it is kept and shared under."""
+        def mm(x):
+            return round(float(x), 6) + 0.0
+
+        return WheelSpec(self.pair, self.fastening, mm(self.hub_radius), mm(self.flange_radius),
+                         mm(self.spool_radius), mm(self.pin_bore), mm(self.height), mm(self.gear_at),
+                         tuple((mm(a), mm(b)) for a, b in self.flanges), tuple((mm(a), mm(b)) for a, b in self.caps),
+                         tuple((mm(z), s, cap, (mm(a), mm(b))) for z, s, cap, (a, b) in self.clamps),
+                         self.gear_on_top)
+
 
 def wheel_spec(lay: TensionerLayout, unit: Unit, pin_bore: float) -> WheelSpec:
     """The wheel of ``unit`` as ``lay`` lays it out, bored for pins of ``pin_bore``."""
