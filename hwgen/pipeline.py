@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__, cache, heap, params
+from . import __version__, cache, heap, params, processes
 from .atomic import new_folder, side_folder, snapshot, write_json
 from .cad import Part, export
 from .cad.families import build_unit, kernel_errors, part_count, units
@@ -456,13 +456,10 @@ def _gear_checks_remembered(folder: Path, manifest: dict, plan: Plan) -> bool:
 
 
 def _elsewhere(job, *args) -> None:
-    """``job(*args)`` in a spawned process, waited for: work whose result the cache hands over,
-    whose memory (meshes, their copies posed, manifold3d solids) then never adds to this
-    process's while it measures the rest."""
-    import multiprocessing
-    p = multiprocessing.get_context("spawn").Process(target=job, args=args, name="hwgen-gears", daemon=True)
-    p.start()
-    p.join()
+    """``job(*args)`` in a process of its own (:func:`hwgen.processes.elsewhere`), waited for: work
+    whose result the cache hands over, whose memory (meshes, their copies posed, manifold3d solids)
+    then never adds to this process's while it measures the rest."""
+    processes.elsewhere(job, *args, name="hwgen-gears").join()
 
 
 def _measure_key(folder: Path, manifest: dict) -> str:
@@ -813,16 +810,13 @@ def _result(kind_value):
 
 
 class _Workers:
-    """Worker processes for the CAD kernel (``jobs`` of them, spawned: a fork of a process that
-    has built CadQuery geometry hangs). This process then never imports CadQuery: its memory
+    """Worker processes for the CAD kernel (``jobs`` of them, forks of the server that imported
+    CadQuery once: :mod:`hwgen.processes`). This process then never imports CadQuery: its memory
     holds the checks alone, and the workers' memory is returned as they end, while the checks
-    start (their exit is not waited for). Each worker pays the CadQuery import (2-4 s) that this
-    process would have paid."""
+    start (their exit is not waited for)."""
 
     def __init__(self, jobs: int, solids: cache.Store):
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
-        self.pool = ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"))
+        self.pool = processes.pool(jobs)
         self.solids = solids        # where the workers keep and find the solids units share (cad.memo.kept)
 
     def __enter__(self):
