@@ -78,22 +78,47 @@ EDIT_KEEPS_TIP = "function: {kind: cosine, a: 25, k: 5, axis: z}"
 
 
 def _process(label: str, args: list[str], env: dict, note: str = "") -> tuple[str, float, float, float, str, str]:
-    """Run ``hwgen ARGS`` as its own process: (label, wall s, CPU s, peak MB, note, stdout). The peak
-    is the largest resident set of the process and the children it waited for (the renderer)."""
+    """Run ``hwgen ARGS`` as its own process: (label, wall s, CPU s, peak MB, note, stdout). The
+    wall time runs until the process exits (its shell prompt back); the CPU and the peak are of
+    the process and every process it started, however started (the part workers are forks of a
+    server it starts, not its children: :func:`_adopting_orphans`), each waited for to its end."""
     return _run(label, [sys.executable, "-m", "hwgen.cli", *args], env, note)
+
+
+def _adopting_orphans() -> None:
+    """This process becomes the reaper of every process its children leave behind (Linux's
+    PR_SET_CHILD_SUBREAPER), so their CPU and peak count in its children's usage once reaped."""
+    import ctypes
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(36, 1, 0, 0, 0)     # PR_SET_CHILD_SUBREAPER
+    except (OSError, AttributeError):
+        pass
 
 
 def _run(label: str, argv: list[str], env: dict, note: str = "") -> tuple[str, float, float, float, str, str]:
     """Run ``argv`` as its own process, measured as :func:`_process` says."""
-    t = time.perf_counter()
-    p = subprocess.Popen(argv, env=env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
-    stdout = p.stdout.read()
-    p.stdout.close()
-    _, status, usage = os.wait4(p.pid, 0)
-    wall = time.perf_counter() - t
+    import resource
+    _adopting_orphans()
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    with tempfile.TemporaryFile() as out:
+        t = time.perf_counter()
+        p = subprocess.Popen(argv, env=env, stdout=out, stderr=subprocess.DEVNULL)
+        _, status, usage = os.wait4(p.pid, 0)
+        wall = time.perf_counter() - t
+        out.seek(0)
+        stdout = out.read().decode(errors="replace")
+    peak = usage.ru_maxrss
+    while True:                     # the processes it left behind (the fork server and its workers)
+        try:
+            _, _, u = os.wait4(-1, 0)
+        except ChildProcessError:
+            break
+        peak = max(peak, u.ru_maxrss)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
     code = os.waitstatus_to_exitcode(status)
     note = f"{note}; exit {code}" if code else note
-    return label, wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024, note, stdout
+    return label, wall, cpu, peak / 1024, note, stdout
 
 
 def _from_cache(stdout: str) -> str:
