@@ -175,3 +175,22 @@ def test_tensioner_hardware_matches_its_parts(proto, tmp_path):
         p.pop("hardware", None)
     rows2, _ = bom.bom_rows(tmp_path, m2_, make_plan(d), read_report(tmp_path))
     assert any("nut" in r["part"] for r in rows2 if r["family"] == "hardware")
+
+
+def test_sizes_are_the_bounds_of_the_meshes_the_checks_read(proto, tmp_path):
+    """The size column reads each STL's corners straight from the file: the same bounds as the
+    mesh the checks load (vertices merged), for every part; an ASCII STL is read whole."""
+    import trimesh
+
+    from hwgen.cad.manifest import ManifestPart
+    folder, m, _, _ = proto
+    for entry in m["parts"]:
+        path = ManifestPart.of(entry).stl_in(folder)
+        lo, hi = bom._stl_bounds(path)
+        mesh = trimesh.load_mesh(str(path), process=True)
+        assert np.array_equal(lo, mesh.bounds[0]) and np.array_equal(hi, mesh.bounds[1]), entry["name"]
+    box = trimesh.creation.box(extents=(3.0, 5.0, 7.0))
+    ascii_stl = tmp_path / "box.stl"
+    ascii_stl.write_text(trimesh.exchange.stl.export_stl_ascii(box))
+    lo, hi = bom._stl_bounds(ascii_stl)
+    assert np.allclose(hi - lo, (3.0, 5.0, 7.0))
