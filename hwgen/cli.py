@@ -502,8 +502,10 @@ def _end() -> None:
     interpreter has joined its threads and run every other handler, the process ends with
     main()'s code without the interpreter's teardown, which only frees what the process holds
     (half a second after a build: the checks' meshes, the report, the libraries' modules)."""
-    if "code" not in _EXIT:
-        return                          # not ended through main(): the interpreter's own way
+    if "code" not in _EXIT or "coverage" in sys.modules:
+        # not ended through main(), or measured by coverage.py, whose handler (registered at start,
+        # so after this one) writes its data: the interpreter's own way
+        return
     try:
         sys.stdout.flush()
         sys.stderr.flush()
