@@ -680,7 +680,8 @@ def _export_unit(plan: Plan, parts, where: Path, solids: cache.Store) -> list[di
     cache keeps to put the assembly together, and by which it knows parts of one solid). A solid
     kept in ``solids`` (:func:`hwgen.cad.memo.made_as`) whose STL and measurements another unit
     has kept there gets those (a throated wheel's are a second of tessellation and MASS_EPS
-    integration; every channel of one spool layout has the same)."""
+    integration; every channel of one spool layout has the same), and its STEP when a unit kept
+    one for the same part name (an edit that moves the tensioner writes no wheel's STEP again)."""
     out = []
     for k, part in enumerate(parts):
         stl, step = where / "stl" / f"{part.name}.stl", where / "step" / f"{part.name}.step"
@@ -693,16 +694,30 @@ def _export_unit(plan: Plan, parts, where: Path, solids: cache.Store) -> list[di
                 stl.write_bytes(got[0])
             else:
                 export.write_stl(part.solid, stl)
-            export.write_step(part.solid, step, part.name)
+            # its STEP names the part: kept per kept solid and name (a wheel's is 0.2 s of writing)
+            step_key = cache.key("kept solid's step", kept_as, part.name) if kept_as else None
+            step_bytes = _kept_bytes(solids, step_key, "step") if step_key else None
+            if step_bytes is not None:
+                step.write_bytes(step_bytes)
+            else:
+                export.write_step(part.solid, step, part.name)
             # a solid measured once (the throated wheels of one size: a second each, to MASS_EPS)
             measured = out[same]["measured"] if same is not None else got[1] if got is not None else \
                 _json(measure(part))
             solid = export.write_brep(part.solid) if same is None else None
         if mesh_key and got is None:
             solids.put_record(mesh_key, {"stl": solids.put_bytes(stl.read_bytes()), "measured": measured})
+        if step_key and step_bytes is None:
+            solids.put_record(step_key, {"step": solids.put_bytes(step.read_bytes())})
         out.append({"part": _json(describe(part)), "measured": measured, "same_solid_as": same,
                     "made_as": kept_as, "stl": stl.read_bytes(), "step": step.read_bytes(), "brep": solid})
     return out
+
+
+def _kept_bytes(solids: cache.Store, key: str, field: str) -> bytes | None:
+    """The file kept for a kept solid under ``key`` (its record's ``field``), None if there is none."""
+    rec = solids.get_record(key)
+    return solids.get_bytes(rec[field]) if isinstance(rec, dict) and isinstance(rec.get(field), str) else None
 
 
 def _kept_mesh(solids: cache.Store, key: str) -> tuple[bytes, dict] | None:
