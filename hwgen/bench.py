@@ -146,7 +146,7 @@ def processes(params_path: Path) -> None:
         rows.append(_process("cold build, --no-cache", [*build, "--no-cache"], env,
                              "every part and stage afresh")[:5])
         rows.append(_process("cold build, --no-cache --jobs 1", [*build, "--no-cache", "--jobs", "1"], env,
-                             "parts in 1 spawned worker")[:5])
+                             "parts in 1 worker process")[:5])
         rows.append(_process("cold build, --no-cache --jobs 0", [*build, "--no-cache", "--jobs", "0"], env,
                              "parts in the process that runs the checks")[:5])
         # the issue's own first measurement was of a build without pictures: the same, for comparison

@@ -354,7 +354,7 @@ def test_parts_writes_only_the_parts_it_names_and_the_whole_manifest(built, tmp_
 
 @pytest.mark.slow
 def test_parts_built_in_worker_processes_have_the_bytes_of_a_serial_build(fresh, built, tmp_path, monkeypatch):
-    """--jobs 2 into an empty cache of its own: every unit is built in a spawned worker (the
+    """--jobs 2 into an empty cache of its own: every unit is built in a worker process (the
     tensioner's channels in both, around the solids they share), the assembly is put together
     in one of them (from its own solids and the other's BREP); every file has the bytes of the
     build in one process. The checks are measured once, in the build's own thread while a
