@@ -373,6 +373,47 @@ def _plain(obj):
     raise TypeError(f"{type(obj).__name__} is not JSON")
 
 
+def kept_arrays(kind: str, inputs, compute: Callable[[], dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """``compute()``, a few named numpy arrays, or the very arrays it gave last time for ``kind``
+    and ``inputs`` when a store is active (:func:`using`): dtype, shape and bytes as they were,
+    each array its own writable copy. Unlike :func:`remembered`, the key holds no code digest:
+    ``inputs`` must name everything the arrays depend on (a library's version, say), so that an
+    edit of hwgen's code keeps them. The bytes are one object of the store (``objects/``, checked
+    by its hash on every read), its record lists each array's name, dtype and shape."""
+    store = _ACTIVE.get()
+    if store is None or not store.enabled:
+        return compute()
+    k = key("arrays", kind, inputs)
+    rec = store.get_record(k)
+    if isinstance(rec, dict) and isinstance(rec.get("arrays"), list):
+        data = store.get_bytes(str(rec.get("object", "")))
+        if data is not None:
+            got = _split_arrays(bytearray(data), rec["arrays"])
+            if got is not None:
+                return got
+    arrays = compute()
+    parts = [np.ascontiguousarray(a) for a in arrays.values()]
+    name = store.put_bytes(b"".join(a.tobytes() for a in parts))
+    store.put_record(k, {"object": name,
+                         "arrays": [[n, a.dtype.str, list(a.shape)] for n, a in zip(arrays, parts)]})
+    return arrays
+
+
+def _split_arrays(buffer: bytearray, layout: list) -> dict[str, np.ndarray] | None:
+    """The arrays a :func:`kept_arrays` object holds, as its record lays them out (None when the
+    two disagree)."""
+    out, at = {}, 0
+    try:
+        for name, dtype, shape in layout:
+            dt = np.dtype(dtype)
+            count = int(np.prod(shape, dtype=np.int64))
+            out[name] = np.frombuffer(buffer, dtype=dt, count=count, offset=at).reshape(shape)
+            at += count * dt.itemsize
+    except (ValueError, TypeError):
+        return None
+    return out if at == len(buffer) else None
+
+
 def remembered(kind: str, inputs, compute: Callable[[], object]):
     """``compute()`` as JSON gives it back, or what it gave last time for ``kind`` and ``inputs``
     (and this code, :func:`code`) when a store is active (:func:`using`). The value is the same

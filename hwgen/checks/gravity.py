@@ -62,10 +62,13 @@ def loads(parts, manifest: dict, length: float):
     strip, points, tip = None, [], []
     for p in parts:
         e = entries.get(p.name, {})
-        if not p.mesh.is_watertight or "density_g_cm3" not in e or e.get("fixture"):
+        if "density_g_cm3" not in e or e.get("fixture"):
             continue
-        m = float(p.mesh.volume) / 1000 * e["density_g_cm3"]
-        com = p.placement[:3, :3] @ p.mesh.center_mass + p.placement[:3, 3]
+        sound = p.soundness()       # volume and centroid, measured once per file
+        if not sound["watertight"]:
+            continue
+        m = sound["volume"] / 1000 * e["density_g_cm3"]
+        com = p.placement[:3, :3] @ np.asarray(sound["center_mass"], dtype=float) + p.placement[:3, 3]
         if p.role == "backbone":
             lo, hi = p.robot_bounds()[:, 1]
             strip = {"part": p.name, "mass_g": m, "y_mm": [float(lo), float(hi)], "lambda_g_mm": m / (hi - lo)}

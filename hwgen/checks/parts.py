@@ -9,8 +9,9 @@ from pathlib import Path
 import numpy as np
 
 from ..cad.manifest import manifest_parts
+from ..cache import as_json
 from .base import Check
-from .meshes import part_mesh, to_manifold
+from .meshes import measured_by_file, read_mesh, to_manifold
 
 NOT_PRINTED = {"backbone"}     # roles cut from stock rather than printed: no build-volume check
 VOLUME_REL_TOL = 0.01          # STL volume versus the solid's volume in the manifest
@@ -25,6 +26,19 @@ class LoadedPart:
     placement: np.ndarray
     volume_mm3: float | None
     entry: Mapping = field(default_factory=dict)   # the part's manifest entry
+    sha256: str | None = None  # of its file's bytes (None: a mesh not read from a file)
+
+    def measured(self, kind: str, values, compute):
+        """``compute()``, a measurement of this part's mesh alone (and of the design ``values`` it
+        reads), as JSON gives it back: made once for every file of the same bytes and remembered
+        by the file (:func:`hwgen.checks.meshes.measured_by_file`); a mesh of no file is measured."""
+        if self.sha256 is None:
+            return as_json(compute())
+        return measured_by_file(self.sha256, kind, values, compute)
+
+    def soundness(self) -> dict:
+        """The mesh's own soundness (:func:`soundness`), measured once per file."""
+        return self.measured("part mesh soundness", None, lambda: soundness(self.mesh, self.placement))
 
     @property
     def fixture(self) -> bool:
@@ -40,41 +54,51 @@ def load_parts(folder: Path, manifest: dict) -> tuple[list[LoadedPart], list[Che
     parts, checks = [], []
     for p in manifest_parts(manifest):
         try:
-            mesh = part_mesh(folder, p)
+            sha, mesh = read_mesh(p.stl_in(folder))
         except Exception as e:  # unreadable file: say so and go on with the others
             checks.append(Check("part.mesh", "error", False, f"{p.name}: cannot read {p.stl_in(folder).name} ({e})",
                                 None, None, {"part": p.name}))
             continue
-        parts.append(LoadedPart(p.name, p.role, mesh, p.placement, p.volume_mm3, p.entry))
+        parts.append(LoadedPart(p.name, p.role, mesh, p.placement, p.volume_mm3, p.entry, sha))
     return parts, checks
 
 
+def soundness(mesh, placement: np.ndarray | None = None) -> dict:
+    """What :func:`mesh_checks` and :func:`mass_summary` read of one mesh: watertight, consistently
+    wound, manifold3d's status (of the solid under ``placement``, which the interference check
+    then intersects: made once for both; the status is the mesh's topology, whatever the
+    placement), its triangles, and, when closed, its volume and centre of mass (file coordinates)."""
+    closed = bool(mesh.is_watertight)
+    return {"watertight": closed, "winding": bool(mesh.is_winding_consistent),
+            "manifold": to_manifold(mesh, placement).status().name, "triangles": len(mesh.faces),
+            "volume": float(mesh.volume) if closed else None,
+            "center_mass": [float(v) for v in mesh.center_mass] if closed else None}
+
+
 def mesh_checks(parts: list[LoadedPart]) -> list[Check]:
-    """Watertight, consistently wound, positive volume, accepted by manifold3d, volume as built."""
+    """Watertight, consistently wound, positive volume, accepted by manifold3d, volume as built
+    (measured once per file: :meth:`LoadedPart.soundness`)."""
     import manifold3d as m3d
     out = []
     for p in parts:
-        m = p.mesh
+        m = p.soundness()
         faults = []
-        if not m.is_watertight:
+        if not m["watertight"]:
             faults.append("not watertight")
-        if not m.is_winding_consistent:
+        if not m["winding"]:
             faults.append("inconsistent winding")
-        if m.is_watertight and m.volume <= 0:
+        if m["watertight"] and m["volume"] <= 0:
             faults.append("inside out (negative volume)")
-        # the solid as placed, which the interference check intersects (made once for both); its
-        # status is the mesh's topology, whatever the placement
-        status = to_manifold(m, p.placement).status()
-        if status != m3d.Error.NoError:
-            faults.append(f"not a manifold ({status.name})")
-        vol = float(m.volume) if m.is_watertight else None
+        if m["manifold"] != m3d.Error.NoError.name:
+            faults.append(f"not a manifold ({m['manifold']})")
+        vol = m["volume"]
         where = {"part": p.name}
         if faults:
             out.append(Check("part.mesh", "error", False, f"{p.name}: mesh is " + ", ".join(faults),
                              None, None, where))
         else:
             out.append(Check("part.mesh", "error", True,
-                             f"{p.name}: watertight manifold, {len(m.faces)} triangles, {vol:.1f} mm³",
+                             f"{p.name}: watertight manifold, {m['triangles']} triangles, {vol:.1f} mm³",
                              vol, None, where))
         if vol is not None and p.volume_mm3:
             rel = abs(vol - p.volume_mm3) / p.volume_mm3
@@ -151,10 +175,13 @@ def mass_summary(parts: list[LoadedPart], manifest: dict) -> tuple[dict, list[Ch
     rows = []
     for p in parts:
         e = entries.get(p.name, {})
-        if not p.mesh.is_watertight or "density_g_cm3" not in e or p.fixture:
+        if "density_g_cm3" not in e or p.fixture:
             continue
-        com = p.placement[:3, :3] @ p.mesh.center_mass + p.placement[:3, 3]
-        rows.append((p.name, p.role, float(p.mesh.volume), float(p.mesh.volume) / 1000 * e["density_g_cm3"], com))
+        m = p.soundness()
+        if not m["watertight"]:
+            continue
+        com = p.placement[:3, :3] @ np.asarray(m["center_mass"], dtype=float) + p.placement[:3, 3]
+        rows.append((p.name, p.role, m["volume"], m["volume"] / 1000 * e["density_g_cm3"], com))
 
     def group(sel) -> dict:
         m = sum(r[3] for r in sel)

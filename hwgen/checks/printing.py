@@ -56,19 +56,20 @@ def closed_voids(mesh) -> int:
 
 
 def printing_checks(parts: list[LoadedPart], technology: str) -> list[Check]:
-    """One check per printed part: no closed void; and, for resin, no cup."""
+    """One check per printed part: no closed void; and, for resin, no cup (each measured once per
+    file: :meth:`hwgen.checks.parts.LoadedPart.measured`)."""
     out = []
     for p in parts:
-        if p.role in NOT_PRINTED or not p.mesh.is_watertight:
+        if p.role in NOT_PRINTED or not p.soundness()["watertight"]:
             continue
         where = {"part": p.name}
-        voids = closed_voids(p.mesh)
+        voids = p.measured("print closed voids", None, lambda: closed_voids(p.mesh))
         if voids:
             out.append(Check("print.void", "error", False, f"{p.name}: holds {voids} closed void(s) that "
                              f"cannot drain: give each a drain hole", float(voids), 0.0, where))
         if technology != "SLA":
             continue
-        found = cups(p.mesh)
+        found = p.measured("print cups", (LAYER_MM, CUP_MIN_AREA_MM2), lambda: cups(p.mesh))
         if found:
             z, a, c = max(found, key=lambda f: f[1])
             msg = (f"{p.name}: {len(found)} cavit{'y' if len(found) == 1 else 'ies'} closed below in its print "

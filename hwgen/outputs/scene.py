@@ -64,12 +64,15 @@ class ScenePart:
     @property
     def edge_data(self) -> "EdgeData":
         """What the edges are drawn from, worked out once from :attr:`mesh` (whose many other
-        cached arrays, most of a part's memory in the renderer, then go)."""
+        cached arrays, most of a part's memory in the renderer, then go), and kept with what the
+        renderer made of the part (:attr:`drawn`: shared by parts of the same file's bytes)."""
+        if self._edges is None:
+            self._edges = self.drawn.get("edges")
         if self._edges is None:
             m = self.mesh
-            self._edges = EdgeData(np.asarray(m.face_normals), np.asarray(m.face_adjacency),
-                                   np.asarray(m.face_adjacency_edges),
-                                   m.face_adjacency_edges[m.face_adjacency_angles > math.radians(FEATURE_ANGLE_DEG)])
+            self._edges = self.drawn["edges"] = EdgeData(
+                np.asarray(m.face_normals), np.asarray(m.face_adjacency), np.asarray(m.face_adjacency_edges),
+                m.face_adjacency_edges[m.face_adjacency_angles > math.radians(FEATURE_ANGLE_DEG)])
         return self._edges
 
     def feature_edges(self) -> np.ndarray:
@@ -112,13 +115,16 @@ def is_fixture(entry: dict) -> bool:
 
 def load_parts(folder: Path, manifest: dict, fixtures: bool = False) -> list[ScenePart]:
     """The robot's parts (or, with ``fixtures``, only the assembly aids), read back from their STLs
-    (vertices merged)."""
+    (vertices merged). Parts whose files hold the same bytes share one mesh's arrays and what the
+    renderer makes of them in file coordinates (:attr:`ScenePart.drawn`: its surface, its edges)."""
     out = []
     keep = {"name", "role", "station", "files", "placement", "color", "volume_mm3", "bbox_mm"}
+    drawn: dict[int, dict] = {}         # per mesh (one per file content), what is drawn of it
     for p, mesh in part_meshes(folder, [p for p in manifest_parts(manifest) if p.fixture == fixtures]):
         e = p.entry
         out.append(ScenePart(p.name, p.role, np.asarray(mesh.vertices), np.asarray(mesh.faces), p.placement, p.station,
-                             {k: v for k, v in e.items() if k not in keep} | {"color": e.get("color")}))
+                             {k: v for k, v in e.items() if k not in keep} | {"color": e.get("color")},
+                             drawn=drawn.setdefault(id(mesh), {})))
     return out
 
 
