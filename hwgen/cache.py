@@ -125,6 +125,7 @@ class Store:
     """The cache at ``root`` (None: no cache: every get misses, every put is dropped)."""
 
     def __init__(self, root: Path | None):
+        self.folder = None if root is None else Path(root)     # as given (another process opens it again)
         self.root = None if root is None else Path(root) / LAYOUT
         self.corrupt: list[str] = []          # entries found damaged (and removed) by this store
         self.unwritable: str | None = None    # why the store turned itself off, if it did
@@ -328,6 +329,11 @@ def using(store: Store) -> Iterator[None]:
         yield
     finally:
         _ACTIVE.reset(token)
+
+
+def active() -> Store | None:
+    """The store :func:`using` made active here, if any."""
+    return _ACTIVE.get()
 
 
 @contextmanager

@@ -21,11 +21,13 @@ import os
 import subprocess
 import sys
 import time
+from contextlib import nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from .. import cache
 from ..cad.manifest import sha256
 from ..model import kinematics as kin
 from .bom import family_label
@@ -213,8 +215,11 @@ def run_child(folder: Path, manifest: dict, settings: Settings, svg_table: list[
     """Draw the pictures in a fresh Python process; raise RenderUnavailable if it cannot."""
     if os.environ.get(BACKEND_ENV, "").lower() == "none":
         raise RenderUnavailable(f"{BACKEND_ENV}=none: offscreen rendering switched off")
+    store = cache.active()
     job = json.dumps({"folder": str(folder), "manifest": manifest, "settings": settings.__dict__,
-                      "svg_table": svg_table, "steps": steps})
+                      "svg_table": svg_table, "steps": steps,
+                      # where the child finds the meshes read before (checks.meshes: by their bytes)
+                      "store": str(store.folder) if store is not None and store.enabled else None})
     attempts = [dict(os.environ)]
     attempts[0].pop("DISPLAY", None)            # offscreen: EGL first, never a stale X display
     attempts[0].setdefault(RASTER_THREADS_ENV, "0")
@@ -244,9 +249,11 @@ def run_child(folder: Path, manifest: dict, settings: Settings, svg_table: list[
 
 def _child_main() -> int:
     job = json.loads(sys.stdin.read())
+    store = cache.Store(Path(job["store"])) if job.get("store") else None
     try:
-        result = render_pictures(Path(job["folder"]), job["manifest"], Settings(**job["settings"]),
-                                 job.get("svg_table"), steps=job.get("steps"))
+        with cache.using(store) if store is not None else nullcontext():
+            result = render_pictures(Path(job["folder"]), job["manifest"], Settings(**job["settings"]),
+                                     job.get("svg_table"), steps=job.get("steps"))
     except RenderUnavailable as e:
         print(f"RenderUnavailable: {e}", file=sys.stderr)
         return EXIT_NO_BACKEND
