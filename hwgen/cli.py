@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import atexit
 import functools
+import hashlib
 import json
 import os
 import signal
@@ -175,6 +176,9 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
                                         "through the checks)")
           ) -> None:
     """Build every part (STL, STEP), assembly.step, the backbone DXF and manifest.json."""
+    if jobs != 0 and not _built_before(params, out_dir):
+        from . import processes
+        processes.context()         # the workers' server imports CadQuery while the design is read and planned
     loaded = _load(params)
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -210,6 +214,26 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
     if failed:
         say(f"{len(failed)} check(s) failed;", "red", f"see {result.folder}")
         raise typer.Exit(EXIT_FINDINGS)
+
+
+def _built_before(params: Path, out_dir: Path) -> bool:
+    """Whether a design folder under ``out_dir`` was built from these very bytes of ``params`` by
+    this hwgen (a rebuild then likely finds every part in the cache and needs no worker); read
+    from the manifests alone, before the design is."""
+    from . import __version__
+    try:
+        sha = hashlib.sha256(Path(params).read_bytes()).hexdigest()
+        manifests = list(Path(out_dir).glob("*/manifest.json"))
+    except OSError:
+        return True                 # the load says what is wrong; no worker for that
+    for path in manifests:
+        try:
+            m = json.loads(path.read_text())
+        except (OSError, ValueError):
+            continue
+        if isinstance(m, dict) and m.get("params_sha256") == sha and m.get("hwgen_version") == __version__:
+            return True
+    return False
 
 
 def _verdict(report: dict) -> None:

@@ -66,3 +66,27 @@ def test_bom_allowances_under_render_are_read_with_a_deprecation_warning(tmp_pat
     both.write_text(yaml.safe_dump(doc))
     r = _run("routing", str(both))
     assert r.returncode == 2 and "render.tie_off_mm:" in r.stderr and "keep only bom.tie_off_mm" in r.stderr
+
+
+def test_a_design_built_before_from_the_same_bytes_starts_no_worker_server_ahead(tmp_path):
+    """`hwgen build` starts the workers' server before reading the design unless a folder under
+    --out was built from these very bytes by this hwgen (a rebuild that likely needs no worker)."""
+    from hwgen import __version__
+    from hwgen.cli import _built_before
+    params = tmp_path / "robot.yaml"
+    params.write_bytes((PARAMS / "prototype.yaml").read_bytes())
+    out = tmp_path / "out"
+    assert not _built_before(params, out)                   # nothing built yet
+    (out / "prototype").mkdir(parents=True)
+    sha = __import__("hashlib").sha256(params.read_bytes()).hexdigest()
+    manifest = out / "prototype" / "manifest.json"
+    manifest.write_text(json.dumps({"params_sha256": sha, "hwgen_version": __version__}))
+    assert _built_before(params, out)
+    manifest.write_text(json.dumps({"params_sha256": sha, "hwgen_version": __version__ + ".other"}))
+    assert not _built_before(params, out)
+    manifest.write_text(json.dumps({"params_sha256": sha, "hwgen_version": __version__}))
+    params.write_bytes(params.read_bytes() + b"\n# edited\n")
+    assert not _built_before(params, out)                   # an edit: the server is started ahead
+    manifest.write_text("{not json")
+    assert not _built_before(params, out)
+    assert _built_before(tmp_path / "missing.yaml", out)    # the load will say what is wrong
