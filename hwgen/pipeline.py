@@ -862,8 +862,8 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
     get their files, and the assembly and the DXF are not written. ``solids``: where the solids
     several units share (the tensioner's worm and gear) are kept, so that each is made once
     whichever process needs it (the cache, or a build's own store). ``placed`` is called with the
-    manifest as it stands once every part's files are in the folder (no assembly or template in
-    its files yet), ``measurable`` with the same once the strip's template is in too. With ``jobs`` ≥ 1, the units
+    manifest as it stands once every part's files are in the folder (the strip's template is
+    drawn before the parts; no assembly in its files yet), then ``measurable`` with the same. With ``jobs`` ≥ 1, the units
     to build and the assembly are made in worker processes (:class:`_Workers`): as many as there
     are units to build, at most ``jobs``, started only when there is something to make; 0: in this
     process."""
@@ -883,6 +883,10 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
         to_make = sum(t[4] is None for t in todo)
         if jobs >= 1 and (to_make or (select is None and assembly is None)):
             workers = stack.enter_context(_Workers(max(1, min(jobs, to_make)), solids))
+        if select is None:
+            # drawn while the workers' server starts (it imports CadQuery first): the checks' measurement
+            # needs it, and starts as soon as the parts are in
+            _backbone_dxf(store, plan, folder / "backbone_template.dxf", salt)
         with kept_in(solids, salt):
             _place_units(plan, folder, todo, workers, store, salt, select, entries, built, units_done, density,
                          total, progress, solids)
@@ -892,10 +896,8 @@ def _write_files(loaded: params.LoadedDesign, plan: Plan, folder: Path, total: i
         if select is None and assembly is None and workers is not None:
             breps = {sha: rec["breps"][sha] for _, rec, _ in units_done for sha in rec.get("breps", {})}
             job = workers.assembly(loaded, plan, [(k, _record(r)) for k, r, _ in units_done], breps, store, salt)
-        if select is None:
-            _backbone_dxf(store, plan, folder / "backbone_template.dxf", salt)    # while a worker writes the assembly
-            if measurable is not None:
-                measurable(_manifest(loaded, plan, {}, entries))
+        if select is None and measurable is not None:
+            measurable(_manifest(loaded, plan, {}, entries))
         if select is None and assembly is None:
             if job is not None:
                 assembly = _result(job.result())
