@@ -62,13 +62,11 @@ def loads(parts, manifest: dict, length: float):
     strip, points, tip = None, [], []
     for p in parts:
         e = entries.get(p.name, {})
-        if "density_g_cm3" not in e or e.get("fixture"):
+        closed = None if "density_g_cm3" not in e or e.get("fixture") else p.volume_and_centroid()
+        if closed is None:
             continue
-        sound = p.soundness()       # volume and centroid, measured once per file
-        if not sound["watertight"]:
-            continue
-        m = sound["volume"] / 1000 * e["density_g_cm3"]
-        com = p.placement[:3, :3] @ np.asarray(sound["center_mass"], dtype=float) + p.placement[:3, 3]
+        volume, com = closed
+        m = volume / 1000 * e["density_g_cm3"]
         if p.role == "backbone":
             lo, hi = p.robot_bounds()[:, 1]
             strip = {"part": p.name, "mass_g": m, "y_mm": [float(lo), float(hi)], "lambda_g_mm": m / (hi - lo)}

@@ -40,6 +40,15 @@ class LoadedPart:
         """The mesh's own soundness (:func:`soundness`), measured once per file."""
         return self.measured("part mesh soundness", None, lambda: soundness(self.mesh, self.placement))
 
+    def volume_and_centroid(self) -> tuple[float, np.ndarray] | None:
+        """Its closed mesh's volume (mm³) and centre of mass in robot coordinates; None when the
+        mesh is not closed."""
+        m = self.soundness()
+        if not m["watertight"]:
+            return None
+        com = self.placement[:3, :3] @ np.asarray(m["center_mass"], dtype=float) + self.placement[:3, 3]
+        return m["volume"], com
+
     @property
     def fixture(self) -> bool:
         """An assembly aid (the jig): not part of the robot."""
@@ -175,13 +184,11 @@ def mass_summary(parts: list[LoadedPart], manifest: dict) -> tuple[dict, list[Ch
     rows = []
     for p in parts:
         e = entries.get(p.name, {})
-        if "density_g_cm3" not in e or p.fixture:
+        closed = None if "density_g_cm3" not in e or p.fixture else p.volume_and_centroid()
+        if closed is None:
             continue
-        m = p.soundness()
-        if not m["watertight"]:
-            continue
-        com = p.placement[:3, :3] @ np.asarray(m["center_mass"], dtype=float) + p.placement[:3, 3]
-        rows.append((p.name, p.role, m["volume"], m["volume"] / 1000 * e["density_g_cm3"], com))
+        volume, com = closed
+        rows.append((p.name, p.role, volume, volume / 1000 * e["density_g_cm3"], com))
 
     def group(sel) -> dict:
         m = sum(r[3] for r in sel)
