@@ -55,11 +55,10 @@ def _call(env: dict[str, str], job, *args):
     return job(*args)
 
 
-def elsewhere(job, *args, name: str, env: dict[str, str] | None = None):
-    """A started process (a fork of the server) running ``job(*args)`` in the environment ``env``
-    (default: this process's); the caller joins it."""
-    p = context().Process(target=_call, args=(dict(os.environ) if env is None else env, job, *args),
-                          name=name, daemon=True)
+def elsewhere(job, *args, name: str):
+    """A started process (a fork of the server) running ``job(*args)`` in this process's
+    environment; the caller joins it."""
+    p = context().Process(target=_call, args=(dict(os.environ), job, *args), name=name, daemon=True)
     p.start()
     return p
 
