@@ -183,14 +183,15 @@ def test_sizes_are_the_bounds_of_the_meshes_the_checks_read(proto, tmp_path):
     import trimesh
 
     from hwgen.cad.manifest import ManifestPart
+    from hwgen.checks.meshes import stl_bounds
     folder, m, _, _ = proto
     for entry in m["parts"]:
         path = ManifestPart.of(entry).stl_in(folder)
-        lo, hi = bom._stl_bounds(path)
+        lo, hi = stl_bounds(path)
         mesh = trimesh.load_mesh(str(path), process=True)
         assert np.array_equal(lo, mesh.bounds[0]) and np.array_equal(hi, mesh.bounds[1]), entry["name"]
     box = trimesh.creation.box(extents=(3.0, 5.0, 7.0))
     ascii_stl = tmp_path / "box.stl"
     ascii_stl.write_text(trimesh.exchange.stl.export_stl_ascii(box))
-    lo, hi = bom._stl_bounds(ascii_stl)
+    lo, hi = stl_bounds(ascii_stl)
     assert np.allclose(hi - lo, (3.0, 5.0, 7.0))

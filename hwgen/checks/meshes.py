@@ -126,6 +126,24 @@ def load_mesh(path: str | Path):
     return read_mesh(path)[1]
 
 
+# a binary STL's triangle: its normal, three corners, an attribute word
+_TRIANGLE = np.dtype([("normal", "<f4", 3), ("corners", "<f4", (3, 3)), ("attribute", "<u2")])
+
+
+def stl_bounds(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """The lowest and highest corner of a binary STL's triangles, read straight from the file (the
+    bounds of the mesh the checks read: merging vertices moves none); an ASCII STL is read whole."""
+    data = Path(path).read_bytes()
+    count = int.from_bytes(data[80:84], "little") if len(data) >= 84 else -1
+    if count < 0 or len(data) != 84 + count * _TRIANGLE.itemsize:
+        return tuple(load_mesh(path).bounds)
+    corners = np.frombuffer(data, dtype=_TRIANGLE, count=count, offset=84)["corners"].reshape(-1, 3)
+    if not len(corners):
+        raise ValueError(f"{path}: no triangles")
+    corners = corners.astype(np.float64)
+    return corners.min(axis=0), corners.max(axis=0)
+
+
 def to_manifold(mesh, placement=None):
     """A trimesh mesh (file coordinates) as a manifold3d solid, in robot coordinates under ``placement``."""
     shelf = _SHELF.get()

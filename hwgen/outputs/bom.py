@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ..cad.manifest import ManifestPart, sha256
-from ..checks.meshes import load_mesh
+from ..checks.meshes import stl_bounds
 from ..checks.report import REPORT
 from ..model import hardware
 from ..model import kinematics as kin
@@ -80,29 +80,11 @@ def rest_lengths(manifest: dict, report: dict | None) -> tuple[dict[str, float],
 def _size(folder: Path, entry: dict) -> str:
     """Overall size, largest first, from the STL's vertices (the manifest's CAD box is loose)."""
     try:
-        lo, hi = _stl_bounds(ManifestPart.of(entry).stl_in(folder))
+        lo, hi = stl_bounds(ManifestPart.of(entry).stl_in(folder))
     except (OSError, ValueError, KeyError):
         lo, hi = np.asarray(entry["bbox_mm"]["min"]), np.asarray(entry["bbox_mm"]["max"])
     ext = sorted(np.asarray(hi) - np.asarray(lo), reverse=True)
     return " × ".join(f"{v:.4g}" for v in ext) + " mm"
-
-
-# a binary STL's triangle: its normal, three corners, an attribute word
-_TRIANGLE = np.dtype([("normal", "<f4", 3), ("corners", "<f4", (3, 3)), ("attribute", "<u2")])
-
-
-def _stl_bounds(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """The lowest and highest corner of a binary STL's triangles, read straight from the file (the
-    bounds of the mesh the checks read: merging vertices moves none); an ASCII STL is read whole."""
-    data = Path(path).read_bytes()
-    count = int.from_bytes(data[80:84], "little") if len(data) >= 84 else -1
-    if count < 0 or len(data) != 84 + count * _TRIANGLE.itemsize:
-        return tuple(load_mesh(path).bounds)
-    corners = np.frombuffer(data, dtype=_TRIANGLE, count=count, offset=84)["corners"].reshape(-1, 3)
-    if not len(corners):
-        raise ValueError(f"{path}: no triangles")
-    corners = corners.astype(np.float64)
-    return corners.min(axis=0), corners.max(axis=0)
 
 
 def _strip_holes(manifest: dict) -> int:
