@@ -35,3 +35,22 @@ def test_the_servers_quick_exit_is_the_servers_alone():
                         "atexit.register(print, 'handlers ran'); raise SystemExit(7)"],
                        capture_output=True, text=True, timeout=60)
     assert r.returncode == 7 and "handlers ran" in r.stdout
+
+
+def _vtk_state() -> tuple[int, str, int]:
+    def loaded():
+        return sum(m.startswith("vtkmodules.") for m in sys.modules)
+    before = loaded()
+    import vtk
+    name = vtk.vtkPolyData.__name__
+    return before, name, loaded()
+
+
+def test_a_worker_has_the_kernel_without_all_of_vtk_until_vtk_is_used():
+    """OCP imports ``vtk`` as it starts, which would load all of VTK's modules (hwgen.cad makes
+    that wait): the server's CadQuery has loaded the few it names, and the first use of ``vtk``
+    loads the rest."""
+    with processes.pool(1) as pool:
+        before, name, after = pool.submit(_vtk_state).result()
+    assert name == "vtkPolyData"
+    assert 0 < before < after / 2

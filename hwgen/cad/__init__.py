@@ -5,10 +5,35 @@ face on the XY plane, resting on Z = 0) and the placement that maps it to robot 
 """
 from __future__ import annotations
 
+import sys
+import types
 import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
+
+
+def _vtk_on_demand() -> None:
+    """Make ``import vtk`` cheap until VTK is used. OCP imports the ``vtk`` module as it starts
+    (for its IVtkOCC bindings), and that module imports every one of VTK's ~160 extension
+    modules: 0.3 s of CPU in each process that imports CadQuery, on the build's critical path
+    (the workers wait for their server's imports). CadQuery itself needs 31 of them, which it
+    imports by name. Until something reads an attribute of ``vtk``, it stands for the full
+    module without loading it; the first read loads it (``vtkmodules.all``) and takes its place.
+    Nothing changes where VTK was imported already."""
+    if "vtk" in sys.modules:
+        return
+    on_demand = types.ModuleType("vtk", "VTK, loaded on first use (hwgen.cad._vtk_on_demand)")
+
+    def __getattr__(name: str):
+        import vtkmodules.all as full
+        sys.modules["vtk"] = full
+        return getattr(full, name)
+    on_demand.__getattr__ = __getattr__
+    sys.modules["vtk"] = on_demand
+
+
+_vtk_on_demand()        # before any module of this package imports CadQuery
 
 
 @dataclass(frozen=True)
