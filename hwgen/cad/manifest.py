@@ -11,12 +11,15 @@ import json
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..atomic import write_json
-from ..model.plan import Plan
 from . import Part, mass_properties
+
+if TYPE_CHECKING:
+    from ..model.plan import Plan
 
 MANIFEST = "manifest.json"
 
