@@ -7,7 +7,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: build test test-fast bench stability docs-images clean venv clients slicer-check
+.PHONY: build test test-fast bench stability docs-images clean venv clients slicer-check bytecode
 
 venv: $(STAMP)
 
@@ -17,7 +17,14 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e ".[test]"
 	touch $(STAMP)
 
-build: $(STAMP)
+# hwgen's modules compiled ahead (as pip compiles an installed package): every process a build
+# starts (the command, the workers' server, the renderer, the gear checks) then reads them compiled,
+# also where Python is told not to write bytecode (PYTHONDONTWRITEBYTECODE), which would compile
+# them again in each process (about a tenth of a second each); stale ones are compiled again here
+bytecode: $(STAMP)
+	@$(BIN)/python -m compileall -q hwgen
+
+build: $(STAMP) bytecode
 	$(BIN)/hwgen build params/prototype.yaml --out out
 
 # The programs the tests open the files in (PrusaSlicer: the plates; FreeCAD: assembly.step's
@@ -35,7 +42,7 @@ clients:
 
 # one pytest worker per core (pytest-xdist); the tests that share a module's build run in one
 # worker, and the workers share one part cache (tests/conftest.py)
-test: $(STAMP) clients
+test: $(STAMP) clients bytecode
 	$(BIN)/python -m pytest -q -n auto --dist loadgroup
 
 # every print plate sliced in PrusaSlicer as the process prints it (SLA: minutes per plate); not in make test
@@ -44,18 +51,18 @@ slicer-check: $(STAMP) clients
 	$(BIN)/python -m tests.slicer_check out/prototype
 
 # one pytest worker per core (pytest-xdist): the CAD-free tier is many small tests that do not share a build
-test-fast: $(STAMP)
+test-fast: $(STAMP) bytecode
 	$(BIN)/python -m pytest -q -m "not slow" -n auto --dist loadgroup
 
 # the benchmark times the disks against OpenSCAD (Debian's openscad, installed here when missing and apt-get can)
-bench: $(STAMP)
+bench: $(STAMP) bytecode
 	@command -v openscad >/dev/null || { [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null && \
 	  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends openscad >/dev/null; } || \
 	  echo "openscad not installed: the benchmark's OpenSCAD row says so"
 	$(BIN)/python -m hwgen.bench
 
 # 100 robots drawn as a lab writes them, each built whole: a table of exit codes and failed checks
-stability: $(STAMP)
+stability: $(STAMP) bytecode
 	$(BIN)/python -m tests.stability --robots 100
 
 # the README's pictures, from a fresh build of the prototype
