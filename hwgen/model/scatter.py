@@ -165,7 +165,7 @@ def run(rb: Robot, sc: Scatter, angles_deg, n: int, seed: int, pair: tuple[int, 
     Lc = centreline(rb, ang, solve)
     dc = Lc - Lc[:, k0:k0 + 1]
     Ln, Ln0, bad0 = solve(chains(rb, replace(sc, sigma_pos=0.0, sigma_dia=0.0, station=0.0, tilt=None,
-                                                  play=None), 1, 0), ang, rb.length)
+                                             play=None), 1, 0), ang, rb.length)
     dn = Ln[0] - Ln0[0][:, None]
     bad = 0
     if n and enough is not None:
