@@ -211,3 +211,47 @@ def _assert_tolerance_figure(rep):
         assert tops[0].get_ylabel() == "L(θ) − L(0) (mm)" and hists[0].get_ylabel() == f"samples (of {tb['samples']})"
     finally:
         plt.close(fig)
+
+
+def _little_robot(x_of_tendon1=3.0):
+    """Three tendons through six disks, each through holes of its own, the second at x = ``x_of_tendon1``."""
+    nd, xs = 6, (-3.0, x_of_tendon1, 0.5)
+    holes = [(t, i) for t in range(3) for i in range(nd)]
+    xz = np.array([[xs[t], 2.0 + 0.3 * i * (t == 2)] for t, i in holes])
+    rb = mc.Robot(np.linspace(0.0, 100.0, nd), np.array([i for _, i in holes]), xz,
+                  np.tile([0.0, 1.0, 0.0], (len(holes), 1)), np.full(len(holes), 0.8),
+                  np.arange(len(holes)).reshape(3, nd), np.array([[x, -1.0, 2.0] for x in xs]),
+                  np.array([[x, 21.0, 2.0] for x in xs]), 0.5, 100.0)
+    sc = mc.Scatter(0.02, 0.02, 0.05, np.full((nd, 3), 0.5), np.full((nd, 2), 0.05))
+    return rb, sc
+
+
+def test_a_tendon_swept_alone_is_its_rows_of_the_whole_sweep():
+    rb, sc = _little_robot()
+    ch = mc.chains(rb, sc, 40, 3)
+    L, L0, bad = taut.sweep(ch, ANGLES[::5], rb.length)
+    Ls, L0s, _ = taut.sweep(taut.tendons(ch, [2, 0]), ANGLES[::5], rb.length)
+    assert np.array_equal(Ls, L[:, [2, 0]]) and np.array_equal(L0s, L0[:, [2, 0]])
+
+
+def test_kept_sweep_solves_again_only_the_tendon_whose_holes_moved(tmp_path, monkeypatch):
+    """Each tendon's lengths are kept under what its solves read: moving one tendon's holes sweeps
+    that tendon alone again, and every length is the one a fresh sweep gives."""
+    from hwgen import cache
+    from hwgen.checks.taut import kept_sweep
+    swept = []
+    real = taut.sweep
+    monkeypatch.setattr(taut, "sweep", lambda ch, *a: swept.append(ch.chain.shape[0]) or real(ch, *a))
+    ang = ANGLES[::5]
+    with cache.using(cache.Store(tmp_path)):
+        for x, solved in ((3.0, [3]), (3.0, []), (3.1, [1])):
+            rb, sc = _little_robot(x)
+            ch = mc.chains(rb, sc, 30, 4)
+            swept.clear()
+            got = kept_sweep(ch, ang, rb.length)
+            assert swept == solved
+            want = real(ch, ang, rb.length)
+            assert all(np.array_equal(g, w) for g, w in zip(got[:2], want[:2])) and got[2] == want[2]
+    swept.clear()
+    kept_sweep(ch, ang, rb.length)          # no store: one sweep of every tendon
+    assert swept == [3]

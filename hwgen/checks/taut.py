@@ -12,6 +12,7 @@ is ``check.robust_severity``.
 """
 from __future__ import annotations
 
+import hashlib
 import os
 from collections.abc import Callable
 
@@ -20,6 +21,7 @@ import numpy as np
 from .. import cache
 from ..errors import InputError, clip
 from ..model import scatter as mc
+from ..model import taut as tp
 from .base import Check
 from .eyelets import EyeletMap
 
@@ -207,8 +209,63 @@ def monte_carlo(rb: mc.Robot, sc: mc.Scatter, angles: np.ndarray, n: int, s, pai
     the active cache; the same result either way)."""
     inputs = (rb, sc, angles, n, s.seed, pair, budgets, s.robust, s.robust_confidence, s.robust_precision_mm)
     doc = cache.remembered("as-built monte carlo", inputs, lambda: mc.to_json(
-        mc.run(rb, sc, angles, n, s.seed, pair, enough_samples(budgets, s))))
+        mc.run(rb, sc, angles, n, s.seed, pair, enough_samples(budgets, s), kept_sweep)))
     return mc.from_json(doc)
+
+
+def kept_sweep(ch: tp.Chains, angles_deg, length: float) -> tuple[np.ndarray, np.ndarray, int]:
+    """:func:`hwgen.model.taut.sweep`, each tendon's lengths kept in the active cache under exactly
+    what its solves read (:func:`hwgen.model.taut.tendons`: the same lengths to the bit): its holes'
+    centres, planes and free radii and its anchor and end in every sample, the disks' stations and
+    slips, the sweep's angles, the length, the solver's tolerance (and this code). An edit that
+    moves one tendon's holes leaves the others' samples as they were (the scatter is drawn per hole
+    and per disk), and their solves are not done again; the tendons not kept are swept together."""
+    ang = np.asarray(angles_deg, float)
+    S, T = ch.C.shape[0], ch.chain.shape[0]
+    inputs = [(_digest(ch.C[:, h], ch.E[:, h], ch.r[:, h], ch.hole_disk[h], ch.anchor[:, t], ch.end[:, t],
+                       ch.stations, ch.dy, ang), float(length), tp.TOL, cache.code())
+              for t, h in enumerate(ch.chain)]
+    got: dict[int, dict] = {}
+    for t in range(T):
+        try:
+            got[t] = cache.kept_arrays(TENDON_SWEEP, inputs[t], _not_kept)
+        except _NotKept:
+            pass
+    todo = [t for t in range(T) if t not in got]
+    if todo:
+        L, L0, bad = tp.sweep(tp.tendons(ch, todo), ang, length)
+        for i, t in enumerate(todo):
+            if bad:     # rare: whose they are, tendon by tendon
+                Lt, L0t, b = tp.sweep(tp.tendons(ch, [t]), ang, length)
+                one = {"lengths": Lt[:, 0], "straight": L0t[:, 0], "unconverged": np.array([b], np.int64)}
+            else:
+                one = {"lengths": L[:, i], "straight": L0[:, i], "unconverged": np.zeros(1, np.int64)}
+            got[t] = cache.kept_arrays(TENDON_SWEEP, inputs[t], lambda one=one: one)
+    lengths, straight = np.empty((S, T, len(ang))), np.empty((S, T))
+    for t in range(T):
+        lengths[:, t], straight[:, t] = got[t]["lengths"], got[t]["straight"]
+    return lengths, straight, sum(int(got[t]["unconverged"][0]) for t in range(T))
+
+
+TENDON_SWEEP = "taut sweep of a tendon"
+
+
+class _NotKept(Exception):
+    pass
+
+
+def _not_kept():
+    raise _NotKept
+
+
+def _digest(*arrays: np.ndarray) -> str:
+    """sha256 of the arrays' dtypes, shapes and bytes."""
+    h = hashlib.sha256()
+    for a in arrays:
+        a = np.ascontiguousarray(a)
+        h.update(f"{a.dtype.str}{a.shape}".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
 
 
 def from_report(report: dict) -> tuple[mc.Robot, mc.Scatter]:

@@ -50,9 +50,16 @@ def sweeps(plan) -> tuple[sf.Described, dict, dict]:
     if model.n_dof > MAX_DOF:
         raise ValueError(f"{model.n_dof} joint coordinates, more than the {MAX_DOF} the sweep is run with")
     ang = plan.check.max_angle_deg
-    locked, free = cache.remembered("tension sweeps", (desc, ang), lambda: (
-        sf.sweep(desc, model, ang, SWEEP_STEP_DEG, locked=True), sf.sweep(desc, model, ang, FREE_STEP_DEG, locked=False)))
+    locked, free = cache.remembered("tension sweeps", (desc, ang), lambda: _sweeps(desc, model, ang))
     return desc, locked, free
+
+
+def _sweeps(desc: sf.Described, model: st.Model, ang: float) -> tuple[dict, dict]:
+    """The sweep with the stiffening tendons locked and with them slack; which tendon each side
+    hauls in is the same for both (probed once)."""
+    inner = sf.inner_tendons(desc, model)
+    return (sf.sweep(desc, model, ang, SWEEP_STEP_DEG, locked=True, inner_of=inner),
+            sf.sweep(desc, model, ang, FREE_STEP_DEG, locked=False, inner_of=inner))
 
 
 def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict, list[Check]]:

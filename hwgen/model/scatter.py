@@ -24,6 +24,8 @@ from . import taut
 
 PERCENTILES = (5, 50, 95)   # the band drawn per angle
 
+Solver = Callable[[taut.Chains, np.ndarray, float], tuple[np.ndarray, np.ndarray, int]]   # as taut.sweep
+
 
 @dataclass(frozen=True)
 class Robot:
@@ -113,10 +115,10 @@ def chains(rb: Robot, sc: Scatter, n: int, seed: int) -> taut.Chains:
         end=np.einsum("sij,tj->sti", R[:, -1], rb.end) + shift[:, None, -1])
 
 
-def centreline(rb: Robot, angles_deg) -> np.ndarray:
+def centreline(rb: Robot, angles_deg, solve: Solver = taut.sweep) -> np.ndarray:
     """Lengths (T, K) through the hole centres of the nominal print, anchor and end included."""
     ch = chains(rb, Scatter(hole_play=0.0), 1, 0)
-    L, _, _ = taut.sweep(ch, angles_deg, rb.length)
+    L, _, _ = solve(ch, angles_deg, rb.length)
     return L[0]
 
 
@@ -149,25 +151,27 @@ def looks(n: int) -> list[int]:
 
 
 def run(rb: Robot, sc: Scatter, angles_deg, n: int, seed: int, pair: tuple[int, int] | None = None,
-        enough: Callable[[np.ndarray, int], bool] | None = None) -> Result:
+        enough: Callable[[np.ndarray, int], bool] | None = None, solve: Solver = taut.sweep) -> Result:
     """Nominal taut path, centre line and ``n`` samples; ``pair``: tendon indices of the actuating pair.
 
     ``enough(worst, looks)``: a run may stop at each of :func:`looks` ``(n)`` once it says so of the
     samples' largest |ΔL| so far ((S, T), as :attr:`Result.worst`; ``looks``: how many looks the run
     may take). The samples then come in batches, the first from ``seed``, batch ``j`` from
-    ``(seed, j)``: the first m samples are the same whatever ``n`` and wherever the run stops."""
+    ``(seed, j)``: the first m samples are the same whatever ``n`` and wherever the run stops.
+    ``solve``: :func:`hwgen.model.taut.sweep` or what gives the same (every taut length worked out
+    through it)."""
     ang = np.asarray(angles_deg, float)
     k0 = int(np.flatnonzero(ang == 0)[0])
-    Lc = centreline(rb, ang)
+    Lc = centreline(rb, ang, solve)
     dc = Lc - Lc[:, k0:k0 + 1]
-    Ln, Ln0, bad0 = taut.sweep(chains(rb, replace(sc, sigma_pos=0.0, sigma_dia=0.0, station=0.0, tilt=None,
-                                                  play=None), 1, 0), ang, rb.length)
+    Ln, Ln0, bad0 = solve(chains(rb, replace(sc, sigma_pos=0.0, sigma_dia=0.0, station=0.0, tilt=None,
+                                             play=None), 1, 0), ang, rb.length)
     dn = Ln[0] - Ln0[0][:, None]
     bad = 0
     if n and enough is not None:
         parts, done, marks = [], 0, looks(n)
         for j, m in enumerate(marks):
-            L, L0, b = taut.sweep(chains(rb, sc, m - done, seed if j == 0 else [seed, j]), ang, rb.length)
+            L, L0, b = solve(chains(rb, sc, m - done, seed if j == 0 else [seed, j]), ang, rb.length)
             parts.append(L - L0[:, :, None])
             bad, done = bad + b, m
             if m < n and enough(np.abs(np.concatenate(parts)).max(axis=2), len(marks)):
@@ -175,7 +179,7 @@ def run(rb: Robot, sc: Scatter, angles_deg, n: int, seed: int, pair: tuple[int, 
         dL = np.concatenate(parts)
         n = done
     elif n:
-        L, L0, bad = taut.sweep(chains(rb, sc, n, seed), ang, rb.length)
+        L, L0, bad = solve(chains(rb, sc, n, seed), ang, rb.length)
         dL = L - L0[:, :, None]
     else:                   # no samples: the band and envelope are the nominal print's curve
         dL = dn[None]

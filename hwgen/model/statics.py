@@ -77,7 +77,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 from scipy.optimize import minimize
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 
 from .sag import G_ACC, Span
 
@@ -175,6 +175,19 @@ class Loads:
     tendons: dict = field(default_factory=dict)
     gravity: tuple[float, float, float] | None = None
     forces: tuple[tuple[float, tuple[float, float, float]], ...] = ()
+
+
+_BLAS: list = []        # the process's BLAS libraries, found once (:func:`blas_threads`)
+
+
+def blas_threads():
+    """Within: BLAS on BLAS_THREADS threads. threadpoolctl's threadpool_limits looks for the loaded
+    libraries anew on every entry (reading the process's maps: 1-5 ms, two per solve, 30 solves a
+    tension sweep); they are found once here, on first use (numpy's and scipy's BLAS are loaded
+    with this module)."""
+    if not _BLAS:
+        _BLAS.append(ThreadpoolController())
+    return _BLAS[0].limit(limits=BLAS_THREADS, user_api="blas")
 
 
 # ------------------------------------------------------------------ rotations
@@ -419,8 +432,14 @@ class Model:
     def energy_and_gradient(self, q: np.ndarray, loads: Loads):
         """V (B,) and dV/dq (B, n_dof) for (B, n_dof) coordinates."""
         q = np.atleast_2d(q)
-        P, R, O, W, th = self.forward(q)
-        A, C, V, _, _ = self._point_forces(P, R, loads)
+        V, grad, _, _ = self._energy(q, self.forward(q), loads)
+        return V, grad
+
+    def _energy(self, q: np.ndarray, kinematics, loads: Loads):
+        """:meth:`energy_and_gradient` of ``q`` (B, n_dof) whose :meth:`forward` is ``kinematics``,
+        and every tendon's length and tension (B,) there."""
+        P, R, O, W, th = kinematics
+        A, C, V, lengths, tensions = self._point_forces(P, R, loads)
         # what acts beyond each joint: nodes after the joint's segment
         SA = np.cumsum(A[:, ::-1], axis=1)[:, ::-1]
         SC = np.cumsum(C[:, ::-1], axis=1)[:, ::-1]
@@ -429,7 +448,7 @@ class Model:
         gen = np.einsum("bjia,bji->bja", W, mom)                    # W^T m
         grad = gen[:, self.dof_joint, self.dof_axis] + self.dof_stiff * q
         V = V + 0.5 * np.sum(self.dof_stiff * q * q, axis=1)
-        return V, grad
+        return V, grad, lengths, tensions
 
     def hessian(self, q: np.ndarray, loads: Loads) -> np.ndarray:
         """d²V/dq² at the coordinates q (n_dof,), exact: see the module's docstring, "The Hessian"."""
@@ -437,7 +456,12 @@ class Model:
         if n == 0:
             return np.zeros((0, 0))
         q = np.asarray(q, float)
-        P, R, O, W, th = (x[0] for x in self.forward(q[None, :]))
+        return self._hessian(q, self.forward(q[None, :]), loads)
+
+    def _hessian(self, q: np.ndarray, kinematics, loads: Loads) -> np.ndarray:
+        """:meth:`hessian` at ``q`` (n_dof,) whose :meth:`forward` (of ``q[None]``) is ``kinematics``."""
+        n = self.n_dof
+        P, R, O, W, th = (x[0] for x in kinematics)
         jd, ax, reach = self.dof_joint, self.dof_axis, self.dof_reach
         omega = W[jd, :, ax]                                      # (n, 3): each DOF's world rotation axis
         xi = np.concatenate([omega, np.cross(O[jd], omega)], axis=1)      # (n, 6): dx/dq_a = [−x^, I] ξ_a
@@ -615,7 +639,7 @@ class Equilibrium:
         jac = np.asarray(jac, float)
         if self.model.n_dof == 0:
             return np.zeros(jac.shape[:-1]) if jac.ndim > 1 else 0.0
-        with threadpool_limits(BLAS_THREADS, user_api="blas"):
+        with blas_threads():
             if self._factor is None:
                 try:
                     self._factor = cho_factor(self.hessian)
@@ -650,28 +674,31 @@ def solve(model: Model, loads: Loads, q0: np.ndarray | None = None, gtol: float 
     t0 = time.perf_counter()
     n = model.n_dof
     x0 = np.zeros(n) if q0 is None else np.asarray(q0, float)
-    cache = {}
+    last: dict = {}     # at the last coordinates asked about: the kinematics, energy (and gradient), Hessian
 
-    def fg(x):
+    def at(x: np.ndarray, what: str):
+        """scipy asks for the energy, the gradient and the Hessian at one x in turn (and the result
+        is its last x): each is worked out once there, on one :meth:`Model.forward`."""
         key = x.tobytes()
-        if key not in cache:
-            cache.clear()
-            V, g = model.energy_and_gradient(x[None, :], loads)
-            cache[key] = (float(V[0]), g[0])
-        return cache[key]
+        if last.get("x") != key:
+            last.clear()
+            last["x"], last["kinematics"] = key, model.forward(x[None, :])
+        if what not in last:
+            last[what] = (model._energy(x[None, :], last["kinematics"], loads) if what == "energy" else
+                          model._hessian(x, last["kinematics"], loads) if n else np.zeros((0, 0)))
+        return last[what]
 
-    if n:
-        with threadpool_limits(BLAS_THREADS, user_api="blas"):
-            res = minimize(lambda x: fg(x)[0], x0, jac=lambda x: fg(x)[1], hess=lambda x: model.hessian(x, loads),
-                           method="trust-krylov", options={"gtol": gtol, "maxiter": max_iter})
-        x, its = res.x, int(res.nit)
-    else:
-        x, its = x0, 0
-    P, R, _, _, _ = model.forward(x[None, :])
-    _, _, V, lengths, tensions = model._point_forces(P, R, loads)
-    Vt, g = model.energy_and_gradient(x[None, :], loads)
-    with threadpool_limits(BLAS_THREADS, user_api="blas"):
-        H = model.hessian(x, loads)
+    with blas_threads():
+        if n:
+            res = minimize(lambda x: float(at(x, "energy")[0][0]), x0, jac=lambda x: at(x, "energy")[1][0],
+                           hess=lambda x: at(x, "hessian"), method="trust-krylov",
+                           options={"gtol": gtol, "maxiter": max_iter})
+            x, its = res.x, int(res.nit)
+        else:
+            x, its = x0, 0
+        Vt, g, lengths, tensions = at(x, "energy")
+        P, R = at(x, "kinematics")[:2]
+        H = at(x, "hessian")
     return Equilibrium(model, loads, x, model.nodes_s.copy(), P[0], R[0],
                        {k: float(v[0]) for k, v in lengths.items()}, {k: float(v[0]) for k, v in tensions.items()},
                        float(Vt[0]), H, float(np.abs(g).max()) if n else 0.0, its, time.perf_counter() - t0)

@@ -355,7 +355,15 @@ def _inner(desc: Described, model: st.Model, sign: int) -> tuple[str | None, flo
     return (name, per_deg) if per_deg > 1e-6 else (None, 0.0)
 
 
-def sweep(desc: Described, model: st.Model, max_deg: float, step_deg: float, locked: bool = True) -> dict:
+def inner_tendons(desc: Described, model: st.Model) -> dict:
+    """:func:`_inner` of either side (sign +1, -1): what a sweep hauls in there, whichever tendons it
+    locks (a probe of the weightless robot alone: the sweeps with and without the stiffening
+    tendons share it)."""
+    return {sign: _inner(desc, model, sign) for sign in (1, -1)}
+
+
+def sweep(desc: Described, model: st.Model, max_deg: float, step_deg: float, locked: bool = True,
+          inner_of: dict | None = None) -> dict:
     """Bend the weightless robot from straight to ±max_deg by hauling in the actuating tendon on the
     inside of the bend (displacement-controlled, its drum turning), the other actuating tendons
     held at their pre-tension by the drive, the stiffening tendons locked where they carry their
@@ -364,7 +372,8 @@ def sweep(desc: Described, model: st.Model, max_deg: float, step_deg: float, loc
     Each side is a continuation: each haul-in aims a step further by the last step's angle per
     millimetre, each solve starting from the last; the tensions are then interpolated (linearly)
     at the sweep's angles. A side no actuating tendon bends, or where hauling in stops bending the
-    robot, ends where it got to (``reached_deg``)."""
+    robot, ends where it got to (``reached_deg``). ``inner_of``: :func:`inner_tendons` of this robot,
+    if already at hand."""
     stiff = [n for n in desc.stiffening if locked]
     angles = np.arange(0.0, max_deg + 1e-9, step_deg)
     if angles[-1] < max_deg - 1e-9:
@@ -372,7 +381,7 @@ def sweep(desc: Described, model: st.Model, max_deg: float, step_deg: float, loc
     out = {}
     for sign in (1, -1):
         key = "+" if sign > 0 else "-"
-        inner, per_deg = _inner(desc, model, sign)
+        inner, per_deg = inner_of[sign] if inner_of else _inner(desc, model, sign)
         if inner is None:
             out[key] = {"inner": None, "angles_deg": [], "tensions_n": {}, "reached_deg": 0.0, "solves": 0}
             continue

@@ -26,7 +26,7 @@ commands that check nothing do not pay.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -77,6 +77,16 @@ def sweep(ch: Chains, angles_deg, length: float, tol: float = TOL) -> tuple[np.n
     if k0 < len(ang) and ang[k0] == 0:
         L[:, :, k0] = L0
     return L, L0, int(bad.sum())
+
+
+def tendons(ch: Chains, which) -> Chains:
+    """The chains of tendons ``which`` (indices) alone. A tendon's solves read only its own holes,
+    anchor and end and the disks' stations and slips, each starting from its own last: a sweep of
+    these gives, to the bit, their rows of the sweep of ``ch`` (the disks' frames, worked out once
+    per sample and angle for every tendon of a sweep, are why a sweep of many costs less than
+    sweeps of each)."""
+    which = np.asarray(which, np.int64)
+    return replace(ch, chain=ch.chain[which], anchor=ch.anchor[:, which], end=ch.end[:, which])
 
 
 def shortest(a, b, C, E, r, tol: float | None = None) -> tuple[float, np.ndarray, bool]:
