@@ -56,9 +56,10 @@ def _parts(tall_box: float = 5.0) -> dict:
 
 @pytest.fixture
 def counted(monkeypatch):
-    """Which plates lib3mf wrote and how many orientations were measured, per call of ``run``."""
-    seen = {"written": [], "decided": 0}
-    write, decide = plates._write_3mf, plates.decide
+    """Which plates lib3mf wrote, how many orientations were measured and how many times the
+    footprints were packed, per call of ``run``."""
+    seen = {"written": [], "decided": 0, "packed": 0}
+    write, decide, pack = plates._write_3mf, plates.decide, plates.pack
 
     def writing(path, objects):
         seen["written"].append(Path(path).name)
@@ -68,11 +69,16 @@ def counted(monkeypatch):
         seen["decided"] += 1
         return decide(*a, **k)
 
+    def packing(*a, **k):
+        seen["packed"] += 1
+        return pack(*a, **k)
+
     monkeypatch.setattr(plates, "_write_3mf", writing)
+    monkeypatch.setattr(plates, "pack", packing)
     monkeypatch.setattr(plates, "decide", deciding)
 
     def run(folder: Path, manifest: dict, store: cache.Store | None, proc=PROC, settings=SETTINGS):
-        seen["written"], seen["decided"] = [], 0
+        seen.update(written=[], decided=0, packed=0)
         m = json.loads(json.dumps(manifest))
         if store is None:
             summary = plates.write_plates(folder, m, proc, settings)
@@ -93,7 +99,7 @@ def test_a_kept_plate_is_the_plate_written_afresh(tmp_path, counted):
     first, first_files, seen = counted(tmp_path / "d", manifest, store)
     assert len(seen["written"]) == 3 and seen["decided"] == 3       # one measurement per file content
     again, again_files, seen = counted(tmp_path / "d", manifest, store)
-    assert seen == {"written": [], "decided": 0}                   # every plate and decision from the store
+    assert seen == {"written": [], "decided": 0, "packed": 0}      # every plate, decision and place from the store
     assert again_files == first_files == fresh_files                # plates.md too
     assert again == first == fresh
 
@@ -106,7 +112,7 @@ def test_a_changed_file_writes_its_plate_again_and_keeps_the_others(tmp_path, co
     summary, files, seen = counted(tmp_path / "d", after, store)
     on = {n: p["file"].split("/")[-1] for p in summary["plates"] for n in p["parts"]}
     assert seen["written"] == [on["box_a"]] and on["box_b"] == on["box_a"]
-    assert seen["decided"] == 1                                      # the boxes' one new content
+    assert seen["decided"] == 1 and seen["packed"] == 0              # the boxes' one new content; same places
     changed = {f for f in files if files[f] != files_before[f]}
     assert changed == {on["box_a"], plates.SUMMARY_MD}
     _, fresh_files, _ = counted(tmp_path / "d", after, None)
@@ -182,5 +188,5 @@ def test_the_prototypes_plates_from_the_store_are_the_builds(built, tmp_path, co
     assert len(seen["written"]) == len(manifest["plates"]["plates"])
     assert seen["decided"] < len(first["parts"])                  # like parts (wheels, worms) measured once
     again, again_files, seen = counted(work, manifest, store, plan.process, plan.plates)
-    assert seen == {"written": [], "decided": 0}
+    assert seen == {"written": [], "decided": 0, "packed": 0}
     assert files == again_files == built_files and first == again == manifest["plates"]

@@ -60,6 +60,7 @@ ON_PLATE_MM = 1e-3            # ... when it lies this close to z = 0
 UUID_SPACE = uuid.UUID("6d1f0e6a-3c47-5a0b-9e1d-2b1f4f0c9a11")   # hwgen's namespace for the 3MF UUIDs
 ORIENTATION = "plates: a part's print orientation"      # the kind of the remembered decision (cache.remembered)
 PLATE_3MF = "plates: a plate's 3MF"                     # ... and of the record naming a kept plate's bytes
+PACKING = "plates: the footprints packed"               # ... and of the remembered packing (cache.remembered)
 
 
 @dataclass
@@ -316,8 +317,19 @@ def layout(folder: Path, manifest: dict, proc, settings) -> tuple[list[Oriented]
             oriented_parts.append(oriented(p.name, p.role, V, F, float(p.volume_mm3), decision, settings, sha))
     too_tall = {o.name for o in oriented_parts if o.size[2] > proc.build_volume[2]}
     sizes = {o.name: (float(o.size[0]), float(o.size[1])) for o in oriented_parts if o.name not in too_tall}
-    plates, nowhere = pack(sizes, proc.build_volume[:2], settings.gap_mm, settings.edge_margin_mm)
+    plates, nowhere = packed(sizes, proc.build_volume[:2], settings.gap_mm, settings.edge_margin_mm)
     return oriented_parts, plates, sorted(too_tall) + nowhere
+
+
+def packed(sizes: dict[str, tuple[float, float]], bed, gap: float, margin: float
+           ) -> tuple[list[dict[str, tuple[float, float, bool]]], list[str]]:
+    """:func:`pack`, remembered under its inputs (the footprints in their order: rectpack's ties go by
+    it) and rectpack's version: the same plates, fresh or read back."""
+    from importlib.metadata import version
+    inputs = ([[n, w, h] for n, (w, h) in sizes.items()], [float(b) for b in bed], float(gap), float(margin),
+              version("rectpack"))
+    plates, nowhere = cache.remembered(PACKING, inputs, lambda: pack(sizes, bed, gap, margin))
+    return [{n: tuple(at) for n, at in plate.items()} for plate in plates], nowhere
 
 
 def plate_key(file: str, plate: dict[str, tuple[float, float, bool]], by_name: dict[str, Oriented]) -> str:
