@@ -75,7 +75,7 @@ class Oriented:
     reason: str
     volume_mm3: float
     tilt: tuple | None = None  # a tilted part's (axis, degrees)
-    sha256: str = ""           # its STL's bytes, when read from a file
+    sha256: str = ""           # the sha256 of its STL's bytes, when read from a file
     size: np.ndarray = field(init=False, repr=False)    # its box's x, y, z extent, mm
 
     def __post_init__(self):
