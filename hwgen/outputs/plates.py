@@ -21,6 +21,18 @@ Orientation, per part:
 
 A part larger than the plate in every orientation tried goes on no plate and is listed as such
 (the checks' ``part.build_volume`` fails it too).
+
+What is kept between builds (in the active store, :mod:`hwgen.cache`; without one, everything is
+made as it is needed):
+
+* a part's orientation decision (flat or tilted, about which side, and why), remembered by its
+  STL's sha256 and the settings :func:`decide` reads, so a file that kept its bytes is not
+  measured again, and parts of the same bytes in one build are measured once; the oriented
+  vertices are made from the mesh each time (cheap), by the same arithmetic;
+* a plate's 3MF bytes, under everything that makes them (:func:`plate_key`: per object its name,
+  its file's sha256, its orientation and its place, lib3mf's version and hwgen's code): a plate
+  whose parts all kept their files and places is copied from the store (its bytes checked against
+  their hash on the way, as every object of the store is), byte-identical to one written afresh.
 """
 from __future__ import annotations
 
@@ -29,13 +41,15 @@ import locale
 import math
 import uuid
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
+from .. import cache
 from ..cad.manifest import ManifestPart, sha256
-from ..checks.meshes import part_meshes
+from ..checks.meshes import measured_by_file, one_load_per_mesh, read_mesh
 from .bom import is_purchased
 
 FOLDER = "plates"
@@ -44,6 +58,9 @@ GRID = 100                    # rectpack works on integers: footprints in 1/100 
 FLAT_NORMAL_Z = 0.999         # a face this close to straight down belongs to the face on the plate
 ON_PLATE_MM = 1e-3            # ... when it lies this close to z = 0
 UUID_SPACE = uuid.UUID("6d1f0e6a-3c47-5a0b-9e1d-2b1f4f0c9a11")   # hwgen's namespace for the 3MF UUIDs
+ORIENTATION = "plates: a part's print orientation"      # the kind of the remembered decision (cache.remembered)
+PLATE_3MF = "plates: a plate's 3MF"                     # ... and of the record naming a kept plate's bytes
+PACKING = "plates: the footprints packed"               # ... and of the remembered packing (cache.remembered)
 
 
 @dataclass
@@ -57,10 +74,12 @@ class Oriented:
     how: str                  # "flat" or "tilted"
     reason: str
     volume_mm3: float
+    tilt: tuple | None = None  # a tilted part's (axis, degrees)
+    sha256: str = ""           # the sha256 of its STL's bytes, when read from a file
+    size: np.ndarray = field(init=False, repr=False)    # its box's x, y, z extent, mm
 
-    @property
-    def size(self) -> np.ndarray:
-        return np.ptp(self.vertices, axis=0)
+    def __post_init__(self):
+        self.size = np.ptp(self.vertices, axis=0)
 
 
 def _rotation(axis: str, deg: float) -> np.ndarray:
@@ -88,29 +107,55 @@ def contact_fraction(vertices: np.ndarray, faces: np.ndarray) -> float:
     return float(area[down].sum() / hull) if hull > 0 else 0.0
 
 
+def decide(vertices: np.ndarray, faces: np.ndarray, technology: str, settings, build_volume) -> dict:
+    """The part's print orientation for the process (see the module), as plain values: ``how``
+    ("flat" or "tilted"), ``axis`` (the side a tilted part turns about, else None) and ``reason``."""
+    v = _to_corner(np.asarray(vertices, float))
+    if technology != "SLA":
+        return {"how": "flat", "axis": None, "reason": "FDM: its largest flat face on the bed (the file's "
+                "orientation): it holds the part down and needs no support under it"}
+    share = contact_fraction(v, faces)
+    if share >= settings.flat_contact_fraction:
+        return {"how": "flat", "axis": None, "reason": f"SLA, flat on the plate: its face on the plate covers "
+                f"{share:.0%} of its footprint, so it needs no supports; holes across the layers stay round and "
+                f"that face stays clean"}
+    size = np.ptp(v, axis=0)
+    axis = "x" if size[0] >= size[1] else "y"        # tilt about the long side: the footprint grows least
+    if not _fits(np.ptp(_tilted(v, axis, settings), axis=0), build_volume, settings):
+        return {"how": "flat", "axis": None, "reason": f"SLA, flat on the plate on supports: its face on the plate "
+                f"covers only {share:.0%} of its footprint, but tilted {settings.sla_tilt_deg:g}° it would not fit "
+                f"the printer"}
+    return {"how": "tilted", "axis": axis, "reason": f"SLA, tilted {settings.sla_tilt_deg:g}° about its long side "
+            f"on supports: its face on the plate covers only {share:.0%} of its footprint, so it needs supports "
+            f"anyway, and tilted no broad layer peels off the film at once"}
+
+
+def _tilted(v: np.ndarray, axis: str, settings) -> np.ndarray:
+    return _to_corner(v @ _rotation(axis, settings.sla_tilt_deg).T)
+
+
+def decision_values(technology: str, settings, build_volume) -> dict:
+    """Everything :func:`decide` reads besides the mesh (the key of a remembered decision)."""
+    return {"technology": technology, "flat_contact_fraction": float(settings.flat_contact_fraction),
+            "sla_tilt_deg": float(settings.sla_tilt_deg), "edge_margin_mm": float(settings.edge_margin_mm),
+            "build_volume": [float(x) for x in build_volume]}
+
+
+def oriented(name: str, role: str, vertices: np.ndarray, faces: np.ndarray, volume: float, decision: dict,
+             settings, sha: str = "") -> Oriented:
+    """The part as :func:`decide` (``decision``) has it print: its vertices turned and moved so."""
+    v = _to_corner(np.asarray(vertices, float))
+    if decision["how"] == "tilted":
+        return Oriented(name, role, _tilted(v, decision["axis"], settings), faces, "tilted", decision["reason"],
+                        volume, (decision["axis"], float(settings.sla_tilt_deg)), sha)
+    return Oriented(name, role, v, faces, decision["how"], decision["reason"], volume, None, sha)
+
+
 def orient(name: str, role: str, vertices: np.ndarray, faces: np.ndarray, volume: float, technology: str,
            settings, build_volume) -> Oriented:
     """The part's print orientation for the process, with the reason (see the module)."""
-    v = _to_corner(np.asarray(vertices, float))
-    if technology != "SLA":
-        return Oriented(name, role, v, faces, "flat", "FDM: its largest flat face on the bed (the file's "
-                        "orientation): it holds the part down and needs no support under it", volume)
-    share = contact_fraction(v, faces)
-    if share >= settings.flat_contact_fraction:
-        return Oriented(name, role, v, faces, "flat", f"SLA, flat on the plate: its face on the plate covers "
-                        f"{share:.0%} of its footprint, so it needs no supports; holes across the layers stay "
-                        f"round and that face stays clean", volume)
-    size = np.ptp(v, axis=0)
-    axis = "x" if size[0] >= size[1] else "y"        # tilt about the long side: the footprint grows least
-    tilted = _to_corner(v @ _rotation(axis, settings.sla_tilt_deg).T)
-    fits = _fits(np.ptp(tilted, axis=0), build_volume, settings)
-    if not fits:
-        return Oriented(name, role, v, faces, "flat", f"SLA, flat on the plate on supports: its face on the plate "
-                        f"covers only {share:.0%} of its footprint, but tilted {settings.sla_tilt_deg:g}° it "
-                        f"would not fit the printer", volume)
-    return Oriented(name, role, tilted, faces, "tilted", f"SLA, tilted {settings.sla_tilt_deg:g}° about its long "
-                    f"side on supports: its face on the plate covers only {share:.0%} of its footprint, so it "
-                    f"needs supports anyway, and tilted no broad layer peels off the film at once", volume)
+    return oriented(name, role, vertices, faces, volume, decide(vertices, faces, technology, settings, build_volume),
+                    settings)
 
 
 def _fits(size, build_volume, settings) -> bool:
@@ -185,10 +230,25 @@ def write_3mf(path: Path, objects: list[tuple[str, np.ndarray, np.ndarray]]) -> 
         _write_3mf(path, objects)
 
 
+@lru_cache(maxsize=1)
+def _wrapper():
+    """lib3mf's wrapper, loaded once (loading it looks up every function of the library: a tenth of a
+    second each time); every model made through it is its own."""
+    import lib3mf
+    return lib3mf.get_wrapper()
+
+
+@lru_cache(maxsize=1)
+def lib3mf_version() -> tuple:
+    """The version of lib3mf that writes the plates (its Python package and its library)."""
+    from importlib.metadata import version
+    return version("lib3mf"), tuple(_wrapper().GetLibraryVersion())
+
+
 def _write_3mf(path: Path, objects) -> None:
     import lib3mf
 
-    wrapper = lib3mf.get_wrapper()
+    wrapper = _wrapper()
     model = wrapper.CreateModel()
     model.SetUnit(lib3mf.ModelUnit.MilliMeter)
     identity = lib3mf.Transform()
@@ -218,10 +278,7 @@ def read_3mf(path: Path) -> list[tuple[str, np.ndarray, np.ndarray]]:
 
 
 def _read_3mf(path: Path) -> list[tuple[str, np.ndarray, np.ndarray]]:
-    import lib3mf
-
-    wrapper = lib3mf.get_wrapper()
-    model = wrapper.CreateModel()
+    model = _wrapper().CreateModel()
     reader = model.QueryReader("3mf")
     reader.SetStrictModeActive(True)
     reader.ReadFromFile(str(path))
@@ -247,38 +304,82 @@ def printed_parts(manifest: dict) -> list[dict]:
 
 def layout(folder: Path, manifest: dict, proc, settings) -> tuple[list[Oriented], list[dict], list[str]]:
     """Every printed part oriented, the plates (name -> corner x, y and turned) and the parts on none;
-    ``proc``: the plan's process (technology, build volume), ``settings``: its plates settings."""
-    oriented = []
-    for p, mesh in part_meshes(folder, [ManifestPart.of(e) for e in printed_parts(manifest)]):
-        oriented.append(orient(p.name, p.role, np.asarray(mesh.vertices), np.asarray(mesh.faces),
-                               float(p.volume_mm3), proc.technology, settings, proc.build_volume))
-    too_tall = {o.name for o in oriented if o.size[2] > proc.build_volume[2]}
-    sizes = {o.name: (float(o.size[0]), float(o.size[1])) for o in oriented if o.name not in too_tall}
-    plates, nowhere = pack(sizes, proc.build_volume[:2], settings.gap_mm, settings.edge_margin_mm)
-    return oriented, plates, sorted(too_tall) + nowhere
+    ``proc``: the plan's process (technology, build volume), ``settings``: its plates settings.
+    A part's orientation is decided once per file content and remembered (:data:`ORIENTATION`)."""
+    values = decision_values(proc.technology, settings, proc.build_volume)
+    oriented_parts = []
+    with one_load_per_mesh():         # files of the same bytes: one mesh, one decision
+        for p in [ManifestPart.of(e) for e in printed_parts(manifest)]:
+            sha, mesh = read_mesh(p.stl_in(folder))
+            V, F = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+            decision = measured_by_file(sha, ORIENTATION, values,
+                                        lambda: decide(V, F, proc.technology, settings, proc.build_volume))
+            oriented_parts.append(oriented(p.name, p.role, V, F, float(p.volume_mm3), decision, settings, sha))
+    too_tall = {o.name for o in oriented_parts if o.size[2] > proc.build_volume[2]}
+    sizes = {o.name: (float(o.size[0]), float(o.size[1])) for o in oriented_parts if o.name not in too_tall}
+    plates, nowhere = packed(sizes, proc.build_volume[:2], settings.gap_mm, settings.edge_margin_mm)
+    return oriented_parts, plates, sorted(too_tall) + nowhere
+
+
+def packed(sizes: dict[str, tuple[float, float]], bed, gap: float, margin: float
+           ) -> tuple[list[dict[str, tuple[float, float, bool]]], list[str]]:
+    """:func:`pack`, remembered under its inputs (the footprints in their order: rectpack's ties go by
+    it) and rectpack's version: the same plates, fresh or read back."""
+    from importlib.metadata import version
+    inputs = ([[n, w, h] for n, (w, h) in sizes.items()], [float(b) for b in bed], float(gap), float(margin),
+              version("rectpack"))
+    plates, nowhere = cache.remembered(PACKING, inputs, lambda: pack(sizes, bed, gap, margin))
+    return [{n: tuple(at) for n, at in plate.items()} for plate in plates], nowhere
+
+
+def plate_key(file: str, plate: dict[str, tuple[float, float, bool]], by_name: dict[str, Oriented]) -> str:
+    """The store's key of a plate's 3MF: everything its bytes are made of. Per object its name, its
+    STL's sha256 (the mesh: vertices and triangles), its orientation and its place; the file's name
+    (the UUIDs are made from it); lib3mf's version and hwgen's code (the arithmetic that turns and
+    places the vertices, and how they are handed to lib3mf)."""
+    objects = [[n, by_name[n].sha256, by_name[n].how, by_name[n].tilt, float(x), float(y), bool(turned)]
+               for n, (x, y, turned) in sorted(plate.items())]
+    return cache.key(PLATE_3MF, file, objects, lib3mf_version(), cache.code())
+
+
+def write_plate(path: Path, plate: dict[str, tuple[float, float, bool]], by_name: dict[str, Oriented]) -> bytes:
+    """One plate's 3MF at ``path``, its bytes returned: copied from the active store when a plate of
+    the same key (:func:`plate_key`) was kept there and its bytes still match their hash, else
+    written (and kept). A part read from no file (no sha256) makes a plate that is not kept."""
+    store = cache.active()
+    kept = store is not None and store.enabled and all(by_name[n].sha256 for n in plate)
+    k = plate_key(path.name, plate, by_name) if kept else None
+    if kept:
+        rec = store.get_record(k)
+        data = store.get_bytes(str(rec.get("object", ""))) if isinstance(rec, dict) else None
+        if data is not None:
+            path.write_bytes(data)
+            return data
+    write_3mf(path, [(n, placed_vertices(by_name[n], x, y, turned), by_name[n].faces)
+                     for n, (x, y, turned) in sorted(plate.items())])
+    data = path.read_bytes()
+    if kept:
+        store.put_record(k, {"object": store.put_bytes(data), "file": path.name})
+    return data
 
 
 def write_plates(folder: Path, manifest: dict, proc, settings) -> dict:
     """plates/plate_NN.3mf and plates/plates.md into the folder (``proc``, ``settings``: as
     :func:`layout` takes them); the summary goes into the manifest (``plates``) and is returned."""
     folder = Path(folder)
-    oriented, plates, nowhere = layout(folder, manifest, proc, settings)
-    by_name = {o.name: o for o in oriented}
+    oriented_parts, plates, nowhere = layout(folder, manifest, proc, settings)
+    by_name = {o.name: o for o in oriented_parts}
     (folder / FOLDER).mkdir(exist_ok=True)
     summary = {"technology": proc.technology, "printer": proc.name, "bed_mm": list(proc.build_volume),
                "gap_mm": settings.gap_mm, "edge_margin_mm": settings.edge_margin_mm,
                "plates": [], "not_placed": nowhere,
-               "parts": {o.name: {"orientation": o.how, "reason": o.reason} for o in oriented}}
+               "parts": {o.name: {"orientation": o.how, "reason": o.reason} for o in oriented_parts}}
     for k, plate in enumerate(plates, start=1):
         name = f"plate_{k:02d}.3mf"
-        objects = []
-        for part, (x, y, turned) in sorted(plate.items()):
-            o = by_name[part]
-            objects.append((part, placed_vertices(o, x, y, turned), o.faces))
-        write_3mf(folder / FOLDER / name, objects)
+        data = write_plate(folder / FOLDER / name, plate, by_name)
         tallest = max(plate, key=lambda n: by_name[n].size[2])
         summary["plates"].append({
-            "file": f"{FOLDER}/{name}", "sha256": sha256(folder / FOLDER / name),
+            "file": f"{FOLDER}/{name}", "sha256": cache.sha256(data),
             "parts": sorted(plate),
             "volume_ml": round(sum(by_name[n].volume_mm3 for n in plate) / 1000, 2),
             "tallest": {"part": tallest, "height_mm": round(float(by_name[tallest].size[2]), 2)},
