@@ -54,3 +54,14 @@ def test_a_worker_has_the_kernel_without_all_of_vtk_until_vtk_is_used():
         before, name, after = pool.submit(_vtk_state).result()
     assert name == "vtkPolyData"
     assert 0 < before < after / 2
+
+
+def test_asking_the_stand_in_vtk_about_itself_loads_nothing():
+    """Introspection of the stand-in (a module's __file__, as reprs and tools read it) answers
+    without loading VTK; a name of VTK's loads it and the real module takes its place."""
+    code = ("import sys, hwgen.cad; v = sys.modules['vtk']; repr(v); getattr(v, '__file__', None); "
+            "n = sum(m.startswith('vtkmodules.') for m in sys.modules); v.vtkPolyData; "
+            "print(n, sum(m.startswith('vtkmodules.') for m in sys.modules), sys.modules['vtk'] is not v)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    before, after, replaced = r.stdout.split()
+    assert int(before) == 0 and int(after) > 100 and replaced == "True", r.stderr

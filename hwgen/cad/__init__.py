@@ -26,6 +26,8 @@ def _vtk_on_demand() -> None:
     on_demand = types.ModuleType("vtk", "VTK, loaded on first use (hwgen.cad._vtk_on_demand)")
 
     def __getattr__(name: str):
+        if name.startswith("__"):       # introspection (a module's __file__, __path__): not VTK's
+            raise AttributeError(name)
         import vtkmodules.all as full
         sys.modules["vtk"] = full
         return getattr(full, name)
