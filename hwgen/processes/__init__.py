@@ -17,7 +17,7 @@ import os
 
 # what the workers import, once, in the server (a module that cannot be imported there is
 # imported by each worker, which then meets the error as it would have); hwgen.cad before CadQuery,
-# so that OCP's import of VTK waits until VTK is used (hwgen.cad._vtk_on_demand)
+# so that CadQuery starts without all of VTK (hwgen.cad._VtkWhileOcpStarts)
 PRELOAD = ("hwgen.processes.server", "hwgen.cad", "cadquery", "hwgen.pipeline", "hwgen.checks.gear_mesh")
 
 # the server's environment besides the starting process's, where not set: numpy's BLAS in one
