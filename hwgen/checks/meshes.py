@@ -35,6 +35,17 @@ def one_load_per_mesh() -> Iterator[None]:
         _SHELF.reset(token)
 
 
+@contextmanager
+def sharing_meshes() -> Iterator[None]:
+    """Within: meshes shared as in :func:`one_load_per_mesh`, the check run's own when one is
+    running (its meshes, solids and measurements), else a run of this block's."""
+    if _SHELF.get() is not None:
+        yield
+        return
+    with one_load_per_mesh():
+        yield
+
+
 def drop_solids() -> None:
     """Let go of the manifold3d solids made so far in this check run (the meshes stay): the checks
     that intersect whole parts are done, and the solids are most of the run's memory; a later check
@@ -174,9 +185,7 @@ def part_mesh(folder: str | Path, part: ManifestPart):
 def part_meshes(folder: str | Path, parts: Iterable[ManifestPart]) -> list[tuple[ManifestPart, object]]:
     """Each part with its mesh (:func:`part_mesh`), in order; parts whose files hold the same bytes
     get one mesh (outside a check run too), which none may change in place."""
-    if _SHELF.get() is not None:
-        return [(p, part_mesh(folder, p)) for p in parts]
-    with one_load_per_mesh():
+    with sharing_meshes():
         return [(p, part_mesh(folder, p)) for p in parts]
 
 

@@ -73,6 +73,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
@@ -177,7 +178,10 @@ class Loads:
     forces: tuple[tuple[float, tuple[float, float, float]], ...] = ()
 
 
-_BLAS: list = []        # the process's BLAS libraries, found once (:func:`blas_threads`)
+@lru_cache(maxsize=1)
+def _blas() -> ThreadpoolController:
+    """The process's BLAS libraries, found once (:func:`blas_threads`)."""
+    return ThreadpoolController()
 
 
 def blas_threads():
@@ -185,9 +189,7 @@ def blas_threads():
     libraries anew on every entry (reading the process's maps: 1-5 ms, two per solve, 30 solves a
     tension sweep); they are found once here, on first use (numpy's and scipy's BLAS are loaded
     with this module)."""
-    if not _BLAS:
-        _BLAS.append(ThreadpoolController())
-    return _BLAS[0].limit(limits=BLAS_THREADS, user_api="blas")
+    return _blas().limit(limits=BLAS_THREADS, user_api="blas")
 
 
 # ------------------------------------------------------------------ rotations

@@ -49,7 +49,7 @@ import numpy as np
 
 from .. import cache
 from ..cad.manifest import ManifestPart, sha256
-from ..checks.meshes import measured_by_file, one_load_per_mesh, read_mesh
+from ..checks.meshes import measured_by_file, read_mesh, sharing_meshes
 from .bom import is_purchased
 
 FOLDER = "plates"
@@ -308,7 +308,7 @@ def layout(folder: Path, manifest: dict, proc, settings) -> tuple[list[Oriented]
     A part's orientation is decided once per file content and remembered (:data:`ORIENTATION`)."""
     values = decision_values(proc.technology, settings, proc.build_volume)
     oriented_parts = []
-    with one_load_per_mesh():         # files of the same bytes: one mesh, one decision
+    with sharing_meshes():            # files of the same bytes: one mesh, one decision
         for p in [ManifestPart.of(e) for e in printed_parts(manifest)]:
             sha, mesh = read_mesh(p.stl_in(folder))
             V, F = np.asarray(mesh.vertices), np.asarray(mesh.faces)
