@@ -10,7 +10,13 @@ the ones before it.
 
 A variant that is bad input, or whose plan is refused, is a row with verdict ``bad input`` and
 the message ``hwgen build`` would print; one that makes hwgen fail is a row with verdict
-``error``; neither stops the batch.
+``error``; neither stops the batch. Each row's ``failures`` lists what fails (and what only warns)
+one record a rule: ``id``, ``severity``, ``message``, ``measured``, ``limit`` (for a tune's
+constraints; the sweep's Parquet keeps the message).
+
+``options["with_plan"]``, when given, is called with each valid variant's plan (made for it at the
+lengths level too) and returns more figures for its row: a tune's objectives
+(:mod:`hwgen.tune.results`).
 """
 from __future__ import annotations
 
@@ -47,14 +53,15 @@ def evaluate_batch(batch: list[tuple[int, tuple]], base: dict, names: tuple[str,
         row = rows[r.index]
         fig = figures[r.index]
         if isinstance(fig, str):
-            row.update(verdict="error", message=fig)
+            row.update(verdict="error", message=fig, failures=[_failure("error", fig)])
             continue
         row["verdict"], row["message"], f = lengths.verdict(fig)
         row.update(f)
+        row["failures"] = lengths.failures(fig)
     share = (time.process_time() - t0) / max(len(todo), 1)
     for r in todo:
         rows[r.index]["cpu_s"] = share
-    if level != "lengths":
+    if level != "lengths" or options.get("with_plan"):
         for r in good:
             row = rows[r.index]
             if row["verdict"] == "error":
@@ -64,8 +71,10 @@ def evaluate_batch(batch: list[tuple[int, tuple]], base: dict, names: tuple[str,
                 _deeper(r, row, level, options)
             except (InputError, DesignError) as e:
                 row.update(verdict="bad input", message=f"{e.path or '<document>'}: {e.message}")
+                row["failures"] = [_failure("input", row["message"])]
             except Exception as e:      # a variant that makes hwgen fail is a row, never the end of the sweep
                 row.update(verdict="error", message=f"internal error: {type(e).__name__}: {e}"[:400])
+                row["failures"] = [_failure("error", row["message"])]
             row["cpu_s"] += time.process_time() - t1
     return [rows[r.index] for r in todo]
 
@@ -78,7 +87,8 @@ def warm() -> None:
 def _row(r: Resolved, level: str) -> dict:
     row = {"variant": r.index, "hash": r.hash, "level": level, "values": r.values,
            "verdict": "bad input" if r.design is None else "pass", "message": r.message, "decoupled": None,
-           "checks_failed": None, "per_tendon": None, "kept": None, "cpu_s": 0.0}
+           "checks_failed": None, "per_tendon": None, "kept": None, "cpu_s": 0.0,
+           "failures": [_failure("input", r.message)] if r.design is None else []}
     row.update({m: None for m in METRICS})
     return row
 
@@ -100,20 +110,32 @@ def _lengths(good: list[Resolved]) -> dict[int, dict | str]:
 
 # ---------------------------------------------------------------- robust, coupling, build
 
+def _failure(cid: str, message: str, severity: str = "error", measured=None, limit=None, where=None) -> dict:
+    return {"id": cid, "severity": severity, "where": where, "measured": measured, "limit": limit,
+            "message": message}
+
+
 def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
     d = r.design
     plan = make_plan(d)
     feasibility.check_plan(plan, d)
+    if options.get("with_plan"):
+        row.update(options["with_plan"](plan))
+    if level == "lengths":
+        return
     centre = {t["name"]: t["centre_mm"] for t in json.loads(row["per_tendon"])}
     taut_rows = robust(plan, d.disks.slot_clearance, options.get("robust_samples", 200))
     fails = [row["message"]] if row["message"] else []
     warns = []
     budgeted = [t for t in taut_rows if t["budget_mm"] is not None]
+    failures = [f for f in row["failures"]]
     for t in budgeted:
         if t["robust_mm"] > t["budget_mm"]:
             text = (f"{t['name']} changes {t['robust_mm']:.3f} mm at {d.check.robust} as built, "
                     f"budget {t['budget_mm']:g} mm")
             (fails if d.check.robust_severity == "error" else warns).append(text)
+            failures.append(_failure("tendon.robust", text, d.check.robust_severity, t["robust_mm"], t["budget_mm"],
+                                     t["name"]))
     tendons = json.loads(row["per_tendon"])
     for t in tendons:
         t.update({k: v for k, v in next(x for x in taut_rows if x["name"] == t["name"]).items()
@@ -125,6 +147,8 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
             warns.append(f"statics skipped: {report['skipped']}")
         for c in report.get("failed", []):
             (fails if c["severity"] == "error" else warns).append(f"{c['id']}: {c['message']}")
+            failures.append(_failure(c["id"], c["message"], c["severity"], c.get("measured"), c.get("limit"),
+                                     (c.get("where") or {}).get("tendon")))
         row["coupling"] = report.get("coupling")
         row["least_tension_n"] = report.get("least_tension_n")
     if level == "build":
@@ -132,10 +156,13 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
         failed, kept = build_and_check(r, options)
         row["checks_failed"] = len(failed)
         row["kept"] = kept
+        failures += [_failure(c["id"], c["message"], c["severity"], c.get("measured"), c.get("limit"))
+                     for c in failed]
         fails = [f for f in fails if f] + [f"{c['id']}: {c['message']}" for c in failed[:3]]
         if len(failed) > 3:
             fails.append(f"and {len(failed) - 3} more failed checks")
     row["per_tendon"] = json.dumps(tendons)
+    row["failures"] = failures
     row["verdict"] = "fail" if any(fails) else "pass"
     row["message"] = "; ".join([f for f in fails if f] + [f"warning: {w}" for w in warns])[:2000]
 
