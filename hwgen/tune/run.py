@@ -1,11 +1,13 @@
 """Running a tune: Optuna asks for trials, the sweep's workers evaluate them, Optuna is told.
 
 The optimiser is Optuna's (:mod:`optuna`): TPE (``TPESampler``, multivariate, constant liar for
-the trials in flight) for one objective, NSGA-II (``NSGAIISampler``) for a Pareto front, each with
-``constraints_func`` (a trial is feasible when every constraint value is ≤ 0); ``random`` for a
-baseline. The constraints (:func:`score`): the checks of the level that fail (and those under
-``goal.require`` even where the design makes them warnings; each counts one plus how far past its
-limit it is, relative, at most 10), and each ``at_least`` / ``at_most`` bound's relative shortfall.
+the trials in flight) for one objective, NSGA-II (``NSGAIISampler``) for a Pareto front, both
+reading each trial's constraints (``Trial.set_constraint``, Optuna 5's successor of
+``constraints_func``: a trial is feasible when every constraint value is ≤ 0; an infeasible one
+ranks by the sum of its violations); ``random`` for a baseline. The constraints (:func:`score`):
+``checks``, the checks of the level that fail (and those under ``goal.require`` even where the
+design makes them warnings; each counts one plus how far past its limit it is, relative, at most
+10), and each ``at_least`` / ``at_most`` bound's relative shortfall, named after the bound.
 
 Trials run on the sweep's pool (:func:`hwgen.sweep.run.pool`: a local Dask cluster, a running
 one, or inline), as batches of :func:`hwgen.sweep.levels.evaluate_batch` with the statics as its
@@ -81,10 +83,6 @@ def distributions(loaded: Loaded) -> dict:
     return out
 
 
-def _constraints(trial) -> list[float]:
-    return trial.user_attrs["constraints"]
-
-
 def sampler(loaded: Loaded, told: int):
     """The sampler for this tune (see the module's docstring); seeded with the tune's seed and the
     number of trials already told, so a resumed tune does not draw its first trials again."""
@@ -98,10 +96,9 @@ def sampler(loaded: Loaded, told: int):
     if kind == "random":
         return optuna.samplers.RandomSampler(seed=seed)
     if kind == "nsga2":
-        return optuna.samplers.NSGAIISampler(population_size=max(8, min(50, budget // 6)), seed=seed,
-                                             constraints_func=_constraints)
-    return optuna.samplers.TPESampler(n_startup_trials=max(4, min(20, budget // 10)), multivariate=True,
-                                      constant_liar=True, seed=seed, constraints_func=_constraints)
+        return optuna.samplers.NSGAIISampler(population_size=max(8, min(50, budget // 6)), seed=seed)
+    return optuna.samplers.TPESampler(n_startup_trials=max(4, min(10, budget // 10)), multivariate=True,
+                                      constant_liar=True, seed=seed)
 
 
 def open_study(loaded: Loaded, folder: Path):
@@ -125,12 +122,31 @@ def open_study(loaded: Loaded, folder: Path):
     else:
         study = optuna.create_study(study_name=name, storage=storage, directions=directions)
         study.set_user_attr("digest", loaded.digest)
+        if within(loaded, loaded.base_values):
+            # the base is the first trial (told the base's own evaluation): the search starts from what works
+            study.enqueue_trial(dict(zip(loaded.names, loaded.base_values)))
     told = len(study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)))
     study.sampler = sampler(loaded, told)
     for t in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
         study.tell(t.number, state=TrialState.FAIL)
         study.enqueue_trial(t.params, skip_if_exists=False)
     return study
+
+
+def constraint_names(loaded: Loaded) -> list[str]:
+    g = loaded.spec.goal
+    return ["checks", *(f"{n} >= {b}" for n, b in g.at_least.items()), *(f"{n} <= {b}" for n, b in g.at_most.items())]
+
+
+def within(loaded: Loaded, values: tuple) -> bool:
+    """Whether values lie within the free parameters' bounds (a choice among the choices)."""
+    for fr, v in zip(loaded.free, values):
+        if fr.choices is not None:
+            if v not in fr.choices:
+                return False
+        elif not (fr.low <= v <= fr.high) or (fr.integer and v != int(v)):
+            return False
+    return True
 
 
 def score(loaded: Loaded, row: dict, base_row: dict | None) -> tuple[list[float], list[float], bool]:
@@ -205,6 +221,7 @@ def base_row(loaded: Loaded, study, p, options: dict) -> dict:
     fut = p.submit(levels.evaluate_batch, [(-1, loaded.base_values)], loaded.base, loaded.names, loaded.spec.level,
                    frozenset(), options, key=f"tune-{loaded.spec.tune}-base-{uuid.uuid4().hex[:6]}")
     row = _finish(loaded, fut.result()[0], loaded.base_values)
+    row["trial"] = -1
     study.set_user_attr("base_row", row)
     return row
 
@@ -232,6 +249,7 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
         options = _options(loaded, folder, cache, p)
         t0 = time.perf_counter()
         base = base_row(loaded, study, p, options)
+        by_hash.setdefault(base["hash"], base)
         doc = p.scatter(loaded.base)
         per_task = TRIALS_PER_TASK[loaded.spec.level]
         cap = loaded.spec.batch or 2 * p.workers
@@ -245,6 +263,8 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
             values, cons, ok = score(loaded, row, base)
             trial.set_user_attr("row", row)
             trial.set_user_attr("constraints", cons)
+            for label, c in zip(constraint_names(loaded), cons):
+                trial.set_constraint(label, c)
             trial.set_user_attr("feasible", ok)
             if same_as is not None:
                 trial.set_user_attr("same_as", same_as)

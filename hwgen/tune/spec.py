@@ -25,9 +25,9 @@ import copy
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, model_validator
 
 from .. import params, yamlfile
 from ..errors import InputError, clip, echo
@@ -79,14 +79,23 @@ class Free(_Model):
         return 1.0 if self.choices is not None else self.high - self.low
 
 
+def _bound(v):
+    if v == "base" or (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)):
+        return v
+    raise ValueError(f"a bound is a number or 'base' (the base design's own figure), not {echo(v)}")
+
+
+Bound = Annotated[Any, BeforeValidator(_bound)]
+
+
 class Goal(_Model):
     maximize: str | list[str] | None = None
     minimize: str | list[str] | None = None
     pass_: bool = Field(False, alias="pass", description="the passing design nearest the base")
     state: str | None = Field(None, description="the tendon state the statics' results are of (default: "
                                                 "every tendon locked)")
-    at_least: dict[str, float | Literal["base"]] = Field(default_factory=dict)
-    at_most: dict[str, float | Literal["base"]] = Field(default_factory=dict)
+    at_least: dict[str, Bound] = Field(default_factory=dict)
+    at_most: dict[str, Bound] = Field(default_factory=dict)
     require: list[str] = Field(default_factory=list, description="checks that must pass even where the design "
                                                                  "makes them warnings (tendon.taut, ...)")
     checks: Literal["all", "required"] = Field(
@@ -178,8 +187,6 @@ def load(path: str | Path) -> Loaded:
         _keys(path, f"free[{i}].path", fr.path, base)
         if fr.path in names:
             raise InputError(path, f"free[{i}].path", f"{echo(fr.path)} is already free")
-        if fr.path in spec.set:
-            raise InputError(path, f"free[{i}].path", f"{echo(fr.path)} is fixed under 'set'")
         names.append(fr.path)
     dump = fixed.design.model_dump(mode="json")
     values = tuple(_value_at(dump, sweep_spec.parse_path(n)) for n in names)
