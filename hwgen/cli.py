@@ -554,8 +554,9 @@ def tune(tune_file: Path = typer.Argument(..., help="tune YAML: a base design, f
         say("no trial passes;", "red", f"see {printable(o.folder / 'summary.md')}")
     else:
         objs = ", ".join(f"{n} {v:.4g}" for (n, _), v in zip(loaded.objectives, t.best["objectives"]))
-        out.print(f"best: trial {t.best['trial']}: {objs}" + (f"; front of {len(t.front)}" if len(t.front) > 1
-                                                              and len(loaded.objectives) > 1 else ""))
+        found = f" (found {o.first_best_s:.1f} s into this run)" if o.first_best_s is not None else ""
+        out.print(f"best: trial {t.best['trial']}: {objs}{found}" + (f"; front of {len(t.front)}" if len(t.front) > 1
+                                                                     and len(loaded.objectives) > 1 else ""))
     for f in t.files:
         out.print(f"  {printable(f)}")
     if t.build_folder is not None:

@@ -137,7 +137,7 @@ def best_yaml(loaded: Loaded, row: dict) -> str:
     y.indent(mapping=2, sequence=4, offset=2)     # hwgen's files: list items two in, their keys four
     doc = y.load(loaded.base_path.read_text())
     changes = dict(loaded.spec.set)
-    changes.update(zip(loaded.names, row["values"]))
+    changes.update((n, v) for n, v, b in zip(loaded.names, row["values"], loaded.base_values) if v != b)
     for path, value in changes.items():
         _put(doc, sweep_spec.parse_path(path), value)
     name = f"{doc['design']}-{loaded.spec.tune}"
