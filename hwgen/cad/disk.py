@@ -13,6 +13,7 @@ import math
 import cadquery as cq
 import numpy as np
 
+from ..model.fixing import seat_overlap
 from ..model.specs import DiskSpec, Hole, HubSpec
 from . import DISK_ROTATION, Part, disk_placement
 
@@ -22,7 +23,6 @@ TOOL_OVERRUN = 1.0                  # tools run this far past the faces, mm
 CONE_HALF_ANGLE_DEG = 45.0          # the chamfer cones around the eyelet axes
 CONE_FLOOR_DEG = 5.0                # ... are narrowed on axes steeper than 90° - this - 45°, so their lowest line rises
 CONE_MIN_DEG = 10.0                 # narrower than this, a slanted eyelet gets no chamfer
-SEAT_OVERLAP = 0.3                  # a seat hole runs this far past the plate into the bore above it, mm
 
 
 def _to_file(x: float, z: float) -> tuple[float, float]:
@@ -148,9 +148,10 @@ def blank_and_tools(spec: DiskSpec) -> tuple[cq.Solid, list[cq.Solid]]:
         tools.append(_truncated(tool, spec.seat_plate, spec) if seated and not h.in_slot else tool)
     for h in normal:
         tools.extend(_eyelet_tool(h, T, spec.edge_size, base_side, True, with_bore=False))
+    overlap = seat_overlap(T, spec.seat_plate)
     for s in spec.seats:
         fx, fy = _to_file(s.x, s.z)
-        tools.append(cq.Solid.makeCylinder(s.diameter / 2, spec.seat_plate + SEAT_OVERLAP + TOOL_OVERRUN,
+        tools.append(cq.Solid.makeCylinder(s.diameter / 2, spec.seat_plate + overlap + TOOL_OVERRUN,
                                            cq.Vector(fx, fy, -TOOL_OVERRUN)))
     for x, z, dia, height in spec.seat_chambers:
         fx, fy = _to_file(x, z)

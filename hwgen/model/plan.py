@@ -111,13 +111,14 @@ def _worst_angles(sweep: Sweep, axes: np.ndarray) -> np.ndarray:
 
 
 def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, np.ndarray],
-               exits: dict[str, np.ndarray] | None = None,
-               sweeps: dict[str, Sweep] | None = None) -> tuple[DiskSpec, list[Merge]]:
+               exits: dict[str, np.ndarray] | None = None, sweeps: dict[str, Sweep] | None = None,
+               hubs: tuple[float, ...] | None = None) -> tuple[DiskSpec, list[Merge]]:
     """Disk i with a hole per eyelet position, and its shared and overlapping eyelets.
 
     ``exits`` (tip disk only): each tendon's direction onward from the disk in its frame,
     toward the tensioner, which is fixed to the tip and so does not turn with bending.
-    ``sweeps``: the tendons' directions over the sweep, when the caller already has them.
+    ``sweeps``: the tendons' directions over the sweep, when the caller already has them; ``hubs``:
+    every disk's hub length (:func:`hwgen.model.fixing.hub_lengths`), likewise.
     """
     sweeps = sweeps if sweeps is not None else _sweeps(d, paths)
     dk = d.disks
@@ -134,7 +135,8 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
         found = [seats_for(d, h, thick, leaving) for h in holes if not h.in_slot]
         seats = tuple(s for group, _ in found for s in group)
         chambers = tuple(c for _, c in found if c is not None)
-    hub = hub_spec(d, role, hub_lengths(d)[i], thick, slot_w, slot_h, tuple(holes), {p.name: p.points[i] for p in paths},
+    hubs = hubs if hubs is not None else hub_lengths(d)
+    hub = hub_spec(d, role, hubs[i], thick, slot_w, slot_h, tuple(holes), {p.name: p.points[i] for p in paths},
                    {p.name: (sweeps[p.name][0][:, i], sweeps[p.name][1][:, i]) for p in paths})
     mounts = _mount_holes(d, role, holes, seats, chambers, (slot_w, slot_h), hub)
     spec = DiskSpec(index=i, y=float(d.stations[i]), role=role, thickness=thick, outer_diameter=dk.outer_diameter,
@@ -245,9 +247,10 @@ def make_plan(design: Design, tensioner_record: dict | None = None) -> Plan:
     paths = tendon_paths(d)
     rest_axes = {p.name: _rest_axes(d, p) for p in paths}
     sweeps = _sweeps(d, paths)
+    hubs = hub_lengths(d)
     disks, merges = [], []
     for i in range(len(d.stations)):
-        spec, m = _disk_spec(d, i, paths, rest_axes, sweeps=sweeps)
+        spec, m = _disk_spec(d, i, paths, rest_axes, sweeps=sweeps, hubs=hubs)
         disks.append(spec)
         merges += m
     bb_holes, findings = _backbone_holes(d, paths, disks)
@@ -267,7 +270,7 @@ def make_plan(design: Design, tensioner_record: dict | None = None) -> Plan:
     except ValueError as e:
         return replace(first, tensioner_error=str(e))
     exits = {r.tendon: np.subtract(r.end, r.start) / r.length for r in lay.runs}
-    tip, tip_merges = _disk_spec(d, len(disks) - 1, paths, rest_axes, exits, sweeps)
+    tip, tip_merges = _disk_spec(d, len(disks) - 1, paths, rest_axes, exits, sweeps, hubs)
     merges = [m for m in merges if m.station != tip.index] + tip_merges
     return replace(first, disks=(*disks[:-1], tip), merges=tuple(merges), tensioner_layout=lay)
 

@@ -49,7 +49,7 @@ NUT_PLAY = hardware.size("nut trap", "any", "play")
 INSERT = {t: hardware.insert(t) for t in ("M2", "M3")}    # bore, length
 SET_SCREW = hardware.size("set screw", "M3", "length")    # the strip clamp's M3 set screws
 SPINE = 4.0              # spine wall: the drive shaft's bearing and the worm's thrust face
-BASE = {"nut": 5.0, "insert": 7.0}    # base bars on the tip disk (y)
+BASE = {"nut": 5.0, "insert": 7.0}    # base bars on the tip disk (y), or deeper: base_bars()
 # stock lengths: the clamps' M2 button head screws, the tip disk's M3 socket head cap screws
 SCREW_LENGTHS = {"M2": hardware.lengths("button head screw", "M2"), "M3": hardware.lengths("socket head cap screw", "M3")}
 # Layout search
@@ -167,7 +167,8 @@ class Sizes:
                      need=td / 2 + ts.tendon_clearance + td / 2, max_exit=math.radians(ts.max_exit_deg),
                      r_s=r_s, r_w=r_s + td / 2, r_f=r_s + FLANGE_HEIGHT,
                      hub_r=max(ts.shaft_diameter / 2 + ts.running_fit / 2 + HUB_WALL, r_s),
-                     spine_hole=DRIVE_SHAFT + ts.running_fit, spine_t=SPINE, base_t=BASE[fast], tip_t=tip.thickness,
+                     spine_hole=DRIVE_SHAFT + ts.running_fit, spine_t=SPINE, base_t=base_bars(fast, tip.thickness),
+                     tip_t=tip.thickness,
                      strip_half_x=d.backbone.height / 2, strip_half_z=d.backbone.thickness / 2,
                      y_end=d.backbone.length + d.backbone.extra_tip, fast=fast)
 
@@ -178,6 +179,16 @@ def standard_screw(kind: str, reach: float) -> float:
     if n is None:
         raise NoFit(f"no standard {kind} screw is as short as {reach:.1f} mm")
     return float(n)
+
+
+def base_bars(fast: str, tip_thickness: float) -> float:
+    """The base bars' depth along y: BASE, or deeper where no standard screw through a tip disk
+    this thick would end inside them past its nut: as deep as the shortest screw that does."""
+    base = BASE[fast]
+    if fast != "nut":
+        return base
+    need = tip_thickness + NUT["M3"][1] + 0.6                  # as joint() asks of the screw's far end
+    return max(base, float(hardware.shortest_reaching(SCREW_LENGTHS["M3"], need)) - tip_thickness)
 
 
 def tip_joint(fast: str, tip_thickness: float, base_t: float) -> Fastening:
