@@ -181,9 +181,10 @@ def tendon_field(d: Design, name: str) -> str:
 
 def plan_problems(plan, d: Design) -> list[tuple[str, str]]:
     """(field path, what is wrong) for holes the plan sized but no part can take: an eyelet
-    that breaks through its disk's rim, a strip hole as wide as the strip. Both come from a
-    tendon that meets the disk or the strip almost edge-on (its hole grows as 1/cos α). ``d``: the
-    design the plan was made from (the fields to name)."""
+    that breaks through its disk's rim (a tendon that meets the disk almost edge-on: its hole
+    grows as 1/cos α), a strip hole as wide as the strip (a strip narrower than the straight hole
+    the tendon passes: the plan cuts an oblique crossing's hole at most half the strip, and
+    backbone.hole_angle fails). ``d``: the design the plan was made from (the fields to name)."""
     out = []
     for disk in plan.disks:
         r_out = disk.outer_diameter / 2
@@ -197,13 +198,13 @@ def plan_problems(plan, d: Design) -> list[tuple[str, str]]:
                             f"Ø{disk.outer_diameter:g} mm disk"))
                 return out
     height = plan.backbone.height
-    for h in plan.backbone.holes:
-        if not math.isfinite(h.diameter) or h.diameter >= height:
+    for h in plan.backbone.holes:          # the plan cuts them at most half the strip, but never below the
+        if not math.isfinite(h.diameter) or h.diameter >= height:       # straight hole the tendon passes
             dia = f"a Ø{h.diameter:.3g} mm" if math.isfinite(h.diameter) else "an endless"
             out.append((tendon_field(d, h.tendon),
-                        f"{h.tendon} crosses the backbone at station {h.station:g} so obliquely that the strip "
-                        f"would need {dia} hole, wider than the {height:g} mm strip: route it across the "
-                        f"strip more squarely, or not through the strip"))
+                        f"{h.tendon} crosses the backbone at station {h.station:g}, where the strip would need "
+                        f"{dia} hole to let it through, wider than the {height:g} mm strip: route it "
+                        f"not through the strip, or make the strip wider"))
             return out
     return out
 

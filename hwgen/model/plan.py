@@ -28,6 +28,9 @@ from .specs import BackboneHole, BackboneSpec, DiskSpec, Hole, Merge
 from .tensioner_layout import TensionerLayout, layout
 
 SAME_POSITION_MM = 1e-6  # eyelets closer than this share one hole
+STRIP_HOLE_SHARE = 0.5   # a strip hole is never wider than this share of the strip (the rest carries its bending):
+#                          one that a tendon crossing the strip almost edge-on would need wider is cut this wide,
+#                          and backbone.hole_angle fails, measuring what it lets through
 SWEEP_STEP_DEG = 1.0     # resolution of the bending sweep used to size eyelets
 
 
@@ -277,7 +280,8 @@ def make_plan(design: Design, tensioner_record: dict | None = None) -> Plan:
 
 def _backbone_holes(d: Design, paths: list[TendonPath], disks: list[DiskSpec]):
     """Holes the strip needs where tendons cross its plane (z = 0) within its height,
-    each sized for the steepest angle the tendon meets the strip at over the sweep."""
+    each sized for the steepest angle the tendon meets the strip at over the sweep, at most
+    STRIP_HOLE_SHARE of the strip (never less than the straight hole the tendon passes)."""
     half_h = d.backbone.height / 2
     kappa = _sweep(d)
     out, findings = [], []
@@ -288,6 +292,9 @@ def _backbone_holes(d: Design, paths: list[TendonPath], disks: list[DiskSpec]):
             beta = float(crossing_angles(d.stations, p.points, station, kappa).max())
             dia = hole_diameter(d.tendon_material.diameter, d.backbone.thickness, beta,
                                 d.process.hole_clearance, d.process.min_hole)
+            least = hole_diameter(d.tendon_material.diameter, d.backbone.thickness, 0.0,
+                                  d.process.hole_clearance, d.process.min_hole)
+            dia = max(least, min(dia, STRIP_HOLE_SHARE * d.backbone.height))
             out.append(BackboneHole(p.name, float(station), float(x), float(y), float(dia)))
         findings += [f"{p.name}: runs in the backbone plane between stations {i} and {i + 1}"
                      for i in in_strip_plane(p.points, half_h)]

@@ -46,6 +46,7 @@ TENDON_HOLE = 3.0         # minimum hole through a base bar around a tendon
 # the nut; thermoplastic: heat-set inserts.
 NUT = {t: hardware.nut(t) for t in ("M2", "M3")}          # across flats, height
 NUT_PLAY = hardware.size("nut trap", "any", "play")
+NUT_BACKING = 0.6        # resin between a nut trap and the face its screw enters by (or the body's far face), mm
 INSERT = {t: hardware.insert(t) for t in ("M2", "M3")}    # bore, length
 SET_SCREW = hardware.size("set screw", "M3", "length")    # the strip clamp's M3 set screws
 SPINE = 4.0              # spine wall: the drive shaft's bearing and the worm's thrust face
@@ -95,7 +96,7 @@ def joint(fast: str, thread: str, grip: float, body: float) -> Fastening:
         af, h = NUT[thread]
         screw = standard_screw(thread, grip + body)
         far = screw - grip                                     # the screw's end, deep in the body
-        if far < h + 0.6:
+        if far < h + NUT_BACKING:
             raise NoFit(f"a {thread} nut and its screw do not fit in {body:g} mm of resin")
         clear = M3_CLEARANCE if thread == "M3" else M2_CLEARANCE
         return Fastening("nut", thread, screw, clear, far - h - NUT_PLAY / 2, far + NUT_PLAY / 2, body)
@@ -183,12 +184,14 @@ def standard_screw(kind: str, reach: float) -> float:
 
 def base_bars(fast: str, tip_thickness: float) -> float:
     """The base bars' depth along y: BASE, or deeper where no standard screw through a tip disk
-    this thick would end inside them past its nut: as deep as the shortest screw that does."""
+    this thick would end inside them past its nut: as deep as the shortest screw that does, with its
+    nut trap and NUT_BACKING of resin behind it."""
     base = BASE[fast]
     if fast != "nut":
         return base
-    need = tip_thickness + NUT["M3"][1] + 0.6                  # as joint() asks of the screw's far end
-    return max(base, float(hardware.shortest_reaching(SCREW_LENGTHS["M3"], need)) - tip_thickness)
+    need = tip_thickness + NUT["M3"][1] + NUT_BACKING           # as joint() asks of the screw's far end
+    screw = float(hardware.shortest_reaching(SCREW_LENGTHS["M3"], need))
+    return max(base, screw - tip_thickness + NUT_PLAY / 2 + NUT_BACKING)
 
 
 def tip_joint(fast: str, tip_thickness: float, base_t: float) -> Fastening:
