@@ -56,10 +56,14 @@ def housing_members(fr: Frame, clamp, sz: Sizes, mounts, fast: str, shaft_diamet
                 y_from, prev = top - SHELF, (z0, z1)
                 continue
             r_boss = max(DRIVE_FLANGE[0] / 2, pair.ra1) + FRAME      # the worm's thrust face and the shaft's flange
+            # a tip-disk screw under the spine runs its hole into it: solid around that too
+            under = [(yb0, yb1 + 1 + FRAME, z - M3_CLEARANCE / 2 - FRAME, z + M3_CLEARANCE / 2 + FRAME)
+                     for x, z in mounts if min(x0, x1) - M3_CLEARANCE / 2 < x < max(x0, x1) + M3_CLEARANCE / 2]
             cuts += _windows(f"{u.channel} spine", 0, x0 - s, x1 + s, (y_from, top), (z0, z1),
                              [(y_from, y_from + SHELF + FRAME, z0, z1),
                               (u.worm_y - r_boss, u.worm_y + r_boss, u.worm_z - r_boss, u.worm_z + r_boss),
-                              (y_from, top, z0, u.lower_bar[1] + FRAME), (y_from, top, u.upper_shelf[0] - FRAME, z1)])
+                              (y_from, top, z0, u.lower_bar[1] + FRAME), (y_from, top, u.upper_shelf[0] - FRAME, z1)]
+                             + under)
             y_from, prev = top - SHELF, (z0, z1)
     for u in fr.units:
         _unit_members(u, fr, sz, members, cuts if with_cuts else None,
