@@ -232,8 +232,11 @@ def seats_for(design: Design, hole: Hole, thickness: float, directions: dict[str
         (t,) = hole.tendons
         if abs(abs(ax[1]) - 1) > SLANT_TOL and abs(hole.diameter - dia) < SEAT_STEP_MM:
             # a slanted bore the seat's own size would meet the seat's wall tangentially where it
-            # enters the plate (a seam no mesher closes): the seat steps out past the bore instead
-            dia = hole.diameter + SEAT_STEP_MM
+            # enters the plate (a seam no mesher closes): the seat steps out past the bore instead,
+            # past its oblique width and its drift over the seat's overlap into it
+            cos = abs(float(ax[1]))
+            drift = 2 * seat_overlap(thickness, plate) * math.sqrt(max(1 - cos**2, 0.0)) / cos
+            dia = max(hole.diameter / cos + drift, hole.diameter) + SEAT_STEP_MM
         return [Seat(t, float(c[0]), float(c[1]), dia, terms[t].diameter)], None
     s = max(dia + design.process.min_wall + SEAT_WALL_MARGIN, max(tm.diameter for tm in terms.values()))
     rho = s / (2 * math.sin(math.pi / n))

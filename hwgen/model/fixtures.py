@@ -71,6 +71,7 @@ DOVETAIL = (8.0, 12.0, 6.0)  # neck width, end width, depth of each dovetail key
 DOVETAIL_X = 20.0           # two keys at x = ±this, mm
 DOVETAIL_PLAY = 0.1         # per side, key in its socket, mm
 PRINT_MARGIN = 2.0          # a jig piece stays this far inside the printer's longest axis, mm
+JIG_PIECES_MAX = 40         # the jig is cut into at most this many pieces
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -272,7 +273,8 @@ def jig_layout(d: Design) -> JigLayout:
     slots = tuple((y - t / 2 - jg.clearance, y + t / 2 + jg.clearance) for y, t in zip(st, thick))
     y0 = slots[0][0] - JIG_END_TOOTH
     y1 = slots[-1][1] + JIG_END_TOOTH
-    longest = max(d.process.build_volume[:2]) - PRINT_MARGIN - DOVETAIL[2]
+    # pieces the printer takes; never more than JIG_PIECES_MAX (a printer too small for them: part.build_volume)
+    longest = max(max(d.process.build_volume[:2]) - PRINT_MARGIN - DOVETAIL[2], (y1 - y0) / JIG_PIECES_MAX)
     n = max(1, math.ceil((y1 - y0) / longest))
     # cut in the middle of the gap between two disks nearest each equal division; where that makes
     # a piece too long for the printer (disks far apart), as near each division as the slots allow

@@ -32,6 +32,8 @@ STRIP_HOLE_SHARE = 0.5   # a strip hole is never wider than this share of the st
 #                          one that a tendon crossing the strip almost edge-on would need wider is cut this wide,
 #                          and backbone.hole_angle fails, measuring what it lets through
 SWEEP_STEP_DEG = 1.0     # resolution of the bending sweep used to size eyelets
+AXIS_SNAP = 1e-6         # an eyelet axis component this small is zero: it slants the bore by under a microradian,
+#                          and OCCT, cutting a bore slanted by 0.004 along x and 2e-9 along z, cut nothing at all
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -171,6 +173,8 @@ def _eyelet_holes(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[st
     def hole(g: list[TendonPath]) -> Hole:
         own = [rest_axes[p.name][i] + exits.get(p.name, 0.0) for p in g]
         ax = np.sum([v / np.linalg.norm(v) for v in own], axis=0)
+        ax /= np.linalg.norm(ax)
+        ax = np.where(np.abs(ax) < AXIS_SNAP, 0.0, ax)
         ax /= np.linalg.norm(ax)
         alpha = max(_worst_angles((sweeps[p.name][0][:, i:i + 1], sweeps[p.name][1][:, i:i + 1]), ax[None])[0]
                     for p in g)
