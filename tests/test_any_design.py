@@ -93,7 +93,7 @@ def designs(draw) -> dict:
     height = num.length((0.05 * od, 0.8 * od))
     thickness = num.length((0.005 * od, 0.04 * od))
     length = num.length((20, 600))
-    count = draw(st.sampled_from([None] * 11 + [200])) or draw(st.integers(2, 20))
+    count = draw(st.sampled_from([None] * 11 + [200])) or draw(st.integers(2, 16))
     if count == 200:
         count = draw(st.integers(2, 200))
     gap = length / (count - 1)
@@ -136,7 +136,7 @@ def designs(draw) -> dict:
     r = (thickness / 2 + clearance + 1.5, max(od / 2 - 2.0, thickness / 2 + clearance + 1.5))
     tendons = [{"name": f"T{i}", "channel": f"C{i}", "routing": _routing(draw, num, r, count),
                 "pretension_n": num(0.0, 10_000.0, (0, 20))}
-               for i in range(draw(st.sampled_from([1, 2, 2, 3, 3, 4] * 2 + [8])))]
+               for i in range(draw(st.sampled_from([1, 1, 2, 2, 3, 3, 4] * 2 + [6])))]
     tensioner = {"channels": [t["channel"] for t in tendons], "actuating_channel": tendons[0]["channel"]}
     if draw(st.sampled_from([False] * 7 + [True])):
         tensioner.update(module=num(0.3, 3.0, (0.8, 2)), wheel_teeth=draw(st.integers(6, 120)),

@@ -227,3 +227,20 @@ def test_every_eyelet_and_seat_is_cut_into_a_closed_disk(index, station, tmp_pat
                      recess=spec.seat_plate + max((c[3] for c in spec.seat_chambers), default=0.0))
     for h in spec.holes:
         assert min(np.hypot(*(q.centre - [h.x, h.z])) for q in m.holes) < 0.01, h.tendons
+
+
+def test_the_hubs_and_seats_survive_the_schemas_extremes():
+    """Found by tests/test_any_design.py: a tilt of 5e-324° (the schema takes any tilt above 0) made
+    the hub's length a division by zero, and an eyelet axis in the disk's plane the seat's."""
+    from hwgen.model.fixing import engagement_length, seats_for
+    from hwgen.model.specs import Hole
+    doc = copy.deepcopy(BASE)
+    doc["disks"]["hub"]["max_tilt_deg"] = 5e-324
+    assert math.isfinite(engagement_length(Design.model_validate(doc)))
+    doc["disks"]["slot_clearance"] = 0.0
+    d = Design.model_validate(doc)
+    assert engagement_length(d) == 0.0
+    hole = Hole(x=0.0, z=20.0, axis=(1.0, 0.0, 0.0), diameter=0.8, tendons=("A1",), worst_angle_deg=90.0,
+                in_slot=False)
+    (seat,), _ = seats_for(d, hole, 6.0, {"A1": np.array([1.0, 0.0, 0.0])})
+    assert all(math.isfinite(v) for v in (seat.x, seat.z, seat.diameter))

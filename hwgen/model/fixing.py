@@ -37,7 +37,7 @@ import math
 
 import numpy as np
 
-from ..params import Design, Termination
+from ..params import MAX_MM, Design, Termination
 from .holes import straight_hole
 from .intervals import interval_difference
 from .specs import Hole, HubSpec, Seat
@@ -52,6 +52,7 @@ CHAMBER_ROOM_SHARE = 0.5    # ... or this share of what the plate leaves below t
 #                             stays open at the mid-plane, where the routing puts the eyelet and the checks cut it
 SEAT_STEP_MM = 0.1          # a single seat differs from a slanted bore it continues by at least this (diameter)
 SLANT_TOL = 1e-9            # a bore whose axis is this close to the disk's normal is not slanted
+AXIS_FLOOR = 1e-9           # the least axial share of a bore's axis the seat's geometry divides by
 SEAT_WALL_MARGIN = 0.1      # over the minimum wall between two seats: the STL's chords and the printer's ±0.05 mm
 
 
@@ -65,7 +66,9 @@ def engagement_length(design: Design) -> float:
     if hub.length is not None:
         return float(hub.length)
     g = 2 * design.disks.slot_clearance
-    ell = g / math.tan(math.radians(hub.max_tilt_deg))
+    tan = math.tan(math.radians(hub.max_tilt_deg))
+    # no play holds at any length; a tilt so small its tangent is 0 asks for more than any robot is long
+    ell = 0.0 if g <= 0 else MAX_MM if tan <= g / MAX_MM else g / tan
     return math.ceil(ell / LENGTH_STEP_MM - 1e-9) * LENGTH_STEP_MM
 
 
@@ -225,7 +228,8 @@ def seats_for(design: Design, hole: Hole, thickness: float, directions: dict[str
     dia = seat_diameter(design)
     ax = np.asarray(hole.axis, dtype=float)
     depth = -thickness / 2 + plate                       # local y of the plate's top face
-    c = np.array([hole.x, hole.z]) + ax[[0, 2]] * depth / ax[1]
+    ay = max(abs(float(ax[1])), AXIS_FLOOR)              # an axis in the disk's plane: no bore to speak of
+    c = np.array([hole.x, hole.z]) + ax[[0, 2]] * depth / math.copysign(ay, ax[1])
     terms = {t: termination_of(design, t) for t in hole.tendons}
     n = len(hole.tendons)
     if n == 1:
@@ -234,7 +238,7 @@ def seats_for(design: Design, hole: Hole, thickness: float, directions: dict[str
             # a slanted bore the seat's own size would meet the seat's wall tangentially where it
             # enters the plate (a seam no mesher closes): the seat steps out past the bore instead,
             # past its oblique width and its drift over the seat's overlap into it
-            cos = abs(float(ax[1]))
+            cos = ay
             drift = 2 * seat_overlap(thickness, plate) * math.sqrt(max(1 - cos**2, 0.0)) / cos
             dia = max(hole.diameter / cos + drift, hole.diameter) + SEAT_STEP_MM
         return [Seat(t, float(c[0]), float(c[1]), dia, terms[t].diameter)], None
