@@ -1247,3 +1247,26 @@ def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | No
         plot_stiffness(report, tmp / STIFFNESS_PLOT)
         plot_gravity(report, tmp / GRAVITY_PLOT)
     return report, folder
+
+
+SIM = "sim"                # the folder of `hwgen sim`'s files inside out/<design>/
+
+
+def sim(loaded: params.LoadedDesign, out_root: Path,
+        cache_dir: Path | None | bool = True) -> tuple[dict, Path, str | None]:
+    """`hwgen sim`: the MuJoCo model of the built robot (:mod:`hwgen.sim`), written as sim/robot.xml,
+    its meshes, sim.json and sim.png into ``out_root/<design>/`` (added to what is there; a later
+    build replaces the folder and drops it). Builds first when the outputs are missing or stale.
+    Returns (sim.json's content, the folder, why it was rebuilt or None)."""
+    from .sim.run import simulate            # MuJoCo: only this command
+    folder = Path(out_root) / loaded.name
+    why = stale_reason(folder, loaded)
+    if why is None and not (folder / REPORT).is_file():
+        why = f"{REPORT} is missing"
+    if why is not None:
+        build(loaded, Path(out_root), cache_dir=cache_dir)
+    with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
+        manifest = read_manifest(tmp)
+        shutil.rmtree(tmp / SIM, ignore_errors=True)
+        result = simulate(design_plan(loaded, tensioner_record(manifest)), tmp, manifest, read_report(tmp), tmp / SIM)
+    return result, folder, why
