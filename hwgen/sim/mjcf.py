@@ -233,7 +233,8 @@ def _tensioner(parent, printed: Printed, drums: list, assets: dict, link_s: floa
         de = ET.SubElement(el, "body", name=f"drum_{d.channel}", pos=_v((centre - origin) * MM))
         ET.SubElement(de, "inertial", pos="0 0 0", mass=_f(TAKE_UP_MASS_KG), diaginertia="1e-12 1e-12 1e-12")
         ET.SubElement(de, "joint", name=f"drum_{d.channel}", type="slide", axis=_v(axis),
-                      range=_v((-d.travel_mm * MM, d.travel_mm * MM)), armature=_f(d.armature_kg),
+                      range=_v((-(d.travel_mm + CHORD_MARGIN_MM / 2) * MM, (d.travel_mm + CHORD_MARGIN_MM / 2) * MM)),
+                      armature=_f(d.armature_kg),
                       damping=_f(d.kp_n_per_m * TIMESTEP))
         for t in d.tendons:
             ET.SubElement(de, "site", name=f"{t}_drum", pos=_v((pos[f"{t}_drum"] - centre) * MM),
@@ -315,17 +316,18 @@ def path_length(points: list) -> float:
     return float(sum(np.linalg.norm(np.subtract(b, a)) for a, b in zip(points[:-1], points[1:])))
 
 
-def drums_of(printed: Printed, channels: list, springs: dict, sweep_delta: dict, break_load: float,
+def drums_of(printed: Printed, channels: list, springs: dict, reach: dict, break_load: float,
              armature: dict) -> list[Drum]:
-    """Each channel's drum: its tendons in order, their senses, how far it travels (the most its
-    tendons' length changes over the check's sweep, plus the stretch at the line's break load),
-    the servo's stiffness and the drum's inertia seen along the line."""
+    """Each channel's drum: its tendons in order, their senses, how far it travels (the most any
+    of its tendons' length changes, ``reach`` (over the check's sweep, or hauled in to a state's
+    lock), plus its stretch at the line's break load), the servo's stiffness and the drum's
+    inertia seen along the line."""
     out = []
     for c in channels:
         ts = tuple(t for t, r in printed.runs.items() if r.channel == c)
         if not ts:
             continue
-        travel = max(sweep_delta.get(t, 0.0) + break_load / springs[t] for t in ts)
+        travel = max(reach.get(t, 0.0) + break_load / springs[t] for t in ts)
         kp = SERVO_RATIO * sum(springs[t] for t in ts) / MM
         out.append(Drum(c, ts, tuple(printed.runs[t].sense for t in ts), travel, kp, armature.get(c, 0.0)))
     return out

@@ -144,13 +144,17 @@ def simulate(plan, folder: Path, manifest: dict, report: dict, out: Path) -> dic
     printed = parts.read_build(folder, manifest, report)
     hinges = chain.hinges(ref.described.robot)
     springs = reference.tendon_springs(ref)
-    sweep = {r["name"]: float(r.get("max_abs_delta_mm") or 0.0) for r in report.get("tendons", [])}
+    hauled = reference.haul_in(ref)
+    reach = {r["name"]: float(r.get("max_abs_delta_mm") or 0.0) for r in report.get("tendons", [])}
+    for lock in hauled.values():
+        for t, h in lock.items():
+            reach[t] = max(reach.get(t, 0.0), abs(h))
     ratio = plan.tensioner_layout.pair.ratio if plan.tensioner_layout else 1.0
-    drums = mjcf.drums_of(printed, list(plan.tensioner.channels), springs, sweep, plan.tendon_material.break_load,
+    drums = mjcf.drums_of(printed, list(plan.tensioner.channels), springs, reach, plan.tendon_material.break_load,
                           mjcf.reflected_inertia(printed, ratio))
     states = [(s.name, s.channels) for s in stiffness.states(plan)]
     out.mkdir(parents=True, exist_ok=True)
-    written = mjcf.write_robot(manifest["design"], printed, hinges, drums, states, reference.haul_in(ref), springs,
+    written = mjcf.write_robot(manifest["design"], printed, hinges, drums, states, hauled, springs,
                                folder, out)
     secs["written"] = time.perf_counter() - t0
     sim = measure.Sim.load(out / ROBOT)
