@@ -29,6 +29,18 @@ def _mujoco():
     return mujoco
 
 
+@dataclass(frozen=True)
+class Extra:
+    """Loads besides the model's own: tendons pulled with a tension (name -> N, as a
+    tension-controlled drive pulls them) and a force at the tip site (N, world frame)."""
+
+    pulls: tuple = ()              # (tendon, N) pairs
+    push: tuple | None = None
+
+
+NONE = Extra()
+
+
 @dataclass
 class Sim:
     """A loaded robot.xml and the names the measurements read."""
@@ -57,36 +69,47 @@ class Sim:
         return dense[m.tendon(name).id]
 
 
-def _forces(sim: Sim, q: np.ndarray, pulls: dict) -> np.ndarray:
-    """The net generalised force on the robot at rest at ``q`` (zero at an equilibrium), with each
-    tendon in ``pulls`` pulled with its tension (N) besides its spring."""
+def _forces(sim: Sim, q: np.ndarray, extra: Extra) -> np.ndarray:
+    """The net generalised force on the robot at rest at ``q`` (zero at an equilibrium), with
+    ``extra``'s loads."""
     mj, m, d = _mujoco(), sim.model, sim.data
     d.qpos[:] = q
     d.qvel[:] = 0.0
     d.qfrc_applied[:] = 0.0
     mj.mj_forward(m, d)
-    if not pulls:
-        return d.qfrc_smooth + d.qfrc_constraint
-    extra = sum(-tau * sim.tendon_jacobian(t) for t, tau in pulls.items())
-    return d.qfrc_smooth + d.qfrc_constraint + extra
+    f = d.qfrc_smooth + d.qfrc_constraint
+    for t, tau in extra.pulls:
+        f = f - tau * sim.tendon_jacobian(t)
+    if extra.push is not None:
+        jacp = np.zeros((3, m.nv))
+        mj.mj_jacSite(m, d, jacp, None, sim.tip)
+        f = f + np.asarray(extra.push, float) @ jacp
+    return f
 
 
-def stiffness_matrix(sim: Sim, q: np.ndarray, pulls: dict) -> np.ndarray:
+def moved(sim: Sim, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
+    """The coordinates q (qpos) moved by dq (a velocity-space step: ball joints turn by it)."""
+    out = np.array(q, float)
+    _mujoco().mj_integratePos(sim.model, out, np.asarray(dq, float), 1.0)
+    return out
+
+
+def stiffness_matrix(sim: Sim, q: np.ndarray, extra: Extra) -> np.ndarray:
     """K = −d(forces)/dq at q, central differences, symmetrised."""
     n = sim.model.nv
     K = np.empty((n, n))
     for i in range(n):
         e = np.zeros(n)
         e[i] = FD_STEP
-        K[:, i] = -(_forces(sim, q + e, pulls) - _forces(sim, q - e, pulls)) / (2 * FD_STEP)
-    _forces(sim, q, pulls)
+        K[:, i] = -(_forces(sim, moved(sim, q, e), extra) - _forces(sim, moved(sim, q, -e), extra)) / (2 * FD_STEP)
+    _forces(sim, q, extra)
     return 0.5 * (K + K.T)
 
 
-def _newton(sim: Sim, q: np.ndarray, pulls: dict) -> tuple[np.ndarray, int, float]:
-    f = _forces(sim, q, pulls)
+def _newton(sim: Sim, q: np.ndarray, extra: Extra) -> tuple[np.ndarray, int, float]:
+    f = _forces(sim, q, extra)
     for it in range(NEWTON_ITER):
-        K = stiffness_matrix(sim, q, pulls)
+        K = stiffness_matrix(sim, q, extra)
         w = 1.0 / np.sqrt(np.maximum(np.abs(np.diag(K)), 1e-30))
         try:
             dq = np.linalg.solve(K, f)
@@ -94,37 +117,38 @@ def _newton(sim: Sim, q: np.ndarray, pulls: dict) -> tuple[np.ndarray, int, floa
             dq = np.linalg.lstsq(K, f, rcond=None)[0]
         step, size = 1.0, np.linalg.norm(f * w)
         while step > 1e-4:
-            f_new = _forces(sim, q + step * dq, pulls)
+            f_new = _forces(sim, moved(sim, q, step * dq), extra)
             if np.linalg.norm(f_new * w) < size or np.max(np.abs(step * dq)) < NEWTON_TOL:
                 break
             step /= 2
-        q, f = q + step * dq, f_new
+        q, f = moved(sim, q, step * dq), f_new
         if np.max(np.abs(step * dq)) < NEWTON_TOL:
             return q, it + 1, float(np.max(np.abs(f)))
     return q, NEWTON_ITER, float(np.max(np.abs(f)))
 
 
-def equilibrium(sim: Sim, q0: np.ndarray, pulls: dict | None = None) -> dict:
-    """The robot at rest under gravity from ``q0`` (the keyframe's pose), gravity brought in over
-    :data:`GRAVITY_STEPS` from the weightless robot: its coordinates, iterations, what force is left."""
-    pulls = pulls or {}
+def equilibrium(sim: Sim, q0: np.ndarray, extra: Extra = NONE) -> dict:
+    """The robot at rest under gravity and ``extra`` from ``q0`` (the keyframe's pose), gravity
+    brought in over :data:`GRAVITY_STEPS` from the weightless robot: its coordinates, iterations,
+    the largest generalised force left."""
     m = sim.model
     q, its = np.array(q0, float), 0
     try:
         for scale in (0.0, *GRAVITY_STEPS):
             m.opt.gravity[:] = sim.gravity * scale
-            q, n, left = _newton(sim, q, pulls)
+            q, n, left = _newton(sim, q, extra)
             its += n
     finally:
         m.opt.gravity[:] = sim.gravity
-    _forces(sim, q, pulls)
+    _forces(sim, q, extra)
     return {"q": q, "iterations": its, "residual": left}
 
 
-def tip_stiffness(sim: Sim, q: np.ndarray, direction, pulls: dict | None = None) -> float:
-    """Force over displacement of a small push at the tip site along ``direction``, N/mm."""
+def tip_stiffness(sim: Sim, q: np.ndarray, direction, extra: Extra = NONE) -> float:
+    """Force over displacement of a small push at the tip site along ``direction``, N/mm (the
+    tangent: j K⁻¹ jᵀ)."""
     mj, m, d = _mujoco(), sim.model, sim.data
-    K = stiffness_matrix(sim, q, pulls or {})
+    K = stiffness_matrix(sim, q, extra)
     jacp = np.zeros((3, m.nv))
     mj.mj_jacSite(m, d, jacp, None, sim.tip)
     j = np.asarray(direction, float) @ jacp

@@ -317,14 +317,14 @@ def path_length(points: list) -> float:
 
 
 def drums_of(printed: Printed, channels: list, springs: dict, reach: dict, break_load: float,
-             armature: dict) -> list[Drum]:
+             armature: dict, order: list) -> list[Drum]:
     """Each channel's drum: its tendons in order, their senses, how far it travels (the most any
     of its tendons' length changes, ``reach`` (over the check's sweep, or hauled in to a state's
     lock), plus its stretch at the line's break load), the servo's stiffness and the drum's
-    inertia seen along the line."""
+    inertia seen along the line. ``order``: the tendons in the YAML's order."""
     out = []
     for c in channels:
-        ts = tuple(t for t, r in printed.runs.items() if r.channel == c)
+        ts = tuple(t for t in order if t in printed.runs and printed.runs[t].channel == c)
         if not ts:
             continue
         travel = max(reach.get(t, 0.0) + break_load / springs[t] for t in ts)

@@ -52,7 +52,7 @@ class Eyelet:
     centre_mm: np.ndarray
     axis: np.ndarray
     diameter_mm: float
-    measured: bool                # False: not found in the STL; placed where the design puts it
+    measured: bool                # False: the checks found no hole for it; placed where the design puts it
 
 
 @dataclass(frozen=True)
@@ -119,7 +119,7 @@ def _eyelets(report: dict, drep: dict, stations: dict) -> list[Eyelet]:
     for e in report.get("eyelets", []):
         st_, tendons = int(e["station"]), tuple(e["tendons"])
         hole = holes.get((st_, tendons), {})
-        found = e.get("status") == "ok" and e.get("measured_xz_mm") is not None
+        found = e.get("measured_xz_mm") is not None      # ok, moved, or read from the strip's hole (in the slot)
         x, z = e["measured_xz_mm"] if found else e["design_xz_mm"]
         axis = e.get("axis") if found and e.get("axis") is not None else hole.get("axis", (0.0, 1.0, 0.0))
         dia = e.get("diameter_mm") if found and e.get("diameter_mm") else hole.get("diameter_mm", 1.0)

@@ -90,7 +90,7 @@ def bent(sim: measure.Sim, ref: reference.Reference) -> dict:
     if not b:
         return {}
     sim.keyframe("N")
-    eq = measure.equilibrium(sim, sim.data.qpos.copy(), {b["tendon"]: b["tension_n"]})
+    eq = measure.equilibrium(sim, sim.data.qpos.copy(), measure.Extra(pulls=((b["tendon"], b["tension_n"]),)))
     tip = measure.tip_mm(sim)
     return {"tendon": b["tendon"], "tension_n": b["tension_n"], "mujoco_tip_mm": tip, "statics_tip_mm": b["tip_mm"],
             "distance_mm": float(np.linalg.norm(np.subtract(tip, b["tip_mm"]))),
@@ -151,7 +151,7 @@ def simulate(plan, folder: Path, manifest: dict, report: dict, out: Path) -> dic
             reach[t] = max(reach.get(t, 0.0), abs(h))
     ratio = plan.tensioner_layout.pair.ratio if plan.tensioner_layout else 1.0
     drums = mjcf.drums_of(printed, list(plan.tensioner.channels), springs, reach, plan.tendon_material.break_load,
-                          mjcf.reflected_inertia(printed, ratio))
+                          mjcf.reflected_inertia(printed, ratio), [p.name for p in plan.paths])
     states = [(s.name, s.channels) for s in stiffness.states(plan)]
     out.mkdir(parents=True, exist_ok=True)
     written = mjcf.write_robot(manifest["design"], printed, hinges, drums, states, hauled, springs,

@@ -1,0 +1,287 @@
+"""`hwgen sim`: the MuJoCo model of the printed robot, read back with MuJoCo and measured.
+
+The quick tests build no part: the hinge chain springs the strip exactly as the statics does and
+bends as a cantilever, and the statics the sim is checked against is ``hwgen stiffness``'s. The
+slow ones run ``hwgen sim`` on a copy of each shipped design's session build and read what it
+wrote: robot.xml loaded by MuJoCo, its eyelet sites against the report's measured eyelets, its
+tendons against the YAML, its keyframes, 2 s of dynamics, the tip stiffness against the statics
+and against pushing robot.xml's tip."""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+mujoco = pytest.importorskip("mujoco")
+
+from hwgen import params
+from hwgen.model import statics as st
+from hwgen.model import stiffness
+from hwgen.model.plan import make_plan
+from hwgen.sim import chain, measure, reference
+
+ROOT = Path(__file__).resolve().parents[1]
+DESIGNS = ["prototype", "paper-table2"]
+
+
+def _plan(name: str):
+    return make_plan(params.read(ROOT / "params" / f"{name}.yaml").design)
+
+
+# ------------------------------------------------------------------ quick: no build
+
+def test_the_chain_springs_the_strip_as_the_statics_does():
+    """Summed over each stretch between two rigid plates, the chain's hinges have the statics'
+    compliance about every axis, at the sim's link length; no hinge sits inside a plate."""
+    desc = stiffness.describe(_plan("prototype"))
+    model = st.Model(desc.robot, chain.SIM_H_MAX)
+    hinges = chain.hinges(desc.robot)
+    comp = model.compliance[model.joint_seg]
+    flex = sum(1.0 / h.flex for h in hinges if h.flex)
+    twist = sum(1.0 / h.twist for h in hinges if h.twist)
+    side = sum(1.0 / h.side for h in hinges if h.side)
+    assert flex == pytest.approx(comp[:, 0].sum(), rel=1e-12)
+    assert twist == pytest.approx(comp[:, 1].sum(), rel=1e-12)
+    assert side == pytest.approx(comp[:, 2].sum(), rel=1e-12)
+    assert sum(h.flex is not None for h in hinges) == len(model.joint_seg)
+    assert max(np.diff([0.0] + [h.s for h in hinges])) <= 22.5          # the links are shorter than a disk gap
+    plates = [sp for sp in desc.robot.stiffening.flex if math.isinf(sp.ei)]
+    assert not [h.s for h in hinges for sp in plates if sp.start < h.s < sp.end]
+    n_twist = sum(h.twist is not None for h in hinges)
+    assert n_twist == sum(h.side is not None for h in hinges) == len(_plan("prototype").disks) - 1
+
+
+def _bare_strip_xml(robot: st.Robot) -> str:
+    """A bare strip as robot.xml chains it (no disks), clamped at the base, weightless."""
+    hs = chain.hinges(robot)
+    L = robot.length
+    parts = ['<mujoco><option gravity="0 0 0"/><worldbody>']
+    origins = [0.0] + [h.s for h in hs]
+    ends = [h.s for h in hs] + [L]
+    sec = robot.section
+    for i, (o, b) in enumerate(zip(origins, ends)):
+        parts.append(f'<body pos="0 {(o - (origins[i - 1] if i else 0.0)) * 1e-3} 0">')
+        if i:
+            h = hs[i - 1]
+            for axis, k in (("1 0 0", h.flex), ("0 1 0", h.twist), ("0 0 1", h.side)):
+                if k:
+                    parts.append(f'<joint type="hinge" axis="{axis}" stiffness="{k * 1e-3}"/>')
+        parts.append(f'<geom type="box" size="{sec.height / 2e3} {(b - o) / 2e3} {sec.thickness / 2e3}" '
+                     f'pos="0 {(b - o) / 2e3} 0" mass="{1e-3 * 0.05 * (b - o)}"/>')
+        if i == len(origins) - 1:
+            parts.append(f'<site name="tip" pos="0 {(b - o) * 1e-3} 0"/>')
+    parts.append("</body>" * len(origins) + "</worldbody></mujoco>")
+    return "".join(parts)
+
+
+def _chain_sim(robot: st.Robot) -> measure.Sim:
+    m = mujoco.MjModel.from_xml_string(_bare_strip_xml(robot))
+    return measure.Sim(m, mujoco.MjData(m), m.site("tip").id, np.zeros(3))
+
+
+def test_a_bare_strip_chain_bends_as_a_cantilever_and_twists_as_its_section():
+    """The chain of a bare strip, loaded in MuJoCo: tip stiffness 3EI/L³ in the flexible
+    direction (a hinge every few millimetres), torque over twist GJ/L."""
+    sec = st.Section(E=50000.0, G=4000.0, height=60.0, thickness=0.59, lin_density=0.05)
+    robot = st.Robot(270.0, sec)
+    sim = _chain_sim(robot)
+    m, q, L = sim.model, sim.model.qpos0.copy(), robot.length
+    assert measure.tip_stiffness(sim, q, (0, 0, 1)) == pytest.approx(3 * sec.ei_flex / L ** 3, rel=5e-3)
+    K = measure.stiffness_matrix(sim, q, measure.NONE)
+    twist = [m.jnt_dofadr[j] for j in range(m.njnt) if np.allclose(m.jnt_axis[j], (0, 1, 0))]
+    assert 1.0 / np.linalg.inv(K)[np.ix_(twist, twist)].sum() == pytest.approx(sec.gj / L * 1e-3, rel=1e-9)
+
+
+def test_a_chain_held_by_plates_every_disk_gap_bends_both_ways_as_the_statics():
+    """With rigid plates every 22.5 mm, as the disks hold the strip, the chain's tip stiffness
+    matches the statics' (1.5 mm segments) in the flexible and the stiff direction: one hinge
+    about z per gap is enough where a gap is a twelfth of the strip (over the bare strip's
+    whole length it would be 4EI/L³, not 3EI/L³)."""
+    sec = st.Section(E=50000.0, G=4000.0, height=60.0, thickness=0.59, lin_density=0.05)
+    plates = tuple(st.Span(max(0.0, y - 1.5), min(270.0, y + 1.5), math.inf) for y in np.arange(0, 270.1, 22.5))
+    robot = st.Robot(270.0, sec, st.Stiffening(plates, plates, plates))
+    sim = _chain_sim(robot)
+    eq = st.solve(st.Model(robot), st.Loads())
+    for u in ((0, 0, 1), (1, 0, 0)):
+        assert measure.tip_stiffness(sim, sim.model.qpos0.copy(), u) == pytest.approx(
+            eq.point_stiffness(270.0, u), rel=0.01)
+
+
+def test_the_reference_is_hwgen_stiffness():
+    """What the sim is checked against is what `hwgen stiffness` reports: the same tip stiffness
+    and sag per state, from the same weights."""
+    plan = _plan("prototype")
+    ref = reference.statics_reference(plan, None, None, 10.0)
+    names = [s["state"] for s in ref.states]
+    full = max(stiffness.states(plan), key=lambda s: len(s.channels)).name
+    assert names == ["N", plan.tensioner.actuating_channel, full]
+    study = {s["state"]: s for s in stiffness.study(plan, names)["states"]}
+    for s in ref.states:
+        assert s["tip_stiffness_n_per_mm"] == pytest.approx(study[s["state"]]["tip_stiffness_n_per_mm"], rel=1e-9)
+        assert s["tip_sag_mm"] == pytest.approx(study[s["state"]]["tip_sag_mm"], rel=1e-9)
+    assert set(ref.locks) == {s.name for s in stiffness.states(plan)}
+    assert ref.bent["tendon"] in {p.name for p in plan.paths if p.channel == plan.tensioner.actuating_channel}
+
+
+def test_hwgen_sim_refuses_a_missing_file_in_one_line(tmp_path):
+    r = subprocess.run([sys.executable, "-m", "hwgen.cli", "sim", str(tmp_path / "nope.yaml"), "--out",
+                        str(tmp_path / "out")], capture_output=True, text=True)
+    assert r.returncode == 2, r.stderr
+    assert "Traceback" not in r.stderr and "nope.yaml" in r.stderr
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+# ------------------------------------------------------------------ slow: on each shipped design's build
+
+@pytest.fixture(scope="module")
+def simulated(built, tmp_path_factory):
+    """name -> (the folder `hwgen sim` wrote into, sim.json, the build's files' sha256 before)."""
+    from hwgen.pipeline import load, sim
+
+    out = {}
+    root = tmp_path_factory.mktemp("sim")
+    for name in DESIGNS:
+        shutil.copytree(built(name), root / name)
+        before = {str(p.relative_to(root / name)): hashlib.sha256(p.read_bytes()).hexdigest()
+                  for p in (root / name).rglob("*") if p.is_file()}
+        result, folder, rebuilt = sim(load(ROOT / "params" / f"{name}.yaml"), root)
+        assert rebuilt is None
+        out[name] = (folder, result, before)
+    return out
+
+
+@pytest.mark.parametrize("name", DESIGNS)
+def test_mujoco_loads_robot_xml_and_every_mesh_it_names_is_beside_it(simulated, name):
+    folder, result, _ = simulated[name]
+    xml = folder / "sim" / "robot.xml"
+    m = mujoco.MjModel.from_xml_path(str(xml))
+    assert m.nmesh > 0 and m.ntendon == len(result["tendons"]) and m.nkey == len(result["keyframes"])
+    import xml.etree.ElementTree as ET
+    for mesh in ET.parse(xml).getroot().iter("mesh"):
+        assert (xml.parent / mesh.get("file")).is_file()
+    assert (folder / "sim" / "sim.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("name", DESIGNS)
+def test_every_eyelet_site_is_on_its_measured_eyelet_when_straight(simulated, name):
+    """Each eyelet the checks measured in the STLs (report.json), at the disk's measured
+    mid-plane, against its site in robot.xml with the robot straight."""
+    folder, _, _ = simulated[name]
+    report = json.loads((folder / "report.json").read_text())
+    mid = {d["station"]: d["y_mid_mm"] for d in report["as_built"]["disks"]}
+    m = mujoco.MjModel.from_xml_path(str(folder / "sim" / "robot.xml"))
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    measured = [e for e in report["eyelets"] if e.get("measured_xz_mm") is not None]
+    assert len(measured) >= 0.8 * len(report["eyelets"])
+    worst = 0.0
+    for e in measured:
+        x, z = e["measured_xz_mm"]
+        site = d.site(f"e{e['station']:02d}_{'+'.join(e['tendons'])}")
+        worst = max(worst, float(np.linalg.norm(site.xpos * 1e3 - (x, mid[e["station"]], z))))
+        if e.get("axis") is not None:
+            assert site.xmat.reshape(3, 3)[:, 2] == pytest.approx(np.asarray(e["axis"]) / np.linalg.norm(e["axis"]),
+                                                                    abs=1e-6)
+    assert worst <= 0.05
+
+
+@pytest.mark.parametrize("name", DESIGNS)
+def test_the_tendons_carry_the_yamls_names_and_run_seat_eyelets_drum(simulated, name):
+    folder, _, _ = simulated[name]
+    design = params.read(ROOT / "params" / f"{name}.yaml").design
+    names = [n for t in design.tendons for n in ([t.name, t.routing.mirror_name or f"{t.name}_m"]
+                                                   if t.routing.mirror else [t.name])]
+    m = mujoco.MjModel.from_xml_path(str(folder / "sim" / "robot.xml"))
+    assert sorted(m.tendon(i).name for i in range(m.ntendon)) == sorted(names)
+    import xml.etree.ElementTree as ET
+    for sp in ET.parse(folder / "sim" / "robot.xml").getroot().iter("spatial"):
+        sites = [s.get("site") for s in sp.iter("site")]
+        assert sites[0] == f"{sp.get('name')}_seat" and sites[-1] == f"{sp.get('name')}_drum"
+        stations = [int(s[1:3]) for s in sites if s.startswith("e")]
+        assert stations == list(range(len(_plan(name).stations)))
+
+
+@pytest.mark.parametrize("name", DESIGNS)
+def test_every_state_is_a_keyframe_its_drums_can_reach(simulated, name):
+    """A keyframe per tendon state; its drum settings inside the actuators' range; in N no
+    tendon pulls, in the state with every channel every tendon does (robot straight)."""
+    folder, result, _ = simulated[name]
+    plan = _plan(name)
+    m = mujoco.MjModel.from_xml_path(str(folder / "sim" / "robot.xml"))
+    d = mujoco.MjData(m)
+    states = stiffness.states(plan)
+    assert [m.key(i).name for i in range(m.nkey)] == [s.name for s in states]
+    for i in range(m.nkey):
+        ctrl = m.key_ctrl[i]
+        assert np.all(ctrl >= m.actuator_ctrlrange[:, 0]) and np.all(ctrl <= m.actuator_ctrlrange[:, 1])
+    assert sorted(m.actuator(i).name for i in range(m.nu)) == sorted(plan.tensioner.channels)
+    for state, taut in (("N", False), (max(states, key=lambda s: len(s.channels)).name, True)):
+        mujoco.mj_resetDataKeyframe(m, d, m.key(state).id)
+        mujoco.mj_forward(m, d)
+        stretch = d.ten_length - m.tendon_lengthspring[:, 1]
+        assert np.all(stretch > 0) if taut else np.all(stretch < 0)
+
+
+@pytest.mark.parametrize("name", DESIGNS)
+def test_two_seconds_under_gravity_stay_finite_from_every_keyframe(simulated, name):
+    folder, _, _ = simulated[name]
+    m = mujoco.MjModel.from_xml_path(str(folder / "sim" / "robot.xml"))
+    d = mujoco.MjData(m)
+    for i in range(m.nkey):
+        mujoco.mj_resetDataKeyframe(m, d, i)
+        mujoco.mj_step(m, d, nstep=int(round(2.0 / m.opt.timestep)))
+        assert np.isfinite(d.qpos).all() and np.isfinite(d.qvel).all(), m.key(i).name
+        assert abs(d.site("tip").xpos[2]) < 0.4          # the tip stays within reach of the strip
+
+
+@pytest.mark.parametrize("name", DESIGNS)
+def test_tip_stiffness_agrees_with_the_statics_and_with_pushing_the_tip(simulated, name):
+    """N, A and the all-tendon state within 25 % of `hwgen stiffness` (sim.json); the statics'
+    figures there are the study's on the same build; and MuJoCo's figure is what pushing
+    robot.xml's tip gives (two equilibria ±5 mN apart), measured here on the file."""
+    folder, result, _ = simulated[name]
+    from hwgen.checks.report import read_report
+    plan = _plan(name)
+    study = {s["state"]: s for s in stiffness.study(plan, [s["state"] for s in result["states"]],
+                                                    measured=read_report(folder)["gravity"])["states"]}
+    assert [s["state"] for s in result["states"]][:2] == ["N", plan.tensioner.actuating_channel]
+    for s in result["states"]:
+        assert abs(s["mujoco_tip_n_per_mm"] / s["statics_tip_n_per_mm"] - 1) <= 0.25
+        assert s["statics_tip_n_per_mm"] == pytest.approx(study[s["state"]]["tip_stiffness_n_per_mm"], rel=1e-9)
+    sim = measure.Sim.load(folder / "sim" / "robot.xml")
+    s = result["states"][1]                             # the actuating pair alone: its locks are the keyframe's
+    assert max(map(abs, s["keyframe"]["lock_missed_by_mm"].values()), default=0.0) < 1e-6
+    sim.keyframe(s["state"])
+    q0 = sim.data.qpos.copy()
+    tips = []
+    for f in (-5e-3, 5e-3):
+        measure.equilibrium(sim, q0, measure.Extra(push=(0.0, 0.0, f)))
+        tips.append(measure.tip_mm(sim)[2])
+    secant = 1e-2 / (tips[1] - tips[0])
+    assert secant == pytest.approx(s["mujoco_tip_n_per_mm"], rel=0.02)
+
+
+@pytest.mark.parametrize("name", DESIGNS)
+def test_state_N_sags_as_the_own_weight_model_and_the_bent_tip_lands_where_the_statics_puts_it(simulated, name):
+    _, result, _ = simulated[name]
+    sag = result["sag"]
+    assert sag["mujoco_tip_sag_mm"] == pytest.approx(sag["sag_model_tip_sag_mm"], rel=0.01)
+    b = result["bent"]
+    assert b["in_plane_distance_mm"] < 0.01 * abs(b["statics_tip_mm"][1])
+    assert all(d["finite"] for d in result["dynamics"]) and result["ok"]
+
+
+@pytest.mark.parametrize("name", DESIGNS)
+def test_hwgen_sim_adds_its_folder_and_leaves_every_built_file_as_it_was(simulated, name):
+    folder, _, before = simulated[name]
+    after = {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+             for p in folder.rglob("*") if p.is_file()}
+    assert {k: v for k, v in after.items() if not k.startswith("sim/")} == before
+    assert {"sim/robot.xml", "sim/sim.json", "sim/sim.png"} <= set(after)
