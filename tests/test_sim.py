@@ -201,11 +201,12 @@ def test_the_tendons_carry_the_yamls_names_and_run_seat_eyelets_drum(simulated, 
     m = mujoco.MjModel.from_xml_path(str(folder / "sim" / "robot.xml"))
     assert sorted(m.tendon(i).name for i in range(m.ntendon)) == sorted(names)
     import xml.etree.ElementTree as ET
+    n_stations = len(_plan(name).stations)
     for sp in ET.parse(folder / "sim" / "robot.xml").getroot().iter("spatial"):
         sites = [s.get("site") for s in sp.iter("site")]
         assert sites[0] == f"{sp.get('name')}_seat" and sites[-1] == f"{sp.get('name')}_drum"
         stations = [int(s[1:3]) for s in sites if s.startswith("e")]
-        assert stations == list(range(len(_plan(name).stations)))
+        assert stations == list(range(n_stations))
 
 
 @pytest.mark.parametrize("name", DESIGNS)

@@ -16,7 +16,7 @@ Here the same model is built at :data:`SIM_H_MAX` and its compliances read off a
   strip's own weight acts through its centre line), so the twist across the stretch is the same
   taken at one hinge as spread over its joints, and the sideways bend is to second order in
   the stretch's length, where the stiff direction's own deflection is 10⁻⁴ of the flexible
-  one's. It keeps the chain at about 85 degrees of freedom instead of about 190, and MuJoCo's
+  one's. It keeps the prototype's chain at 84 degrees of freedom instead of 180, and MuJoCo's
   cost on a serial chain grows about as their cube.
 
 The y and z hinges sit at the stretch's compliance-weighted middle (a link of their own where

@@ -10,8 +10,9 @@ collide with, and a site at each printed eyelet (centre and axis as measured). T
 parts are one body fixed to the tip, their masses and inertias summed.
 
 Joint damping is stiffness-proportional (Rayleigh), β = :data:`RAYLEIGH_S`: the first bending
-mode (about 2 Hz) gets about 1.5 % of critical damping, in the range of woven carbon/epoxy
-(0.5-2 %), and every mode above 1/(πβ) ≈ 160 Hz is overdamped; MuJoCo's Euler step takes joint
+mode (1.4 Hz in the prototype's state N, 3.4 Hz with every tendon locked) gets 0.9-2.1 % of
+critical damping, in the range of woven carbon/epoxy (0.5-2 %), and every mode above
+1/(πβ) ≈ 160 Hz is overdamped; MuJoCo's Euler step takes joint
 damping implicitly, so the stiff directions (10⁴ times the flexible one) stay stable at a 2 ms
 step.
 
@@ -308,7 +309,9 @@ def build_xml(name: str, printed: Printed, hinges: list, drums: list, folder: Pa
         el = _part_body(world, b, assets, np.zeros(3))
         _box_geom(el, f"{b.name}_collision", b.box_min, b.box_max, np.zeros(3))
     last = _links(world, printed, hinges, assets)
-    _tensioner(last, printed, drums, assets, hinges[-1].s if hinges else 0.0, printed.stations_mm[max(printed.disks)])
+    if printed.tip:                   # a design whose tensioner could not be laid out has none
+        _tensioner(last, printed, drums, assets, hinges[-1].s if hinges else 0.0,
+                   printed.stations_mm[max(printed.disks)])
     return root
 
 
@@ -370,6 +373,9 @@ def write_robot(name: str, printed: Printed, hinges: list, drums: list, states: 
                                rgba=_v(CHANNEL_RGBA[i % len(CHANNEL_RGBA)]))
             for s in sites:
                 ET.SubElement(sp, "site", site=s)
+    if not drums:
+        notes.append("no drums (the tensioner has no layout): every tendon stays just taut at the straight robot, "
+                     "and the keyframes cannot lock or slacken them")
     act = ET.SubElement(root, "actuator")
     for d in drums:
         ET.SubElement(act, "position", name=d.channel, joint=f"drum_{d.channel}", kp=_f(d.kp_n_per_m),
@@ -384,7 +390,7 @@ def write_robot(name: str, printed: Printed, hinges: list, drums: list, states: 
             ctrl.append(u * MM)
             miss[s].update(m)
         keys[s] = dict(zip([d.channel for d in drums], ctrl))
-        ET.SubElement(frames, "key", name=s, qpos=_v([0.0] * n_hinges + ctrl), ctrl=_v(ctrl))
+        ET.SubElement(frames, "key", name=s, qpos=_v([0.0] * n_hinges + ctrl), **({"ctrl": _v(ctrl)} if ctrl else {}))
     ET.indent(root)
     ET.ElementTree(root).write(out / "robot.xml", encoding="unicode", xml_declaration=False)
     return Written(drums, keys, miss, rest, baked, notes)
