@@ -72,6 +72,15 @@ class Drum:
 
 
 @dataclass(frozen=True)
+class Locks:
+    """The tendon states the keyframes set: (name, channels) of each, and per state each locked
+    tendon's haul-in, mm (the statics' lock: ℓ_straight − ℓ₀)."""
+
+    states: list
+    hauled: dict
+
+
+@dataclass(frozen=True)
 class Written:
     """What :func:`write_robot` wrote: the drums, each state's drum settings (m of line hauled in)
     and what each locked tendon is left off its lock by (mm), each tendon's rest length (mm)."""
@@ -97,7 +106,7 @@ def _quat(R: np.ndarray) -> str:
     return _v((w, x, y, z))
 
 
-def _combine(items) -> tuple[float, np.ndarray, np.ndarray]:
+def combine(items) -> tuple[float, np.ndarray, np.ndarray]:
     """(mass, centre, inertia about it) of several (mass, centre, inertia) together."""
     m = sum(i[0] for i in items)
     c = sum(i[0] * np.asarray(i[1]) for i in items) / m
@@ -193,13 +202,13 @@ def tendon_sites(printed: Printed, name: str) -> list[str]:
     return out
 
 
-def site_positions(printed: Printed, drums: list, tip_mm) -> dict:
+def site_positions(printed: Printed, drums: list) -> dict:
     """Every routing site's position in the straight robot with every drum at ctrl 0, mm (robot frame)."""
     pos = {eyelet_site(e): e.centre_mm for e in printed.eyelets}
     for t, (x, z, face) in printed.seats.items():
         pos[f"{t}_seat"] = np.array([x, face, z])
     for d in drums:
-        axis, centre = _drum_axis(printed, d)
+        axis, _ = _drum_axis(printed, d)
         for t, sense in zip(d.tendons, d.senses):
             r = printed.runs[t]
             pos[f"{t}_exit"], pos[f"{t}_run"] = r.start_mm, r.end_mm
@@ -217,14 +226,14 @@ def _drum_axis(printed: Printed, d: Drum) -> tuple[np.ndarray, np.ndarray]:
 def _tensioner(parent, printed: Printed, drums: list, assets: dict, link_s: float, tip_y: float) -> None:
     origin = np.array([0.0, tip_y, 0.0])
     el = ET.SubElement(parent, "body", name="tensioner", pos=_v((origin - [0.0, link_s, 0.0]) * MM))
-    m, c, inertia = _combine([(b.mass_g, b.com_mm, b.inertia_g_mm2) for b in printed.tip])
+    m, c, inertia = combine([(b.mass_g, b.com_mm, b.inertia_g_mm2) for b in printed.tip])
     _inertial(el, m, c, inertia, origin)
     for b in printed.tip:
         _mesh_geom(el, b, assets, origin)
     housing = [b for b in printed.tip if b.role == "tensioner_housing"]
     if housing:
         _box_geom(el, "tensioner_collision", housing[0].box_min, housing[0].box_max, origin)
-    pos = site_positions(printed, drums, origin)
+    pos = site_positions(printed, drums)
     for d in drums:
         for t in d.tendons:
             for k in ("exit", "run"):
@@ -346,11 +355,10 @@ def _state_setting(d: Drum, locked: dict, hauled: dict, baked: dict) -> tuple[fl
     return 0.0, {}
 
 
-def write_robot(name: str, printed: Printed, hinges: list, drums: list, states: list, hauled: dict,
-                springs: dict, folder: Path, out: Path) -> Written:
-    """robot.xml and its meshes into ``out`` (see the module's docstring). ``states``: (name,
-    channels) of every tendon state; ``hauled``: state -> {tendon: haul-in of its lock, mm} (the
-    statics'); ``springs``: tendon -> N/mm."""
+def write_robot(name: str, printed: Printed, hinges: list, drums: list, locks: Locks, springs: dict,
+                folder: Path, out: Path) -> Written:
+    """robot.xml and its meshes into ``out`` (see the module's docstring); ``springs``: tendon -> N/mm."""
+    states, hauled = locks.states, locks.hauled
     root = build_xml(name, printed, hinges, drums, folder, out)
     notes, baked = [], {}
     for d in drums:
@@ -361,7 +369,7 @@ def write_robot(name: str, printed: Printed, hinges: list, drums: list, states: 
         if opposite:
             notes.append(f"drum {d.channel} winds {', '.join(d.tendons)} in opposite senses: its lock is built into "
                          f"their rest lengths, and no keyframe can slacken them both")
-    pos = site_positions(printed, drums, None)
+    pos = site_positions(printed, drums)
     tendon = ET.SubElement(root, "tendon")
     rest = {}
     for i, d in enumerate(drums):

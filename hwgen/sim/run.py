@@ -24,6 +24,7 @@ from .plot import plot_sim
 ROBOT, SIM_JSON, SIM_PNG = "robot.xml", "sim.json", "sim.png"
 AGREEMENT = 0.25                  # the issue's: MuJoCo's tip stiffness within 25 % of the statics'
 SITE_TOL_MM = 0.05                # an eyelet site this close to the measured eyelet, robot straight
+OFF_CENTRE_MM = 0.5               # a tip assembly's centre of mass this far across the strip is worth a word
 
 
 def _mujoco_version() -> str:
@@ -125,8 +126,9 @@ def _findings(states: list, written: mjcf.Written, printed: parts.Printed, bent_
                        f"keyframe, tip stiffness {s['keyframe']['tip_n_per_mm']:.4f} N/mm and sag "
                        f"{s['keyframe']['tip_sag_mm']:.1f} mm against {s['mujoco_tip_n_per_mm']:.4f} and "
                        f"{s['mujoco_tip_sag_mm']:.1f} with the statics' locks")
-    m, c, _ = mjcf._combine([(b.mass_g, b.com_mm, b.inertia_g_mm2) for b in printed.tip]) if printed.tip else (0, 0, 0)
-    if printed.tip and abs(c[0]) > 0.5:
+    m, c, _ = mjcf.combine([(b.mass_g, b.com_mm, b.inertia_g_mm2) for b in printed.tip]) if printed.tip \
+        else (0.0, np.zeros(3), None)
+    if abs(c[0]) > OFF_CENTRE_MM:
         out.append(f"the tensioner's {m:.0f} g sit {c[0]:+.1f} mm across the strip (x) from its centre line; the statics "
                    f"puts the tip assembly on the centre line, MuJoCo where the STLs put it, so MuJoCo's robot twists "
                    f"under its weight" + (f" (bent: the tip {bent_['mujoco_tip_mm'][0]:+.2f} mm in x)" if bent_ else ""))
@@ -154,7 +156,7 @@ def simulate(plan, folder: Path, manifest: dict, report: dict, out: Path) -> dic
                           mjcf.reflected_inertia(printed, ratio), [p.name for p in plan.paths])
     states = [(s.name, s.channels) for s in stiffness.states(plan)]
     out.mkdir(parents=True, exist_ok=True)
-    written = mjcf.write_robot(manifest["design"], printed, hinges, drums, states, hauled, springs,
+    written = mjcf.write_robot(manifest["design"], printed, hinges, drums, mjcf.Locks(states, hauled), springs,
                                folder, out)
     secs["written"] = time.perf_counter() - t0
     sim = measure.Sim.load(out / ROBOT)
