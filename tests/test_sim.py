@@ -286,3 +286,29 @@ def test_hwgen_sim_adds_its_folder_and_leaves_every_built_file_as_it_was(simulat
              for p in folder.rglob("*") if p.is_file()}
     assert {k: v for k, v in after.items() if not k.startswith("sim/")} == before
     assert {"sim/robot.xml", "sim/sim.json", "sim/sim.png"} <= set(after)
+
+
+def test_a_robot_without_a_tensioner_still_loads_with_its_tendons_just_taut(simulated, tmp_path):
+    """A design whose tensioner could not be laid out has no drums: robot.xml still loads, each
+    tendon ends at its tip eyelet, just taut in the straight robot, and the model says so."""
+    import dataclasses
+
+    from hwgen.cad.manifest import read_manifest
+    from hwgen.checks.report import read_report
+    from hwgen.sim import mjcf, parts
+
+    folder, _, _ = simulated["prototype"]
+    printed = parts.read_build(folder, read_manifest(folder), read_report(folder))
+    bare = dataclasses.replace(printed, tip=[], runs={})
+    plan = _plan("prototype")
+    ref = reference.statics_reference(plan, read_report(folder)["gravity"], ["N"], 10.0)
+    states = [(s.name, s.channels) for s in stiffness.states(plan)]
+    written = mjcf.write_robot("bare", bare, chain.hinges(ref.described.robot), [],
+                               mjcf.Locks(states, reference.haul_in(ref)), reference.tendon_springs(ref),
+                               folder, tmp_path)
+    assert written.notes and not written.drums
+    m = mujoco.MjModel.from_xml_path(str(tmp_path / "robot.xml"))
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    assert m.nu == 0 and m.nkey == len(states)
+    assert d.ten_length == pytest.approx(m.tendon_lengthspring[:, 1], abs=1e-9)
