@@ -4,7 +4,8 @@ Exit codes: 0 success, 1 design findings that fail, 2 bad input or usage, 3 a bu
 
 Every command reports through one error path (:func:`_errors`): bad input, parameters that
 make no part (including any failure of the CAD kernel), and an output folder that cannot be
-written all print one line ``error: FILE: FIELD: what is wrong`` and exit 2; anything else is
+written all print one line ``error: FILE: FIELD: what is wrong`` (a file with several faults: a
+line naming it, then one line for each) and exit 2; anything else is
 a bug and says so in one line (``HWGEN_DEBUG=1`` shows the traceback). Nothing the user wrote
 is ever read as rich markup or emoji codes: the consoles have both switched off, and styled
 words are :class:`rich.text.Text` spans.
@@ -13,7 +14,6 @@ from __future__ import annotations
 
 import atexit
 import functools
-import hashlib
 import json
 import os
 import signal
@@ -34,6 +34,7 @@ EXIT_OK, EXIT_FINDINGS, EXIT_BAD_INPUT, EXIT_BUG = 0, 1, 2, 3
 DEBUG_ENV = "HWGEN_DEBUG"          # "1": let an unexpected exception through with its traceback
 MESSAGE_CHARS = 400                # the longest error message printed
 FIELD_CHARS = 100
+MAX_LISTED = 25                    # problems of one input listed (a file of 2 000 unknown keys: the first 25)
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   help="Print files, checks and pictures for tendon-driven continuum robots.")
@@ -94,6 +95,27 @@ def _bad_input(file, path: str, message: str) -> typer.Exit:
     return typer.Exit(EXIT_BAD_INPUT)
 
 
+def _refused(e: InputError, params) -> typer.Exit:
+    """Every problem of bad input in one block: one line when there is one (``error: FILE: FIELD:
+    what``), else a line naming the file and how many, then one line per problem (its file when it
+    is another, such as a base), at most :data:`MAX_LISTED`; then the hints."""
+    found = e.problems
+    if len(found) == 1:
+        _bad_input(e.file, e.path, e.message)
+    else:
+        top = str(params) if params is not None else found[0].file
+        say("error:", "bold red", f"{_file_label(top)}: {len(found)} problems:")
+        for p in found[:MAX_LISTED]:
+            field = clip(p.path, FIELD_CHARS) if p.path else "<document>"
+            where = "" if p.file == top else f"{_file_label(p.file)}: "
+            err.print(Text(f"  - {printable(where)}{field}: {clip(p.message, MESSAGE_CHARS)}"), soft_wrap=True)
+        if len(found) > MAX_LISTED:
+            err.print(Text(f"  ... and {len(found) - MAX_LISTED} more (fix these and run again)"), soft_wrap=True)
+    for note in e.notes:
+        say("  hint:", "yellow", clip(note, MESSAGE_CHARS))
+    return typer.Exit(EXIT_BAD_INPUT)
+
+
 @contextmanager
 def _errors(params: Path | None):
     """The one error path of every command (see the module's docstring)."""
@@ -113,7 +135,7 @@ def _errors(params: Path | None):
     except (typer.Exit, typer.Abort):
         raise
     except InputError as e:
-        raise _bad_input(e.file, e.path, e.message) from None
+        raise _refused(e, params) from None
     except DesignError as e:
         raise _bad_input(params if params is not None else "", e.path, e.message) from None
     except KeyboardInterrupt:
@@ -221,10 +243,11 @@ def _built_before(params: Path, out_dir: Path) -> bool:
     this hwgen (a rebuild then likely finds every part in the cache and needs no worker); read
     from the manifests alone, before the design is."""
     from . import __version__
+    from .designfile import read_layers
     try:
-        sha = hashlib.sha256(Path(params).read_bytes()).hexdigest()
+        sha = read_layers(params).sha256           # of the file and the bases it builds on
         manifests = list(Path(out_dir).glob("*/manifest.json"))
-    except OSError:
+    except (OSError, InputError):
         return True                 # the load says what is wrong; no worker for that
     for path in manifests:
         try:

@@ -62,12 +62,14 @@ STIFFNESS, STIFFNESS_PLOT, GRAVITY_PLOT = "stiffness.json", "stiffness.png", "gr
 
 
 def load(path: str | Path) -> params.LoadedDesign:
-    """Read a design YAML, check it against the schema, then check that it can be built.
+    """Read a design YAML (and its bases), check it against the schema, then check that it can be built.
 
-    Raises :class:`hwgen.errors.InputError` naming the file and the field path.
+    Raises :class:`hwgen.errors.InputError` naming, for every fault, the file and the field path.
     """
     loaded = params.read(path)
-    feasibility.check(loaded.design, path)
+    found = feasibility.problems(loaded.design)
+    if found:
+        raise params.refuse(found, loaded.layers)
     return loaded
 
 
@@ -925,6 +927,8 @@ def _manifest(loaded: params.LoadedDesign, plan: Plan, files: dict, entries: lis
         "hwgen_version": __version__,
         "params_file": loaded.source,
         "params_sha256": loaded.sha256,
+        "params_base": list(loaded.bases),          # the file's base, its base's base, ...: merged under it
+        "design_resolved": loaded.design.model_dump(mode="json"),    # the design as read, bases merged
         "files": files,
         "parts": entries,
         "design_report": design_report(plan),
