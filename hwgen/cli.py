@@ -232,9 +232,8 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
     if result.manifest.get("render", {}).get("status") in ("unavailable", "failed"):
         say("warning:", "yellow", result.manifest["render"]["message"])
     if result.report is not None:
-        _verdict(result.report)
+        _verdict(result.report, result.folder, loaded)
     if failed:
-        say(f"{len(failed)} check(s) failed;", "red", f"see {result.folder}")
         raise typer.Exit(EXIT_FINDINGS)
 
 
@@ -259,16 +258,20 @@ def _built_before(params: Path, out_dir: Path) -> bool:
     return False
 
 
-def _verdict(report: dict) -> None:
-    """What `hwgen check` ends with: every failing warning, then the verdict line."""
-    checks = report["checks"]
-    warns = [c for c in checks if not c["passed"] and c["severity"] == "warning"]
-    for c in warns:
-        say("warning:", "yellow", f"{c['id']}: {c['message']}")
-    n_fail = sum(1 for c in checks if not c["passed"] and c["severity"] == "error")
-    verdict = Text("PASS", style="bold green") if report["ok"] else Text("FAIL", style="bold red")
-    out.print(Text.assemble(f"{report['design']}: ", verdict, f": {len(checks)} checks, {n_fail} failed, "
-                            f"{len(warns)} warning(s)"))
+def _verdict(report: dict, folder: Path, loaded) -> None:
+    """What `hwgen build` and `hwgen check` end with: a line per failed check with its fix, the
+    warnings, then the verdict naming summary.md and any setting of the design (and its file)
+    that states a failing check as a warning."""
+    from .checks.report import verdict_lines
+    from .designfile import NOT_INHERITED, dotted
+    files = {dotted(k): str(loaded.layers.file_of(dotted(k))) for k in NOT_INHERITED}
+    for label, text in verdict_lines(report, Path(folder) / "summary.md", files):
+        if label == "verdict":
+            word, rest = text.split(":", 1)
+            out.print(Text.assemble(f"{report['design']}: ", (word, "bold green" if word == "PASS" else "bold red"),
+                                    printable(":" + rest)), soft_wrap=True)
+        else:
+            say(label, "bold red" if label == "failed:" else "yellow", text, out)
 
 
 @_command
@@ -341,6 +344,7 @@ def check(params: Path = PARAMS, out_dir: Path = OUT,
     rep, folder = _on_outputs(f"checking {loaded.name}", quiet,
                               lambda: check_design(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache, cache_size)))
     print_report(rep, out, verbose=verbose)
+    _verdict(rep, folder, loaded)
     if report is not None:
         _write_side_file(report, "--report", lambda: write_json(report, rep))
     if junit is not None:
