@@ -205,7 +205,7 @@ def _value(v, unit: str) -> str:
     if unit == "%":
         return f"{v * 100:.3g} %"
     if isinstance(v, float):
-        return f"{0.0 if abs(v) < 5e-7 else v:.4g}{unit}"
+        return f"{0.0 if abs(v) < 5e-5 else v:.4g}{unit}"
     return f"{v}{unit}"
 
 

@@ -75,18 +75,15 @@ def _legend(names_colours, title: str):
     return texts
 
 
-def station_labels(posed: list[Posed], view: View, marked: dict[str, list[str]] | None = None) -> list[tuple]:
-    """Disk numbers (the station index) just above each disk on the screen; a disk with a failing
-    check (``marked``: part -> check ids) says which, in the warning colour."""
+def station_labels(posed: list[Posed], view: View) -> list[tuple[str, np.ndarray]]:
+    """Disk numbers (the station index) just above each disk on the screen."""
     right, up, d = view.axes()
     out = []
     for ps in posed:
         if ps.part.station is None:
             continue
         top = ps.vertices[np.argmax(ps.vertices @ up)]
-        ids = (marked or {}).get(ps.part.name)
-        out.append((f"{ps.part.station}: {', '.join(ids)}", top + up * LABEL_GAP_MM, WARNING_COLOUR) if ids else
-                   (str(ps.part.station), top + up * LABEL_GAP_MM))
+        out.append((str(ps.part.station), top + up * LABEL_GAP_MM))
     return out
 
 
@@ -117,31 +114,44 @@ def _marked(posed: list[Posed], parts: dict[str, list[str]]) -> list[Posed]:
     return [ps.as_role(WARNING_ROLE) if ps.part.name in parts else ps for ps in posed]
 
 
-def _part_labels(posed: list[Posed], view: View, parts: dict[str, list[str]], skip=()) -> list[tuple]:
-    """The failing checks' ids just above each marked part (but those in ``skip``), in the warning colour."""
-    _, up, _ = view.axes()
-    return [(", ".join(parts[ps.part.name]), ps.vertices[np.argmax(ps.vertices @ up)] + up * LABEL_GAP_MM,
-             WARNING_COLOUR) for ps in posed if ps.part.name in parts and ps.part.name not in skip]
+def _part_labels(posed: list[Posed], view: View, parts: dict[str, list[str]]) -> list[tuple]:
+    """The failing checks' ids beside the marked parts (right of them on the screen; a part along
+    the backbone at a third of its length), once for parts that fail the same checks, in the
+    warning colour."""
+    right, up, _ = view.axes()
+    groups: dict[str, list[np.ndarray]] = {}
+    for ps in posed:
+        if ps.part.name not in parts:
+            continue
+        v = ps.vertices
+        if ps.part.station is None and np.ptp(v[:, 1]) > 0.5 * np.ptp(v, axis=0).max():   # along the backbone
+            y = np.percentile(v[:, 1], 33)
+            v = v[np.abs(v[:, 1] - y) <= np.ptp(v[:, 1]) * 0.02]
+        groups.setdefault(", ".join(parts[ps.part.name]), []).append(v[np.argmax(v @ right)])
+    return [(text, max(pts, key=lambda p: p @ right) + right * LABEL_GAP_MM, WARNING_COLOUR)
+            for text, pts in groups.items()]
 
 
-def _tendon_marks(tubes: dict, tendons: dict[str, list[str]]) -> tuple[dict, list[tuple]]:
-    """Tubes of tendons with a failing check in the warning colour, and a label at each one's middle."""
+def _tendon_marks(tubes: dict, tendons: dict[str, list[str]], view: View) -> tuple[dict, list[tuple]]:
+    """Tubes of tendons with a failing check in the warning colour, and a label beside each (spread
+    along the tubes, so that two do not meet)."""
+    right, _, _ = view.axes()
     out, labels = {}, []
+    marked = [n for n in tubes if n in tendons]
     for name, (pts, rgb) in tubes.items():
         if name in tendons:
             out[name] = (pts, WARNING_COLOUR)
-            labels.append((f"{name}: {', '.join(tendons[name])}", pts[len(pts) // 2], WARNING_COLOUR))
+            k = marked.index(name)
+            at = pts[min(len(pts) - 1, int(len(pts) * (k + 1) / (len(marked) + 1)))]
+            labels.append((f"{name}: {', '.join(tendons[name])}", at + right * LABEL_GAP_MM, WARNING_COLOUR))
         else:
             out[name] = (pts, rgb)
     return out, labels
 
 
 def _warning_legend(parts: dict, tendons: dict) -> list[tuple[str, tuple]]:
-    if not parts and not tendons:
-        return []
-    n = len(parts) + len(tendons)
-    return [(f"failing check ({n} part{'s' if n > 1 else ''} and tendon{'s' if n > 1 else ''}; summary.md)",
-             WARNING_COLOUR)]
+    what = [f"{len(d)} {word}{'s' if len(d) > 1 else ''}" for d, word in ((parts, "part"), (tendons, "tendon")) if d]
+    return [(f"failing check: {' and '.join(what)} (summary.md)", WARNING_COLOUR)] if what else []
 
 
 def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table: list[dict] | None = None,
@@ -175,8 +185,7 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
     ex = exploded_placements(parts, st, settings.explode_mm, ISOMETRIC.toward_camera)
     exploded = [pose_rigid(p, ex[p.name], d) for p in parts]     # drawn again as exploded.svg
     if "exploded.png" in wanted:
-        stations = {p.name for p in parts if p.station is not None}
-        labels = station_labels(exploded, ISOMETRIC, marks[0]) + _part_labels(exploded, ISOMETRIC, marks[0], stations)
+        labels = station_labels(exploded, ISOMETRIC) + _part_labels(exploded, ISOMETRIC, marks[0])
         _, W, H = r.draw(_marked(exploded, marks[0]), warned, ISOMETRIC, folder / "exploded.png", labels=labels,
                          texts=_legend(fam_legend + _warning_legend(marks[0], {}),
                                        f"{manifest['design']}: exploded, {settings.explode_mm:g} mm between disks"))
@@ -201,7 +210,7 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
         b /= np.linalg.norm(b)
         posed = [pose_bent(p, st, kappa, b) for p in parts]
         bent, tube_labels = _tendon_marks({n: (pts, tcol[n]) for n, pts in tendon_polylines(report, kappa).items()},
-                                          marks[1])
+                                          marks[1], BENT)
         texts = _legend([(n, tcol[n]) for n in bent] + _warning_legend(*marks),
                         f"{manifest['design']}: bent {settings.bend_deg:g}° (constant curvature, eq. 1)")
         texts.append((reachable_note(manifest), TEXT_COLOUR, (0.015, 0.02), 22, None))

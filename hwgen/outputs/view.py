@@ -280,7 +280,8 @@ class Renderer:
         if labels:
             # the camera (set by _fit) and the window's size map world points to the screen: no
             # render is needed before (one took 0.17 s for exploded.png; the labels land on the same pixels)
-            for text, point, *rgb in labels:          # (text, point) or (text, point, colour)
+            for text, point, *rgb in labels:
+                # (text, point): centred on it; (text, point, colour): a callout starting there, on white
                 ren.SetWorldPoint(*point, 1.0)
                 ren.WorldToDisplay()
                 x, y, _ = ren.GetDisplayPoint()
@@ -289,7 +290,12 @@ class Renderer:
                 t.GetTextProperty().SetColor(*(rgb[0] if rgb else TEXT_COLOUR))
                 t.GetTextProperty().SetFontSize(int(24 * self.width / 1800))
                 t.GetTextProperty().BoldOn()
-                t.GetTextProperty().SetJustificationToCentered()
+                if rgb:
+                    t.GetTextProperty().SetJustificationToLeft()
+                    t.GetTextProperty().SetBackgroundColor(*BACKGROUND)
+                    t.GetTextProperty().SetBackgroundOpacity(0.8)
+                else:
+                    t.GetTextProperty().SetJustificationToCentered()
                 t.GetTextProperty().SetVerticalJustificationToCentered()
                 t.SetDisplayPosition(int(x), int(y))
                 ren.AddViewProp(t)
