@@ -151,8 +151,7 @@ def gravity_checks(parts, manifest: dict, plan, fits: list[SlotFit], strip_h: fl
     checks = []
     ok = r.max_stress <= allow
     sev = plan.check.overstress
-    strip_study = _StripStudy(length, st, ms, tip, worst_key, fits, E, h, t, e_print, strip["lambda_g_mm"],
-                              plan.check.max_angle_deg, allow)
+    strip_study = _StripStudy(r, fits, E, h, e_print, plan.check.max_angle_deg, allow)
     text = (f"state N (no tendon tensioned, horizontal, gravity along {worst_key}): tip sags {r.tip_sag:.1f} mm, "
             f"tip {-r.tip_angle_deg:.1f}° below horizontal; the strip's largest bending stress "
             f"{r.max_stress:.1f} MPa at s = {r.s_max_stress:.1f} mm "
@@ -170,7 +169,7 @@ def gravity_checks(parts, manifest: dict, plan, fits: list[SlotFit], strip_h: fl
     mount, c = _mount_check(parts, plan.mount.max_tip_share, r, e_print, e_why)
     report["mount"] = mount
     checks += c
-    bend, c = _bend_check(plan.check.max_angle_deg, allow, spans, E, I, t, length, strip["part"], strip_study)
+    bend, c = _bend_check(strip_study, spans, I, strip["part"])
     report["bend"] = bend
     checks += c
     return report, checks
@@ -223,9 +222,10 @@ def _mount_check(parts, limit: float, r: sag.SagResult, e_print: float, e_why: s
     return rep, [Check("mount.stiffness", "error", ok, msg, share, limit, {"part": mount.name}, fix=fix)]
 
 
-def _bend_check(ang: float, allow: float, spans, E, I, t, length, part: str,
-                study: _StripStudy) -> tuple[dict, list[Check]]:
-    """The strip bent ``ang`` degrees (the check's sweep end) against its allowable stress ``allow``, MPa."""
+def _bend_check(study: _StripStudy, spans, I: float, part: str) -> tuple[dict, list[Check]]:
+    """The strip bent to the check's sweep end against its allowable stress, MPa (``study``: the
+    strip, its sweep and allowable)."""
+    ang, allow, E, t, length = study.ang, study.allow, study.E, study.t, study.length
     stress, kappa = sag.bending_stress_under_uniform_moment(length, math.radians(ang), E, I, t, spans)
     bare = E * t / 2 * math.radians(ang) / length
     ok = stress <= allow
@@ -244,12 +244,12 @@ class _StripStudy:
     falls as the strip thickens or widens; the stress of the bend to the sweep's end rises with
     the thickness and does not depend on the width. A few solves of the elastica: milliseconds."""
 
-    def __init__(self, length, st, ms, tip, gravity, fits, E, h, t, e_print, lam, ang, allow):
-        self.length, self.st, self.ms, self.tip, self.fits = length, st, ms, tip, fits
-        self.sign = 1.0 if gravity == "-z" else -1.0
-        self.E, self.h, self.t, self.e_print, self.lam = E, h, t, e_print, lam
+    def __init__(self, r: sag.SagResult, fits, E: float, h: float, e_print: float, ang: float, allow: float):
+        """``r``: the worse own-weight case as solved (its loads, strip and gravity's direction)."""
+        self.r, self.fits, self.E, self.h, self.e_print = r, fits, E, h, e_print
+        self.length, self.t = r.L, r.thickness
         self.ang, self.allow = ang, allow
-        self.solved: dict[tuple[float, float], float] = {}
+        self.solved: dict[tuple[float, float], float] = {(r.thickness, h): r.max_stress}
 
     def own_weight(self, t: float, h: float | None = None) -> float:
         """The largest own-weight stress (MPa) with a strip ``t`` thick and ``h`` wide."""
@@ -260,11 +260,11 @@ class _StripStudy:
 
     def _own_weight(self, t: float, h: float) -> float:
         I = sag.second_moment(h, t)
-        r = sag.solve_sag(self.length, self.st, self.ms, E=self.E, I=I, thickness=t,
-                          strip_lin_density=self.lam * t * h / (self.t * self.h), tip_mass=self.tip["mass_g"],
-                          tip_offset=(self.tip["a_mm"], self.sign * self.tip["z_mm"]),
-                          spans=_spans(self.fits, self.length, self.E * I, self.e_print))
-        return r.max_stress
+        r = self.r
+        return sag.solve_sag(r.L, r.stations, r.point_masses, E=self.E, I=I, thickness=t,
+                             strip_lin_density=r.strip_lin_density * t * h / (r.thickness * self.h),
+                             tip_mass=r.tip_mass, tip_offset=r.tip_offset,
+                             spans=_spans(self.fits, self.length, self.E * I, self.e_print)).max_stress
 
     def bend(self, t: float, ang: float | None = None) -> float:
         """The largest stress (MPa) of the strip ``t`` thick bent ``ang``° (the sweep's end)."""

@@ -105,25 +105,12 @@ def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict,
                f"{span} (statics through the eyelet centres, spring {springs[name]:.2f} N/mm); as built "
                f"({chk.robust}) its path shortens {excess:.3f} mm more, so at least {lo_built:.2f} N: "
                + ("taut" if ok else "SLACK") + f" (floor {floor:g} N)")
-        pre = desc.pretension[name]
-        # locked tensions move with the pretension one for one (the spring changes by the same lengths)
-        raise_by, lower_by = floor - lo_built, hi_built - allow
-        fix = "" if ok else (
-            f"raise {name}'s pretension_n (tendons[].pretension_n) from {pre:g} to at least "
-            f"{pre + raise_by + 0.05:.1f} N" + (f", which takes its greatest tension to {hi_built + raise_by:.1f} N, "
-                                                f"over the {allow:.1f} N allowed (tendon.overload): a stronger line "
-                                                f"(tendon_material.break_load)" if hi_built + raise_by >= allow else "")
-            + f"; or route it so its path changes less over the bend ({excess:.3f} mm as built beyond the centres: "
-              f"tendon.robust)")
-        checks.append(Check("tendon.taut", sev, ok, msg, lo_built, floor, {"tendon": name}, fix=fix,
+        span_n = (desc.pretension[name], lo_built, hi_built, floor, allow)
+        checks.append(Check("tendon.taut", sev, ok, msg, lo_built, floor, {"tendon": name},
+                            fix="" if ok else _slack_fix(name, span_n, excess),
                             lowered_by="check.robust_severity" if not ok and sev == "warning" else ""))
         ok = hi_built < allow
-        fix = "" if ok else (
-            f"a stronger line: tendon_material.break_load of at least {hi_built * chk.tendon_safety_factor:.0f} N "
-            f"(check.tendon_safety_factor {chk.tendon_safety_factor:g}); or lower {name}'s pretension_n from {pre:g} to "
-            f"at most {max(pre - lower_by - 0.05, 0.0):.1f} N"
-            + (f", though it then goes slack (tendon.taut: at least {lo_built - lower_by:.2f} N against "
-               f"{floor:g} N)" if lo_built - lower_by <= floor else ""))
+        fix = "" if ok else _overload_fix(name, span_n, chk.tendon_safety_factor)
         checks.append(Check("tendon.overload", "error", ok,
                             f"{name}: greatest tension over the sweep {hi:.2f} N, {hi_built:.2f} N as built if its "
                             f"excess went the taut way, {'under' if ok else 'over'} "
@@ -150,12 +137,11 @@ def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict,
         worst = max(sides, key=lambda s: s["rise"])
         ok = worst["rise"] <= limit
         short = "" if abs(worst["at_deg"]) >= ang - 0.5 else f" (hauling it in bends the robot only {abs(worst['at_deg']):.1f}°)"
-        stiffening = sorted(desc.stiffening)
         fix = "" if ok else (
-            f"lower the locked stiffening tendons' pretension_n ({', '.join(stiffening)}: tendons[].pretension_n), or "
-            f"route them so their length changes less as the robot bends (tendon.length): each pulls against the bend "
-            f"as much as its path lengthens times its spring; or a more compliant line or tie-off "
-            f"(tendon_material.axial_stiffness_n, tie_off_compliance_mm_per_n); or, if a "
+            f"lower the locked stiffening tendons' pretension_n ({', '.join(sorted(desc.stiffening))}: "
+            f"tendons[].pretension_n), or route them so their length changes less as the robot bends (tendon.length): "
+            f"each pulls against the bend as much as its path lengthens times its spring; or a more compliant line or "
+            f"tie-off (tendon_material.axial_stiffness_n, tie_off_compliance_mm_per_n); or, if a "
             f"{worst['rise'] * 100:.0f} % rise is acceptable, check.max_coupling")
         checks.append(Check("actuation.coupling", "error", ok,
                             f"{worst['inner']} needs {worst['with_stiffening_n']:.2f} N to bend the robot "
@@ -172,6 +158,30 @@ def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict,
         "allowable_n": allow, "floor_n": floor, "tendons": tendons, "actuation": sides,
     }
     return report, checks
+
+
+def _slack_fix(name: str, span_n: tuple, excess: float) -> str:
+    """A stiffening tendon that goes slack: the pretension that keeps it taut (its locked tensions
+    move with the pretension one for one: its spring changes by the same lengths), and what that
+    costs its greatest tension. ``span_n``: (pretension, least and greatest as built, floor, allowed)."""
+    pre, lo, hi, floor, allow = span_n
+    up = floor - lo
+    return (f"raise {name}'s pretension_n (tendons[].pretension_n) from {pre:g} to at least {pre + up + 0.05:.1f} N"
+            + (f", which takes its greatest tension to {hi + up:.1f} N, over the {allow:.1f} N allowed "
+               f"(tendon.overload): a stronger line too (tendon_material.break_load)" if hi + up >= allow else "")
+            + f"; or route it so its path changes less over the bend ({excess:.3f} mm as built beyond the centres: "
+              f"tendon.robust)")
+
+
+def _overload_fix(name: str, span_n: tuple, safety: float) -> str:
+    """A stiffening tendon pulled over its allowed load: the line that carries it, or the pretension
+    that keeps it under, and what that costs its least tension (as :func:`_slack_fix`)."""
+    pre, lo, hi, floor, allow = span_n
+    down = hi - allow
+    return (f"a stronger line: tendon_material.break_load of at least {hi * safety:.0f} N (check.tendon_safety_factor "
+            f"{safety:g}); or lower {name}'s pretension_n from {pre:g} to at most {max(pre - down - 0.05, 0.0):.1f} N"
+            + (f", though it then goes slack (tendon.taut: at least {lo - down:.2f} N against {floor:g} N)"
+               if lo - down <= floor else ""))
 
 
 def _actuation_tension(top: dict, tm, chk, ang: float) -> Check:
