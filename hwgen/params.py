@@ -642,10 +642,6 @@ def validate(data: dict, path: str | Path, layers: designfile.Layers | None = No
     return design
 
 
-def _read_bytes(path: Path) -> bytes:
-    return designfile.read_bytes(path)
-
-
 def design_problems(d: Design) -> list[tuple[str | tuple[str, ...], str]]:
     """Checks that span fields: (the field path, or the paths of the fields the rule involves with
     the one to change first; what is wrong), every one found."""
