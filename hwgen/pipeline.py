@@ -62,12 +62,14 @@ STIFFNESS, STIFFNESS_PLOT, GRAVITY_PLOT = "stiffness.json", "stiffness.png", "gr
 
 
 def load(path: str | Path) -> params.LoadedDesign:
-    """Read a design YAML, check it against the schema, then check that it can be built.
+    """Read a design YAML (and its bases), check it against the schema, then check that it can be built.
 
-    Raises :class:`hwgen.errors.InputError` naming the file and the field path.
+    Raises :class:`hwgen.errors.InputError` naming, for every fault, the file and the field path.
     """
     loaded = params.read(path)
-    feasibility.check(loaded.design, path)
+    found = feasibility.problems(loaded.design)
+    if found:
+        raise params.refuse(found, loaded.layers)
     return loaded
 
 
@@ -148,6 +150,12 @@ def pictures_stage(plan: Plan, folder: Path, manifest: dict, report: dict | None
                   guide.picture_jobs(folder, manifest, plan))
 
 
+def marks_stage(plan: Plan, folder: Path, manifest: dict, report: dict | None) -> None:
+    """exploded.png and bent.png drawn again with what fails marked (the pictures stage ran beside
+    the checks, before their verdict); nothing when every check passes."""
+    pictures.mark_failures(folder, manifest, plan.render)
+
+
 def guide_stage(plan: Plan, folder: Path, manifest: dict, report: dict | None) -> dict:
     """guide/assembly.md and guide/assembly.html, from bom.csv, the manifest and the step pictures."""
     return guide.write_guide(folder, manifest, plan)
@@ -157,7 +165,7 @@ def guide_stage(plan: Plan, folder: Path, manifest: dict, report: dict | None) -
 # is the checks' (None for the checks themselves, and for a stage that runs beside them)
 AFTER_FILES: list[tuple[str, Callable[[Plan, Path, dict, dict | None], object]]] = [
     ("checks", checks_stage), ("bom", bom_stage), ("plates", plates_stage), ("pictures", pictures_stage),
-    ("guide", guide_stage)]
+    ("marks", marks_stage), ("guide", guide_stage)]
 DRAWING_STAGES = ("bom", "pictures", "guide")     # what `hwgen render` runs on existing outputs
 
 
@@ -544,7 +552,9 @@ def _after_files(store: cache.Store, plan: Plan, folder: Path, manifest: dict, d
 
 
 # the stages the cache keeps, and what each reads besides the folder, the manifest and the plan
-STAGE_ENV = {"checks": ("HWGEN_CHECK_SAMPLES",), "bom": (), "plates": (), "guide": (), "pictures": ("HWGEN_RENDER_BACKEND", "DISPLAY")}
+STAGE_ENV = {"checks": ("HWGEN_CHECK_SAMPLES",), "bom": (), "plates": (), "guide": (), "pictures": ("HWGEN_RENDER_BACKEND", "DISPLAY"),
+             "marks": ("HWGEN_RENDER_BACKEND", "DISPLAY")}
+STAGE_REWRITES = {"marks": pictures.MARKED}   # files a stage draws again over an earlier stage's (kept in the cache)
 STAGE_RESULT = {"checks": REPORT}       # a stage whose return value is this file of its outputs (read back by read_report)
 
 
@@ -604,11 +614,14 @@ def _cached_stage(store: cache.Store, name: str, stage, plan: Plan, folder: Path
     fields = {k: json.dumps(v, sort_keys=True) for k, v in manifest.items()}
     out = stage(plan, folder, manifest, report)
     after = _files(folder)
-    if any(after.get(path) != sha for path, sha in before.items()):
+    redrawn = STAGE_REWRITES.get(name, ())
+    if any(after.get(path) != sha for path, sha in before.items() if path not in redrawn):
         return out                              # it changed a file it was given: not kept
-    if name == "pictures" and manifest.get("render", {}).get("status") != "ok":
-        return out
-    files = {path: store.put_bytes((folder / path).read_bytes()) for path in after if path not in before}
+    if name in ("pictures", "marks") and (manifest.get("render", {}).get("status") != "ok"
+                                         or "message" in manifest["render"].get("failing", {})):
+        return out                              # another try may find a renderer
+    files = {path: store.put_bytes((folder / path).read_bytes()) for path in after
+             if path not in before or (path in redrawn and after[path] != before[path])}
     changed = {k: v for k, v in manifest.items() if fields.get(k) != json.dumps(v, sort_keys=True)}
     store.put_record(key, {"files": files, "manifest": changed})
     return out
@@ -925,6 +938,8 @@ def _manifest(loaded: params.LoadedDesign, plan: Plan, files: dict, entries: lis
         "hwgen_version": __version__,
         "params_file": loaded.source,
         "params_sha256": loaded.sha256,
+        "params_base": list(loaded.bases),          # the file's base, its base's base, ...: merged under it
+        "design_resolved": loaded.design.model_dump(mode="json"),    # the design as read, bases merged
         "files": files,
         "parts": entries,
         "design_report": design_report(plan),
