@@ -90,6 +90,7 @@ class Report(_Named):
     seats: list[dict[str, Any]]   # checks.anchors
     gravity: dict[str, Any]       # checks.gravity
     tension: dict[str, Any]       # checks.tension
+    stiffening: dict[str, Any] | None   # the tendon states' statics: hwgen.model.stiffness.stiffening
 
 
 def write_report(report: Report, folder: Path) -> None:
@@ -177,6 +178,12 @@ def as_built_lines(report: dict) -> list[str]:
     return out
 
 
+def stiffening_lines(report: dict) -> list[str]:
+    """What locking the stiffening tendons adds, in words (the statics' ``stiffening``), after a blank line."""
+    st = report.get("stiffening") or {}
+    return ["", *st["lines"]] if st.get("lines") else []
+
+
 def write_summary(report: dict, path: Path) -> None:
     """A short Markdown summary: verdict, tendon lengths, failing and warning findings."""
     checks = report["checks"]
@@ -215,6 +222,7 @@ def write_summary(report: dict, path: Path) -> None:
         case = g["cases"][g["gravity"]]
         lines += ["", f"Own weight, no tendon tensioned (state N): tip sag {case['tip_sag_mm']:.1f} mm, strip stress "
                       f"{case['max_stress_mpa']:.0f} MPa (allowable {g['allowable_stress_mpa']:g} MPa). Plot: `sag.png`."]
+    lines += stiffening_lines(report)
     if errs:
         lines += ["", "## Failed", ""] + [f"- `{c['id']}` {c['message']}" for c in errs]
     if warns:
@@ -253,6 +261,8 @@ def print_report(report: dict, console, verbose: bool = False) -> None:
         ft.add_row(Text(s, style=style.get(s, "")), c["id"], Text(place(c)), _fmt(c["measured"]), _fmt(c["limit"]),
                    Text(c["message"]))
     console.print(ft)
+    for line in stiffening_lines(report)[1:]:
+        console.print(Text(line))
     n_fail = sum(1 for c in report["checks"] if not c["passed"] and c["severity"] == "error")
     n_warn = sum(1 for c in report["checks"] if not c["passed"] and c["severity"] == "warning")
     verdict = Text("PASS", style="bold green") if report["ok"] else Text("FAIL", style="bold red")
