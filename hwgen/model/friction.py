@@ -229,16 +229,17 @@ def capstan_push(b: Bounds, jac: np.ndarray, push_n: float, mu: float) -> Push:
     K = np.where(finite, b.springs, 0.0)
     with st.blas_threads():
         Z = cho_solve(f, np.column_stack([jac, b.rows.T]))
-    zj, ZG = Z[:, 0], Z[:, 1:]
-    c = float(jac @ zj)
-    p = b.rows @ zj
-    P = b.rows @ ZG
-    KP = K[:, None] * P
-    Mx = np.diag(K) - KP * K[None, :]                       # K (I − P K)
+    c = float(jac @ Z[:, 0])
+    p = b.rows @ Z[:, 0]
+    P = b.rows @ Z[:, 1:]
     e = len(b.eyelets)
-    D = np.zeros((m, e))                                    # segment free-length change per slip (line b → a)
-    D[b.eyelets[:, 0], np.arange(e)] = -1.0
-    D[b.eyelets[:, 1], np.arange(e)] = 1.0
+    lo_seg, hi_seg = b.eyelets[:, 0], b.eyelets[:, 1]
+    D = np.zeros((m, e))                                    # segment free-length change per slip (line tip side → base side)
+    D[lo_seg, np.arange(e)] = -1.0
+    D[hi_seg, np.arange(e)] = 1.0
+    Kp = K * p
+    MD = K[:, None] * (D - P @ (K[:, None] * D))            # K (I − P K) D: each slip's tension change per mm
+    pKD = Kp @ D                                            # and the output's, less, per mm of each slip
     ratio = np.exp(mu * b.turns)
     tau = b.tension.copy()
     high = np.zeros(e, int)                                 # 0 stuck; +1 the tip side higher and slipping; -1 the base side
@@ -246,23 +247,33 @@ def capstan_push(b: Bounds, jac: np.ndarray, push_n: float, mu: float) -> Push:
     first = None
     slack = False
     for _ in range(MAX_PHASES):
-        rate, w, x = _phase(high, ratio, K, Mx, D, p, c, b.eyelets)
-        bad = np.flatnonzero((high != 0) & (high * x > 1e-15))      # would slide back: it holds again
-        if len(bad):
-            high[bad] = 0
-            continue
+        S = np.flatnonzero(high)
+        x = np.zeros(e)
+        if len(S):
+            hi = np.where(high[S] > 0, hi_seg[S], lo_seg[S])
+            lo = np.where(high[S] > 0, lo_seg[S], hi_seg[S])
+            A = MD[hi][:, S] - ratio[S, None] * MD[lo][:, S]
+            x[S] = np.linalg.solve(A, ratio[S] * Kp[lo] - Kp[hi])
+            bad = S[high[S] * x[S] > 1e-15]                 # would slide back: it holds again
+            if len(bad):
+                high[bad] = 0
+                continue
+        rate = Kp + MD[:, S] @ x[S]                         # each segment's tension per newton
+        w = c - pKD[S] @ x[S]                               # the output's displacement per newton
         step, which, side = push_n - F, -1, 0
-        for k in np.flatnonzero(high == 0):
-            a_, b_ = b.eyelets[k]
-            for s, (hi, lo) in ((1, (b_, a_)), (-1, (a_, b_))):
-                den = rate[hi] - ratio[k] * rate[lo]
-                if den > 1e-15:
-                    dF = max(0.0, (ratio[k] * tau[lo] - tau[hi]) / den)
-                    if dF < step:
-                        step, which, side = dF, k, s
+        held = np.flatnonzero(high == 0)
+        if len(held):
+            a_, b_ = lo_seg[held], hi_seg[held]
+            for sgn, (h_, l_) in ((1, (b_, a_)), (-1, (a_, b_))):
+                den = rate[h_] - ratio[held] * rate[l_]
+                ok = den > 1e-15
+                dF = np.where(ok, np.maximum(0.0, (ratio[held] * tau[l_] - tau[h_]) / np.where(ok, den, 1.0)), np.inf)
+                k = int(np.argmin(dF))
+                if dF[k] < step:
+                    step, which, side = float(dF[k]), int(held[k]), sgn
         falling = (rate < 0) & finite
         if np.any(falling):
-            gone = np.min(np.where(falling, tau / np.where(falling, -rate, 1.0), np.inf))
+            gone = float(np.min(np.where(falling, tau / np.where(falling, -rate, 1.0), np.inf)))
             if gone < step:
                 step, which, slack = gone, -1, True
         F += step
@@ -273,22 +284,3 @@ def capstan_push(b: Bounds, jac: np.ndarray, push_n: float, mu: float) -> Push:
         high[which] = side
         first = F if first is None else first
     return Push(F / u if u > 0 else math.inf, F, int(np.count_nonzero(high)), e, first, slack)
-
-
-def _phase(high, ratio, K, Mx, D, p, c, eyelets):
-    """One phase of the push: with the eyelets in ``high`` slipping, each segment's tension and the
-    output's displacement per newton, and each slipping eyelet's slide (line from its tip side
-    into its base side) per newton."""
-    S = np.flatnonzero(high)
-    x = np.zeros(len(high))
-    if len(S):
-        C = np.zeros((len(S), len(K)))
-        for r, k in enumerate(S):
-            a_, b_ = eyelets[k]
-            hi, lo = (b_, a_) if high[k] > 0 else (a_, b_)
-            C[r, hi], C[r, lo] = 1.0, -ratio[k]
-        A = C @ Mx @ D[:, S]
-        x[S] = np.linalg.solve(A, -C @ (K * p))
-    rate = K * p + Mx @ (D @ x)
-    w = c - p @ (K * (D @ x))
-    return rate, w, x

@@ -533,26 +533,29 @@ def stiffening(report: dict, desc: Described) -> dict:
     tip = next(b["tip"]["none"] for b in by if b["orientation"] == ref)
     low = tip < LOW_STIFFENING
     why = _why(tendons, desc) if low else []
-    lines = [f"Stiffening, {full} over {act} (`stiffness.json`, `stiffness.png`): at the tip "
-             + "; ".join(_words(b) for b in by) + "."]
-    cap = [f for f in ("capstan +z", "capstan -z") if f in by[0]["tip"]]
-    if cap:
-        lines.append(f"With eyelet friction (μ {desc.eyelet_friction:g}, a {desc.push_n:g} N push at the tip): "
-                     + "; ".join(f"{b['orientation']} " + " / ".join(f"{b['tip'][f]:.2f}× ({f[-2:]})" for f in cap)
-                                 for b in by) + ".")
+    lines = [f"Stiffening, {full} over {act} at the tip (and the least over the disks, counted from 1 at the clamped "
+             f"base as the paper does; `stiffness.json`, `stiffness.png`), tensioned by the paper's protocol:", ""]
+    lines += [f"- {b['orientation']}: {_words(b, desc)}" for b in by]
+    lines += ["", f"Locked in {full}, {ref}: " + ", ".join(
+        f"{n} {v:.2f} N" + (" (its pretension_n)" if entry["tension_from"][n] == "pretension_n" else "")
+        for n, v in entry["tensions_n"].items()) + f"; protocol: {protocol.SUMMARY}."]
     if low:
-        lines.append(f"Under {LOW_STIFFENING:g}× ({ref}, frictionless): " + " ".join(why))
+        lines += ["", f"Under {LOW_STIFFENING:g}× ({ref}, frictionless): " + " ".join(why)]
     return {"states": [full, act], "reference": ref, "by_orientation": by, "tendons": tendons, "low": low,
             "why": why, "lines": lines}
 
 
-def _words(b: dict) -> str:
+def _words(b: dict, desc: Described) -> str:
     t, d = b["tip"], b["least_over_disks"]
-    out = f"{t['none']:.2f}× frictionless to {t['stuck']:.2f}× with every eyelet stuck"
-    if "none" in d and "stuck" in d:
-        out += (f" (least over the disks {d['none']['ratio']:.2f}× at disk {d['none']['disk']}, "
-                f"{d['stuck']['ratio']:.2f}× at disk {d['stuck']['disk']})")
-    return f"{out}, {b['orientation']}"
+
+    def least(f):
+        return f" ({d[f]['ratio']:.2f}× at disk {d[f]['disk'] + 1})" if f in d else ""
+
+    out = f"{t['none']:.2f}×{least('none')} frictionless to {t['stuck']:.2f}×{least('stuck')} with every eyelet stuck"
+    if "capstan +z" in t:
+        out += (f"; with eyelet friction μ {desc.eyelet_friction:g} over a {desc.push_n:g} N push at the tip "
+                f"{t['capstan +z']:.2f}× pushed toward +z, {t['capstan -z']:.2f}× toward −z")
+    return out
 
 
 def _shares(entry: dict, desc: Described) -> list[dict]:
