@@ -261,8 +261,8 @@ def print_report(report: dict, console, verbose: bool = False) -> None:
         ft.add_row(Text(s, style=style.get(s, "")), c["id"], Text(place(c)), _fmt(c["measured"]), _fmt(c["limit"]),
                    Text(c["message"]))
     console.print(ft)
-    for line in stiffening_lines(report)[1:]:
-        console.print(Text(line))
+    if (report.get("stiffening") or {}).get("headline"):
+        console.print(Text(report["stiffening"]["headline"] + " (summary.md, stiffness.json)"))
     n_fail = sum(1 for c in report["checks"] if not c["passed"] and c["severity"] == "error")
     n_warn = sum(1 for c in report["checks"] if not c["passed"] and c["severity"] == "warning")
     verdict = Text("PASS", style="bold green") if report["ok"] else Text("FAIL", style="bold red")

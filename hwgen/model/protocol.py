@@ -23,7 +23,8 @@ orientation of the robot (gravity's direction in the base frame, or none):
    Σ (x² + z²) of the disks' centres: how far they lie off the straight line from the clamp,
    which is what a photograph shows), but not under the floor; then each is locked where it
    is (ℓ₀ = ℓ − T/k), which leaves the robot in the same equilibrium.
-4. If locking a later channel left an earlier protocol tendon under the floor, that channel's
+4. If locking a later channel left an earlier protocol tendon under the floor (by more than
+   :data:`FIXUP_TOL`), that channel's
    least tension is raised by the shortfall and the state tensioned again (a few times at most);
    what is still under it is said in the notes (its routing does not let it be held taut).
 
@@ -45,7 +46,8 @@ SUMMARY = ("the actuating pair locked straight (strip on edge) at the least tens
            "turned; each further channel, in channel order, pulled in the stated orientation to the least tension "
            "that holds the disks within check.straight_within_mm of the straightest it can, never under "
            "check.taut_floor_n nor over the allowable load, and locked there (Sect. III-B)")
-FLOOR_TOL = 1e-3                    # N: a tension this close to its floor is at it
+FLOOR_TOL = 1e-3                    # N: a tension this close to its goal is at it (the searches stop there)
+FIXUP_TOL = 0.01                    # N: a protocol tendon that ends this far under the floor is set higher and tensioned again
 LEVEL_ITERATIONS = 8                # the pair's level: solves at most (one suffices where both stay taut)
 STRAIGHT_ITERATIONS = 6             # a further channel's straightest tension: Gauss-Newton steps at most
 FIXUPS = 4                          # tensionings of a state again to lift a tendon back to its floor
@@ -175,7 +177,7 @@ def tension_state(model: st.Model, channels: tuple[str, ...], gravity, pretensio
     for attempt in range(FIXUPS + 1):
         locks, eq, set_n = _sequence(model, channels, by_channel, given, gravity, rules, extra, nodes, memo)
         final = _solve(model, locks, gravity, eq.q)
-        low = {n: final.tensions[n] for n in set_n if final.tensions[n] < floor - FLOOR_TOL}
+        low = {n: final.tensions[n] for n in set_n if final.tensions[n] < floor - FIXUP_TOL}
         if not low:
             break
         if attempt == FIXUPS:

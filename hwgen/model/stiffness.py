@@ -541,8 +541,12 @@ def stiffening(report: dict, desc: Described) -> dict:
         for n, v in entry["tensions_n"].items()) + f"; protocol: {protocol.SUMMARY}."]
     if low:
         lines += ["", f"Under {LOW_STIFFENING:g}× ({ref}, frictionless): " + " ".join(why)]
+    b = next(b for b in by if b["orientation"] == ref)
+    headline = (f"stiffening {full}/{act} at the tip ({ref}): {b['tip']['none']:.2f}× frictionless to "
+                f"{b['tip']['stuck']:.2f}× with the eyelets stuck" + (f"; under {LOW_STIFFENING:g}×: " + " ".join(why)
+                                                                      if low else ""))
     return {"states": [full, act], "reference": ref, "by_orientation": by, "tendons": tendons, "low": low,
-            "why": why, "lines": lines}
+            "why": why, "headline": headline, "lines": lines}
 
 
 def _words(b: dict, desc: Described) -> str:

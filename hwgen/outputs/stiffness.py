@@ -32,31 +32,37 @@ def stiffness_figure(report: dict):
     frictionless stiffness (a colour per state, log scale), continued lighter up to the stuck one;
     the capstan stiffness at the tip as markers (▲ pushed toward +z, ▼ toward −z)."""
     plt = _pyplot()
+    from matplotlib.patches import Patch
     none, stuck = _by(report, "none"), _by(report, "stuck")
     caps = {k: _by(report, "capstan", k) for k in ("+z", "-z")}
     orientations = list(none)
     fig, axes = plt.subplots(len(orientations), 1, figsize=(10, 3.6 * len(orientations) + 0.6), squeeze=False)
     cmap = plt.get_cmap("viridis")
     r = report.get("endpoint_ratio", {})
+    handles: dict = {}
     for ax, o in zip(axes[:, 0], orientations):
         states = none[o]
         n = len(states)
         disks = [d["disk"] for d in states[0]["disks"]]
         width = 0.8 / max(n, 1)
         x = np.arange(len(disks))
-        for j, (s, t) in enumerate(zip(states, stuck[o])):
-            colour = cmap(j / max(n - 1, 1))
-            lo = np.array([d["stiffness_n_per_mm"] for d in s["disks"]])
-            hi = np.array([d["stiffness_n_per_mm"] for d in t["disks"]])
-            at = x + (j - (n - 1) / 2) * width
-            ax.bar(at, lo, width, label=s["state"], color=colour)
-            band = ax.bar(at, np.maximum(hi - lo, 0.0), width, bottom=lo, color=colour, alpha=BAND_ALPHA)
-            for patch in band:
-                patch.set_gid("band")
-            for key, marker in (("+z", "^"), ("-z", "v")):
-                c = caps[key].get(o)
-                if c:
-                    ax.plot(at[-1], c[j]["tip_stiffness_n_per_mm"], marker, color="k", ms=4, label="_capstan")
+        colours = [cmap(j / max(n - 1, 1)) for j in range(n)]
+        at = np.concatenate([x + (j - (n - 1) / 2) * width for j in range(n)])     # state by state, disk by disk
+        lo = np.array([d["stiffness_n_per_mm"] for s in states for d in s["disks"]])
+        hi = np.array([d["stiffness_n_per_mm"] for s in stuck[o] for d in s["disks"]])
+        each = np.repeat(np.arange(n), len(disks))
+        ax.bar(at, lo, width, color=[colours[j] for j in each])                  # one call: thousands of bars draw fast
+        band = ax.bar(at, np.maximum(hi - lo, 0.0), width, bottom=lo, color=[colours[j] for j in each],
+                      alpha=BAND_ALPHA)
+        for patch in band:
+            patch.set_gid("band")
+        tips = at.reshape(n, len(disks))[:, -1]
+        for key, marker in (("+z", "^"), ("-z", "v")):
+            c = caps[key].get(o)
+            if c:
+                ax.plot(tips, [e["tip_stiffness_n_per_mm"] for e in c], marker, color="k", ms=4, ls="none",
+                        label="_capstan")
+        handles.setdefault("states", [Patch(color=colours[j], label=s["state"]) for j, s in enumerate(states)])
         ax.set_yscale("log")
         ax.set_xticks(x, [str(i + 1) for i in disks])        # the paper counts disks from 1 at the base
         ax.set_ylabel("stiffness along z (N/mm)")
@@ -69,9 +75,10 @@ def stiffness_figure(report: dict):
                       f"(paper: {r['paper']:g}×)")
         ax.set_title(title, fontsize=9)
         ax.grid(axis="y", which="both", alpha=0.3)
-    axes[0, 0].legend(ncol=min(len(none[orientations[0]]), 9), fontsize=8, loc="upper right")
+    axes[0, 0].legend(handles=handles["states"], ncol=min(len(handles["states"]), 9), fontsize=8, loc="upper right")
     axes[-1, 0].set_xlabel("tendon support disk (1 = base, clamped)")
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.08, right=0.98, top=1 - 0.5 / fig.get_figheight(), bottom=0.45 / fig.get_figheight(),
+                        hspace=0.32)          # fixed margins: tight_layout measures every log tick label first
     return fig
 
 
