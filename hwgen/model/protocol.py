@@ -74,15 +74,17 @@ def _solve(model, tendons, gravity, q0):
     return st.solve(model, st.Loads(tendons=tendons, gravity=gravity), q0)
 
 
-def _pair_level(model, locks, names, gravity, least, q0):
-    """(T_A, locks with the pair's, equilibrium) for the actuating channel (step 2)."""
+def _pair_level(model, locks, names, gravity, bounds, q0):
+    """(T_A, locks with the pair's, equilibrium) for the actuating channel (step 2), T_A within
+    ``bounds`` (least, most)."""
     springs = {t.name: t.stiffness for t in model.robot.tendons}
+    least, most = bounds
     T = least
     for _ in range(LEVEL_ITERATIONS):
         trial = {**locks, **st.locked_at(model, {n: T for n in names})}
         eq = _solve(model, trial, gravity, q0)
         virtual = min(springs[n] * (eq.lengths[n] - trial[n][1]) for n in names)    # negative when slack
-        new = max(least, T + least - virtual)      # both taut, each tension moves with T one for one
+        new = min(most, max(least, T + least - virtual))      # both taut, each tension moves with T one for one
         if abs(new - T) < FLOOR_TOL:
             break
         T, q0 = new, eq.q
@@ -106,15 +108,15 @@ def _deviation(model, eq, names, nodes):
     return np.r_[pts[:, 0], pts[:, 2]], np.r_[move[:, :, 0] @ dq, move[:, :, 2] @ dq]
 
 
-def rms(dev: np.ndarray) -> float:
-    """How far the disks lie off the straight line, root mean square, mm."""
-    return float(np.sqrt(2.0 * np.mean(dev * dev)))
+def rms(eq: st.Equilibrium, nodes) -> float:
+    """How far the disks (at ``nodes``) lie off the straight line from the clamp, root mean square, mm."""
+    return float(np.sqrt(np.mean(np.sum(eq.p[nodes][:, [0, 2]] ** 2, axis=1))))
 
 
 def _straightest(model, locks, names, gravity, bounds, within, nodes, q0):
     """(T, equilibrium) for a further channel's tendons ``names`` (step 3), pulled at T with
-    ``locks`` (the earlier tendons) locked: the least T in ``bounds`` (least, most) at which the disks lie within ``within`` mm (root mean
-    square) of the straightest the channel can hold them."""
+    ``locks`` (the earlier tendons) locked: the least T in ``bounds`` (least, most) at which the
+    disks lie within ``within`` mm (root mean square) of the straightest the channel can hold them."""
     least, most = bounds
 
     def pulled(T, q):
@@ -131,15 +133,15 @@ def _straightest(model, locks, names, gravity, bounds, within, nodes, q0):
             if abs(new - T) < FLOOR_TOL:
                 break
             T, eq = new, pulled(new, eq.q)
-        goal = rms(_deviation(model, eq, names, nodes)[0]) + within
-        lo, hi = (least, rms(_deviation(model, at_least, names, nodes)[0]) - goal), (T, -within)
+        goal = rms(eq, nodes) + within
+        lo, hi = (least, rms(at_least, nodes) - goal), (T, -within)
         if lo[1] <= 0:
             T, eq = least, at_least                             # no visible gain over the floor
         else:
             for _ in range(STRAIGHT_ITERATIONS):                 # the least T at the goal: regula falsi
                 t = lo[0] + (hi[0] - lo[0]) * lo[1] / (lo[1] - hi[1])
                 eq = pulled(t, eq.q)
-                g = rms(_deviation(model, eq, names, nodes)[0]) - goal
+                g = rms(eq, nodes) - goal
                 T = t
                 if abs(g) < 0.01 * within:
                     break
@@ -175,7 +177,7 @@ def tension_state(model: st.Model, channels: tuple[str, ...], gravity, pretensio
     extra: dict[str, float] = {}
     notes: list[str] = []
     for attempt in range(FIXUPS + 1):
-        locks, eq, set_n = _sequence(model, channels, by_channel, given, gravity, rules, extra, nodes, memo)
+        locks, eq, set_n = _sequence(model, channels, given, gravity, rules, extra, nodes, memo)
         final = _solve(model, locks, gravity, eq.q)
         low = {n: final.tensions[n] for n in set_n if final.tensions[n] < floor - FIXUP_TOL}
         if not low:
@@ -194,9 +196,10 @@ def tension_state(model: st.Model, channels: tuple[str, ...], gravity, pretensio
     return Tensioned(locks, final, {**given, **set_n}, source, notes)
 
 
-def _sequence(model, channels, by_channel, given, gravity, rules: Rules, extra, nodes, memo):
+def _sequence(model, channels, given, gravity, rules: Rules, extra, nodes, memo):
     """Steps 1-3 for the channels in order: (locks, the last equilibrium, tension set per protocol tendon)."""
     springs = {t.name: t.stiffness for t in model.robot.tendons}
+    by_channel = {c: [t.name for t in model.robot.tendons if t.channel == c] for c in channels}
     locks, eq, set_n, done = st.locked_at(model, given), None, {}, ()
     for c in channels:
         done = (*done, c)
@@ -212,7 +215,7 @@ def _sequence(model, channels, by_channel, given, gravity, rules: Rules, extra, 
         if not names:
             eq = _solve(model, locks, gravity, q0)
         elif c == rules.actuating:                  # straight, on edge: locked at the straight lengths
-            T, locks, eq = _pair_level(model, locks, names, gravity, least, q0)
+            T, locks, eq = _pair_level(model, locks, names, gravity, (least, rules.allowable_n), q0)
         else:                                       # in the stated orientation: pulled, then locked where it is
             T, eq = _straightest(model, locks, names, gravity, (least, rules.allowable_n), rules.within_mm, nodes, q0)
             locks = {**locks, **{n: ("locked", eq.lengths[n] - T / springs[n]) for n in names}}
