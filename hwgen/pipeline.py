@@ -122,8 +122,11 @@ def checked(folder: Path, manifest: dict, plan: Plan) -> tuple[dict, dict]:
     from .checks.run import run_checks as run
     ahead = _MEASURED_AHEAD.get()
     report = run(folder, manifest, plan, ahead.measured(folder, manifest) if ahead is not None else None)
-    study = statics(plan, report.get("gravity"))
-    report["stiffening"] = study.get("stiffening")
+    try:
+        study = statics(plan, report.get("gravity"))
+    except (ValueError, ArithmeticError, np.linalg.LinAlgError) as e:      # the statics says why, the rest stands
+        study = {"skipped": f"the tendon states' statics was not computed: {e}"}
+    report["stiffening"] = study.get("stiffening") or ({"skipped": study["skipped"]} if "skipped" in study else None)
     return report, study
 
 
@@ -150,8 +153,9 @@ def checks_stage(plan: Plan, folder: Path, manifest: dict, no_report: None) -> d
     plot_tolerance(report, folder / TOLERANCE)
     plot_sag(report, manifest["design_report"], folder / SAG)
     write_json(folder / STIFFNESS, study)
-    plot_stiffness(study, folder / STIFFNESS_PLOT)
-    plot_gravity(study, folder / GRAVITY_PLOT)
+    if "skipped" not in study:
+        plot_stiffness(study, folder / STIFFNESS_PLOT)
+        plot_gravity(study, folder / GRAVITY_PLOT)
     return report
 
 

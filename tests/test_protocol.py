@@ -265,3 +265,20 @@ def test_the_build_writes_the_statics_and_states_the_stiffening(built):
         assert (folder / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     summary = (folder / "summary.md").read_text()
     assert study["stiffening"]["lines"][0] in summary and "gravity -z" in summary
+
+
+def test_a_statics_that_cannot_be_computed_is_said_and_the_checks_stand(monkeypatch):
+    """The checks' report keeps every check and says why the stiffening is missing (a robot longer
+    than the statics resolves, a solver that cannot factor): no traceback, no stiffness plots."""
+    from hwgen import pipeline
+    from hwgen.checks import report as rp
+    from hwgen.checks import run
+    monkeypatch.setattr(run, "run_checks", lambda *a: {"checks": [], "ok": True, "gravity": None})
+
+    def fails(*a, **k):
+        raise ValueError("2000 joint coordinates, more than the 1500 the statics is run with")
+
+    monkeypatch.setattr(pipeline, "statics", fails)
+    report, study = pipeline.checked(None, {}, None)
+    assert report["ok"] and "1500" in report["stiffening"]["skipped"] and "skipped" in study
+    assert rp.stiffening_lines(report) == ["", report["stiffening"]["skipped"] + "."]

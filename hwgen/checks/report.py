@@ -181,7 +181,7 @@ def as_built_lines(report: dict) -> list[str]:
 def stiffening_lines(report: dict) -> list[str]:
     """What locking the stiffening tendons adds, in words (the statics' ``stiffening``), after a blank line."""
     st = report.get("stiffening") or {}
-    return ["", *st["lines"]] if st.get("lines") else []
+    return ["", *st["lines"]] if st.get("lines") else ["", st["skipped"] + "."] if st.get("skipped") else []
 
 
 def write_summary(report: dict, path: Path) -> None:

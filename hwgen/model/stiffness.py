@@ -67,6 +67,7 @@ PAPER_ENDPOINT_RATIO = 4.85       # abstract and Sect. VI: AC1C2H over A at the 
 MAX_COMBINED = 4                  # more stiffening channels than this: each alone and all together only
 CURVE_POINTS = 120
 STUDY_H_MAX = 3.0                 # mm: the study's rod segments (tip stiffness within 1e-4 of 1.5 mm's)
+STUDY_MAX_DOF = 1500              # a longer robot than this resolves is not studied (a ValueError says so)
 
 
 @dataclass(frozen=True)
@@ -399,6 +400,8 @@ def study(plan, which: list[str] | None = None, orientations: list[str] | None =
     report (see the module's docstring); ``measured``: as :func:`describe` takes it."""
     desc = describe(plan, measured)
     model = st.Model(desc.robot, h_max)
+    if model.n_dof > STUDY_MAX_DOF:
+        raise ValueError(f"{model.n_dof} joint coordinates, more than the {STUDY_MAX_DOF} the statics is run with")
     todo = [s for s in states(plan) if not which or s.name in which]
     names = list(orientations or ORIENTATIONS)
     entries = []
