@@ -433,6 +433,8 @@ def stiffness(params: Path = PARAMS, out_dir: Path = OUT,
                   f"{band[1]:.2f}× between the friction bounds, {r['ratio']:.2f}× frictionless; the paper measured "
                   f"{r['paper']:g}× on its prototype ({'inside' if r['paper_inside'] else 'outside'} the band)")
     out.print(Text(f"tensions: {rep['protocol']}; * a tendon's own pretension_n"))
+    out.print(Text(f"friction: {rep['frictions']['capstan']}; † a tendon went slack before the push was whole "
+                   "(the secant up to there); ▲ toward +z, ▼ toward −z"))
     for note in rep["notes"]:
         out.print(Text(f"note: {note}"))
     out.print(Text(f"model: {rep['model']}"))
