@@ -439,34 +439,68 @@ def _on_outputs(doing: str, quiet: bool, run):
 def stiffness(params: Path = PARAMS, out_dir: Path = OUT,
               states: str = typer.Option(None, "--states", help="comma-separated tendon states (default: all, "
                                                                  "the nine of the paper's Fig. 8 for the prototype)"),
-              quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner")) -> None:
-    """Stiffness in newtons per tendon state: at every disk and in torsion at the tip, and the shape under gravity.
+              quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner"),
+              cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
+    """Stiffness in newtons per tendon state and orientation: at every disk and in torsion at the tip, between the eyelet-friction bounds, and the shape under gravity.
 
-    From the parameters alone (no CAD): stiffness.json, stiffness.png (Fig. 8 style) and gravity.png (Fig. 7 style) in OUT/<design>/.
+    From the parameters (no CAD; the weights from a current build's files when OUT/<design>/ holds one): stiffness.json, stiffness.png (Fig. 8 style) and gravity.png (Fig. 7 style) in OUT/<design>/, which `hwgen build` writes too.
     """
     loaded = _load(params)
     from .pipeline import stiffness as run_stiffness
 
     which = [s.strip() for s in states.split(",") if s.strip()] if states else None
     with err.status(Text(f"solving {loaded.name}"), spinner="dots") if not quiet else nullcontext():
-        rep, folder = run_stiffness(loaded, out_dir, which)
-    ref = next((s for s in rep["states"] if s["state"] == rep["endpoint_ratio"]["states"][1]), None)
-    t = Table(title=f"{loaded.name}: stiffness per tendon state (robot horizontal, own weight)")
-    for col in ("state", "tip N/mm", "× " + (ref["state"] if ref else "-"), "least disk N/mm", "tip torsion N·mm/rad",
-                "tip sag mm"):
-        t.add_column(col, justify="right" if col != "state" else "left")
-    for s in rep["states"]:
-        least = min(d["stiffness_n_per_mm"] for d in s["disks"])
-        t.add_row(s["state"], f"{s['tip_stiffness_n_per_mm']:.4f}",
-                  f"{s['tip_stiffness_n_per_mm'] / ref['tip_stiffness_n_per_mm']:.2f}" if ref else "-",
-                  f"{least:.4f}", f"{s['tip_torsion_nmm_per_rad']:.0f}", f"{s['tip_sag_mm']:.1f}")
-    out.print(t)
+        rep, folder = run_stiffness(loaded, out_dir, which, cache_dir=_cache(cache_dir, no_cache))
+    for table in _stiffness_tables(loaded.name, rep):
+        out.print(table)
     r = rep["endpoint_ratio"]
-    if r["ratio"] is not None:
-        out.print(f"endpoint stiffness {r['states'][0]}/{r['states'][1]}: {r['ratio']:.2f}× (the paper measured "
-                  f"{r['paper']:g}× on its prototype); model: {rep['model']}")
+    if r.get("ratio") is not None:
+        band = r["band"]
+        out.print(f"endpoint stiffness {r['states'][0]}/{r['states'][1]} ({r['orientation']}): {band[0]:.2f}-"
+                  f"{band[1]:.2f}× between the friction bounds, {r['ratio']:.2f}× frictionless; the paper measured "
+                  f"{r['paper']:g}× on its prototype ({'inside' if r['paper_inside'] else 'outside'} the band)")
+    out.print(Text(f"tensions: {rep['protocol']}; * a tendon's own pretension_n"))
+    out.print(Text(f"friction: {rep['frictions']['capstan']}; † a tendon went slack before the push was whole "
+                   "(the secant up to there); ▲ toward +z, ▼ toward −z"))
+    for note in rep["notes"]:
+        out.print(Text(f"note: {note}"))
+    out.print(Text(f"model: {rep['model']}"))
     for name in ("stiffness.json", "stiffness.png", "gravity.png"):
         out.print(f"  {printable(folder / name)}")
+
+
+def _stiffness_tables(design: str, rep: dict) -> list:
+    """One table per orientation: each state's locked tensions and stiffness between the friction bounds."""
+    tip = {(e["state"], e["orientation"], e["friction"] + (" " + e["push"] if "push" in e else "")): e
+           for e in rep["states"]}
+    ref = rep["endpoint_ratio"]["states"][1] if rep["endpoint_ratio"].get("states") else None
+    tables = []
+    for o in rep["orientations"]:
+        t = Table(title=f"{design}: {o}, tensioned by the protocol (N/mm; frictionless–stuck)")
+        cols = ("state", "locked tensions N", "tip N/mm", "× " + (ref or "-"), "capstan ▲/▼", "least disk",
+                "torsion N·mm/rad", "tip z mm", "slack at push ▲/▼ N")
+        for col in cols:
+            t.add_column(col, justify="left" if col in ("state", "locked tensions N") else "right")
+        for e in rep["states"]:
+            if e["orientation"] != o or e["friction"] != "none":
+                continue
+            stuck = tip[(e["state"], o, "stuck")]
+            a, b = e["tip_stiffness_n_per_mm"], stuck["tip_stiffness_n_per_mm"]
+            base = (tip.get((ref, o, "none")), tip.get((ref, o, "stuck")))
+            times = (f"{a / base[0]['tip_stiffness_n_per_mm']:.2f}–{b / base[1]['tip_stiffness_n_per_mm']:.2f}"
+                     if all(base) else "-")
+            caps = [tip.get((e["state"], o, f"capstan {k}")) for k in ("+z", "-z")]
+            cap = "/".join(f"{c['tip_stiffness_n_per_mm']:.3f}" + ("†" if c["slack_within_push"] else "")
+                           for c in caps if c) or "-"
+            tens = " ".join(f"{n} {v:.2f}" + ("*" if e["tension_from"][n] == "pretension_n" else "")
+                            for n, v in e["tensions_n"].items()) or "-"
+            least = min(d["stiffness_n_per_mm"] for d in e["disks"])
+            slack = "/".join("-" if v is None else f"{v:.2f}" for v in e["slack_at_tip_push_n"].values())
+            t.add_row(e["state"], tens, f"{a:.4f}–{b:.4f}", times, cap, f"{least:.4f}",
+                      f"{e['tip_torsion_nmm_per_rad']:.0f}–{stuck['tip_torsion_nmm_per_rad']:.0f}",
+                      f"{e['tip_z_mm']:+.1f}", slack)
+        tables.append(t)
+    return tables
 
 
 @_command

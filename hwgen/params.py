@@ -185,9 +185,11 @@ class Tendon(_Model):
         None, description="allowed length change over the sweep, mm (default: 0.2 unless on the actuating channel)")
     termination: Termination | None = Field(
         None, description="how this tendon ends at the base disk (default: tendon_material.termination)")
-    pretension_n: Finite = Field(5.0, ge=0, le=10_000,
-                                 description="tension the tendon is locked at, robot straight and unloaded, N "
-                                             "(a mirrored tendon gets the same)")
+    pretension_n: Finite | None = Field(
+        None, ge=0, le=10_000,
+        description="tension the tendon is pulled to at its turn in the tensioning protocol, N (a mirrored tendon gets "
+                    "the same); default: the paper's protocol finds it (hwgen.model.protocol: the tension that holds "
+                    "the backbone straightest, not under check.taut_floor_n)")
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -226,6 +228,11 @@ class TendonMaterial(_Model):
                                                 description="stretch per newton of a tendon's two ends together: "
                                                             "its knot in its seat and its wraps on the drum, "
                                                             "with the drive behind it, mm/N")
+    eyelet_friction: Finite | None = Field(
+        None, ge=0, le=2,
+        description="coefficient of friction of the line in an eyelet (capstan: a segment slips once the tension "
+                    "on one side exceeds e^(μθ) times the other's, θ the angle the line turns there); the "
+                    "stiffness is then reported for it between the frictionless and the stuck bounds")
 
 
 class Process(_Model):
@@ -352,6 +359,17 @@ class CheckSettings(_Model):
                                  description="largest rise, as a share, of the actuating tension needed at the "
                                              "sweep's end when the stiffening tendons are locked, over the "
                                              "tension needed with them slack")
+    working_tension_n: Finite = Field(5.0, gt=0, le=10_000,
+                                      description="tension a tendon without pretension_n is locked at (a stiffening "
+                                                  "tendon) or held at by the drive (an actuating one) in the tension "
+                                                  "checks' bending sweep, N")
+    straight_within_mm: Finite = Field(1.0, gt=0, le=100,
+                                       description="tensioning protocol: a stiffening channel is pulled to the least "
+                                                   "tension that brings the disks within this of the straightest it "
+                                                   "can hold them (root mean square off the straight line), mm")
+    stiffness_push_n: Finite = Field(1.0, gt=0, le=1000,
+                                     description="the push the stiffness with eyelet friction (capstan) is taken "
+                                                 "over, at the tip, N")
 
 
 class Render(_Model):

@@ -1,7 +1,8 @@
 """The order of the stages, and the one place that knows it.
 
     read (params) → feasibility (model) → plan (model) → parts (cad) → files and manifest (cad)
-    → checks (report.json, summary.md) → plots (lengths.png, tolerance.png, sag.png) → bill of materials
+    → checks (report.json, summary.md; the tendon states' statics: stiffness.json, stiffness.png,
+    gravity.png) → plots (lengths.png, tolerance.png, sag.png) → bill of materials
     → print plates (plates/) → pictures → assembly guide (guide/)
 
 Every build writes into a fresh staging folder beside the target; only when every file is
@@ -110,19 +111,42 @@ def output_errors(out_root: Path) -> Iterator[None]:
 # ---------------------------------------------------------------- stages after the files
 
 def run_checks(folder: Path, manifest: dict, plan: Plan) -> dict:
+    """:func:`checked`'s report."""
+    return checked(folder, manifest, plan)[0]
+
+
+def checked(folder: Path, manifest: dict, plan: Plan) -> tuple[dict, dict]:
     """:func:`hwgen.checks.run.run_checks`, imported when the checks run: it brings scipy's
     optimisers (about a second), which a build whose stages all come from the cache never needs.
     In a build, with what the work ahead measured on these very files while assembly.step was
-    written (:meth:`_Ahead.measure`), when it did."""
+    written (:meth:`_Ahead.measure`), when it did. Then the tendon states' statics
+    (:func:`statics`), whose stiffening joins the report. Returns (report, statics)."""
     from .checks.run import run_checks as run
     ahead = _MEASURED_AHEAD.get()
-    return run(folder, manifest, plan, ahead.measured(folder, manifest) if ahead is not None else None)
+    report = run(folder, manifest, plan, ahead.measured(folder, manifest) if ahead is not None else None)
+    try:
+        study = statics(plan, report.get("gravity"))
+    except (ValueError, ArithmeticError, np.linalg.LinAlgError) as e:      # the statics says why, the rest stands
+        study = {"skipped": f"the tendon states' statics was not computed: {e}"}
+    report["stiffening"] = study.get("stiffening") or ({"skipped": study["skipped"]} if "skipped" in study else None)
+    return report, study
+
+
+def statics(plan: Plan, measured: dict | None, which: list[str] | None = None) -> dict:
+    """The statics of the plan's tendon states (or those named; :func:`hwgen.model.stiffness.study`)
+    with the weights the checks measured (a report's ``gravity`` section, else the plan's
+    estimate): stiffness.json's content, remembered in the active cache by what it reads (the
+    described robot, its states and orientations, the code)."""
+    from .model import stiffness as sf      # scipy's optimisers: only the checks and `hwgen stiffness`
+    todo = [s for s in sf.states(plan) if not which or s.name in which]
+    inputs = (sf.describe(plan, measured), todo, sf.ORIENTATIONS, sf.STUDY_H_MAX)
+    return cache.remembered("stiffness study", inputs, lambda: sf.study(plan, which, measured=measured))
 
 
 def checks_stage(plan: Plan, folder: Path, manifest: dict, no_report: None) -> dict:
     """Measure the fresh files: report.json, summary.md, lengths.png, tolerance.png and sag.png; the checks go
-    into the manifest."""
-    report = run_checks(folder, manifest, plan)
+    into the manifest. And the tendon states' statics: stiffness.json, stiffness.png, gravity.png."""
+    report, study = checked(folder, manifest, plan)
     manifest["checks"] = report["checks"]
     manifest["checks_ok"] = report["ok"]
     write_report(report, folder)
@@ -130,6 +154,10 @@ def checks_stage(plan: Plan, folder: Path, manifest: dict, no_report: None) -> d
     plot_lengths(report, folder / PLOT)
     plot_tolerance(report, folder / TOLERANCE)
     plot_sag(report, manifest["design_report"], folder / SAG)
+    write_json(folder / STIFFNESS, study)
+    if "skipped" not in study:
+        plot_stiffness(study, folder / STIFFNESS_PLOT)
+        plot_gravity(study, folder / GRAVITY_PLOT)
     return report
 
 
@@ -1237,26 +1265,30 @@ def coupon(loaded: params.LoadedDesign, out_root: Path) -> tuple[dict, Path]:
     return info, folder
 
 
-def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | None = None) -> tuple[dict, Path]:
+def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | None = None,
+              cache_dir: Path | None | bool = True) -> tuple[dict, Path]:
     """`hwgen stiffness`: the statics of every tendon state (or those named) from the plan, the
     weights measured from the built files when ``out_root/<design>/`` holds a current build (its
     report's gravity section), else estimated from the plan; written as stiffness.json,
-    stiffness.png and gravity.png into that folder (added to what is there; a later build replaces
-    the folder and drops them). Returns (report, folder)."""
+    stiffness.png and gravity.png into that folder (replacing what a build wrote there: the same
+    files when every state is asked for). Returns (report, folder)."""
     from .model import stiffness as statics_study       # scipy's optimisers: only this command and the checks
-    plan = design_plan(loaded)
+    folder = Path(out_root) / loaded.name
+    measured, record = None, None
+    with output_errors(Path(out_root)), snapshot(folder) as view:
+        if stale_reason(view, loaded) is None:
+            measured = (read_report(view) or {}).get("gravity")
+            record = tensioner_record(read_manifest(view))     # the build's layout, as `hwgen check` takes it
+    plan = design_plan(loaded, record)
     if which:
         known = [s.name for s in statics_study.states(plan)]
         for name in which:
             if name not in known:
                 raise InputError(loaded.source, "--states", f"unknown state {clip(name)!r}; this design's are "
                                                             f"{', '.join(known)}")
-    folder = Path(out_root) / loaded.name
-    measured = None
-    with output_errors(Path(out_root)), snapshot(folder) as view:
-        if stale_reason(view, loaded) is None:
-            measured = (read_report(view) or {}).get("gravity")
-    report = statics_study.study(plan, which, measured=measured)
+    store = cache.Store(cache.default_dir() if cache_dir is True else (cache_dir or None))
+    with cache.using(store):
+        report = statics(plan, measured, which)
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
         write_json(tmp / STIFFNESS, report)
         plot_stiffness(report, tmp / STIFFNESS_PLOT)

@@ -92,6 +92,7 @@ class Report(_Named):
     seats: list[dict[str, Any]]   # checks.anchors
     gravity: dict[str, Any]       # checks.gravity
     tension: dict[str, Any]       # checks.tension
+    stiffening: dict[str, Any] | None   # the tendon states' statics: hwgen.model.stiffness.stiffening
 
 
 def write_report(report: Report, folder: Path) -> None:
@@ -251,6 +252,12 @@ def verdict_lines(report: dict, summary: Path | str, files: dict[str, str] | Non
     return out + [("verdict", text)]
 
 
+def stiffening_lines(report: dict) -> list[str]:
+    """What locking the stiffening tendons adds, in words (the statics' ``stiffening``), after a blank line."""
+    st = report.get("stiffening") or {}
+    return ["", *st["lines"]] if st.get("lines") else ["", st["skipped"] + "."] if st.get("skipped") else []
+
+
 def write_summary(report: dict, path: Path) -> None:
     """A short Markdown summary: verdict, tendon lengths, failing and warning findings."""
     checks = report["checks"]
@@ -289,6 +296,7 @@ def write_summary(report: dict, path: Path) -> None:
         case = g["cases"][g["gravity"]]
         lines += ["", f"Own weight, no tendon tensioned (state N): tip sag {case['tip_sag_mm']:.1f} mm, strip stress "
                       f"{case['max_stress_mpa']:.0f} MPa (allowable {g['allowable_stress_mpa']:g} MPa). Plot: `sag.png`."]
+    lines += stiffening_lines(report)
     if errs:
         lines += ["", "## Failed", ""] + [_finding(c) for c in errs]
     if warns:
@@ -331,3 +339,5 @@ def print_report(report: dict, console, verbose: bool = False) -> None:
         ft.add_row(Text(s, style=style.get(s, "")), c["id"], Text(place(c)), _fmt(c["measured"]), _fmt(c["limit"]),
                    Text(c["message"]))
     console.print(ft)
+    if (report.get("stiffening") or {}).get("headline"):
+        console.print(Text(report["stiffening"]["headline"] + " (summary.md, stiffness.json)"))

@@ -2,10 +2,13 @@
 locked stiffening tendons cost the actuating pair (:mod:`hwgen.model.stiffness`,
 :mod:`hwgen.model.statics`).
 
-Model. The weightless robot bent from straight to ±check angle by hauling in the actuating
-tendon on the inside of the bend (its drum turning), the other actuating tendons held at their
-pre-tension, every stiffening tendon locked where it carries ``pretension_n`` in the weightless
-robot those tensions settle (tensioned on the bench); tendons as eq. (2) chords through the
+Model (:mod:`hwgen.model.bending`). The weightless robot bent from straight to ±check angle by
+hauling in the actuating tendon on the inside of the bend (its drum turning), the other actuating
+tendons held at their working tension, every stiffening tendon locked where it carries its
+working tension in the weightless robot those tensions settle (tensioned on the bench): its
+``pretension_n``, else ``check.working_tension_n`` (the paper's tensioning protocol sets the
+stiffness states' tensions for the robot under its weight, which a weightless sweep cannot use;
+:mod:`hwgen.model.protocol`); tendons as eq. (2) chords through the
 eyelet centres, one-way springs of ``tendon_material.axial_stiffness_n`` in series with
 ``tie_off_compliance_mm_per_n``. Then the same sweep with the stiffening tendons slack: the
 actuating tension's rise between the two is the coupling. The statics is of the plan (the
@@ -29,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import cache
+from ..model import bending as bd
 from ..model import statics as st
 from ..model import stiffness as sf
 from .base import REBUILD, Check
@@ -46,20 +50,26 @@ def sweeps(plan) -> tuple[sf.Described, dict, dict]:
     what they gave last time for these (and this code) is remembered in the active cache (the same
     values either way)."""
     desc = sf.describe(plan)
-    model = st.Model(desc.robot, sf.SWEEP_H_MAX)
+    model = st.Model(desc.robot, bd.SWEEP_H_MAX)
     if model.n_dof > MAX_DOF:
         raise ValueError(f"{model.n_dof} joint coordinates, more than the {MAX_DOF} the sweep is run with")
     ang = plan.check.max_angle_deg
-    locked, free = cache.remembered("tension sweeps", (desc, ang), lambda: _sweeps(desc, model, ang))
+    work = working_tensions(desc, plan)
+    locked, free = cache.remembered("tension sweeps", (desc, work, ang), lambda: _sweeps(desc, model, work, ang))
     return desc, locked, free
 
 
-def _sweeps(desc: sf.Described, model: st.Model, ang: float) -> tuple[dict, dict]:
+def working_tensions(desc: sf.Described, plan) -> dict:
+    """Each tendon's working tension in the sweep: its ``pretension_n``, else ``check.working_tension_n``."""
+    return {n: plan.check.working_tension_n if v is None else v for n, v in desc.pretension.items()}
+
+
+def _sweeps(desc: sf.Described, model: st.Model, work: dict, ang: float) -> tuple[dict, dict]:
     """The sweep with the stiffening tendons locked and with them slack; which tendon each side
     hauls in is the same for both (probed once)."""
-    inner = sf.inner_tendons(desc, model)
-    return (sf.sweep(desc, model, ang, SWEEP_STEP_DEG, locked=True, inner_of=inner),
-            sf.sweep(desc, model, ang, FREE_STEP_DEG, locked=False, inner_of=inner))
+    inner = bd.inner_tendons(desc, model)
+    return (bd.sweep(desc, model, work, ang, SWEEP_STEP_DEG, locked=True, inner_of=inner),
+            bd.sweep(desc, model, work, ang, FREE_STEP_DEG, locked=False, inner_of=inner))
 
 
 def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict, list[Check]]:
@@ -77,6 +87,7 @@ def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict,
                     [Check("tension.model", "warning", False, f"the tendon tensions were not computed: {e}; "
                            f"tendon.taut, tendon.overload and actuation.* are not judged", fix=fix)])
     desc, locked, free = swept
+    work = working_tensions(desc, plan)
     ang = chk.max_angle_deg
     allow = tm.break_load / chk.tendon_safety_factor
     floor = chk.taut_floor_n
@@ -96,12 +107,12 @@ def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict,
         excess = max(0.0, robust - centre_mm.get(name, 0.0)) if robust is not None else 0.0
         lo_built = lo - springs[name] * excess
         hi_built = hi + springs[name] * excess
-        tendons.append({"name": name, "spring_n_per_mm": springs[name], "pretension_n": desc.pretension[name],
+        tendons.append({"name": name, "spring_n_per_mm": springs[name], "pretension_n": work[name],
                         "least_n": lo, "greatest_n": hi, "as_built_excess_mm": excess, "least_as_built_n": lo_built,
                         "greatest_as_built_n": hi_built})
         ok = lo_built > floor
         sev = "error" if lo <= floor else chk.robust_severity   # slack even through the centres: an error
-        msg = (f"{name}: locked at {desc.pretension[name]:g} N, its tension runs {lo:.2f}-{hi:.2f} N over "
+        msg = (f"{name}: locked at {work[name]:g} N, its tension runs {lo:.2f}-{hi:.2f} N over "
                f"{span} (statics through the eyelet centres, spring {springs[name]:.2f} N/mm); as built "
                f"({chk.robust}) its path shortens {excess:.3f} mm more, so at least {lo_built:.2f} N: "
                + ("taut" if ok else "SLACK") + f" (floor {floor:g} N)")
@@ -151,8 +162,9 @@ def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict,
                             worst["rise"], limit, {"tendon": worst["inner"]}, fix=fix))
         checks.append(_actuation_tension(max(sides, key=lambda s: s["with_stiffening_n"]), tm, chk, ang))
     report = {
-        "model": "weightless robot bent by hauling in the inner actuating tendon, the others at pre-tension; "
-                 "stiffening tendons locked at pre-tension (and again slack); discrete elastic rod with eq. (2) "
+        "model": "weightless robot bent by hauling in the inner actuating tendon, the others at their working "
+                 "tension; stiffening tendons locked at it (pretension_n, else check.working_tension_n; and again "
+                 "slack); discrete elastic rod with eq. (2) "
                  "tendons as one-way springs (hwgen.model.statics); as built: the taut path's excess length "
                  "change at the tendon's spring rate, first order",
         "allowable_n": allow, "floor_n": floor, "tendons": tendons, "actuation": sides,
