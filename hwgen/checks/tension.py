@@ -116,7 +116,7 @@ def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict,
                f"{span} (statics through the eyelet centres, spring {springs[name]:.2f} N/mm); as built "
                f"({chk.robust}) its path shortens {excess:.3f} mm more, so at least {lo_built:.2f} N: "
                + ("taut" if ok else "SLACK") + f" (floor {floor:g} N)")
-        span_n = (desc.pretension[name], lo_built, hi_built, floor, allow)
+        span_n = (work[name], lo_built, hi_built, floor, allow)
         checks.append(Check("tendon.taut", sev, ok, msg, lo_built, floor, {"tendon": name},
                             fix="" if ok else _slack_fix(name, span_n, excess),
                             lowered_by="check.robust_severity" if not ok and sev == "warning" else ""))
