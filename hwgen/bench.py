@@ -402,7 +402,8 @@ def _statics(plan) -> None:
     from hwgen.model import stiffness as sf
     n = len(sf.states(plan))
     cpu = time.process_time()
-    with timed(f"statics: {n} tendon states", "settle, own weight, stiffness at every disk, tip torsion"):
+    with timed(f"statics: {n} tendon states × {len(sf.ORIENTATIONS)} orientations",
+               "the tensioning protocol, stiffness at every disk frictionless and stuck, the capstan push, torsion"):
         rep = sf.study(plan)
     ROWS[-1] = (*ROWS[-1][:2], ROWS[-1][2] + f"; {rep['dof']} DOF, {time.process_time() - cpu:.1f} s CPU, "
                                             f"load {os.getloadavg()[0]:.1f}")
