@@ -115,19 +115,67 @@ def test_a_chain_held_by_plates_every_disk_gap_bends_both_ways_as_the_statics():
 
 
 def test_the_reference_is_hwgen_stiffness():
-    """What the sim is checked against is what `hwgen stiffness` reports: the same tip stiffness
-    and sag per state, from the same weights."""
+    """What the sim is checked against is what `hwgen stiffness` reports in the orientation the
+    sim's world has (gravity −z), frictionless: the same tip stiffness, sag and tensions per
+    state, every state's locks; the bent case pulls the actuating tendon that lifts the robot."""
     plan = _plan("prototype")
-    ref = reference.statics_reference(plan, None, None, 10.0)
+    study = stiffness.study(plan, orientations=[reference.ORIENTATION])
+    ref = reference.statics_reference(plan, None, study, bend_tension_n=10.0)
     names = [s["state"] for s in ref.states]
     full = max(stiffness.states(plan), key=lambda s: len(s.channels)).name
-    assert names == ["N", plan.tensioner.actuating_channel, full]
-    study = {s["state"]: s for s in stiffness.study(plan, names)["states"]}
+    assert names == ["N", plan.tensioner.actuating_channel, full] and ref.all_tendons == full
+    tips = stiffness.tip_stiffness(study)
+    entries = {(e["state"], e["orientation"], e["friction"]): e for e in study["states"]}
     for s in ref.states:
-        assert s["tip_stiffness_n_per_mm"] == pytest.approx(study[s["state"]]["tip_stiffness_n_per_mm"], rel=1e-9)
-        assert s["tip_sag_mm"] == pytest.approx(study[s["state"]]["tip_sag_mm"], rel=1e-9)
-    assert set(ref.locks) == {s.name for s in stiffness.states(plan)}
-    assert ref.bent["tendon"] in {p.name for p in plan.paths if p.channel == plan.tensioner.actuating_channel}
+        e = entries[(s["state"], "gravity -z", "none")]
+        assert s["tip_stiffness_n_per_mm"] == tips[(s["state"], "gravity -z", "none")]
+        assert s["tip_sag_mm"] == pytest.approx(-e["tip_z_mm"], abs=1e-9)
+        assert s["tip_mm"][0] == pytest.approx(e["tip_x_mm"], abs=1e-9)
+        assert s["tensions_n"] == e["tensions_n"]
+    assert ref.locks == {s.name: entries[(s.name, "gravity -z", "none")]["locks_mm"] for s in stiffness.states(plan)}
+    assert set(ref.locks[full]) == {p.name for p in plan.paths}
+    b = ref.bent
+    assert b["tendon"] in {p.name for p in plan.paths if p.channel == plan.tensioner.actuating_channel}
+    assert b["tension_n"] == 10.0 and b["tip_mm"][2] > ref.states[0]["tip_mm"][2] + 50     # it lifts the tip
+    assert stiffness.ORIENTATIONS[reference.ORIENTATION] == (0.0, 0.0, -1.0) == stiffness.ORIENTATIONS[
+        stiffness.REFERENCE]                           # robot.xml's gravity, and the statics' headline orientation
+
+
+def test_the_builds_statics_serve_only_when_they_hold_every_state_from_the_same_weights(tmp_path):
+    """study_of reads stiffness.json when it has every state in the sim's orientation from the
+    same weights, and solves the statics again when it has a state fewer, the other orientations
+    only, other weights, a skipped statics or no file."""
+    plan = _plan("prototype")
+    full = stiffness.study(plan, orientations=[reference.ORIENTATION])
+    solved = []
+
+    def solve():
+        solved.append(1)
+        return full
+
+    def served(content, measured=None) -> str:
+        path = tmp_path / reference.STUDY_FILE
+        path.unlink(missing_ok=True)
+        if content is not None:
+            path.write_text(json.dumps(content))
+        study, source = reference.study_of(tmp_path, plan, measured, solve)
+        assert json.loads(json.dumps(study)) == json.loads(json.dumps(full))
+        return source
+
+    assert served(full) == "the build's stiffness.json" and not solved
+    heavier = stiffness.describe(plan).masses
+    heavier = {**heavier, "tip_assembly": {**heavier["tip_assembly"], "mass_g": 2 * heavier["tip_assembly"]["mass_g"]}}
+    measured = {"disks": heavier["disks"], "strip": {"lambda_g_mm": heavier["strip_g_per_mm"]},
+                "tip_assembly": {"mass_g": heavier["tip_assembly"]["mass_g"], "a_mm": heavier["tip_assembly"]["a_mm"],
+                                 "z_mm": heavier["tip_assembly"]["b_mm"]}}
+    for content, why, m in (({**full, "states": [e for e in full["states"] if e["state"] != "AC2"]}, "state AC2", None),
+                            ({**full, "states": [{**e, "orientation": "weightless"} for e in full["states"]]},
+                             "state N", None),
+                            (full, "weights", measured),
+                            ({"skipped": "too many coordinates"}, "too many coordinates", None),
+                            (None, "cannot be read", None)):
+        assert why in served(content, m)
+    assert len(solved) == 5
 
 
 def test_hwgen_sim_refuses_a_missing_file_in_one_line(tmp_path):
@@ -223,11 +271,26 @@ def test_every_state_is_a_keyframe_its_drums_can_reach(simulated, name):
         ctrl = m.key_ctrl[i]
         assert np.all(ctrl >= m.actuator_ctrlrange[:, 0]) and np.all(ctrl <= m.actuator_ctrlrange[:, 1])
     assert sorted(m.actuator(i).name for i in range(m.nu)) == sorted(plan.tensioner.channels)
-    for state, taut in (("N", False), (max(states, key=lambda s: len(s.channels)).name, True)):
-        mujoco.mj_resetDataKeyframe(m, d, m.key(state).id)
+    mujoco.mj_resetDataKeyframe(m, d, m.key("N").id)
+    mujoco.mj_forward(m, d)
+    assert np.all(d.ten_length < m.tendon_lengthspring[:, 1])            # in N no tendon pulls
+    # in every other state, robot straight, each locked tendon stretched by its haul-in from the
+    # statics' lock in the build's stiffness.json (ℓ_straight − ℓ₀), less what its drum misses it by
+    study = json.loads((folder / "stiffness.json").read_text())
+    straight = st.straight_lengths(st.Model(stiffness.describe(plan).robot, stiffness.STUDY_H_MAX))
+    missed = result["keyframe_lock_missed_by_mm"]
+    for e in study["states"]:
+        if e["orientation"] != reference.ORIENTATION or e["friction"] != "none" or e["state"] == "N":
+            continue
+        mujoco.mj_resetDataKeyframe(m, d, m.key(e["state"]).id)
         mujoco.mj_forward(m, d)
-        stretch = d.ten_length - m.tendon_lengthspring[:, 1]
-        assert np.all(stretch > 0) if taut else np.all(stretch < 0)
+        for t, lock in e["locks_mm"].items():
+            i = m.tendon(t).id
+            stretch_mm = (d.ten_length[i] - m.tendon_lengthspring[i, 1]) * 1e3
+            miss = missed.get(e["state"], {}).get(t, 0.0)
+            assert stretch_mm == pytest.approx(straight[t] - lock - miss, abs=1e-6), (e["state"], t)
+    full = result["states"][-1]                     # and taut at MuJoCo's equilibrium under gravity
+    assert all(full["mujoco_tensions_n"][t] > 0 for t in full["statics_tensions_n"])
 
 
 @pytest.mark.parametrize("name", DESIGNS)
@@ -250,12 +313,16 @@ def test_tip_stiffness_agrees_with_the_statics_and_with_pushing_the_tip(simulate
     folder, result, _ = simulated[name]
     from hwgen.checks.report import read_report
     plan = _plan(name)
-    study = {s["state"]: s for s in stiffness.study(plan, [s["state"] for s in result["states"]],
-                                                    measured=read_report(folder)["gravity"])["states"]}
+    o = reference.ORIENTATION
+    tips = stiffness.tip_stiffness(stiffness.study(plan, [s["state"] for s in result["states"]], orientations=[o],
+                                                   measured=read_report(folder)["gravity"]))
     assert [s["state"] for s in result["states"]][:2] == ["N", plan.tensioner.actuating_channel]
+    assert result["statics_from"] == "the build's stiffness.json" and result["orientation"]["name"] == o
+    m = mujoco.MjModel.from_xml_path(str(folder / "sim" / "robot.xml"))
+    assert m.opt.gravity / np.linalg.norm(m.opt.gravity) == pytest.approx(result["orientation"]["gravity"])
     for s in result["states"]:
         assert abs(s["mujoco_tip_n_per_mm"] / s["statics_tip_n_per_mm"] - 1) <= 0.25
-        assert s["statics_tip_n_per_mm"] == pytest.approx(study[s["state"]]["tip_stiffness_n_per_mm"], rel=1e-9)
+        assert s["statics_tip_n_per_mm"] == pytest.approx(tips[(s["state"], o, "none")], rel=1e-9)
     sim = measure.Sim.load(folder / "sim" / "robot.xml")
     s = result["states"][1]                             # the actuating pair alone: its locks are the keyframe's
     assert max(map(abs, s["keyframe"]["lock_missed_by_mm"].values()), default=0.0) < 1e-6
@@ -301,7 +368,8 @@ def test_a_robot_without_a_tensioner_still_loads_with_its_tendons_just_taut(simu
     printed = parts.read_build(folder, read_manifest(folder), read_report(folder))
     bare = dataclasses.replace(printed, tip=[], runs={})
     plan = _plan("prototype")
-    ref = reference.statics_reference(plan, read_report(folder)["gravity"], ["N"], 10.0)
+    study = json.loads((folder / "stiffness.json").read_text())
+    ref = reference.statics_reference(plan, read_report(folder)["gravity"], study, ["N"], 10.0)
     states = [(s.name, s.channels) for s in stiffness.states(plan)]
     written = mjcf.write_robot("bare", bare, chain.hinges(ref.described.robot), [],
                                mjcf.Locks(states, reference.haul_in(ref)), reference.tendon_springs(ref),

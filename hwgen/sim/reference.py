@@ -3,27 +3,40 @@ reached through one function, :func:`statics_reference`.
 
 Everything the sim takes from the statics' tendon states passes through here: each state's
 locked rest lengths (which set the drums in its keyframe), the tensions it settles at, its tip
-stiffness and sag, and the bent shape at a given actuating tension. The protocol is the
-statics' own (``hwgen stiffness``): each locked tendon locked where it carries its
-``pretension_n`` in the weightless robot; the robot horizontal, its flexible direction along
-gravity; frictionless eyelets; a small push at the tip along gravity. When the statics' states
-change (their pre-tensions, orientation or friction bounds), this is the one function to
-reconnect.
+stiffness and sag, and the bent shape at a given actuating tension. The states are the statics'
+own, as ``hwgen build`` writes them into stiffness.json (:func:`hwgen.model.stiffness.study`):
+each tensioned by the paper's protocol (:mod:`hwgen.model.protocol`) with the robot horizontal,
+its flexible direction along gravity, gravity toward −z (:data:`ORIENTATION`, the paper's and
+the MuJoCo model's world), frictionless eyelets (:data:`FRICTION`), a small push at the tip
+along z. :func:`study_of` takes them from the build's stiffness.json when it holds them (every
+state in that orientation, from the same weights), else from the statics solved again. The bent
+case is the actuating tendon that lifts the robot (:func:`hwgen.model.bending.inner_tendons`)
+pulled with the most a tendon may carry, every other tendon slack, under gravity.
 """
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
+from ..cache import as_json
+from ..model import bending
 from ..model import statics as st
 from ..model import stiffness
 
-ORIENTATION = {"gravity": list(stiffness.GRAVITY), "push": list(stiffness.PUSH),
-               "words": "robot horizontal, its flexible direction (z) along gravity, pushed along gravity "
-                        "(the statics' default)"}
-FRICTION = "none"                 # eyelets without friction, as the statics takes them
+ORIENTATION = "gravity -z"        # the statics' REFERENCE orientation, and robot.xml's gravity (−z)
+FRICTION = "none"                 # eyelets without friction, the statics' frictionless bound
+STUDY_FILE = "stiffness.json"     # the build's statics, beside report.json
+
+
+def orientation() -> dict:
+    """sim.json's account of the orientation compared in."""
+    return {"name": ORIENTATION, "gravity": list(stiffness.ORIENTATIONS[ORIENTATION]), "push": list(stiffness.PUSH),
+            "words": "robot horizontal, its flexible direction (z) along gravity, gravity toward −z (C1's base eyelet "
+                     "up: the statics' reference orientation, taken as the paper's); pushed along z"}
 
 
 @dataclass(frozen=True)
@@ -36,6 +49,7 @@ class Reference:
     states: list                            # the compared states: {state, tip stiffness, sag, tip, tensions, curve}
     bent: dict                              # the bent case: {tendon, tension_n, tip_mm, curve}
     all_tendons: str                        # the name of the state that locks every channel
+    source: str                             # where the states came from, in words
 
 
 def _curve(eq: st.Equilibrium) -> dict:
@@ -43,42 +57,88 @@ def _curve(eq: st.Equilibrium) -> dict:
             "x_mm": eq.p[:, 0].tolist()}
 
 
-def _result(desc: stiffness.Described, eq: st.Equilibrium, name: str) -> dict:
-    L = desc.robot.length
-    tip = eq.at(L)
-    k = eq.point_stiffness(L, stiffness.PUSH)
-    return {"state": name, "tip_stiffness_n_per_mm": float(k), "tip_sag_mm": float(-tip[2]),
-            "tip_mm": [float(v) for v in tip], "tensions_n": dict(eq.tensions), "curve": _curve(eq)}
+def _entries(study: dict) -> dict:
+    """state -> the study's entry for it in :data:`ORIENTATION`, frictionless."""
+    return {e["state"]: e for e in study.get("states", [])
+            if e.get("orientation") == ORIENTATION and e.get("friction") == FRICTION and "push" not in e}
 
 
-def statics_reference(plan, measured: dict | None, compare: list[str] | None, bend_tension_n: float) -> Reference:
-    """The statics of ``plan`` (weights ``measured`` as ``hwgen stiffness`` takes them: the check
-    report's gravity section, else None for the plan's estimate): every state's locks, the
-    ``compare`` states solved in full (default N, the actuating channel alone and the state with
-    every channel), and the bent case: the actuating tendon that lifts the robot against gravity
-    pulled with ``bend_tension_n`` (tension-controlled), every other tendon slack, under gravity."""
+def unusable(study, plan, desc: stiffness.Described) -> str | None:
+    """Why ``study`` (a stiffness.json's content) cannot be the reference for ``plan`` described as
+    ``desc`` (None: it can): it must hold every state in :data:`ORIENTATION`, frictionless, with
+    each locked tendon's lock, its tip stiffness and its curve, from the same weights and springs."""
+    if not isinstance(study, dict) or "skipped" in study:
+        return "it holds no statics" + (f" ({study['skipped']})" if isinstance(study, dict) else "")
+    entries = _entries(study)
+    for s in stiffness.states(plan):
+        e = entries.get(s.name)
+        locked = [t.name for t in desc.robot.tendons if t.channel in s.channels]
+        if e is None or not {"tip_stiffness_n_per_mm", "tensions_n", "curve"} <= set(e) \
+                or set(e.get("locks_mm", {})) != set(locked):
+            return f"it has no {ORIENTATION} frictionless entry with its locks for state {s.name}"
+    if study.get("masses") != as_json(desc.masses):
+        return "its weights are not this build's"
+    springs = {t["name"]: t["spring_n_per_mm"] for t in study.get("tendons", [])}
+    if springs != {t.name: float(t.stiffness) for t in desc.robot.tendons}:
+        return "its tendons' springs are not this plan's"
+    return None
+
+
+def study_of(folder: Path, plan, measured: dict | None, solve) -> tuple[dict, str]:
+    """The statics to compare with: the build's stiffness.json in ``folder`` when it holds what
+    :func:`unusable` asks, else ``solve()`` (the statics of ``plan`` with the weights
+    ``measured``). Returns (the study, where it came from in words)."""
     desc = stiffness.describe(plan, measured)
-    model = st.Model(desc.robot)
+    try:
+        study = json.loads((Path(folder) / STUDY_FILE).read_text(encoding="utf-8"))
+        why = unusable(study, plan, desc)
+    except (OSError, ValueError) as e:
+        why = f"it cannot be read ({type(e).__name__})"
+    if why is None:
+        return study, f"the build's {STUDY_FILE}"
+    return solve(), f"the statics solved again ({STUDY_FILE}: {why})"
+
+
+def _result(desc: stiffness.Described, e: dict) -> dict:
+    c = e["curve"]
+    tip = [float(c["x_mm"][-1]), float(c["y_mm"][-1]), float(c["z_mm"][-1])]
+    if not math.isclose(c["s_mm"][-1], desc.robot.length, abs_tol=1e-6):
+        raise ValueError(f"state {e['state']}: the statics' curve ends at s = {c['s_mm'][-1]} mm, not at the tip")
+    return {"state": e["state"], "tip_stiffness_n_per_mm": float(e["tip_stiffness_n_per_mm"]),
+            "tip_sag_mm": -tip[2], "tip_mm": tip, "tensions_n": dict(e["tensions_n"]), "curve": c}
+
+
+def statics_reference(plan, measured: dict | None, study: dict, compare: list[str] | None = None,
+                      bend_tension_n: float | None = None, source: str = "") -> Reference:
+    """The statics of ``plan`` (weights ``measured`` as ``hwgen stiffness`` takes them: the check
+    report's gravity section, else None for the plan's estimate) read from ``study`` (what
+    :func:`hwgen.model.stiffness.study` returns, at least :data:`ORIENTATION`): every state's
+    locks, the ``compare`` states (default N, the actuating channel alone and the state with
+    every channel), and the bent case: the actuating tendon that lifts the robot against gravity
+    pulled with ``bend_tension_n`` (default: the most a tendon may carry, the protocol's
+    ceiling), tension-controlled, every other tendon slack, under gravity."""
+    desc = stiffness.describe(plan, measured)
+    why = unusable(study, plan, desc)
+    if why is not None:
+        raise ValueError(f"the statics given cannot be the sim's reference: {why}")
+    entries = _entries(study)
     every = stiffness.states(plan)
     full = max(every, key=lambda s: len(s.channels)).name
-    names = compare or [s.name for s in every[:2]] + ([full] if full not in [s.name for s in every[:2]] else [])
-    locks, out = {}, []
-    for s in every:
-        if s.name in names:
-            res, eq = stiffness.state_result(desc, model, s)
-            out.append(_result(desc, eq, s.name))
-            locks[s.name] = {n: float(v[1]) for n, v in eq.loads.tendons.items()}
-        else:
-            loads, _ = stiffness.state_loads(desc, model, s)
-            locks[s.name] = {n: float(v[1]) for n, v in loads.tendons.items()}
-    inner = stiffness.inner_tendons(desc, model)[int(math.copysign(1, -stiffness.GRAVITY[2]))][0]
+    names = compare or list(dict.fromkeys([s.name for s in every[:2]] + [full]))
+    locks = {s.name: {n: float(v) for n, v in entries[s.name]["locks_mm"].items()} for s in every}
+    compared = [_result(desc, entries[n]) for n in names]
+    model = st.Model(desc.robot, stiffness.STUDY_H_MAX)
+    gravity = stiffness.ORIENTATIONS[ORIENTATION]
+    lift = 1 if gravity[2] < 0 else -1                   # bending toward −gravity lifts the robot
+    inner = bending.inner_tendons(desc, model)[lift][0]
     bent = {}
     if inner is not None:
-        eq = st.solve(model, st.Loads(tendons={inner: ("tension", bend_tension_n)}, gravity=stiffness.GRAVITY))
+        pull = desc.rules.allowable_n if bend_tension_n is None else bend_tension_n
+        eq = st.solve(model, st.Loads(tendons={inner: ("tension", pull)}, gravity=gravity))
         tip = eq.at(desc.robot.length)
-        bent = {"tendon": inner, "tension_n": bend_tension_n, "tip_mm": [float(v) for v in tip],
+        bent = {"tendon": inner, "tension_n": pull, "tip_mm": [float(v) for v in tip],
                 "tip_angle_deg": math.degrees(eq.tip_angle()), "curve": _curve(eq)}
-    return Reference(desc, st.straight_lengths(model), locks, out, bent, full)
+    return Reference(desc, st.straight_lengths(model), locks, compared, bent, full, source)
 
 
 def haul_in(ref: Reference) -> dict:

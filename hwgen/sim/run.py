@@ -3,7 +3,8 @@ build, and check the MuJoCo model against hwgen's own statics.
 
 What is compared (sim.json): for N, the actuating channel alone and the state with every channel,
 the tip stiffness in the flexible direction and the tip's sag, MuJoCo's equilibrium against the
-statics' (``hwgen stiffness``), each tendon locked exactly where the statics locks it; the same
+statics' (the build's stiffness.json, ``hwgen stiffness``: tensioned by the paper's protocol,
+gravity toward −z, frictionless eyelets), each tendon locked exactly where the statics locks it; the same
 states again from their keyframes as written (a drum that winds two tendons sets one length for
 both); state N's sag against the own-weight model of the checks (the report's gravity section);
 the bent robot at the most a tendon may carry; and the model stepped for 2 s under gravity from
@@ -25,6 +26,7 @@ ROBOT, SIM_JSON, SIM_PNG = "robot.xml", "sim.json", "sim.png"
 AGREEMENT = 0.25                  # the issue's: MuJoCo's tip stiffness within 25 % of the statics'
 SITE_TOL_MM = 0.05                # an eyelet site this close to the measured eyelet, robot straight
 OFF_CENTRE_MM = 0.5               # a tip assembly's centre of mass this far across the strip is worth a word
+TENSION_TOL_N = 0.05              # a locked tendon's tension this far from the statics' is worth a word
 
 
 def _mujoco_version() -> str:
@@ -56,7 +58,7 @@ def _state(sim: measure.Sim, written: mjcf.Written, ref_state: dict, exact: bool
     _set_locks(sim, written, name, exact)
     try:
         eq = measure.equilibrium(sim, sim.data.qpos.copy())
-        k = measure.tip_stiffness(sim, eq["q"], reference.ORIENTATION["push"])
+        k = measure.tip_stiffness(sim, eq["q"], stiffness.PUSH)
         return {"tip_n_per_mm": k, "tip_mm": measure.tip_mm(sim), "tensions_n": _tensions(sim),
                 "curve": measure.centre_line(sim), "newton": {"iterations": eq["iterations"],
                                                                "residual": eq["residual"]}}
@@ -114,6 +116,11 @@ def eyelet_offsets(sim: measure.Sim, printed: parts.Printed) -> dict:
 def _findings(states: list, written: mjcf.Written, printed: parts.Printed, bent_: dict) -> list[str]:
     out = list(written.notes)
     for s in states:
+        off = {t: (s["mujoco_tensions_n"].get(t, 0.0), v) for t, v in s["statics_tensions_n"].items()
+               if abs(s["mujoco_tensions_n"].get(t, 0.0) - v) > TENSION_TOL_N}
+        if off:
+            out.append(f"state {s['state']}: MuJoCo's locked tendons carry " + ", ".join(
+                f"{t} {mj:.2f} N against the statics' {v:.2f}" for t, (mj, v) in off.items()))
         if not s["within"]:
             out.append(f"state {s['state']}: MuJoCo's tip stiffness {s['mujoco_tip_n_per_mm']:.4f} N/mm is "
                        f"{s['ratio']:.2f}× the statics' {s['statics_tip_n_per_mm']:.4f} (limit ±{AGREEMENT:.0%})")
@@ -121,10 +128,9 @@ def _findings(states: list, written: mjcf.Written, printed: parts.Printed, bent_
         if miss and max(abs(v) for v in miss.values()) > 0.01:
             worst = max(miss, key=lambda t: abs(miss[t]))
             out.append(f"state {s['state']}: its keyframe leaves {worst} {miss[worst]:+.2f} mm off the statics' lock "
-                       f"(a drum winds its tendons together and sets one length for all; the statics locks each at "
-                       f"its own pre-tension in the weightless robot the stiffening tendons bend): from the "
-                       f"keyframe, tip stiffness {s['keyframe']['tip_n_per_mm']:.4f} N/mm and sag "
-                       f"{s['keyframe']['tip_sag_mm']:.1f} mm against {s['mujoco_tip_n_per_mm']:.4f} and "
+                       f"(a drum winds its tendons together and sets one length for all; the statics' protocol locks "
+                       f"each where it tensions it): from the keyframe, tip stiffness "
+                       f"{s['keyframe']['tip_n_per_mm']:.4f} N/mm and sag {s['keyframe']['tip_sag_mm']:.1f} mm against {s['mujoco_tip_n_per_mm']:.4f} and "
                        f"{s['mujoco_tip_sag_mm']:.1f} with the statics' locks")
     m, c, _ = mjcf.combine([(b.mass_g, b.com_mm, b.inertia_g_mm2) for b in printed.tip]) if printed.tip \
         else (0.0, np.zeros(3), None)
@@ -135,13 +141,14 @@ def _findings(states: list, written: mjcf.Written, printed: parts.Printed, bent_
     return out
 
 
-def simulate(plan, folder: Path, manifest: dict, report: dict, out: Path) -> dict:
+def simulate(plan, folder: Path, manifest: dict, report: dict, out: Path, solve) -> dict:
     """Write ``out`` (robot.xml, meshes/, sim.json, sim.png) for the build in ``folder`` and return
-    sim.json's content."""
+    sim.json's content. ``solve()``: the statics of the plan's tendon states with the report's
+    weights (:func:`hwgen.model.stiffness.study`), for when the build's stiffness.json cannot serve."""
     t0 = time.perf_counter()
     secs = {}
-    allowed = plan.tendon_material.break_load / plan.check.tendon_safety_factor
-    ref = reference.statics_reference(plan, report.get("gravity"), None, allowed)
+    study, source = reference.study_of(folder, plan, report.get("gravity"), solve)
+    ref = reference.statics_reference(plan, report.get("gravity"), study, source=source)
     secs["statics"] = time.perf_counter() - t0
     printed = parts.read_build(folder, manifest, report)
     hinges = chain.hinges(ref.described.robot)
@@ -167,7 +174,8 @@ def simulate(plan, folder: Path, manifest: dict, report: dict, out: Path) -> dic
     secs["measured"] = time.perf_counter() - t0
     N = next((s for s in compared if s["state"] == "N"), None)
     g = report.get("gravity", {})
-    sag_model = g.get("cases", {}).get("-z" if reference.ORIENTATION["gravity"][2] < 0 else "+z", {})
+    facing = reference.orientation()
+    sag_model = g.get("cases", {}).get("-z" if facing["gravity"][2] < 0 else "+z", {})
     m = sim.model
     result = {
         "design": manifest["design"],
@@ -177,13 +185,16 @@ def simulate(plan, folder: Path, manifest: dict, report: dict, out: Path) -> dic
                  "spatial-tendon springs through the measured eyelets; a drum per channel on a servo (MuJoCo "
                  f"{_mujoco_version()}, {m.opt.timestep * 1e3:g} ms Euler steps)",
         "assumptions": [
-            reference.ORIENTATION["words"], "eyelets without friction (" + reference.FRICTION + ")",
+            facing["words"], "eyelets without friction (the statics' friction bound " + reference.FRICTION + ")",
+            "each state tensioned and locked by the paper's protocol (hwgen.model.protocol) in that orientation; "
+            "the statics from " + ref.source,
             "equilibria by Newton's method on MuJoCo's own forces (central differences); stiffness the tangent "
             "j K⁻¹ jᵀ at the tip site, as the statics takes it from its Hessian",
             "states compared with each tendon locked where the statics locks it; the keyframes' own figures beside",
             "strip: the report's measured height, thickness and grams per millimetre; E, G and the hubs' sections "
             "the statics'"],
-        "orientation": reference.ORIENTATION, "friction": reference.FRICTION, "agreement_limit": AGREEMENT,
+        "orientation": facing, "friction": reference.FRICTION, "statics_from": ref.source,
+        "agreement_limit": AGREEMENT,
         "mujoco": {"version": _mujoco_version(), "timestep_s": m.opt.timestep, "integrator": "Euler",
                    "nbody": m.nbody, "nv": m.nv, "ntendon": m.ntendon, "nu": m.nu, "nkey": m.nkey,
                    "hinges": {k: sum(getattr(h, k) is not None for h in hinges) for k in ("flex", "twist", "side")},
@@ -203,6 +214,7 @@ def simulate(plan, folder: Path, manifest: dict, report: dict, out: Path) -> dic
                    "travel_mm": d.travel_mm, "kp_n_per_m": d.kp_n_per_m, "armature_kg": d.armature_kg}
                   for d in written.drums],
         "keyframes": written.keyframes,
+        "keyframe_lock_missed_by_mm": written.residual_mm,
     }
     result["findings"] = _findings(compared, written, printed, bent_)
     result["ok"] = (all(s["within"] for s in compared) and all(d["finite"] for d in moving)
