@@ -504,6 +504,45 @@ def _stiffness_tables(design: str, rep: dict) -> list:
 
 
 @_command
+def sim(params: Path = PARAMS, out_dir: Path = OUT,
+        quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner"),
+        cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
+    """A MuJoCo model of the robot as printed, checked against hwgen's own statics.
+
+    Reads the built files (builds first when the outputs are missing or made from other parameters) and writes OUT/<design>/sim/: robot.xml with its meshes (a keyframe per tendon state), sim.json and sim.png. Open it with `python -m mujoco.viewer --mjcf OUT/<design>/sim/robot.xml`. Exit 1 when MuJoCo's tip stiffness and the statics' differ by more than 25 %, the model does not stay finite, or an eyelet site is off its measured eyelet.
+    """
+    loaded = _load(params)
+    from .pipeline import sim as run_sim
+
+    res, folder = _on_outputs(f"simulating {loaded.name}", quiet,
+                              lambda: run_sim(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache)))
+    t = Table(title=f"{loaded.name}: MuJoCo against the statics ({res['orientation']['words']})")
+    for col in ("state", "MuJoCo tip N/mm", "statics tip N/mm", "ratio", "MuJoCo sag mm", "statics sag mm"):
+        t.add_column(col, justify="right" if col != "state" else "left")
+    for s in res["states"]:
+        t.add_row(s["state"], f"{s['mujoco_tip_n_per_mm']:.4f}", f"{s['statics_tip_n_per_mm']:.4f}",
+                  f"{s['ratio']:.3f}", f"{s['mujoco_tip_sag_mm']:.1f}", f"{s['statics_tip_sag_mm']:.1f}")
+    out.print(t)
+    if res["sag"].get("sag_model_tip_sag_mm") is not None:
+        out.print(f"state N sags {res['sag']['mujoco_tip_sag_mm']:.1f} mm in MuJoCo, "
+                  f"{res['sag']['sag_model_tip_sag_mm']:.1f} mm by the own-weight model of the checks")
+    b = res["bent"]
+    if b:
+        out.print(f"{b['tendon']} pulled with {b['tension_n']:.1f} N: tip at ({', '.join(_mm(v) for v in b['mujoco_tip_mm'])}) "
+                  f"mm in MuJoCo, ({', '.join(_mm(v) for v in b['statics_tip_mm'])}) by the statics")
+    for d in res["dynamics"]:
+        rtf = f"{d['real_time_factor']:.0f}× real time on one core" if d["real_time_factor"] else ""
+        out.print(f"keyframe {d['state']}: {d['seconds']:g} s under gravity, "
+                  f"{'finite' if d['finite'] else 'NOT FINITE'}, {rtf}")
+    for f in res["findings"]:
+        say("finding:", "yellow", f)
+    for name in ("robot.xml", "sim.json", "sim.png"):
+        out.print(f"  {printable(folder / 'sim' / name)}")
+    if not res["ok"]:
+        raise typer.Exit(EXIT_FINDINGS)
+
+
+@_command
 def sweep(sweep_file: Path = typer.Argument(..., help="sweep YAML: a base design and axes over its parameters",
                                             show_default=False),
           out_dir: Path = typer.Option(Path("out"), "--out", help="output root; results go to OUT/sweeps/<name>/<level>/"),

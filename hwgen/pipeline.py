@@ -1294,3 +1294,29 @@ def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | No
         plot_stiffness(report, tmp / STIFFNESS_PLOT)
         plot_gravity(report, tmp / GRAVITY_PLOT)
     return report, folder
+
+
+SIM = "sim"                # the folder of `hwgen sim`'s files inside out/<design>/
+
+
+def sim(loaded: params.LoadedDesign, out_root: Path,
+        cache_dir: Path | None | bool = True) -> tuple[dict, Path, str | None]:
+    """`hwgen sim`: the MuJoCo model of the built robot (:mod:`hwgen.sim`), written as sim/robot.xml,
+    its meshes, sim.json and sim.png into ``out_root/<design>/`` (added to what is there; a later
+    build replaces the folder and drops it). Builds first when the outputs are missing or stale.
+    Checked against the build's stiffness.json, else :func:`statics` (remembered in the cache).
+    Returns (sim.json's content, the folder, why it was rebuilt or None)."""
+    from .sim.run import simulate            # MuJoCo: only this command
+    folder = Path(out_root) / loaded.name
+    why = stale_reason(folder, loaded)
+    if why is None and not (folder / REPORT).is_file():
+        why = f"{REPORT} is missing"
+    if why is not None:
+        build(loaded, Path(out_root), cache_dir=cache_dir)
+    store = cache.Store(cache.default_dir() if cache_dir is True else (cache_dir or None))
+    with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp, cache.using(store):
+        manifest, report = read_manifest(tmp), read_report(tmp)
+        shutil.rmtree(tmp / SIM, ignore_errors=True)
+        plan = design_plan(loaded, tensioner_record(manifest))
+        result = simulate(plan, tmp, manifest, report, tmp / SIM, lambda: statics(plan, report.get("gravity")))
+    return result, folder, why
