@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from hwgen.checks.fixtures import mount_checks
+from hwgen.checks.fixtures import jig_checks, mount_checks
 from hwgen.checks.parts import LoadedPart
 from hwgen.model.fixtures import FOOT_THICKNESS, JAW_BEYOND_STRIP, JAW_BOTTOM, JAW_LEAST, LOWER_JAW_LEAST
 from hwgen.model.plan import make_plan
@@ -66,7 +66,7 @@ def test_a_short_extra_base_is_built_and_mount_clamp_names_the_least_that_clamps
     clamp, foot = mount_checks(_mount_parts(plan), [_Disk(6.0)], plan)
     assert clamp.id == "mount.clamp" and not clamp.passed
     assert clamp.measured == pytest.approx(12.0) and clamp.limit == JAW_LEAST
-    assert "backbone.extra_base ≥ 22.00 mm (it is 15)" in clamp.message
+    assert "backbone.extra_base ≥ 22.00 mm (it is 15), 7.00 mm more" in clamp.fix
     assert foot.passed
     proto = _plan()
     clamp, _ = mount_checks(_mount_parts(proto), [_Disk(6.0)], proto)
@@ -95,10 +95,59 @@ def test_a_small_disk_sets_the_lower_jaw_on_the_foot(od):
     _, foot = mount_checks(_mount_parts(plan), [_Disk(6.0)], plan)
     assert foot.passed == full
     if not full:
-        least = float(foot.message.split("table_clearance ≥ ")[1].split(" ")[0])
+        least = float(foot.fix.split("table_clearance ≥ ")[1].split(" ")[0])
         assert least == pytest.approx(m.table_clearance + m.least_below_strip - foot.measured, abs=0.01)
         wider = _plan(doc=small, base_mount__table_clearance=least + 0.01)
         assert mount_checks(_mount_parts(wider), [_Disk(6.0)], wider)[1].passed
+
+
+class _Outline:
+    def __init__(self, r: float):
+        a = np.linspace(0, 2 * np.pi, 360, endpoint=False)
+        self.points = np.c_[r * np.cos(a), r * np.sin(a)]
+
+
+class _JigDisk:
+    """A measured disk as :func:`jig_checks` reads it: its station, part and outline (x, z)."""
+
+    def __init__(self, r: float):
+        self.station, self.part, self.outline = 0, "disk_00", _Outline(r)
+
+
+def _hold(**edits):
+    """jig.hold of a plan against a jig that covers none of its base disk's face (walls outside its rim)."""
+    def edit(doc):
+        doc["backbone"]["height"] = edits.get("height", doc["backbone"]["height"])
+        doc["disks"]["outer_diameter"] = edits.get("od", doc["disks"]["outer_diameter"])
+        doc["disks"]["hub"]["wall"] = edits.get("wall", doc["disks"]["hub"]["wall"])
+    plan = _plan(doc=edit)
+    r = plan.disks[0].outer_diameter / 2
+    lo, hi = plan.jig.slots[0]
+    piece = _box((r + 5, lo - 5, -r), (r + 10, hi + 5, r))
+    (hold,) = jig_checks([LoadedPart("jig_1", "jig", piece, np.eye(4), None)], [_JigDisk(r)], plan)
+    return plan, hold
+
+
+@pytest.mark.parametrize("height, od, wall", [(73.2, 77.5, 1.2), (60.0, 72.0, 3.0)])
+def test_jig_hold_names_the_disk_and_the_hub_wall_that_stand_the_walls_beside_the_rims(height, od, wall):
+    """A disk barely wider than its strip and hubs (low walls): a jig.hold failure names the least
+    disks.outer_diameter, and where the process prints it the thickest disks.hub.wall, with which the
+    plan stands the walls beside the strip and the hubs, JIG_ENGAGE into the rims."""
+    plan, hold = _hold(height=height, od=od, wall=wall)
+    assert plan.jig.low and not hold.passed and hold.measured == 0.0
+    least = float(hold.fix.split("disks.outer_diameter ≥ ")[1].split(" ")[0])
+    assert not _plan_low(height=height, od=least, wall=wall) and _plan_low(height=height, od=least - 0.2, wall=wall)
+    if "disks.hub.wall" in hold.fix:
+        thick = float(hold.fix.split("disks.hub.wall ≤ ")[1].split(" ")[0])
+        assert thick >= plan.min_wall
+        assert not _plan_low(height=height, od=od, wall=thick) and _plan_low(height=height, od=od, wall=thick + 0.05)
+    assert ("disks.hub.wall" in hold.fix) == (wall == 3.0)
+    _, fine = _hold(height=height, od=least, wall=wall)
+    assert not fine.passed and "hwgen stands the jig's walls" in fine.fix   # the walls are beside: hwgen's fault
+
+
+def _plan_low(**edits) -> bool:
+    return _hold(**edits)[0].jig.low
 
 
 def test_a_thick_tip_disk_deepens_the_base_bars_until_a_stock_screw_holds():
@@ -173,7 +222,7 @@ def test_the_lab_robot_is_built_and_fails_only_the_check_that_names_its_value(tm
     import json
     checks = json.loads((tmp_path / "out" / "lab" / "report.json").read_text())["checks"]
     by = {c["id"]: c for c in checks if c["id"] in ("mount.clamp", "jig.hold", "mount.foot")}
-    assert "backbone.extra_base ≥ 20.50 mm (it is 15)" in by["mount.clamp"]["message"]
+    assert "backbone.extra_base ≥ 20.50 mm (it is 15)" in by["mount.clamp"]["fix"]
     assert by["jig.hold"]["passed"] and by["mount.foot"]["passed"]
     seats = [c for c in checks if c["id"] == "tendon.seat"]
     assert seats and all(c["passed"] for c in seats)

@@ -164,7 +164,7 @@ def _measure(folder: Path, manifest: dict, plan) -> Measured:
     checks += interference_checks(parts, s.interference_tol_mm3)
     checks += build_volume_checks(parts, proc.build_volume)
     checks += printing_checks(parts, proc.technology)
-    checks += mount_checks(parts, disks, plan) + jig_checks(parts, disks, plan.jig.slots)
+    checks += mount_checks(parts, disks, plan) + jig_checks(parts, disks, plan)
     # the tendon runs are measured against the placed solids the interference check has just made
     # (their place in the report is further down)
     runs = tendon_checks(folder, manifest, plan) if gear_pairs(manifest) else []   # no tensioner: no runs
