@@ -174,8 +174,10 @@ def _eyelet_holes(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[st
         own = [rest_axes[p.name][i] + exits.get(p.name, 0.0) for p in g]
         ax = np.sum([v / np.linalg.norm(v) for v in own], axis=0)
         ax /= np.linalg.norm(ax)
-        ax = np.where(np.abs(ax) < AXIS_SNAP, 0.0, ax)
-        ax /= np.linalg.norm(ax)
+        tiny = (np.abs(ax) < AXIS_SNAP) & (ax != 0.0)
+        if tiny.any():                  # (normalised again only then: the same bits as before otherwise)
+            ax = np.where(tiny, 0.0, ax)
+            ax /= np.linalg.norm(ax)
         alpha = max(_worst_angles((sweeps[p.name][0][:, i:i + 1], sweeps[p.name][1][:, i:i + 1]), ax[None])[0]
                     for p in g)
         for p in g:
