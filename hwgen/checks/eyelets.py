@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .base import Check
+from .base import REBUILD, Check
 from .meshes import load_mesh
 from .polygons import area_centroid, inside, num
 from .sections import Loop, chain_loops, disk_slab, section_loops
@@ -297,7 +297,8 @@ def _unexpected(disk: DiskSections, mh: MeasuredHole) -> Check:
     return Check("eyelet.unexpected", "warning", False,
                  f"{disk.part}: a hole at x={num(x)}, z={num(z)} mm (Ø{mh.diameter:.2f}) "
                  f"matches no eyelet or mount hole of the design",
-                 float(mh.diameter), None, {"part": disk.part, "station": disk.station, "x": float(x), "z": float(z)})
+                 float(mh.diameter), None, {"part": disk.part, "station": disk.station, "x": float(x), "z": float(z)},
+                 fix=f"if {disk.part}'s file was edited since the build, rebuild; else {REBUILD}")
 
 
 def _footprint(rd: dict, hole: dict) -> float:
@@ -370,10 +371,12 @@ def _position_checks(report: dict, eyelets: list[Eyelet], tol: float) -> list[Ch
             out.append(Check("eyelet.overlap", "error", False,
                              f"{part}: the routing puts eyelets where their holes open into another hole or the "
                              f"slot, so they cannot hold their tendons apart: {'; '.join(overlaps)}; move these "
-                             f"tendons (tendons[].routing) at station {i}", None, None, where))
+                             f"tendons (tendons[].routing) at station {i}", None, None, where,
+                             fix=f"route these tendons apart at station {i} (tendons[].routing), so each eyelet keeps a "
+                                 f"process.min_wall to the next hole and the slot, or into one eyelet they share"))
         if bad:
             out.append(Check("eyelet.position", "error", False, f"{part}: " + "; ".join(bad),
-                             None if not np.isfinite(worst) else worst, tol, where))
+                             None if not np.isfinite(worst) else worst, tol, where, fix=REBUILD))
         else:
             out.append(Check("eyelet.position", "error", True,
                              f"{part}: {len(mine)} eyelet(s) found within {tol:g} mm of design intent "

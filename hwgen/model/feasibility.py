@@ -25,8 +25,9 @@ from .tensioner_layout import spool_wall_problem
 EYELET_CUT_FRACTION = 1 / 8  # the checks cut a disk this share of its thickness off its mid-plane (keep clear)
 
 
-def problems(d: Design) -> list[tuple[str, str]]:
-    """(field path, what is wrong) for every reason this design cannot be built, in YAML order."""
+def problems(d: Design) -> list[tuple[str | tuple[str, ...], str]]:
+    """(field path, what is wrong) for every reason this design cannot be built, in YAML order; a
+    rule over several fields gives their paths, the one to change first."""
     out = []
     material = material_problem(d.process)
     if material:
@@ -62,7 +63,7 @@ def _spacing_problems(d: Design) -> list[tuple[str, str]]:
         if gap <= 0:
             where = (f"disks.stations[{i + 1}]" if d.disks.stations is not None else
                      "disks.spacing" if d.disks.spacing is not None else "disks.count")
-            return [(where, f"disk {i} and disk {i + 1} overlap: their stations are "
+            return [((where, "backbone.length", "disks.thickness", "disks.end_thickness"), f"disk {i} and disk {i + 1} overlap: their stations are "
                             f"{d.stations[i + 1] - d.stations[i]:g} mm apart and they are "
                             f"{disk_thicknesses(d)[i] / 2 + disk_thicknesses(d)[i + 1] / 2:g} mm thick "
                             f"between their mid-planes (disks.thickness, disks.end_thickness)")]
@@ -114,6 +115,7 @@ def _eyelets_outside(d: Design) -> list[tuple[str, str]]:
         j = int(over[0])
         x, z = (float(v) for v in pts[j])
         p = f"tendons[{i}].routing.table[{j}]" if table is not None else f"tendons[{i}].routing.function"
+        p = (p, "disks.outer_diameter")
         if r[j] >= r_out:
             out.append((p, f"eyelet at station {j} (x={x:g}, z={z:g}) lies outside the disk (radius {r_out:g} mm)"))
         else:
@@ -135,9 +137,9 @@ def _slot_problems(d: Design) -> list[tuple[str, str]]:
     if math.hypot(w / 2, h / 2) + wall <= r:
         return []
     if w / 2 >= r:
-        return [("disks.outer_diameter", f"{dk.outer_diameter} mm does not enclose the backbone slot ({w:g} mm)")]
+        return [(("disks.outer_diameter", "backbone.height"), f"{dk.outer_diameter} mm does not enclose the backbone slot ({w:g} mm)")]
     field = "backbone.thickness" if w / 2 + wall < r else "disks.outer_diameter"
-    return [(field, f"the backbone slot ({w:g} × {h:g} mm: the strip and disks.slot_clearance) reaches past "
+    return [((field, "disks.outer_diameter", "backbone.height", "disks.slot_clearance"), f"the backbone slot ({w:g} × {h:g} mm: the strip and disks.slot_clearance) reaches past "
                     f"the rim of the Ø{dk.outer_diameter:g} mm disk, or leaves less than "
                     f"process.min_wall = {wall:g} mm of it")]
 
@@ -149,7 +151,7 @@ def _tendon_size_problems(d: Design) -> list[tuple[str, str]]:
     hole = straight_hole(d.tendon_material.diameter, d.process.hole_clearance, d.process.min_hole)
     if hole + 2 * d.process.min_wall <= room:
         return []
-    return [("tendon_material.diameter",
+    return [(("tendon_material.diameter", "disks.outer_diameter", "process.hole_clearance"),
              f"a Ø{d.tendon_material.diameter:g} mm tendon needs eyelets of at least Ø{hole:g} mm "
              f"(with process.hole_clearance); with {d.process.min_wall:g} mm walls they do not fit between the "
              f"backbone slot and the rim of a Ø{dk.outer_diameter:g} mm disk")]
@@ -221,6 +223,8 @@ def check_plan(plan, d: Design) -> None:
 
 
 def check(d: Design, file: str | Path) -> None:
-    """Raise :class:`InputError` for the first problem (the order of :func:`problems`)."""
-    for path, message in problems(d):
-        raise InputError(file, path, message)
+    """Raise one :class:`InputError` carrying every problem (in the order of :func:`problems`; a
+    rule over several fields named by the first of them)."""
+    found = problems(d)
+    if found:
+        raise InputError.of([InputError(file, p if isinstance(p, str) else p[0], m) for p, m in found])
