@@ -2,19 +2,20 @@
 #   make build   set up .venv, install hwgen, build out/prototype/ from params/prototype.yaml
 #   make test    same set-up, then the whole test suite
 #   make test-fast  the tests that build no part with the CAD kernel (under a minute)
+#   make docs    the documentation site into site/ (open site/index.html)
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: build test test-fast bench stability docs-images clean venv clients slicer-check bytecode
+.PHONY: build test test-fast bench stability docs docs-images clean venv clients slicer-check bytecode
 
 venv: $(STAMP)
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[test]"
+	$(BIN)/python -m pip install --quiet -e ".[test,docs]"
 	touch $(STAMP)
 
 # hwgen's modules compiled ahead (as pip compiles an installed package): every process a build

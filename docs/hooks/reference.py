@@ -53,6 +53,8 @@ def _type(schema: dict, node: dict) -> str:
                 inner = ("section" if items.get("type") == "object" or "properties" in items
                          else _type(schema, items))
                 words.append(f"list of {inner}")
+        elif isinstance(o.get("additionalProperties"), dict):
+            words.append(f"mapping of name to {_type(schema, o['additionalProperties'])}")
         elif o.get("type") == "object" or "properties" in o:
             words.append("section")
         else:
@@ -107,7 +109,11 @@ def _unit(name: str, description: str) -> tuple[str, str]:
     return UNITS[m.group(1).lower()], (description[:m.start()] + description[m.end():]).strip()
 
 
-def _cell(text: str) -> str:
+def _cell(text: str, prose: bool = False) -> str:
+    """One table cell: on one line, its bars escaped; in prose (a description, not a code span)
+    ``<name>`` is shown as written, not read as HTML."""
+    if prose:
+        text = text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
     return " ".join(text.replace("|", "\\|").split())
 
 
@@ -136,24 +142,54 @@ def fields(schema: dict) -> list[dict]:
     return rows
 
 
+def anchor(path: str) -> str:
+    """The id of a field's row on the page: its path without the list brackets
+    (``tendons[].routing.function.k`` → ``tendons.routing.function.k``)."""
+    return path.replace("[]", "")
+
+
+def _row(r: dict, with_id: bool = True) -> str:
+    mark = f'<span id="{anchor(r["path"])}"></span>' if with_id else ""
+    return (f"| {mark}`{r['path']}` | {_cell(r['type'])} | {r['unit']} | {_cell(r['default'])} | {_cell(r['bounds'])} "
+            f"| {_cell(r['description'], prose=True)} |")
+
+
+HEAD = ["| field | type | unit | default | bounds | what it is |", "|---|---|---|---|---|---|"]
+
+
 def page(schema: dict) -> str:
+    """The reference page: the fields at the top of the file (``design``, ``base``) in one table, then
+    a heading and a table per section, in the schema's order. Every row carries its field's path as
+    an anchor (:func:`anchor`), so other pages link straight to it."""
     rows = fields(schema)
     out = ["# The parameter file, field by field", "",
            "Generated from `hwgen schema` each time this site is built: every field of a design YAML, "
            "with its type, unit, default and bounds. A default of *derived* means hwgen works the value "
-           "out from the robot at hand when the field is left out (or set to `null` over a base design). "
-           "What each section is for, and how to write your own robot, is on "
-           "[the parameter file](../parameters.md) and [your own robot](../your-robot.md).", ""]
-    sections = [r for r in rows if "." not in r["path"] and "[" not in r["path"]]
-    for top in sections:
-        out += [f"## `{top['path']}`", "", _cell(top["description"]) or "", ""]
-        mine = [r for r in rows if r["path"].startswith(top["path"] + ".") or r["path"].startswith(top["path"] + "[]")
-                or (r["path"] == top["path"] and r["type"] != "section")]
-        out += ["| field | type | unit | default | bounds | what it is |", "|---|---|---|---|---|---|"]
-        out += [f"| `{r['path']}` | {_cell(r['type'])} | {r['unit']} | {_cell(r['default'])} | {_cell(r['bounds'])} "
-                f"| {_cell(r['description'])} |" for r in mine]
-        out.append("")
+           "out from the robot at hand when the field is left out (or set to `null` over a base design); "
+           "*required* means a design must give it, itself or through its `base:`. What each section is "
+           "for is on [the parameter file](../parameters.md); how to write your own robot on "
+           "[your own robot](../your-robot.md). From the command line, `hwgen schema` prints the same as "
+           "JSON Schema, for an editor's completion and validation.", ""]
+    top = [r for r in rows if "." not in r["path"] and "[" not in r["path"]]
+    scalars = [r for r in top if r["type"] != "section" and not r["type"].startswith("list of section")]
+    out += ["## The file itself", "", "The fields at the top of a design file, beside its sections.", "", *HEAD]
+    out += [_row(r) for r in scalars]
+    out.append("")
+    for section in (r for r in top if r not in scalars):
+        out += [f"## `{section['path']}`", ""]
+        if section["description"]:
+            out += [_cell(section["description"], prose=True), ""]
+        mine = [r for r in rows if r["path"].startswith(section["path"] + ".")
+                or r["path"].startswith(section["path"] + "[]")]
+        if section["type"] != "section":          # a list of sections: its own row (its bounds), no anchor
+            mine.insert(0, section)               # beside the heading's
+        out += HEAD + [_row(r, with_id=r is not section) for r in mine] + [""]
     return "\n".join(out)
+
+
+def paths(schema: dict) -> set[str]:
+    """Every field's path, as the pages write it (``tendons[].pretension_n``)."""
+    return {r["path"] for r in fields(schema)}
 
 
 def on_files(files, config):
