@@ -20,12 +20,12 @@ import posixpath
 import re
 from pathlib import Path
 
+import hwgen
 import reference   # docs/hooks/reference.py: MkDocs puts a hook's folder on the path while it loads
 
 log = logging.getLogger("mkdocs.hooks.checks")
 
-ROOT = Path(__file__).resolve().parents[2]
-PACKAGE = ROOT / "hwgen"
+PACKAGE = Path(hwgen.__file__).resolve().parent
 CHECKS_PAGE = "checks.md"
 # a row of the checks page: its first cell is the check's id, as a code span
 _ROW = re.compile(r"^\|\s*`([a-z0-9_]+(?:\.[a-z0-9_]+)+)`\s*\|", re.MULTILINE)
