@@ -130,6 +130,12 @@ def _from_cache(stdout: str) -> str:
     return f"{int(m.group(1)) - int(m.group(2) or 0)} of {m.group(1)} parts built"
 
 
+def _sim_note(stdout: str) -> str:
+    """How much faster than real time `hwgen sim` says its model steps (its slowest keyframe)."""
+    rates = [int(v) for v in re.findall(r"(\d+)× real time", stdout)]
+    return f"the model steps {min(rates)}× real time on one core" if rates else ""
+
+
 def processes(params_path: Path) -> None:
     """Cold build (empty part cache), the same build again, one tendon edited, hwgen check on the
     built outputs, hwgen routing: each a fresh process with the shipped Monte Carlo sample count."""
@@ -171,6 +177,9 @@ def processes(params_path: Path) -> None:
                              "on the built outputs")[:5])
         rows.append(_process("hwgen check, empty cache", [*check[:-3], "--cache-dir", str(tmp / "empty"), "-q"], env,
                              "nothing remembered: Monte Carlo, statics, gears measured")[:5])
+        r = _process("hwgen sim", ["sim", str(params), "--out", str(out), "--cache-dir", str(store), "-q"], env,
+                     "on the built outputs: robot.xml, 3 states and the bent robot solved, 3 × 2 s stepped")
+        rows.append((*r[:4], "; ".join(x for x in (r[4], _sim_note(r[5])) if x)))
         if EDIT_FROM in text:
             params.write_text(text.replace(EDIT_FROM, EDIT_KEEPS_TIP))
             r = _process("one-tendon edit, tip kept", build, env, "C2: k 3 → 5 from the prototype")
@@ -221,7 +230,8 @@ def disk_scad(spec) -> str:
     from :func:`hwgen.cad.disk.eyelet_profiles`), seat, seat chamber and glue port cut at once. Left
     out: turning the tip disk over for printing (orientation only). OpenSCAD writes meshes only:
     no STEP or exact BREP, which hwgen's disks also write."""
-    from hwgen.cad.disk import NORMAL_AXIS_TOL, SEAT_OVERLAP, TOOL_OVERRUN, _to_file, eyelet_profiles
+    from hwgen.cad.disk import NORMAL_AXIS_TOL, TOOL_OVERRUN, _to_file, eyelet_profiles
+    from hwgen.model.fixing import seat_overlap
     T, seated = spec.thickness, bool(spec.seats)
     normal = [h for h in spec.holes if abs(abs(h.axis[1]) - 1) < NORMAL_AXIS_TOL and not seated]
     slanted = [h for h in spec.holes if h not in normal]
@@ -258,7 +268,7 @@ def disk_scad(spec) -> str:
         tools += revolved(h, False)
     for st in spec.seats:
         tools.append(f"translate({_v((*_to_file(st.x, st.z), -TOOL_OVERRUN))}) "
-                     f"cylinder(d={st.diameter:.6f}, h={spec.seat_plate + SEAT_OVERLAP + TOOL_OVERRUN:.6f});")
+                     f"cylinder(d={st.diameter:.6f}, h={spec.seat_plate + seat_overlap(T, spec.seat_plate) + TOOL_OVERRUN:.6f});")
     for x, z, dia, height in spec.seat_chambers:
         tools.append(f"translate({_v((*_to_file(x, z), spec.seat_plate))}) cylinder(d={dia:.6f}, h={height:.6f});")
     if hub is not None and hub.port is not None:
@@ -416,7 +426,8 @@ def _statics(plan) -> None:
     from hwgen.model import stiffness as sf
     n = len(sf.states(plan))
     cpu = time.process_time()
-    with timed(f"statics: {n} tendon states", "settle, own weight, stiffness at every disk, tip torsion"):
+    with timed(f"statics: {n} tendon states × {len(sf.ORIENTATIONS)} orientations",
+               "the tensioning protocol, stiffness at every disk frictionless and stuck, the capstan push, torsion"):
         rep = sf.study(plan)
     ROWS[-1] = (*ROWS[-1][:2], ROWS[-1][2] + f"; {rep['dof']} DOF, {time.process_time() - cpu:.1f} s CPU, "
                                             f"load {os.getloadavg()[0]:.1f}")

@@ -4,7 +4,8 @@ Exit codes: 0 success, 1 design findings that fail, 2 bad input or usage, 3 a bu
 
 Every command reports through one error path (:func:`_errors`): bad input, parameters that
 make no part (including any failure of the CAD kernel), and an output folder that cannot be
-written all print one line ``error: FILE: FIELD: what is wrong`` and exit 2; anything else is
+written all print one line ``error: FILE: FIELD: what is wrong`` (a file with several faults: a
+line naming it, then one line for each) and exit 2; anything else is
 a bug and says so in one line (``HWGEN_DEBUG=1`` shows the traceback). Nothing the user wrote
 is ever read as rich markup or emoji codes: the consoles have both switched off, and styled
 words are :class:`rich.text.Text` spans.
@@ -13,7 +14,6 @@ from __future__ import annotations
 
 import atexit
 import functools
-import hashlib
 import json
 import os
 import signal
@@ -34,6 +34,7 @@ EXIT_OK, EXIT_FINDINGS, EXIT_BAD_INPUT, EXIT_BUG = 0, 1, 2, 3
 DEBUG_ENV = "HWGEN_DEBUG"          # "1": let an unexpected exception through with its traceback
 MESSAGE_CHARS = 400                # the longest error message printed
 FIELD_CHARS = 100
+MAX_LISTED = 25                    # problems of one input listed (a file of 2 000 unknown keys: the first 25)
 
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   help="Print files, checks and pictures for tendon-driven continuum robots.")
@@ -94,6 +95,27 @@ def _bad_input(file, path: str, message: str) -> typer.Exit:
     return typer.Exit(EXIT_BAD_INPUT)
 
 
+def _refused(e: InputError, params) -> typer.Exit:
+    """Every problem of bad input in one block: one line when there is one (``error: FILE: FIELD:
+    what``), else a line naming the file and how many, then one line per problem (its file when it
+    is another, such as a base), at most :data:`MAX_LISTED`; then the hints."""
+    found = e.problems
+    if len(found) == 1:
+        _bad_input(e.file, e.path, e.message)
+    else:
+        top = str(params) if params is not None else found[0].file
+        say("error:", "bold red", f"{_file_label(top)}: {len(found)} problems:")
+        for p in found[:MAX_LISTED]:
+            field = clip(p.path, FIELD_CHARS) if p.path else "<document>"
+            where = "" if p.file == top else f"{_file_label(p.file)}: "
+            err.print(Text(f"  - {printable(where)}{field}: {clip(p.message, MESSAGE_CHARS)}"), soft_wrap=True)
+        if len(found) > MAX_LISTED:
+            err.print(Text(f"  ... and {len(found) - MAX_LISTED} more (fix these and run again)"), soft_wrap=True)
+    for note in e.notes:
+        say("  hint:", "yellow", clip(note, MESSAGE_CHARS))
+    return typer.Exit(EXIT_BAD_INPUT)
+
+
 @contextmanager
 def _errors(params: Path | None):
     """The one error path of every command (see the module's docstring)."""
@@ -113,7 +135,7 @@ def _errors(params: Path | None):
     except (typer.Exit, typer.Abort):
         raise
     except InputError as e:
-        raise _bad_input(e.file, e.path, e.message) from None
+        raise _refused(e, params) from None
     except DesignError as e:
         raise _bad_input(params if params is not None else "", e.path, e.message) from None
     except KeyboardInterrupt:
@@ -210,9 +232,8 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
     if result.manifest.get("render", {}).get("status") in ("unavailable", "failed"):
         say("warning:", "yellow", result.manifest["render"]["message"])
     if result.report is not None:
-        _verdict(result.report)
+        _verdict(result.report, result.folder, loaded)
     if failed:
-        say(f"{len(failed)} check(s) failed;", "red", f"see {result.folder}")
         raise typer.Exit(EXIT_FINDINGS)
 
 
@@ -221,10 +242,11 @@ def _built_before(params: Path, out_dir: Path) -> bool:
     this hwgen (a rebuild then likely finds every part in the cache and needs no worker); read
     from the manifests alone, before the design is."""
     from . import __version__
+    from .designfile import read_layers
     try:
-        sha = hashlib.sha256(Path(params).read_bytes()).hexdigest()
+        sha = read_layers(params).sha256           # of the file and the bases it builds on
         manifests = list(Path(out_dir).glob("*/manifest.json"))
-    except OSError:
+    except (OSError, InputError):
         return True                 # the load says what is wrong; no worker for that
     for path in manifests:
         try:
@@ -236,16 +258,20 @@ def _built_before(params: Path, out_dir: Path) -> bool:
     return False
 
 
-def _verdict(report: dict) -> None:
-    """What `hwgen check` ends with: every failing warning, then the verdict line."""
-    checks = report["checks"]
-    warns = [c for c in checks if not c["passed"] and c["severity"] == "warning"]
-    for c in warns:
-        say("warning:", "yellow", f"{c['id']}: {c['message']}")
-    n_fail = sum(1 for c in checks if not c["passed"] and c["severity"] == "error")
-    verdict = Text("PASS", style="bold green") if report["ok"] else Text("FAIL", style="bold red")
-    out.print(Text.assemble(f"{report['design']}: ", verdict, f": {len(checks)} checks, {n_fail} failed, "
-                            f"{len(warns)} warning(s)"))
+def _verdict(report: dict, folder: Path, loaded) -> None:
+    """What `hwgen build` and `hwgen check` end with: a line per failed check with its fix, the
+    warnings, then the verdict naming summary.md and any setting of the design (and its file)
+    that states a failing check as a warning."""
+    from .checks.report import verdict_lines
+    from .designfile import NOT_INHERITED, dotted
+    files = {dotted(k): str(loaded.layers.file_of(dotted(k))) for k in NOT_INHERITED}
+    for label, text in verdict_lines(report, Path(folder) / "summary.md", files):
+        if label == "verdict":
+            word, rest = text.split(":", 1)
+            out.print(Text.assemble(f"{report['design']}: ", (word, "bold green" if word == "PASS" else "bold red"),
+                                    printable(":" + rest)), soft_wrap=True)
+        else:
+            say(label, "bold red" if label == "failed:" else "yellow", text, out)
 
 
 @_command
@@ -318,6 +344,7 @@ def check(params: Path = PARAMS, out_dir: Path = OUT,
     rep, folder = _on_outputs(f"checking {loaded.name}", quiet,
                               lambda: check_design(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache, cache_size)))
     print_report(rep, out, verbose=verbose)
+    _verdict(rep, folder, loaded)
     if report is not None:
         _write_side_file(report, "--report", lambda: write_json(report, rep))
     if junit is not None:
@@ -412,34 +439,107 @@ def _on_outputs(doing: str, quiet: bool, run):
 def stiffness(params: Path = PARAMS, out_dir: Path = OUT,
               states: str = typer.Option(None, "--states", help="comma-separated tendon states (default: all, "
                                                                  "the nine of the paper's Fig. 8 for the prototype)"),
-              quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner")) -> None:
-    """Stiffness in newtons per tendon state: at every disk and in torsion at the tip, and the shape under gravity.
+              quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner"),
+              cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
+    """Stiffness in newtons per tendon state and orientation: at every disk and in torsion at the tip, between the eyelet-friction bounds, and the shape under gravity.
 
-    From the parameters alone (no CAD): stiffness.json, stiffness.png (Fig. 8 style) and gravity.png (Fig. 7 style) in OUT/<design>/.
+    From the parameters (no CAD; the weights from a current build's files when OUT/<design>/ holds one): stiffness.json, stiffness.png (Fig. 8 style) and gravity.png (Fig. 7 style) in OUT/<design>/, which `hwgen build` writes too.
     """
     loaded = _load(params)
     from .pipeline import stiffness as run_stiffness
 
     which = [s.strip() for s in states.split(",") if s.strip()] if states else None
     with err.status(Text(f"solving {loaded.name}"), spinner="dots") if not quiet else nullcontext():
-        rep, folder = run_stiffness(loaded, out_dir, which)
-    ref = next((s for s in rep["states"] if s["state"] == rep["endpoint_ratio"]["states"][1]), None)
-    t = Table(title=f"{loaded.name}: stiffness per tendon state (robot horizontal, own weight)")
-    for col in ("state", "tip N/mm", "× " + (ref["state"] if ref else "-"), "least disk N/mm", "tip torsion N·mm/rad",
-                "tip sag mm"):
-        t.add_column(col, justify="right" if col != "state" else "left")
-    for s in rep["states"]:
-        least = min(d["stiffness_n_per_mm"] for d in s["disks"])
-        t.add_row(s["state"], f"{s['tip_stiffness_n_per_mm']:.4f}",
-                  f"{s['tip_stiffness_n_per_mm'] / ref['tip_stiffness_n_per_mm']:.2f}" if ref else "-",
-                  f"{least:.4f}", f"{s['tip_torsion_nmm_per_rad']:.0f}", f"{s['tip_sag_mm']:.1f}")
-    out.print(t)
+        rep, folder = run_stiffness(loaded, out_dir, which, cache_dir=_cache(cache_dir, no_cache))
+    for table in _stiffness_tables(loaded.name, rep):
+        out.print(table)
     r = rep["endpoint_ratio"]
-    if r["ratio"] is not None:
-        out.print(f"endpoint stiffness {r['states'][0]}/{r['states'][1]}: {r['ratio']:.2f}× (the paper measured "
-                  f"{r['paper']:g}× on its prototype); model: {rep['model']}")
+    if r.get("ratio") is not None:
+        band = r["band"]
+        out.print(f"endpoint stiffness {r['states'][0]}/{r['states'][1]} ({r['orientation']}): {band[0]:.2f}-"
+                  f"{band[1]:.2f}× between the friction bounds, {r['ratio']:.2f}× frictionless; the paper measured "
+                  f"{r['paper']:g}× on its prototype ({'inside' if r['paper_inside'] else 'outside'} the band)")
+    out.print(Text(f"tensions: {rep['protocol']}; * a tendon's own pretension_n"))
+    out.print(Text(f"friction: {rep['frictions']['capstan']}; † a tendon went slack before the push was whole "
+                   "(the secant up to there); ▲ toward +z, ▼ toward −z"))
+    for note in rep["notes"]:
+        out.print(Text(f"note: {note}"))
+    out.print(Text(f"model: {rep['model']}"))
     for name in ("stiffness.json", "stiffness.png", "gravity.png"):
         out.print(f"  {printable(folder / name)}")
+
+
+def _stiffness_tables(design: str, rep: dict) -> list:
+    """One table per orientation: each state's locked tensions and stiffness between the friction bounds."""
+    tip = {(e["state"], e["orientation"], e["friction"] + (" " + e["push"] if "push" in e else "")): e
+           for e in rep["states"]}
+    ref = rep["endpoint_ratio"]["states"][1] if rep["endpoint_ratio"].get("states") else None
+    tables = []
+    for o in rep["orientations"]:
+        t = Table(title=f"{design}: {o}, tensioned by the protocol (N/mm; frictionless–stuck)")
+        cols = ("state", "locked tensions N", "tip N/mm", "× " + (ref or "-"), "capstan ▲/▼", "least disk",
+                "torsion N·mm/rad", "tip z mm", "slack at push ▲/▼ N")
+        for col in cols:
+            t.add_column(col, justify="left" if col in ("state", "locked tensions N") else "right")
+        for e in rep["states"]:
+            if e["orientation"] != o or e["friction"] != "none":
+                continue
+            stuck = tip[(e["state"], o, "stuck")]
+            a, b = e["tip_stiffness_n_per_mm"], stuck["tip_stiffness_n_per_mm"]
+            base = (tip.get((ref, o, "none")), tip.get((ref, o, "stuck")))
+            times = (f"{a / base[0]['tip_stiffness_n_per_mm']:.2f}–{b / base[1]['tip_stiffness_n_per_mm']:.2f}"
+                     if all(base) else "-")
+            caps = [tip.get((e["state"], o, f"capstan {k}")) for k in ("+z", "-z")]
+            cap = "/".join(f"{c['tip_stiffness_n_per_mm']:.3f}" + ("†" if c["slack_within_push"] else "")
+                           for c in caps if c) or "-"
+            tens = " ".join(f"{n} {v:.2f}" + ("*" if e["tension_from"][n] == "pretension_n" else "")
+                            for n, v in e["tensions_n"].items()) or "-"
+            least = min(d["stiffness_n_per_mm"] for d in e["disks"])
+            slack = "/".join("-" if v is None else f"{v:.2f}" for v in e["slack_at_tip_push_n"].values())
+            t.add_row(e["state"], tens, f"{a:.4f}–{b:.4f}", times, cap, f"{least:.4f}",
+                      f"{e['tip_torsion_nmm_per_rad']:.0f}–{stuck['tip_torsion_nmm_per_rad']:.0f}",
+                      f"{e['tip_z_mm']:+.1f}", slack)
+        tables.append(t)
+    return tables
+
+
+@_command
+def sim(params: Path = PARAMS, out_dir: Path = OUT,
+        quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner"),
+        cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
+    """A MuJoCo model of the robot as printed, checked against hwgen's own statics.
+
+    Reads the built files (builds first when the outputs are missing or made from other parameters) and writes OUT/<design>/sim/: robot.xml with its meshes (a keyframe per tendon state), sim.json and sim.png. Open it with `python -m mujoco.viewer --mjcf OUT/<design>/sim/robot.xml`. Exit 1 when MuJoCo's tip stiffness and the statics' differ by more than 25 %, the model does not stay finite, or an eyelet site is off its measured eyelet.
+    """
+    loaded = _load(params)
+    from .pipeline import sim as run_sim
+
+    res, folder = _on_outputs(f"simulating {loaded.name}", quiet,
+                              lambda: run_sim(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache)))
+    t = Table(title=f"{loaded.name}: MuJoCo against the statics ({res['orientation']['words']})")
+    for col in ("state", "MuJoCo tip N/mm", "statics tip N/mm", "ratio", "MuJoCo sag mm", "statics sag mm"):
+        t.add_column(col, justify="right" if col != "state" else "left")
+    for s in res["states"]:
+        t.add_row(s["state"], f"{s['mujoco_tip_n_per_mm']:.4f}", f"{s['statics_tip_n_per_mm']:.4f}",
+                  f"{s['ratio']:.3f}", f"{s['mujoco_tip_sag_mm']:.1f}", f"{s['statics_tip_sag_mm']:.1f}")
+    out.print(t)
+    if res["sag"].get("sag_model_tip_sag_mm") is not None:
+        out.print(f"state N sags {res['sag']['mujoco_tip_sag_mm']:.1f} mm in MuJoCo, "
+                  f"{res['sag']['sag_model_tip_sag_mm']:.1f} mm by the own-weight model of the checks")
+    b = res["bent"]
+    if b:
+        out.print(f"{b['tendon']} pulled with {b['tension_n']:.1f} N: tip at ({', '.join(_mm(v) for v in b['mujoco_tip_mm'])}) "
+                  f"mm in MuJoCo, ({', '.join(_mm(v) for v in b['statics_tip_mm'])}) by the statics")
+    for d in res["dynamics"]:
+        rtf = f"{d['real_time_factor']:.0f}× real time on one core" if d["real_time_factor"] else ""
+        out.print(f"keyframe {d['state']}: {d['seconds']:g} s under gravity, "
+                  f"{'finite' if d['finite'] else 'NOT FINITE'}, {rtf}")
+    for f in res["findings"]:
+        say("finding:", "yellow", f)
+    for name in ("robot.xml", "sim.json", "sim.png"):
+        out.print(f"  {printable(folder / 'sim' / name)}")
+    if not res["ok"]:
+        raise typer.Exit(EXIT_FINDINGS)
 
 
 @_command

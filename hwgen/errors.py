@@ -12,11 +12,34 @@ ECHO_CHARS = 40          # the most of one user-given value a message quotes
 
 
 class InputError(Exception):
-    """Bad input: the file, the field path (``tendons[2].routing.table``) and what is wrong."""
+    """Bad input: the file, the field path (``tendons[2].routing.table``) and what is wrong.
+
+    One error may carry others found in the same reading (``more``: every problem of a file is
+    reported at once) and ``notes`` (hints on values that are not errors themselves, such as a
+    length that looks like metres); :attr:`problems` is the error and the others, in order."""
 
     def __init__(self, file: str | Path, path: str, message: str):
         self.file, self.path, self.message = str(file), path, message
+        self.more: list[InputError] = []
+        self.notes: list[str] = []
         super().__init__(f"{file}: {path or '<document>'}: {message}")
+
+    @property
+    def problems(self) -> list[InputError]:
+        return [self, *self.more]
+
+    @classmethod
+    def of(cls, problems: list[InputError], notes: list[str] = ()) -> InputError:
+        """One error carrying all of ``problems`` (at least one) and the ``notes``."""
+        first = problems[0]
+        first.more = list(problems[1:])
+        first.notes = list(notes)
+        return first
+
+    def __str__(self) -> str:
+        text = super().__str__()
+        return text if not self.more else f"{text} (and: " + "; ".join(
+            f"{e.file}: {e.path or '<document>'}: {e.message}" for e in self.more) + ")"
 
 
 class DesignError(Exception):

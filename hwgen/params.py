@@ -4,23 +4,27 @@ Units are millimetres and degrees throughout; every field says so in its descrip
 Coordinates are the paper's: the backbone runs along +y from the base disk at y = 0,
 x spans the backbone's height, z its thickness; positive curvature bends toward +z.
 
-Reading is two passes: pydantic checks each field's type and range, then
-:func:`_check_design` checks what spans fields (station counts, channels, names). Both report
-through :class:`InputError`, which names the file, the field path and what is wrong. What
-needs the model to decide (eyelets inside the disk, gears that can be made) is checked next,
-by :mod:`hwgen.model.feasibility`; :func:`hwgen.pipeline.load` runs both.
+Reading (:func:`read`) takes the file and the bases it builds on (:mod:`hwgen.designfile`), then
+two passes: pydantic checks each field's type and range, then :func:`design_problems` checks what
+spans fields (station counts, channels, names). Every fault of a pass is reported at once, through
+one :class:`InputError` that names, for each, the file that wrote the field, the field path and
+what is wrong and allowed (an unknown key with the nearest known one; a rule over several fields
+blames the one the design's own file wrote). What needs the model to decide (eyelets inside the
+disk, gears that can be made) is checked next, by :mod:`hwgen.model.feasibility`;
+:func:`hwgen.pipeline.load` runs both.
 """
 from __future__ import annotations
 
-import hashlib
+import difflib
 import re
+import types
+import typing
 from pathlib import Path
 from typing import Annotated, Literal, get_args
 
-import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 
-from . import yamlfile
+from . import designfile, yamlfile
 from .errors import InputError, clip, echo
 
 SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
@@ -181,9 +185,11 @@ class Tendon(_Model):
         None, description="allowed length change over the sweep, mm (default: 0.2 unless on the actuating channel)")
     termination: Termination | None = Field(
         None, description="how this tendon ends at the base disk (default: tendon_material.termination)")
-    pretension_n: Finite = Field(5.0, ge=0, le=10_000,
-                                 description="tension the tendon is locked at, robot straight and unloaded, N "
-                                             "(a mirrored tendon gets the same)")
+    pretension_n: Finite | None = Field(
+        None, ge=0, le=10_000,
+        description="tension the tendon is pulled to at its turn in the tensioning protocol, N (a mirrored tendon gets "
+                    "the same); default: the paper's protocol finds it (hwgen.model.protocol: the tension that holds "
+                    "the backbone straightest, not under check.taut_floor_n)")
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -222,6 +228,11 @@ class TendonMaterial(_Model):
                                                 description="stretch per newton of a tendon's two ends together: "
                                                             "its knot in its seat and its wraps on the drum, "
                                                             "with the drive behind it, mm/N")
+    eyelet_friction: Finite | None = Field(
+        None, ge=0, le=2,
+        description="coefficient of friction of the line in an eyelet (capstan: a segment slips once the tension "
+                    "on one side exceeds e^(μθ) times the other's, θ the angle the line turns there); the "
+                    "stiffness is then reported for it between the frictionless and the stuck bounds")
 
 
 class Process(_Model):
@@ -348,6 +359,17 @@ class CheckSettings(_Model):
                                  description="largest rise, as a share, of the actuating tension needed at the "
                                              "sweep's end when the stiffening tendons are locked, over the "
                                              "tension needed with them slack")
+    working_tension_n: Finite = Field(5.0, gt=0, le=10_000,
+                                      description="tension a tendon without pretension_n is locked at (a stiffening "
+                                                  "tendon) or held at by the drive (an actuating one) in the tension "
+                                                  "checks' bending sweep, N")
+    straight_within_mm: Finite = Field(1.0, gt=0, le=100,
+                                       description="tensioning protocol: a stiffening channel is pulled to the least "
+                                                   "tension that brings the disks within this of the straightest it "
+                                                   "can hold them (root mean square off the straight line), mm")
+    stiffness_push_n: Finite = Field(1.0, gt=0, le=1000,
+                                     description="the push the stiffness with eyelet friction (capstan) is taken "
+                                                 "over, at the tip, N")
 
 
 class Render(_Model):
@@ -429,17 +451,27 @@ class Design(_Model):
 
 
 class LoadedDesign(_Model):
-    """A validated design, where it came from, and what the reader warns about (deprecated keys)."""
+    """A validated design, where it came from (the file, and the bases it builds on), and what
+    the reader warns about (deprecated keys, values far off their usual range)."""
 
     design: Design
     source: str
     sha256: str
     warnings: tuple[str, ...] = ()
+    bases: tuple[str, ...] = ()           # the file's base, its base's base, ... (empty: no base)
+    _layers: designfile.Layers | None = PrivateAttr(None)
 
     @property
     def name(self) -> str:
         """The design's name (the YAML's ``design`` key): it names the output folder."""
         return self.design.design
+
+    @property
+    def layers(self) -> designfile.Layers:
+        """The merged document and where each of its values came from."""
+        if self._layers is None:
+            return designfile.single(self.design.model_dump(mode="json", exclude_defaults=True), self.source)
+        return self._layers
 
 
 def _path(loc) -> str:
@@ -449,163 +481,275 @@ def _path(loc) -> str:
     return out
 
 
-# Keys that moved: (old section, key) -> (new section, key). Read from the old place for one release.
-MOVED_KEYS = {("render", "tie_off_mm"): ("bom", "tie_off_mm"), ("render", "spool_mm"): ("bom", "spool_mm"),
-              ("tensioner", "backlash"): ("tensioner", "center_offset")}
-
-
-def _move_deprecated(data: dict, path: Path) -> list[str]:
-    """Move keys from their old section to their new one; a warning for each, an error if given twice."""
-    warnings = []
-    for (old, key), (new, new_key) in MOVED_KEYS.items():
-        section = data.get(old)
-        if not isinstance(section, dict) or key not in section:
-            continue
-        target = data.setdefault(new, {})
-        if not isinstance(target, dict):
-            continue          # the schema reports the malformed section
-        if new_key in target:
-            raise InputError(path, f"{old}.{key}", f"given here and as {new}.{new_key}; keep only {new}.{new_key}")
-        target[new_key] = section.pop(key)
-        warnings.append(f"{path}: {old}.{key} is deprecated, write it as {new}.{new_key} "
-                        f"(read from {old}.{key}: for this release only)")
-    return warnings
-
+# ---------------------------------------------------------------- reading a design
 
 def read(path: str | Path) -> LoadedDesign:
-    """Read a design YAML and check it against the schema; raise :class:`InputError` on any fault."""
+    """Read a design YAML (and the bases it builds on) and check it against the schema; raise
+    :class:`InputError` naming every fault at once."""
     path = Path(path)
-    raw = _read_bytes(path)
-    data, warnings = document(raw, path)
-    design = validate(data, path)
-    return LoadedDesign(design=design, source=str(path), sha256=hashlib.sha256(raw).hexdigest(),
-                        warnings=tuple(warnings))
+    layers = designfile.read_layers(path)
+    design = validate(layers.doc, path, layers)
+    hinted = designfile.hints(layers.doc)
+    warnings = list(layers.warnings) + [f"{layers.file_of(p)}: {p}: {h}" for p, h in hinted.items()]
+    loaded = LoadedDesign(design=design, source=str(path), sha256=layers.sha256, warnings=tuple(warnings),
+                          bases=tuple(str(f) for f in layers.files[1:]))
+    loaded._layers = layers
+    return loaded
 
 
 def document(raw: bytes, path: str | Path) -> tuple[dict, list[str]]:
-    """A design file's bytes as its mapping of sections (deprecated keys moved to their new place),
-    and the warnings about those keys; raise :class:`InputError` when it is no such mapping."""
-    path = Path(path)
-    try:
-        data = yamlfile.load(raw.decode("utf-8"))
-    except UnicodeDecodeError:
-        raise InputError(path, "", "not UTF-8 text") from None
-    except yamlfile.YamlFault as e:
-        raise InputError(path, e.path, e.message) from None
-    except yaml.YAMLError as e:
-        mark = getattr(e, "problem_mark", None)
-        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
-        problem = getattr(e, "problem", None) or str(e)
-        context = getattr(e, "context", None)
-        problem += f" ({context})" if context else ""
-        raise InputError(path, "", f"YAML syntax: {where}{clip(problem, 160)}") from None
-    except ValueError as e:      # a scalar Python cannot convert (a date such as 2024-02-30)
-        raise InputError(path, "", f"a value YAML cannot read: {clip(str(e), 80)}") from None
-    if not isinstance(data, dict):
-        raise InputError(path, "", "the document must be a mapping of sections (design, backbone, disks, ...)")
-    return data, _move_deprecated(data, path)
+    """A design file's bytes as its mapping of sections (:func:`hwgen.designfile.document`)."""
+    return designfile.document(raw, path)
 
 
-def validation_error(e: ValidationError, path: str | Path) -> InputError:
-    """Pydantic's first error as one :class:`InputError`: the field path and what is wrong."""
-    err = e.errors()[0]
-    loc = [p for p in err["loc"] if not (isinstance(p, str) and p.startswith("function-"))]
-    msg = err["msg"].removeprefix("Value error, ")
-    if err["type"] == "extra_forbidden":
-        msg = "unknown key"
-    elif "input" in err and err["type"] not in ("missing", "value_error"):
-        msg += f" (got {echo(err['input'])})"
-    extra = f" (and {e.error_count() - 1} more)" if e.error_count() > 1 else ""
-    return InputError(path, _path(loc), msg + extra)
+def unwrap(ann):
+    """The type inside Optional / Annotated: (kind, inner) with kind "model", "seq", "dict" or "leaf"."""
+    while True:
+        origin = typing.get_origin(ann)
+        if origin is Annotated:
+            ann = typing.get_args(ann)[0]
+        elif origin in (typing.Union, types.UnionType):
+            args = [a for a in typing.get_args(ann) if a is not type(None)]
+            ann = args[0] if len(args) == 1 else ann
+            if len(args) != 1:
+                return "leaf", ann
+        else:
+            break
+    if isinstance(ann, type) and issubclass(ann, BaseModel):
+        return "model", ann
+    if typing.get_origin(ann) in (tuple, list):
+        args = typing.get_args(ann)
+        return "seq", (args[0] if args else typing.Any)
+    if typing.get_origin(ann) is dict:
+        return "dict", ann
+    return "leaf", ann
 
 
-def validate(data: dict, path: str | Path) -> Design:
-    """A design document (as read from YAML) checked against the schema and the checks that span
-    fields, exactly as a design file is; ``path`` names it in the :class:`InputError`."""
+def _field_at(model: type[BaseModel], loc) -> tuple[type[BaseModel] | None, object]:
+    """(the model whose field ``loc`` ends in, that field's FieldInfo) walking the schema; None where
+    the path leaves it."""
+    kind, cur, info, parent = "model", model, None, None
+    for key in loc:
+        if kind == "model" and isinstance(key, str) and key in cur.model_fields:
+            parent, info = cur, cur.model_fields[key]
+            kind, cur = unwrap(info.annotation)
+        elif kind == "seq" and isinstance(key, int):
+            kind, cur = unwrap(cur)
+        else:
+            return (cur if kind == "model" and key is loc[-1] else None), None
+    return parent, info
+
+
+def _fields_everywhere(model: type[BaseModel], prefix: str = "") -> dict[str, list[str]]:
+    """key -> every dotted path of the schema that ends in it (a list's items marked ``[]``)."""
+    out: dict[str, list[str]] = {}
+    for name, info in model.model_fields.items():
+        path = f"{prefix}.{name}" if prefix else name
+        out.setdefault(name, []).append(path)
+        kind, inner = unwrap(info.annotation)
+        if kind == "seq":
+            kind, inner = unwrap(inner)
+            path += "[]"
+        if kind == "model":
+            for k, v in _fields_everywhere(inner, path).items():
+                out.setdefault(k, []).extend(v)
+    return out
+
+
+def _unknown_key(model: type[BaseModel], loc, missing: set[str]) -> tuple[str, str | None]:
+    """What to say of an unknown key: the nearest key of its mapping (difflib), or the section it
+    belongs in; (message, the suggested key when it is a required one that is missing)."""
+    key = loc[-1] if loc else ""
+    parent, _ = _field_at(model, loc)
+    where = _path(loc[:-1]) or "the design"
+    if parent is None or not isinstance(key, str):
+        return "unknown key", None
+    names = list(parent.model_fields)
+    close = difflib.get_close_matches(key, names, n=1, cutoff=0.6)
+    if close:
+        sibling = _path([*loc[:-1], close[0]])
+        if sibling in missing:
+            return f"unknown key; did you mean {close[0]} (required, and missing)?", sibling
+        return f"unknown key; did you mean {close[0]}?", None
+    elsewhere = [p for p in _fields_everywhere(model).get(key, []) if p.rsplit(".", 1)[0] != where]
+    if elsewhere:
+        return f"unknown key here; {key} belongs in {' or '.join(elsewhere[:3])}", None
+    return f"unknown key; {where} takes {clip(', '.join(names), 300)}", None
+
+
+def schema_problems(e: ValidationError, model: type[BaseModel] = None) -> list[tuple[str, str]]:
+    """Every error pydantic found, each as (field path, what is wrong and what is allowed): a
+    missing field with what it holds, an unknown key with the nearest known one."""
+    model = model or Design
+    errs = []
+    for err in e.errors():
+        loc = tuple(p for p in err["loc"] if not (isinstance(p, str) and p.startswith("function-")))
+        errs.append((loc, err))
+    missing = {_path(loc) for loc, err in errs if err["type"] == "missing"}
+    unknown = {i: _unknown_key(model, loc, missing) for i, (loc, err) in enumerate(errs)
+               if err["type"] == "extra_forbidden"}
+    covered = {meant for _, meant in unknown.values() if meant}       # a misspelt key says its missing one
+    out = []
+    for i, (loc, err) in enumerate(errs):
+        typ, path = err["type"], _path(loc)
+        msg = err["msg"].removeprefix("Value error, ")
+        if i in unknown:
+            msg = unknown[i][0]
+        elif path in covered:
+            continue
+        elif typ == "missing":
+            _, info = _field_at(model, loc)
+            what = getattr(info, "description", None)
+            msg = f"missing (required): {what}" if what else "missing (required)"
+        elif "input" in err and typ != "value_error":
+            msg += f" (got {echo(err['input'])})"
+        out.append((path, msg))
+    return list(dict.fromkeys(out))
+
+
+def validation_error(e: ValidationError, path: str | Path, model: type[BaseModel] = None) -> InputError:
+    """Pydantic's errors as one :class:`InputError` carrying each (the field path and what is wrong)."""
+    return InputError.of([InputError(path, p, m) for p, m in schema_problems(e, model)])
+
+
+def refuse(problems: list, layers: designfile.Layers) -> InputError:
+    """``problems`` ((field path, message); a rule over several fields gives their paths, the one
+    to change first; or an :class:`InputError` named already) as one :class:`InputError`, each named in the file that wrote the field it
+    blames: of a rule's fields, one the design's own file wrote, else one whose value is far off
+    its usual range, else one a base wrote, else the first. A field far off its usual range says
+    so in the message of its problem, or as a note."""
+    hinted = designfile.hints(layers.doc)
+    used, out = set(), []
+    for problem in problems:
+        if isinstance(problem, InputError):           # named already
+            out.append(problem)
+            continue
+        paths, message = problem
+        paths = (paths,) if isinstance(paths, str) else tuple(paths)
+
+        def rank(p):
+            o = layers.origin(designfile.keys_of(p))
+            return (o == 0, p in hinted, o is not None)
+        best = max(paths, key=rank)          # max keeps the first of equals
+        if best in hinted and best not in used:
+            message = f"{message}; {hinted[best]}"
+            used.add(best)
+        out.append(InputError(layers.file_of(best), best, message))
+    errored = {e.path for e in out}
+    notes = [f"{layers.file_of(p)}: {p}: {h}" for p, h in hinted.items() if p not in used and p not in errored]
+    return InputError.of(out, notes)
+
+
+def validate(data: dict, path: str | Path, layers: designfile.Layers | None = None) -> Design:
+    """A design document (as read from YAML, its bases merged) checked against the schema and the
+    checks that span fields, exactly as a design file is; every fault is raised at once as one
+    :class:`InputError`, each named in the file that wrote it (``layers``; else ``path``)."""
+    layers = layers or designfile.single(data, path)
+    problems: list = []
+    if len(layers.files) > 1 and layers.origin(("design",)) != 0:
+        problems.append(InputError(path, "design", f"a design built on a base needs a name of its own: the base's "
+                                                   f"{echo(data.get('design'))} would write over that design's "
+                                                   f"outputs (e.g. design: {clip(Path(path).stem)})"))
     try:
         design = Design.model_validate(data)
     except ValidationError as e:
-        raise validation_error(e, path) from None
-    _check_design(design, Path(path))
+        raise refuse(problems + schema_problems(e), layers) from None
+    problems += design_problems(design)
+    if problems:
+        raise refuse(problems, layers)
     return design
 
 
-def _read_bytes(path: Path) -> bytes:
-    """The file's bytes, at most :data:`hwgen.yamlfile.MAX_BYTES` of them (a device such as
-    /dev/zero, or a 50 MB file, is refused after reading that much, not read to the end)."""
-    try:
-        with open(path, "rb") as f:
-            raw = f.read(yamlfile.MAX_BYTES + 1)
-    except OSError as e:
-        raise InputError(path, "", f"cannot read the file ({e.strerror or e})") from None
-    if len(raw) > yamlfile.MAX_BYTES:
-        raise InputError(path, "", f"larger than {yamlfile.MAX_BYTES >> 20} MiB; a design file is a few kB")
-    return raw
-
-
-def _check_design(d: Design, file: Path) -> None:
-    """Checks that span fields; each raises InputError with the field path."""
+def design_problems(d: Design) -> list[tuple[str | tuple[str, ...], str]]:
+    """Checks that span fields: (the field path, or the paths of the fields the rule involves with
+    the one to change first; what is wrong), every one found."""
+    out: list = []
     if not SAFE_NAME.match(d.design):
-        raise InputError(file, "design", f"{echo(d.design)} is not a safe file name (letters, digits, _ and -)")
+        out.append(("design", f"{echo(d.design)} is not a safe file name (letters, digits, _ and -)"))
     n = d.disks.count
     if d.disks.stations is not None:
         st = d.disks.stations
         if len(st) != n:
-            raise InputError(file, "disks.stations", f"has {len(st)} stations, disks.count is {n}")
+            out.append((("disks.stations", "disks.count"), f"has {len(st)} stations, disks.count is {n}"))
         if any(b <= a for a, b in zip(st, st[1:])):
-            raise InputError(file, "disks.stations", "stations must increase strictly")
+            out.append(("disks.stations", "stations must increase strictly"))
         if abs(st[0]) > 1e-9 or abs(st[-1] - d.backbone.length) > 1e-6:
-            raise InputError(file, "disks.stations",
-                             f"must run from 0 to backbone.length = {d.backbone.length} mm")
+            out.append((("disks.stations", "backbone.length"),
+                        f"disks.stations must run from 0 to backbone.length = {d.backbone.length} mm "
+                        f"(they run from {st[0]:g} to {st[-1]:g} mm)"))
     elif d.disks.spacing is not None and abs(d.disks.spacing * (n - 1) - d.backbone.length) > 1e-6:
-        raise InputError(file, "disks.spacing",
-                         f"{n - 1} gaps of {d.disks.spacing} mm give {d.disks.spacing * (n - 1):g} mm, "
-                         f"backbone.length is {d.backbone.length} mm")
+        out.append((("disks.spacing", "backbone.length", "disks.count"),
+                    f"{n - 1} gaps of disks.spacing {d.disks.spacing:g} mm give {d.disks.spacing * (n - 1):g} mm, "
+                    f"backbone.length is {d.backbone.length:g} mm (leave disks.spacing out and the disks are "
+                    f"spaced equally over the length)"))
     if d.disks.eyelets.edge_size >= d.disks.thickness / 2:
-        raise InputError(file, "disks.eyelets.edge_size", "must be less than half the disk thickness")
+        out.append((("disks.eyelets.edge_size", "disks.thickness"),
+                    f"the eyelets' chamfers (disks.eyelets.edge_size {d.disks.eyelets.edge_size:g} mm at each end) "
+                    f"must be less than half the disk thickness (disks.thickness {d.disks.thickness:g} mm): a "
+                    f"smaller edge_size, or disks thicker than {2 * d.disks.eyelets.edge_size:g} mm"))
     if d.disks.anchors.plate >= d.disks.end_thickness / 2:
-        raise InputError(file, "disks.anchors.plate", "must be less than half the end disk thickness")
+        out.append((("disks.anchors.plate", "disks.end_thickness"),
+                    f"the seat plate (disks.anchors.plate {d.disks.anchors.plate:g} mm) must be less than half "
+                    f"the end disks' thickness (disks.end_thickness {d.disks.end_thickness:g} mm)"))
     sweep, checked = d.disks.eyelets.sweep_deg, d.check.max_angle_deg
     if checked is not None and checked > sweep:
-        raise InputError(file, "check.max_angle_deg",
-                         f"±{checked:g}° is beyond the ±{sweep:g}° the eyelets are sized for "
-                         f"(disks.eyelets.sweep_deg): they would fail the angle check by design; "
-                         f"raise the sweep or leave check.max_angle_deg out")
+        out.append((("check.max_angle_deg", "disks.eyelets.sweep_deg"),
+                    f"±{checked:g}° is beyond the ±{sweep:g}° the eyelets are sized for "
+                    f"(disks.eyelets.sweep_deg): they would fail the angle check by design; "
+                    f"raise the sweep or leave check.max_angle_deg out"))
+    out += _channel_problems(d)
+    out += _tendon_problems(d)
+    return out
 
+
+def _channel_problems(d: Design) -> list:
+    out: list = []
     channels = d.tensioner.channels
     if len(channels) > MAX_CHANNELS:
-        raise InputError(file, "tensioner.channels", f"{len(channels)} channels; at most {MAX_CHANNELS}")
-    for i, c in enumerate(channels):
+        out.append(("tensioner.channels", f"{len(channels)} channels; at most {MAX_CHANNELS}"))
+    for i, c in enumerate(channels[:MAX_CHANNELS]):
         if not SAFE_NAME.match(c):
-            raise InputError(file, f"tensioner.channels[{i}]", f"{echo(c)} is not a safe file name")
+            out.append((f"tensioner.channels[{i}]", f"{echo(c)} is not a safe file name"))
         if c in channels[:i]:
-            raise InputError(file, f"tensioner.channels[{i}]", f"duplicate channel {echo(c)}")
+            out.append((f"tensioner.channels[{i}]", f"duplicate channel {echo(c)}"))
     if d.tensioner.actuating_channel not in channels:
-        raise InputError(file, "tensioner.actuating_channel",
-                         f"{echo(d.tensioner.actuating_channel)} is not one of the channels {echo(list(channels), 80)}")
+        out.append((("tensioner.actuating_channel", "tensioner.channels"),
+                    f"{echo(d.tensioner.actuating_channel)} is not one of the channels {echo(list(channels), 80)}"))
     for c in d.tensioner.winding:
         if c not in channels:
-            raise InputError(file, f"tensioner.winding.{clip(c)}",
-                             f"{echo(c)} is not one of the channels {echo(list(channels), 80)}")
+            out.append(((f"tensioner.winding.{clip(c)}", "tensioner.channels"),
+                        f"{echo(c)} is not one of the channels {echo(list(channels), 80)}"))
+    return out
 
+
+def _tendon_problems(d: Design) -> list:
+    out: list = []
+    channels, n = d.tensioner.channels, d.disks.count
     names: dict[str, str] = {}
     for i, t in enumerate(d.tendons):
         where = f"tendons[{i}]"
         own = list(zip(t.names, (f"{where}.name", f"{where}.routing.mirror_name")))
         for name, p in own:
             if not SAFE_NAME.match(name):
-                raise InputError(file, p, f"{echo(name)} is not a safe file name (letters, digits, _ and -)")
-            if name in names:
-                raise InputError(file, p, f"duplicate tendon name {echo(name)} (also at {names[name]})")
-            names[name] = p
+                out.append((p, f"{echo(name)} is not a safe file name (letters, digits, _ and -)"))
+            elif name in names:
+                out.append((p, f"duplicate tendon name {echo(name)} (also at {names[name]})"))
+            else:
+                names[name] = p
         if t.channel not in channels:
-            raise InputError(file, f"{where}.channel",
-                             f"unknown channel {echo(t.channel)}; tensioner.channels are {echo(list(channels), 80)}")
+            out.append(((f"{where}.channel", "tensioner.channels"),
+                        f"unknown channel {echo(t.channel)}; tensioner.channels are {echo(list(channels), 80)}"))
         if t.routing.table is not None and len(t.routing.table) != n:
-            raise InputError(file, f"{where}.routing.table",
-                             f"has {len(t.routing.table)} rows, there are {n} stations")
+            out.append(((f"{where}.routing.table", "disks.count"),
+                        f"has {len(t.routing.table)} rows, there are {n} stations (disks.count)"))
+    return out
 
 
 def json_schema() -> dict:
-    return Design.model_json_schema()
-
+    """The JSON Schema of a design file: the design's fields, and ``base``."""
+    schema = Design.model_json_schema()
+    schema.setdefault("properties", {})[designfile.BASE_KEY] = {
+        "type": "string", "title": "Base",
+        "description": "a design file this one builds on (relative to this file): its values, with this file's "
+                       "merged over them (mappings key by key, lists whole; null removes a value)"}
+    return schema

@@ -1,7 +1,8 @@
 """The order of the stages, and the one place that knows it.
 
     read (params) → feasibility (model) → plan (model) → parts (cad) → files and manifest (cad)
-    → checks (report.json, summary.md) → plots (lengths.png, tolerance.png, sag.png) → bill of materials
+    → checks (report.json, summary.md; the tendon states' statics: stiffness.json, stiffness.png,
+    gravity.png) → plots (lengths.png, tolerance.png, sag.png) → bill of materials
     → print plates (plates/) → pictures → assembly guide (guide/)
 
 Every build writes into a fresh staging folder beside the target; only when every file is
@@ -62,12 +63,14 @@ STIFFNESS, STIFFNESS_PLOT, GRAVITY_PLOT = "stiffness.json", "stiffness.png", "gr
 
 
 def load(path: str | Path) -> params.LoadedDesign:
-    """Read a design YAML, check it against the schema, then check that it can be built.
+    """Read a design YAML (and its bases), check it against the schema, then check that it can be built.
 
-    Raises :class:`hwgen.errors.InputError` naming the file and the field path.
+    Raises :class:`hwgen.errors.InputError` naming, for every fault, the file and the field path.
     """
     loaded = params.read(path)
-    feasibility.check(loaded.design, path)
+    found = feasibility.problems(loaded.design)
+    if found:
+        raise params.refuse(found, loaded.layers)
     return loaded
 
 
@@ -108,19 +111,42 @@ def output_errors(out_root: Path) -> Iterator[None]:
 # ---------------------------------------------------------------- stages after the files
 
 def run_checks(folder: Path, manifest: dict, plan: Plan) -> dict:
+    """:func:`checked`'s report."""
+    return checked(folder, manifest, plan)[0]
+
+
+def checked(folder: Path, manifest: dict, plan: Plan) -> tuple[dict, dict]:
     """:func:`hwgen.checks.run.run_checks`, imported when the checks run: it brings scipy's
     optimisers (about a second), which a build whose stages all come from the cache never needs.
     In a build, with what the work ahead measured on these very files while assembly.step was
-    written (:meth:`_Ahead.measure`), when it did."""
+    written (:meth:`_Ahead.measure`), when it did. Then the tendon states' statics
+    (:func:`statics`), whose stiffening joins the report. Returns (report, statics)."""
     from .checks.run import run_checks as run
     ahead = _MEASURED_AHEAD.get()
-    return run(folder, manifest, plan, ahead.measured(folder, manifest) if ahead is not None else None)
+    report = run(folder, manifest, plan, ahead.measured(folder, manifest) if ahead is not None else None)
+    try:
+        study = statics(plan, report.get("gravity"))
+    except (ValueError, ArithmeticError, np.linalg.LinAlgError) as e:      # the statics says why, the rest stands
+        study = {"skipped": f"the tendon states' statics was not computed: {e}"}
+    report["stiffening"] = study.get("stiffening") or ({"skipped": study["skipped"]} if "skipped" in study else None)
+    return report, study
+
+
+def statics(plan: Plan, measured: dict | None, which: list[str] | None = None) -> dict:
+    """The statics of the plan's tendon states (or those named; :func:`hwgen.model.stiffness.study`)
+    with the weights the checks measured (a report's ``gravity`` section, else the plan's
+    estimate): stiffness.json's content, remembered in the active cache by what it reads (the
+    described robot, its states and orientations, the code)."""
+    from .model import stiffness as sf      # scipy's optimisers: only the checks and `hwgen stiffness`
+    todo = [s for s in sf.states(plan) if not which or s.name in which]
+    inputs = (sf.describe(plan, measured), todo, sf.ORIENTATIONS, sf.STUDY_H_MAX)
+    return cache.remembered("stiffness study", inputs, lambda: sf.study(plan, which, measured=measured))
 
 
 def checks_stage(plan: Plan, folder: Path, manifest: dict, no_report: None) -> dict:
     """Measure the fresh files: report.json, summary.md, lengths.png, tolerance.png and sag.png; the checks go
-    into the manifest."""
-    report = run_checks(folder, manifest, plan)
+    into the manifest. And the tendon states' statics: stiffness.json, stiffness.png, gravity.png."""
+    report, study = checked(folder, manifest, plan)
     manifest["checks"] = report["checks"]
     manifest["checks_ok"] = report["ok"]
     write_report(report, folder)
@@ -128,6 +154,10 @@ def checks_stage(plan: Plan, folder: Path, manifest: dict, no_report: None) -> d
     plot_lengths(report, folder / PLOT)
     plot_tolerance(report, folder / TOLERANCE)
     plot_sag(report, manifest["design_report"], folder / SAG)
+    write_json(folder / STIFFNESS, study)
+    if "skipped" not in study:
+        plot_stiffness(study, folder / STIFFNESS_PLOT)
+        plot_gravity(study, folder / GRAVITY_PLOT)
     return report
 
 
@@ -148,6 +178,12 @@ def pictures_stage(plan: Plan, folder: Path, manifest: dict, report: dict | None
                   guide.picture_jobs(folder, manifest, plan))
 
 
+def marks_stage(plan: Plan, folder: Path, manifest: dict, report: dict | None) -> None:
+    """exploded.png and bent.png drawn again with what fails marked (the pictures stage ran beside
+    the checks, before their verdict); nothing when every check passes."""
+    pictures.mark_failures(folder, manifest, plan.render)
+
+
 def guide_stage(plan: Plan, folder: Path, manifest: dict, report: dict | None) -> dict:
     """guide/assembly.md and guide/assembly.html, from bom.csv, the manifest and the step pictures."""
     return guide.write_guide(folder, manifest, plan)
@@ -157,7 +193,7 @@ def guide_stage(plan: Plan, folder: Path, manifest: dict, report: dict | None) -
 # is the checks' (None for the checks themselves, and for a stage that runs beside them)
 AFTER_FILES: list[tuple[str, Callable[[Plan, Path, dict, dict | None], object]]] = [
     ("checks", checks_stage), ("bom", bom_stage), ("plates", plates_stage), ("pictures", pictures_stage),
-    ("guide", guide_stage)]
+    ("marks", marks_stage), ("guide", guide_stage)]
 DRAWING_STAGES = ("bom", "pictures", "guide")     # what `hwgen render` runs on existing outputs
 
 
@@ -544,7 +580,9 @@ def _after_files(store: cache.Store, plan: Plan, folder: Path, manifest: dict, d
 
 
 # the stages the cache keeps, and what each reads besides the folder, the manifest and the plan
-STAGE_ENV = {"checks": ("HWGEN_CHECK_SAMPLES",), "bom": (), "plates": (), "guide": (), "pictures": ("HWGEN_RENDER_BACKEND", "DISPLAY")}
+STAGE_ENV = {"checks": ("HWGEN_CHECK_SAMPLES",), "bom": (), "plates": (), "guide": (), "pictures": ("HWGEN_RENDER_BACKEND", "DISPLAY"),
+             "marks": ("HWGEN_RENDER_BACKEND", "DISPLAY")}
+STAGE_REWRITES = {"marks": pictures.MARKED}   # files a stage draws again over an earlier stage's (kept in the cache)
 STAGE_RESULT = {"checks": REPORT}       # a stage whose return value is this file of its outputs (read back by read_report)
 
 
@@ -604,11 +642,14 @@ def _cached_stage(store: cache.Store, name: str, stage, plan: Plan, folder: Path
     fields = {k: json.dumps(v, sort_keys=True) for k, v in manifest.items()}
     out = stage(plan, folder, manifest, report)
     after = _files(folder)
-    if any(after.get(path) != sha for path, sha in before.items()):
+    redrawn = STAGE_REWRITES.get(name, ())
+    if any(after.get(path) != sha for path, sha in before.items() if path not in redrawn):
         return out                              # it changed a file it was given: not kept
-    if name == "pictures" and manifest.get("render", {}).get("status") != "ok":
-        return out
-    files = {path: store.put_bytes((folder / path).read_bytes()) for path in after if path not in before}
+    if name in ("pictures", "marks") and (manifest.get("render", {}).get("status") != "ok"
+                                         or "message" in manifest["render"].get("failing", {})):
+        return out                              # another try may find a renderer
+    files = {path: store.put_bytes((folder / path).read_bytes()) for path in after
+             if path not in before or (path in redrawn and after[path] != before[path])}
     changed = {k: v for k, v in manifest.items() if fields.get(k) != json.dumps(v, sort_keys=True)}
     store.put_record(key, {"files": files, "manifest": changed})
     return out
@@ -925,6 +966,8 @@ def _manifest(loaded: params.LoadedDesign, plan: Plan, files: dict, entries: lis
         "hwgen_version": __version__,
         "params_file": loaded.source,
         "params_sha256": loaded.sha256,
+        "params_base": list(loaded.bases),          # the file's base, its base's base, ...: merged under it
+        "design_resolved": loaded.design.model_dump(mode="json"),    # the design as read, bases merged
         "files": files,
         "parts": entries,
         "design_report": design_report(plan),
@@ -1222,28 +1265,58 @@ def coupon(loaded: params.LoadedDesign, out_root: Path) -> tuple[dict, Path]:
     return info, folder
 
 
-def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | None = None) -> tuple[dict, Path]:
+def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | None = None,
+              cache_dir: Path | None | bool = True) -> tuple[dict, Path]:
     """`hwgen stiffness`: the statics of every tendon state (or those named) from the plan, the
     weights measured from the built files when ``out_root/<design>/`` holds a current build (its
     report's gravity section), else estimated from the plan; written as stiffness.json,
-    stiffness.png and gravity.png into that folder (added to what is there; a later build replaces
-    the folder and drops them). Returns (report, folder)."""
+    stiffness.png and gravity.png into that folder (replacing what a build wrote there: the same
+    files when every state is asked for). Returns (report, folder)."""
     from .model import stiffness as statics_study       # scipy's optimisers: only this command and the checks
-    plan = design_plan(loaded)
+    folder = Path(out_root) / loaded.name
+    measured, record = None, None
+    with output_errors(Path(out_root)), snapshot(folder) as view:
+        if stale_reason(view, loaded) is None:
+            measured = (read_report(view) or {}).get("gravity")
+            record = tensioner_record(read_manifest(view))     # the build's layout, as `hwgen check` takes it
+    plan = design_plan(loaded, record)
     if which:
         known = [s.name for s in statics_study.states(plan)]
         for name in which:
             if name not in known:
                 raise InputError(loaded.source, "--states", f"unknown state {clip(name)!r}; this design's are "
                                                             f"{', '.join(known)}")
-    folder = Path(out_root) / loaded.name
-    measured = None
-    with output_errors(Path(out_root)), snapshot(folder) as view:
-        if stale_reason(view, loaded) is None:
-            measured = (read_report(view) or {}).get("gravity")
-    report = statics_study.study(plan, which, measured=measured)
+    store = cache.Store(cache.default_dir() if cache_dir is True else (cache_dir or None))
+    with cache.using(store):
+        report = statics(plan, measured, which)
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
         write_json(tmp / STIFFNESS, report)
         plot_stiffness(report, tmp / STIFFNESS_PLOT)
         plot_gravity(report, tmp / GRAVITY_PLOT)
     return report, folder
+
+
+SIM = "sim"                # the folder of `hwgen sim`'s files inside out/<design>/
+
+
+def sim(loaded: params.LoadedDesign, out_root: Path,
+        cache_dir: Path | None | bool = True) -> tuple[dict, Path, str | None]:
+    """`hwgen sim`: the MuJoCo model of the built robot (:mod:`hwgen.sim`), written as sim/robot.xml,
+    its meshes, sim.json and sim.png into ``out_root/<design>/`` (added to what is there; a later
+    build replaces the folder and drops it). Builds first when the outputs are missing or stale.
+    Checked against the build's stiffness.json, else :func:`statics` (remembered in the cache).
+    Returns (sim.json's content, the folder, why it was rebuilt or None)."""
+    from .sim.run import simulate            # MuJoCo: only this command
+    folder = Path(out_root) / loaded.name
+    why = stale_reason(folder, loaded)
+    if why is None and not (folder / REPORT).is_file():
+        why = f"{REPORT} is missing"
+    if why is not None:
+        build(loaded, Path(out_root), cache_dir=cache_dir)
+    store = cache.Store(cache.default_dir() if cache_dir is True else (cache_dir or None))
+    with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp, cache.using(store):
+        manifest, report = read_manifest(tmp), read_report(tmp)
+        shutil.rmtree(tmp / SIM, ignore_errors=True)
+        plan = design_plan(loaded, tensioner_record(manifest))
+        result = simulate(plan, tmp, manifest, report, tmp / SIM, lambda: statics(plan, report.get("gravity")))
+    return result, folder, why

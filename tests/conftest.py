@@ -52,10 +52,12 @@ BUILDS = "built"          # the fixture that makes a test slow wherever it is as
 # 25 to 90 s of CPU, the gear stability run, also long, is a group; the quick ones 20 to 60 s of
 # wall on a loaded machine): each starts before the others of its tier. A name that no longer
 # matches only loses its place in the queue.
-LONGEST = ("tests/test_reproducible.py::", "tests/test_any_robot.py::test_lab_robots_build_without_breaking",
+LONGEST = ("tests/test_reproducible.py::", "tests/test_user_loop.py::test_the_readmes_own_robot",
+           "tests/test_any_robot.py::test_lab_robots_build_without_breaking",
            "tests/test_variant.py::", "tests/test_sweep.py::test_build_level",
            "tests/test_cache.py::test_two_builds_sharing",
-           "tests/test_fuzz.py::test_random_mutations", "tests/test_hostile.py::test_a_kernel_failure",
+           "tests/test_fuzz.py::test_random_mutations", "tests/test_any_design.py::",
+           "tests/test_hostile.py::test_a_kernel_failure",
            "tests/test_hostile.py::test_an_empty_solid")
 
 

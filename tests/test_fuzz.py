@@ -149,9 +149,11 @@ def test_random_mutations_end_in_exit_0_1_or_2_without_a_traceback(tmp_path):
             problem = f"exit {code}: {stderr.strip()[:300]}"
         elif "Traceback" in stderr or "Warning:" in stderr or "Warning)" in stderr:
             problem = f"traceback or warning: {stderr[:300]}"
-        elif code == 2 and not (len(lines) == 1 and lines[0].startswith("error: ") and f.name in lines[0]
-                                and len(lines[0]) <= 600):
-            problem = f"not one short error line: {stderr[:300]}"
+        elif code == 2 and not (lines and lines[0].startswith("error: ") and f.name in lines[0]
+                                and all(len(ln) <= 600 for ln in lines)
+                                and (len(lines) == 1 or lines[0].endswith(" problems:") or lines[1].startswith("  hint: "))
+                                and all(ln.startswith(("  - ", "  hint: ", "  ... and ")) for ln in lines[1:])):
+            problem = f"not one short error message: {stderr[:300]}"
         elif code == 0 and any(not ln.startswith("warning: ") for ln in lines):
             problem = f"stderr on success: {stderr[:300]}"
         if problem:

@@ -39,9 +39,11 @@ def test_every_step_has_its_picture(guide):
         png = folder / s["picture"]
         img = np.asarray(Image.open(png).convert("RGB"))
         assert img.shape[1] == 1000 and img.min() < 100        # drawn, not a blank window
-        assert f"]({s['picture']})" in md
+        assert f"]({png.relative_to(folder / 'guide').as_posix()})" in md    # linked from guide/, where the page is
         assert base64.b64encode(png.read_bytes()).decode() in page          # embedded, the same bytes
     assert "<img" in page and 'src="guide/' not in page                      # nothing points outside the page
+    links = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", md)
+    assert len(links) == len(steps) and all((folder / "guide" / link).is_file() for link in links), links
 
 
 def test_the_guides_numbers_are_the_bill_of_materials(guide):

@@ -11,8 +11,8 @@ import pytest
 PKG = Path(__file__).resolve().parents[1] / "hwgen"
 
 # The stages in the order data flows; a module may import its own stage and those before it.
-STAGES = ["errors", "atomic", "heap", "processes", "cache", "yamlfile", "params", "model", "cad", "checks", "outputs", "pipeline", "sweep", "tune", "cli", "bench"]
-NO_CAD_KERNEL = ("yamlfile", "params", "model")         # plain data and numpy: never CadQuery or OCP
+STAGES = ["errors", "atomic", "heap", "processes", "cache", "yamlfile", "designfile", "params", "model", "cad", "checks", "outputs", "sim", "pipeline", "sweep", "tune", "cli", "bench"]
+NO_CAD_KERNEL = ("yamlfile", "designfile", "params", "model")         # plain data and numpy: never CadQuery or OCP
 
 
 def _modules() -> dict[str, Path]:
@@ -123,7 +123,7 @@ def test_model_and_params_need_no_cad_kernel(stage):
         assert not _external(f) & {"cadquery", "OCP", "vtk", "vtkmodules"}, m
 
 
-AFTER_MODEL = ("cad", "checks", "outputs")     # they see the design only as the model resolved it
+AFTER_MODEL = ("cad", "checks", "outputs", "sim")     # they see the design only as the model resolved it
 
 
 @pytest.mark.parametrize("stage", AFTER_MODEL)

@@ -156,9 +156,10 @@ def test_a_locked_tendon_never_pushes():
 def _shipped_model(name):
     from hwgen import params
     from hwgen.model import stiffness as sf
+    from hwgen.model.bending import SWEEP_H_MAX
     from hwgen.model.plan import make_plan
     desc = sf.describe(make_plan(params.read(f"params/{name}.yaml").design))
-    return st.Model(desc.robot, sf.SWEEP_H_MAX)
+    return st.Model(desc.robot, SWEEP_H_MAX)
 
 
 def _lengths(model, q):
@@ -310,11 +311,16 @@ def prototype():
     return sf, design, desc, model
 
 
-def _state(prototype, channels):
+def _result(prototype, channels, friction="none"):
+    """The state tensioned by the paper's protocol, flexible direction along gravity (−z)."""
     sf, design, desc, model = prototype
     name = "".join(channels) or "N"
-    res, _ = sf.state_result(desc, model, sf.State(name, tuple(channels)))
-    return np.array([d["stiffness_n_per_mm"] for d in res["disks"]])
+    return next(e for e in sf.evaluate(desc, model, sf.State(name, tuple(channels)), "gravity -z")
+                if e["friction"] == friction)
+
+
+def _state(prototype, channels, friction="none"):
+    return np.array([d["stiffness_n_per_mm"] for d in _result(prototype, channels, friction)["disks"]])
 
 
 def test_state_N_sags_as_the_own_weight_model_shoots_it(prototype):
@@ -359,9 +365,10 @@ def test_the_nine_states_are_the_papers_and_follow_the_channels(prototype):
     assert all("Q" not in n for n in names) and len(names) == 9
 
 
-def test_every_stiffening_state_is_stiffer_than_A_at_every_disk(prototype):
-    a = _state(prototype, ("A",))
-    full = _state(prototype, ("A", "C1", "C2", "H"))
+@pytest.mark.parametrize("friction", ["none", "stuck"])
+def test_every_stiffening_state_is_stiffer_than_A_at_every_disk(prototype, friction):
+    a = _state(prototype, ("A",), friction)
+    full = _state(prototype, ("A", "C1", "C2", "H"), friction)
     assert np.all(full > a)
 
 
@@ -373,12 +380,11 @@ def test_removing_a_bending_stiffener_never_raises_tip_stiffness(prototype, remo
 
 
 def test_the_helix_stiffens_torsion_and_leaves_bending_at_the_tip_as_it_was(prototype):
-    """Not "never raises": without H the model's tip is 0.18 % stiffer in bending (H's pre-tension
-    loads the strip more than its path holds it there; the paper saw such falls at disks 3 and 5,
-    Sect. V). What H is for is torsion."""
-    sf, _, desc, model = prototype
-    full, _ = sf.state_result(desc, model, sf.State("AC1C2H", ("A", "C1", "C2", "H")))
-    fewer, _ = sf.state_result(desc, model, sf.State("AC1C2", ("A", "C1", "C2")))
+    """What H is for is torsion; in bending at the tip it changes the frictionless stiffness by
+    well under a percent (its tension can soften the strip as much as its path holds it: the
+    paper saw such falls at disks 3 and 5, Sect. V)."""
+    full = _result(prototype, ("A", "C1", "C2", "H"))
+    fewer = _result(prototype, ("A", "C1", "C2"))
     assert fewer["tip_stiffness_n_per_mm"] == pytest.approx(full["tip_stiffness_n_per_mm"], rel=0.01)
     assert full["tip_torsion_nmm_per_rad"] > 3 * fewer["tip_torsion_nmm_per_rad"]
 
@@ -462,41 +468,52 @@ def test_hwgen_stiffness_writes_its_files_and_refuses_an_unknown_state(tmp_path)
     assert r.returncode == 0, r.stderr
     folder = tmp_path / "prototype"
     rep = json.loads((folder / "stiffness.json").read_text())
-    assert [s["state"] for s in rep["states"]] == ["A", "AC1"]
+    assert [s["state"] for s in rep["states"] if s["friction"] == "none"] == ["A", "AC1"] * 3
     assert rep["endpoint_ratio"]["states"] == ["AC1", "A"] and rep["endpoint_ratio"]["ratio"] > 1
     for png in ("stiffness.png", "gravity.png"):
         assert (folder / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     _assert_stiffness_figures(rep)
-    assert "AC1/A" in r.stdout
+    assert "AC1/A (gravity -z)" in r.stdout and "weightless" in r.stdout
     bad = subprocess.run(run + ["--states", "AX"], capture_output=True, text=True, timeout=300)
     assert bad.returncode == 2 and "--states: unknown state 'AX'" in bad.stderr
     assert "prototype.yaml" in bad.stderr and "Traceback" not in bad.stderr
 
 
 def _assert_stiffness_figures(rep):
-    """stiffness.png and gravity.png as drawn: a bar per disk and state at the report's stiffness
-    on a log axis, the states in the legend; a shape per state along the report's curve."""
+    """stiffness.png and gravity.png as drawn: per orientation a panel; a bar per disk and state at
+    the report's frictionless stiffness on a log axis and, on it, the band up to the stuck one;
+    the states in the legend; a shape per state along the report's curve."""
     import matplotlib.pyplot as plt
 
     from hwgen.outputs.stiffness import gravity_figure, stiffness_figure
-    states = rep["states"]
     fig = stiffness_figure(rep)
     try:
-        (ax,) = fig.axes
-        heights = [b.get_height() for b in ax.patches]
-        assert heights == pytest.approx([d["stiffness_n_per_mm"] for s in states for d in s["disks"]])
-        assert ax.get_yscale() == "log" and [tx.get_text() for tx in ax.get_legend().get_texts()] == \
-            [s["state"] for s in states]
-        assert [tk.get_text() for tk in ax.get_xticklabels()] == [str(d["disk"] + 1) for d in states[0]["disks"]]
-        assert f"{rep['endpoint_ratio']['ratio']:.2f}×" in ax.get_title()
+        assert len(fig.axes) == len(rep["orientations"])
+        for ax, o in zip(fig.axes, rep["orientations"]):
+            none = [e for e in rep["states"] if e["orientation"] == o and e["friction"] == "none"]
+            stuck = [e for e in rep["states"] if e["orientation"] == o and e["friction"] == "stuck"]
+            solid = [b for b in ax.patches if b.get_gid() != "band"]
+            band = [b for b in ax.patches if b.get_gid() == "band"]
+            assert [b.get_height() for b in solid] == pytest.approx(
+                [d["stiffness_n_per_mm"] for s in none for d in s["disks"]])
+            assert [b.get_y() + b.get_height() for b in band] == pytest.approx(
+                [max(d["stiffness_n_per_mm"], e["stiffness_n_per_mm"]) for s, t in zip(none, stuck)
+                 for d, e in zip(s["disks"], t["disks"])])
+            assert ax.get_yscale() == "log" and o in ax.get_title()
+            assert [tk.get_text() for tk in ax.get_xticklabels()] == [str(d["disk"] + 1) for d in none[0]["disks"]]
+        assert [tx.get_text() for tx in fig.axes[0].get_legend().get_texts()] == \
+            [e["state"] for e in rep["states"] if e["orientation"] == rep["endpoint_ratio"]["orientation"]
+             and e["friction"] == "none"]
     finally:
         plt.close(fig)
     fig = gravity_figure(rep)
     try:
-        (ax,) = fig.axes
-        lines = [ln for ln in ax.get_lines() if not ln.get_label().startswith("_")]
-        assert [ln.get_label() for ln in lines] == [f"{s['state']}: tip {s['tip_sag_mm']:.1f} mm down" for s in states]
-        for ln, s in zip(lines, states):
-            assert np.allclose(ln.get_xdata(), s["curve"]["y_mm"]) and np.allclose(ln.get_ydata(), s["curve"]["z_mm"])
+        for ax, o in zip(fig.axes, rep["orientations"]):
+            states = [e for e in rep["states"] if e["orientation"] == o and e["friction"] == "none"]
+            lines = [ln for ln in ax.get_lines() if not ln.get_label().startswith("_")]
+            assert [ln.get_label() for ln in lines] == [f"{s['state']}: tip at z = {s['tip_z_mm']:+.1f} mm"
+                                                        for s in states]
+            for ln, s in zip(lines, states):
+                assert np.allclose(ln.get_xdata(), s["curve"]["y_mm"]) and np.allclose(ln.get_ydata(), s["curve"]["z_mm"])
     finally:
         plt.close(fig)

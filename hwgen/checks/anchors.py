@@ -16,7 +16,7 @@ import numpy as np
 
 from ..cad.export import STL_TOLERANCE_MM
 from ..model.settings import Termination
-from .base import Check
+from .base import REBUILD, Check
 from .eyelets import DiskSections
 from .polygons import area_centroid, inside, inside_many, loop_gap, points_to_polyline
 from .sections import chain_loops, section_robot
@@ -25,7 +25,8 @@ PLANE_STEP_MM = 0.1         # depth between cuts
 INSCRIBED_STEPS = 40        # grid across a loop for its largest inscribed circle, per zoom
 INSCRIBED_ZOOMS = 4         # each zoom refines ±4 cells around the best point so far
 SAME_SHAPE = 1e-3           # a loop whose area is within this share of the last one's is the same hole
-SEAT_SEARCH_FRACTION = 3 / 8    # cuts reach this share of the disk's thickness in from its outer face
+SEAT_SEARCH_FRACTION = 3 / 8    # cuts reach this share of the disk's thickness in from its outer face (a plate
+#                                 thicker than that is measured as this deep: the least it holds)
 SAG_MM = STL_TOLERANCE_MM   # the STL's chordal error: section polygons lie this far inside round holes
 
 
@@ -97,7 +98,9 @@ def seat_checks(disk: DiskSections, mesh, placement, design_disk: dict, ends: di
         if not openings or not alone:
             msg = (f"{name}: no seat of its own on {disk.part}'s outer face"
                    + (" (it shares its opening with another tendon)" if openings else " (the face is solid there)"))
-            out.append(Check("tendon.seat", "error", False, msg, None, term.diameter, where))
+            out.append(Check("tendon.seat", "error", False, msg, None, term.diameter, where,
+                             fix=f"route {name} to start clear of the other tendons and the strip at the base disk "
+                                 f"(tendons[].routing at station 0), where its seat can be cut; else {REBUILD}"))
             rows.append({"tendon": name, "part": disk.part, "opening_mm": None, "termination_mm": term.diameter,
                          "termination": term.kind, "plate_mm": 0.0, "wall_mm": None, "ok": False})
             continue
@@ -119,8 +122,16 @@ def seat_checks(disk: DiskSections, mesh, placement, design_disk: dict, ends: di
                     f"Ø{opening:.2f} mm")
         elif not ok:
             text += f"; under the process minimum wall {min_wall:g} mm"
+        fix = "" if ok else (
+            f"a larger termination than the Ø{opening:.2f} mm opening (tendon_material.termination.diameter, or "
+            f"this tendon's termination), or a smaller hole (process.min_hole, process.hole_clearance)" if not holds
+            else f"a thicker seat plate (disks.anchors.plate, now {plate:.2f} mm; the end disk must stay over twice "
+                 f"it: disks.end_thickness), or route {name} to start farther from its neighbours (tendons[].routing "
+                 f"at station 0)" if plate < min_wall else
+            f"route {name} to start farther from its neighbours and the strip (tendons[].routing at station 0): the "
+            f"wall beside its seat is {wall:.2f} mm; or a process that prints thinner walls (process.min_wall)")
         out.append(Check("tendon.seat", "error", ok, text, opening, term.diameter,
-                         {**where, "plate_mm": plate, "wall_mm": wall}))
+                         {**where, "plate_mm": plate, "wall_mm": wall}, fix=fix))
         rows.append({"tendon": name, "part": disk.part, "opening_mm": opening, "termination_mm": term.diameter,
                      "termination": term.kind, "plate_mm": plate, "wall_mm": wall, "ok": ok})
     return out, rows

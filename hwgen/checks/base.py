@@ -18,6 +18,18 @@ class Check:
     measured: float | None = None
     limit: float | None = None
     where: dict[str, Any] = field(default_factory=dict)   # part, station, tendon, channel, ...
+    # what to change when it fails: the parameter(s), which way and, where the model computes it,
+    # how far (and what the change costs another check); empty when it passes
+    fix: str = ""
+    # the design setting that states this failure as a warning rather than an error
+    # ("check.robust_severity"); empty when the severity is the check's own
+    lowered_by: str = ""
 
     def to_json(self) -> dict:
         return asdict(self)
+
+
+# the fix of a check that finds hwgen's own files wrong (a part that is not where the design puts
+# it, a file missing or unreadable): nothing in the design to change
+REBUILD = ("rebuild (hwgen build); if it fails again, hwgen made this wrong: please report it with the "
+           "parameter file")

@@ -9,6 +9,7 @@ diameters enlarged by that much before they are compared.
 """
 from __future__ import annotations
 
+import math
 from itertools import combinations
 from pathlib import Path
 
@@ -18,7 +19,8 @@ from ..cad.export import STL_TOLERANCE_MM
 from ..model import kinematics as kin
 from ..model.crossings import crossing_angles, strip_crossings
 from ..model.holes import hole_diameter
-from .base import Check
+from ..model.plan import STRIP_HOLE_SHARE
+from .base import REBUILD, Check
 from .eyelets import EyeletMap, joined_holes
 from .polygons import inside, loop_gap, num, points_to_polyline
 
@@ -97,8 +99,26 @@ def wall_checks(emap: EyeletMap, report: dict, min_wall: float) -> list[Check]:
                 msg = (f"{disk.part}: wall {kind} {w:.3f} mm at {place} is under the process minimum "
                        f"{min_wall:g} mm" + (f"; also thin: {', '.join(p for p in bad if p != place)}"
                                              if len(bad) > 1 else ""))
-            out.append(Check(cid, "error", ok, msg, max(w, 0.0), min_wall, {**where, "at": place}))
+            rd = next((r for r in report["disks"] if r["index"] == disk.station), {})
+            fix = "" if ok else _wall_fix(cid, place, min_wall - w, disk.station, rd.get("outer_diameter_mm"))
+            out.append(Check(cid, "error", ok, msg, max(w, 0.0), min_wall, {**where, "at": place}, fix=fix))
     return out
+
+
+def _wall_fix(cid: str, place: str, short: float, station: int, diameter: float | None) -> str:
+    """What gives a wall under the process minimum the ``short`` mm it lacks, at ``place``."""
+    holes = place.split(" (")[0]
+    thinner = "; or a process that prints thinner walls (process.min_wall)"
+    if cid == "eyelet.wall.edge":
+        grow = f"disks.outer_diameter from {diameter:g} to at least {math.ceil(2 * (diameter / 2 + short) * 2) / 2:g} mm, or " \
+            if diameter else ""
+        return (f"{grow}route the tendon of {holes} at least {short:.2f} mm further in at station {station} "
+                f"(tendons[].routing){thinner}")
+    if cid == "eyelet.wall.slot":
+        return (f"route the tendon of {holes} at least {short:.2f} mm further from the strip at station {station} "
+                f"(tendons[].routing: a larger |z| there), or a smaller disks.slot_clearance{thinner}")
+    return (f"route {holes} at least {short:.2f} mm further apart at station {station} (tendons[].routing), or "
+            f"route them into one shared eyelet; or smaller eyelets (process.hole_clearance){thinner}")
 
 
 def hole_checks(emap: EyeletMap, min_hole: float, tendon_d: float, angles_deg: np.ndarray,
@@ -126,7 +146,8 @@ def hole_checks(emap: EyeletMap, min_hole: float, tendon_d: float, angles_deg: n
                f"{2 * SAG_MM:g} mm under the true hole at most), process minimum {min_hole:g} mm"
                if ok else f"{disk.part}: eyelet {nm} is Ø{small.hole.diameter:.3f} mm, under the process minimum "
                           f"{min_hole:g} mm; it may print closed")
-        out.append(Check("eyelet.min_hole", "error", ok, msg, small.hole.diameter, min_hole, {**where, "tendon": nm}))
+        out.append(Check("eyelet.min_hole", "error", ok, msg, small.hole.diameter, min_hole, {**where, "tendon": nm},
+                         fix="" if ok else f"hwgen cuts every eyelet at least process.min_hole wide: {REBUILD}"))
 
     kappa = kin.kappas_for_angles(angles_deg, length)
     T_of = {d.station: d.thickness for d in emap.disks}
@@ -163,7 +184,9 @@ def hole_checks(emap: EyeletMap, min_hole: float, tendon_d: float, angles_deg: n
         else:
             msg = (f"{name} is pinched in {where['part']}: the eyelet is Ø{have:.3f} mm but at {a:.1f}° to "
                    f"its axis (bending {ang:+g}°) the tendon needs {need:.3f} mm")
-        out.append(Check("eyelet.tendon_angle", "error", ok, msg, have, need, where))
+        fix = "" if ok else (f"the eyelet needs Ø{need:.3f} mm; hwgen sizes each for the worst angle over "
+                             f"disks.eyelets.sweep_deg (and tensioner.max_exit_deg at the tip): {REBUILD}")
+        out.append(Check("eyelet.tendon_angle", "error", ok, msg, have, need, where, fix=fix))
     return out
 
 
@@ -228,8 +251,13 @@ def tendon_pair_checks(emap: EyeletMap, report: dict, tendon_d: float, angles_de
         msg = (f"{a} and {b}: closest {dmin:.3f} mm {span} at {ang:+g}° (tendon Ø{tendon_d:g} mm)" if ok else
                f"{a} and {b} rub: {dmin:.3f} mm apart {span} at {ang:+g}° bending, less than the tendon "
                f"diameter {tendon_d:g} mm")
+        fix = "" if ok else (
+            f"route {a} and {b} at least {tendon_d - dmin:.2f} mm further apart between stations {seg} and {seg + 1} "
+            f"(their tendons[].routing: amplitude, phase or an x or z offset), or route them to meet at a disk, where "
+            f"they share one eyelet; the stations decide where the lines between eyelets run (disks.count, "
+            f"disks.spacing)")
         out.append(Check("tendon.clearance", "error", ok, msg, dmin, tendon_d,
-                         {**where, "segment": [seg, seg + 1], "angle_deg": ang}))
+                         {**where, "segment": [seg, seg + 1], "angle_deg": ang}, fix=fix))
     return out
 
 
@@ -259,6 +287,19 @@ def _breaks_through(x: float, y: float, r: float, outline) -> str:
     edge = x1 if x >= 0 else x0
     return (f"so near the strip's edge that its Ø{2 * r:.2f} hole (reaching x = {x + r if x >= 0 else x - r:.2f} mm, "
             f"the edge is at x = {edge:.2f} mm) breaks through it")
+
+
+def _hole_angle_fix(name: str, at: str, need: float, height: float) -> str:
+    """What lets a tendon through the strip untouched: where the hole it needs is wider than the plan
+    cuts any strip hole (STRIP_HOLE_SHARE of the strip), a squarer crossing or a wider strip; else
+    hwgen cut it too small."""
+    if need <= STRIP_HOLE_SHARE * height:
+        return (f"drill the strip's hole Ø{need:.2f} mm; hwgen sizes it for the steepest crossing over "
+                f"disks.eyelets.sweep_deg: {REBUILD}")
+    return (f"route {name} across the strip more squarely {at} (tendons[].routing: the hole it needs grows as "
+            f"1/cos of its angle to the strip's normal; a smaller disks.eyelets.sweep_deg bends it less), or a "
+            f"wider strip, whose hole may take {STRIP_HOLE_SHARE:.0%} of it: backbone.height ≥ "
+            f"{math.ceil(need / STRIP_HOLE_SHARE * 10) / 10:.1f} mm (it is {height:.1f})")
 
 
 def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendon_d: float, tol: float,
@@ -298,7 +339,10 @@ def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendo
         else:
             msg = f"{place} through a hole in the template and the strip"
         measured = float(min(best_dxf, stl_fit)) if np.isfinite(min(best_dxf, stl_fit)) else None
-        out.append(Check("backbone.crossing", "error", not missing, msg, measured, 0.0, where))
+        fix = "" if not missing else (
+            f"route {name} to cross the strip farther from its {'end' if 'end' in msg else 'edge'} "
+            f"(tendons[].routing), or a wider strip (backbone.height)" if notched else REBUILD)
+        out.append(Check("backbone.crossing", "error", not missing, msg, measured, 0.0, where, fix=fix))
         if dia and strip_t is not None and angles_deg is not None:
             beta = crossing_angles(emap.stations_y, emap.positions[name], st,
                                    kin.kappas_for_angles(angles_deg, length))
@@ -311,9 +355,12 @@ def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendo
                    f"(bending {angles_deg[k]:+g}°): a hole drilled square to the strip needs Ø{need:.2f} mm")
             msg = (f"{txt}; it is Ø{have:.2f} mm" if ok else
                    f"{txt} to let it through untouched, it is Ø{have:.2f} mm: the line bears on the hole's edge")
+            fix = "" if ok else _hole_angle_fix(name, at, need, 2 * half_h)
             out.append(Check("backbone.hole_angle", "error", ok, msg, have, float(need),
-                             {**where, "angle_deg": float(angles_deg[k])}))
+                             {**where, "angle_deg": float(angles_deg[k])}, fix=fix))
     for f in findings:
         out.append(Check("backbone.in_plane", "error", False, f"{f}: it would have to run through the strip",
-                         None, None, {}))
+                         None, None, {}, fix="route the tendon off the strip's plane there (tendons[].routing: its z "
+                                             "beyond the strip's half thickness and disks.slot_clearance), or across "
+                                             "the strip at a station"))
     return out

@@ -19,12 +19,13 @@ from pathlib import Path
 
 import numpy as np
 
-from .base import Check
+from ..model.holes import AXIS_CUT_FRACTION
+from .base import REBUILD, Check
 from .meshes import load_mesh
 from .polygons import area_centroid, inside, num
 from .sections import Loop, chain_loops, disk_slab, section_loops
 
-OFF_PLANE_FRACTION = 1 / 8   # the axis cuts sit this fraction of the thickness either side of the mid-plane,
+OFF_PLANE_FRACTION = AXIS_CUT_FRACTION   # the axis cuts sit this fraction of the thickness either side of the mid-plane,
 CLEAR_FRACTION = 1 / 2       # or this fraction of the way from the mid-plane to a recess floor, if nearer
 NEAR_FACTOR = 3.0            # an unmatched hole within this many design diameters is "moved", not "missing"
 
@@ -297,7 +298,8 @@ def _unexpected(disk: DiskSections, mh: MeasuredHole) -> Check:
     return Check("eyelet.unexpected", "warning", False,
                  f"{disk.part}: a hole at x={num(x)}, z={num(z)} mm (Ø{mh.diameter:.2f}) "
                  f"matches no eyelet or mount hole of the design",
-                 float(mh.diameter), None, {"part": disk.part, "station": disk.station, "x": float(x), "z": float(z)})
+                 float(mh.diameter), None, {"part": disk.part, "station": disk.station, "x": float(x), "z": float(z)},
+                 fix=f"if {disk.part}'s file was edited since the build, rebuild; else {REBUILD}")
 
 
 def _footprint(rd: dict, hole: dict) -> float:
@@ -317,12 +319,12 @@ def _crowded(rd: dict, tendons) -> bool:
 
 
 def _reaches_slot(rd: dict, tendons) -> bool:
-    """Whether the design's own hole for ``tendons`` (its circle on the mid-plane, with its chamfer at
-    the faces) reaches the slot."""
+    """Whether the design's own hole for ``tendons`` (its footprint on the faces: its circle, its
+    chamfer and a slanted axis's drift, :func:`_footprint`) reaches the slot."""
     w, h = rd["slot_mm"]
     for hole in rd["holes"]:
         if tuple(hole["tendons"]) == tuple(tendons):
-            r = hole["diameter_mm"] / 2 + rd.get("edge_mm", 0.0)
+            r = _footprint(rd, hole)
             dx, dz = max(abs(hole["x"]) - w / 2, 0.0), max(abs(hole["z"]) - h / 2, 0.0)
             return math.hypot(dx, dz) < r
     return False
@@ -370,10 +372,12 @@ def _position_checks(report: dict, eyelets: list[Eyelet], tol: float) -> list[Ch
             out.append(Check("eyelet.overlap", "error", False,
                              f"{part}: the routing puts eyelets where their holes open into another hole or the "
                              f"slot, so they cannot hold their tendons apart: {'; '.join(overlaps)}; move these "
-                             f"tendons (tendons[].routing) at station {i}", None, None, where))
+                             f"tendons (tendons[].routing) at station {i}", None, None, where,
+                             fix=f"route these tendons apart at station {i} (tendons[].routing), so each eyelet keeps a "
+                                 f"process.min_wall to the next hole and the slot, or into one eyelet they share"))
         if bad:
             out.append(Check("eyelet.position", "error", False, f"{part}: " + "; ".join(bad),
-                             None if not np.isfinite(worst) else worst, tol, where))
+                             None if not np.isfinite(worst) else worst, tol, where, fix=REBUILD))
         else:
             out.append(Check("eyelet.position", "error", True,
                              f"{part}: {len(mine)} eyelet(s) found within {tol:g} mm of design intent "

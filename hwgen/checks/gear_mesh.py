@@ -44,7 +44,7 @@ from ..cache import as_json, remembered
 from ..cad.manifest import ManifestPart
 from ..model.gearing import hertz_allowable
 from .axes import Axis, axes_angle, axes_distance, fit_axis
-from .base import Check
+from .base import REBUILD, Check
 from .meshes import placed_mesh, to_manifold
 from .surface import SurfaceDistance, sample_surface
 
@@ -348,7 +348,7 @@ def gear_checks(folder: Path, manifest: dict, plan) -> list[Check]:
     folder = Path(folder)
     pairs = gear_pairs(manifest)
     if not pairs:
-        return [Check("gear.parts", "error", False, "no tensioner worm/wheel parts in the manifest")]
+        return [Check("gear.parts", "error", False, "no tensioner worm/wheel parts in the manifest", fix=REBUILD)]
     checks = _pair_checks(folder, manifest, plan, pairs)
     return [Check(**c) for c in as_json([c.to_json() for c in checks])]
 
@@ -414,7 +414,7 @@ def _pair_checks(folder: Path, manifest: dict, plan, pairs: dict) -> list[Check]
         where = {"channel": channel}
         if channel not in of:
             out.append(Check("gear.parts", "error", False, f"channel {channel}: worm or wheel missing", None, None,
-                             where))
+                             where, fix=REBUILD))
             continue
         on = of[channel].measured_on
         m = found[on]
@@ -426,26 +426,31 @@ def _pair_checks(folder: Path, manifest: dict, plan, pairs: dict) -> list[Check]
         fit = f"axes fitted to the crests, RMS {1e6 * m['worm_rms']:.1f} / {1e6 * m['wheel_rms']:.1f} nm"
         out.append(Check("gear.center_distance", "error", abs(a - a_nom) <= CENTER_TOL_MM,
                          f"{name}: worm and wheel axes {a:.4f} mm apart ({fit}); design (d1 + d2)/2 + "
-                         f"center_offset = {a_nom:.4f} mm", a, a_nom, where))
+                         f"center_offset = {a_nom:.4f} mm", a, a_nom, where,
+                         fix="" if abs(a - a_nom) <= CENTER_TOL_MM else REBUILD))
         out.append(Check("gear.shaft_angle", "error", abs(m["shaft_angle"] - 90) <= SHAFT_ANGLE_TOL_DEG,
                          f"{name}: worm and wheel axes at {m['shaft_angle']:.4f}° (90° wanted)",
-                         m["shaft_angle"], 90.0, where))
+                         m["shaft_angle"], 90.0, where,
+                         fix="" if abs(m["shaft_angle"] - 90) <= SHAFT_ANGLE_TOL_DEG else REBUILD))
         for what, n, want in (("teeth", m["teeth"], pair.teeth), ("starts", m["starts"], pair.starts)):
             part = "wheel" if what == "teeth" else "worm"
             out.append(Check(f"gear.{what}", "error", n == want,
                              f"{name}: {n} {what if part == 'wheel' else 'thread starts'} counted in the "
-                             f"{part}'s section, the design has {want}", float(n), float(want), where))
+                             f"{part}'s section, the design has {want}", float(n), float(want), where,
+                             fix="" if n == want else REBUILD))
         if "gap" not in m:
             continue
         vol, gap = m["interference"], m["gap"]
         out.append(Check("gear.interference", "error", vol <= INTERFERENCE_TOL_MM3,
                          f"{name}: worm and wheel overlap by at most {vol:.4f} mm³ over one thread "
-                         f"period ({SWEEP_STEPS} positions)", vol, INTERFERENCE_TOL_MM3, where))
+                         f"period ({SWEEP_STEPS} positions)", vol, INTERFERENCE_TOL_MM3, where,
+                         fix="" if vol <= INTERFERENCE_TOL_MM3 else f"a larger tensioner.center_offset; {REBUILD}"))
         lo, hi = GAP_MIN_SHARE * flank_gap, pair.center_offset + GAP_TOL_MM
         out.append(Check("gear.gap", "error", lo <= gap <= hi,
                          f"{name}: closest gap between worm and wheel {gap:.4f} mm over one thread period "
                          f"(from {lo:.4f} to {hi:.4f} mm wanted: the design's center_offset {pair.center_offset:g} mm "
-                         f"leaves {flank_gap:.4f} mm per flank by the rack formula)", gap, lo, where))
+                         f"leaves {flank_gap:.4f} mm per flank by the rack formula)", gap, lo, where,
+                         fix="" if lo <= gap <= hi else REBUILD))
     measured = {c: found[d.measured_on] for c, d in of.items()}
     out += _strength_checks(measured, of, measurer, manifest, plan, pair)
     return out
@@ -506,7 +511,8 @@ def _strength_checks(measured: dict, of: dict, measurer: _Measurer, manifest: di
                          f"{face:.2f} mm with Y = {y:.3f} (both measured on channel {on}'s files), m = "
                          f"{pair.module:g} mm: safety {sf:.2f} against the design's resin_strength "
                          f"{ts.resin_strength:g} MPa (need {ts.safety_factor:g})", sf, ts.safety_factor,
-                         {**where, "stress_mpa": sigma, "face_mm": face, "form_factor": y}))
+                         {**where, "stress_mpa": sigma, "face_mm": face, "form_factor": y},
+                         fix="" if sf >= ts.safety_factor else _strength_fix(ts, ts.safety_factor / sf, False)))
         hz = pair.hertz_line(t2, face, mu, e_mpa, nu)
         sh = allow / hz["p0_mpa"]
         out.append(Check("gear.hertz", "error", sh >= ts.safety_factor,
@@ -517,9 +523,22 @@ def _strength_checks(measured: dict, of: dict, measurer: _Measurer, manifest: di
                          f"against {allow:.1f} MPa = 1.67 × the design's resin_strength (onset of yield below the "
                          f"surface; E = {e_mpa:g} MPa, ν = {nu:g} from the materials table, {proc.material}) "
                          f"(need {ts.safety_factor:g})", sh, ts.safety_factor,
-                         {**where, "p0_mpa": hz["p0_mpa"], "allowable_mpa": allow, "elasticity": why}))
+                         {**where, "p0_mpa": hz["p0_mpa"], "allowable_mpa": allow, "elasticity": why},
+                         fix="" if sh >= ts.safety_factor else _strength_fix(ts, ts.safety_factor / sh, True)))
         t1 = pair.worm_torque(t2, mu)
         out.append(Check("gear.worm_torque", "info", True,
                          f"channel {channel}: {t1:.1f} N·mm on the worm's hex key to hold the tendon break load "
                          f"(design data; tightening, μ = {mu:g}, efficiency {pair.efficiency(mu):.2f})", t1, None, where))
     return out
+
+
+def _strength_fix(ts, k: float, hertz: bool) -> str:
+    """How far the tensioner's settings move a tooth stress whose safety is ``k`` times short. Lewis:
+    σ = T / (r2 b m Y) with r2 = m z2 / 2, so face, teeth and module² each by k; Hertz: p0 goes as
+    1 / (m z2 √b) (the force as 1 / r2, the flank's radius as r2), so face by k², teeth and module by k."""
+    face, teeth, module = (k * k, k, k) if hertz else (k, k, math.sqrt(k))
+    return (f"tensioner.face_width from {ts.face_width:g} to about {ts.face_width * face:.1f} mm, or "
+            f"tensioner.wheel_teeth from {ts.wheel_teeth} to about {math.ceil(ts.wheel_teeth * teeth)} (a larger wheel "
+            f"pushes its teeth less for the same tendon pull), or tensioner.module from {ts.module:g} to about "
+            f"{ts.module * module:.2f} mm; or a stronger material: tensioner.resin_strength from {ts.resin_strength:g} "
+            f"to {ts.resin_strength * k:.0f} MPa (a tough resin), if it has it; each with the tensioner laid out again")

@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from ..model import sag
-from .base import Check
+from .base import REBUILD, Check
 from .polygons import section_moments
 from .sections import chain_loops, section_robot
 from .seating import SlotFit
@@ -107,7 +107,8 @@ def gravity_checks(parts, manifest: dict, plan, fits: list[SlotFit], strip_h: fl
     e_print *= 1000.0
     strip, points, tip = loads(parts, manifest, length)
     if strip is None:
-        return {}, [Check("gravity.strip_stress", "error", False, "no strip to load: the backbone STL is missing")]
+        return {}, [Check("gravity.strip_stress", "error", False, "no strip to load: the backbone STL is missing",
+                          fix=REBUILD)]
     spans = _spans(fits, length, E * I, e_print)
     st = [s for _, s, _ in points]
     ms = [m for _, _, m in points]
@@ -150,6 +151,7 @@ def gravity_checks(parts, manifest: dict, plan, fits: list[SlotFit], strip_h: fl
     checks = []
     ok = r.max_stress <= allow
     sev = plan.check.overstress
+    strip_study = _StripStudy(r, fits, E, h, e_print, plan.check.max_angle_deg, allow)
     text = (f"state N (no tendon tensioned, horizontal, gravity along {worst_key}): tip sags {r.tip_sag:.1f} mm, "
             f"tip {-r.tip_angle_deg:.1f}° below horizontal; the strip's largest bending stress "
             f"{r.max_stress:.1f} MPa at s = {r.s_max_stress:.1f} mm "
@@ -159,13 +161,15 @@ def gravity_checks(parts, manifest: dict, plan, fits: list[SlotFit], strip_h: fl
             f"manifest's densities; E = {E / 1000:g} GPa); as a bare strip without hubs "
             f"{bare.tip_sag:.1f} mm and {bare.max_stress:.1f} MPa")
     checks.append(Check("gravity.strip_stress", sev if not ok else "error", ok, text, r.max_stress, allow,
-                        {"part": strip["part"], "gravity": worst_key, "s_mm": r.s_max_stress}))
+                        {"part": strip["part"], "gravity": worst_key, "s_mm": r.s_max_stress},
+                        fix="" if ok else strip_study.own_weight_fix(r.max_stress),
+                        lowered_by="check.overstress" if not ok and sev == "warning" else ""))
     checks.append(Check("gravity.sag", "info", True, f"state N: tip sag {r.tip_sag:.1f} mm (small-deflection "
                         f"theory: {r.lin_tip_sag:.1f} mm)", r.tip_sag, None, {"gravity": worst_key}))
     mount, c = _mount_check(parts, plan.mount.max_tip_share, r, e_print, e_why)
     report["mount"] = mount
     checks += c
-    bend, c = _bend_check(plan.check.max_angle_deg, allow, spans, E, I, t, length)
+    bend, c = _bend_check(strip_study, spans, I, strip["part"])
     report["bend"] = bend
     checks += c
     return report, checks
@@ -189,7 +193,8 @@ def _mount_check(parts, limit: float, r: sag.SagResult, e_print: float, e_why: s
         if best is None or mo["i_vc"] < best[1]["i_vc"]:
             best = (float(zc), mo)
     if best is None:
-        return {}, [Check("mount.stiffness", "error", False, f"{mount.name}: no section between table and strip")]
+        return {}, [Check("mount.stiffness", "error", False, f"{mount.name}: no section between table and strip",
+                          fix=REBUILD)]
     zc, mo = best
     H = 0.0 - lo                                      # table to the strip's plane
     M, W = abs(r.base_moment), r.total_weight
@@ -210,11 +215,17 @@ def _mount_check(parts, limit: float, r: sag.SagResult, e_print: float, e_why: s
            f"{theta * 1e3:.3f} mrad, "
            f"dropping the tip {drop:.3f} mm, {share * 100:.2f} % of the {r.tip_sag:.1f} mm sag (limit "
            f"{limit * 100:g} %); {mount_k / strip_k:.0f}× the strip's EI/L")
-    return rep, [Check("mount.stiffness", "error", ok, msg, share, limit, {"part": mount.name})]
+    fix = "" if ok else (
+        f"a shorter mount: a lower base_mount.table_clearance (its column, {H:.0f} mm from table to strip, turns "
+        f"about as its height squared); or a stiffer printed material (process.material); or, if "
+        f"{share * 100:.1f} % of the sag is acceptable, base_mount.max_tip_share")
+    return rep, [Check("mount.stiffness", "error", ok, msg, share, limit, {"part": mount.name}, fix=fix)]
 
 
-def _bend_check(ang: float, allow: float, spans, E, I, t, length) -> tuple[dict, list[Check]]:
-    """The strip bent ``ang`` degrees (the check's sweep end) against its allowable stress ``allow``, MPa."""
+def _bend_check(study: _StripStudy, spans, I: float, part: str) -> tuple[dict, list[Check]]:
+    """The strip bent to the check's sweep end against its allowable stress, MPa (``study``: the
+    strip, its sweep and allowable)."""
+    ang, allow, E, t, length = study.ang, study.allow, study.E, study.t, study.length
     stress, kappa = sag.bending_stress_under_uniform_moment(length, math.radians(ang), E, I, t, spans)
     bare = E * t / 2 * math.radians(ang) / length
     ok = stress <= allow
@@ -222,4 +233,104 @@ def _bend_check(ang: float, allow: float, spans, E, I, t, length) -> tuple[dict,
            f"plates and hubs (measured) curves at {kappa * 1000:.2f} /m: {stress:.1f} MPa, "
            f"{'under' if ok else 'over'} the allowable {allow:g} MPa (a strip without hubs: {bare:.1f} MPa)")
     return ({"angle_deg": ang, "stress_mpa": stress, "curvature_per_mm": kappa, "bare_stress_mpa": bare},
-            [Check("backbone.bend_stress", "error", ok, msg, stress, allow, {"angle_deg": ang})])
+            [Check("backbone.bend_stress", "error", ok, msg, stress, allow, {"part": part, "angle_deg": ang},
+                   fix="" if ok else study.bend_fix(stress, bare))])
+
+
+class _StripStudy:
+    """The strip's two stress checks solved again at another strip (thickness, width) to say how far
+    to change it: the own-weight stress (state N, :func:`sag.solve_sag`, the disks and the tip
+    assembly as measured, the strip's own weight scaled with its section, the hubs as they are)
+    falls as the strip thickens or widens; the stress of the bend to the sweep's end rises with
+    the thickness and does not depend on the width. A few solves of the elastica: milliseconds."""
+
+    def __init__(self, r: sag.SagResult, fits, E: float, h: float, e_print: float, ang: float, allow: float):
+        """``r``: the worse own-weight case as solved (its loads, strip and gravity's direction)."""
+        self.r, self.fits, self.E, self.h, self.e_print = r, fits, E, h, e_print
+        self.length, self.t = r.L, r.thickness
+        self.ang, self.allow = ang, allow
+        self.solved: dict[tuple[float, float], float] = {(r.thickness, h): r.max_stress}
+
+    def own_weight(self, t: float, h: float | None = None) -> float:
+        """The largest own-weight stress (MPa) with a strip ``t`` thick and ``h`` wide."""
+        h = self.h if h is None else h
+        if (t, h) not in self.solved:
+            self.solved[(t, h)] = self._own_weight(t, h)
+        return self.solved[(t, h)]
+
+    def _own_weight(self, t: float, h: float) -> float:
+        I = sag.second_moment(h, t)
+        r = self.r
+        return sag.solve_sag(r.L, r.stations, r.point_masses, E=self.E, I=I, thickness=t,
+                             strip_lin_density=r.strip_lin_density * t * h / (r.thickness * self.h),
+                             tip_mass=r.tip_mass, tip_offset=r.tip_offset,
+                             spans=_spans(self.fits, self.length, self.E * I, self.e_print)).max_stress
+
+    def bend(self, t: float, ang: float | None = None) -> float:
+        """The largest stress (MPa) of the strip ``t`` thick bent ``ang``° (the sweep's end)."""
+        I = sag.second_moment(self.h, t)
+        return sag.bending_stress_under_uniform_moment(
+            self.length, math.radians(self.ang if ang is None else ang), self.E, I, t,
+            _spans(self.fits, self.length, self.E * I, self.e_print))[0]
+
+    @staticmethod
+    def _reach(stress, x: float, s: float, target: float, p: float, lo: float, hi: float) -> float | None:
+        """Where ``stress(x)`` (monotone) comes down to ``target``, within [lo, hi], from ``x`` where
+        it is ``s``: steps along the local power law stress ∝ x^p (``p`` guessed, then measured
+        between the last two solves), to within 0.2 %; None when the range does not reach it."""
+        for _ in range(8):
+            nxt = min(max(x * (target / s) ** (1 / p), lo), hi)
+            got = stress(nxt)
+            if abs(got - target) <= 0.002 * target:
+                return nxt
+            if nxt in (lo, hi) and (got > target) == (s > target):
+                return None                           # the end of the range does not get there
+            if abs(math.log(nxt / x)) > 1e-9 and got > 0 and abs(math.log(got / s)) > 1e-9:
+                p = math.log(got / s) / math.log(nxt / x)
+            x, s = nxt, got
+        return x
+
+    def own_weight_fix(self, stress: float) -> str:
+        """What to change when the own-weight stress is over the allowable, and what it costs the bend."""
+        a = self.allow
+        t_need = self._reach(self.own_weight, self.t, stress, a, -2.0, self.t, 4 * self.t)
+        h_need = self._reach(lambda h: self.own_weight(self.t, h), self.h, stress, a, -1.0, self.h, 4 * self.h)
+        out = []
+        if t_need is not None:
+            t_need = math.ceil(t_need * 100) / 100
+            bend = self.bend(t_need)
+            cost = ("which backbone.bend_stress still passes" if bend <= a else
+                    "but a thicker strip fails backbone.bend_stress")
+            out.append(f"backbone.thickness from {self.t:g} to at least {t_need:.2f} mm (solved again: "
+                       f"{self.own_weight(t_need):.0f} MPa; the bend to {self.ang:g}° then stresses it "
+                       f"{bend:.0f} MPa, {cost})")
+        if h_need is not None:
+            h_need = math.ceil(h_need)
+            out.append(f"or backbone.height from {self.h:g} to at least {h_need:g} mm (the bend's stress does not "
+                       f"depend on the width; the disks then need an outer_diameter above {h_need:g} mm to hold "
+                       f"the wider slot)")
+        out.append("or lighter or fewer disks (disks.count, disks.thickness, disks.outer_diameter) or a lighter "
+                   "tensioner: the weight beyond the base is what loads it")
+        return "; ".join(out)
+
+    def bend_fix(self, stress: float, bare: float) -> str:
+        """What to change when the bend's stress is over the allowable, and what it costs the own weight."""
+        a = self.allow
+        out = []
+        t_max = self._reach(self.bend, self.t, stress, a, 1.0, self.t / 4, self.t)
+        if t_max is not None:
+            t_max = math.floor(t_max * 100) / 100
+            weight = self.own_weight(t_max)
+            cost = ("which gravity.strip_stress still passes" if weight <= a else
+                    "but a thinner strip fails gravity.strip_stress under its own weight: no thickness passes "
+                    "both, change something else below")
+            out.append(f"backbone.thickness from {self.t:g} to at most {t_max:.2f} mm (the bend then stresses it "
+                       f"{self.bend(t_max):.0f} MPa; its own weight {weight:.0f} MPa, {cost})")
+        ang = self.ang * a / stress
+        out.append(f"or bend it no further than ±{math.floor(ang):g}° (disks.eyelets.sweep_deg, check.max_angle_deg)")
+        if stress > 1.2 * bare:
+            out.append(f"or shorter hubs (disks.hub.length, disks.hub.max_tilt_deg) or fewer disks: the disks' plates "
+                       f"and hubs hold the strip straight over part of its length, so the rest curves "
+                       f"{stress / bare:.1f}× as much as a bare strip would")
+        out.append("or a laminate of measured higher strength (backbone.allowable_stress_mpa)")
+        return "; ".join(out)

@@ -100,5 +100,7 @@ def length_checks(tls: list[TendonLengths], emap: EyeletMap, deviations: dict[st
                     msg += (f"; eyelets on the named function would change by {fd:.4f} mm, "
                             f"{'within' if fd <= t.budget else 'also over'} the budget")
         # through the hole centres: reported; the verdict is on the taut path as built (tendon.robust)
-        out.append(Check("tendon.length", "info", t.passed, msg, t.max_abs_delta, t.budget, where))
+        fix = "" if t.passed else (f"route {t.name} so its length changes less over the bend (tendons[].routing: "
+                                   f"eq. (3) with a smaller amplitude or more half waves), or a larger budget_mm")
+        out.append(Check("tendon.length", "info", t.passed, msg, t.max_abs_delta, t.budget, where, fix=fix))
     return out

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..cad.manifest import manifest_parts
 from ..cache import as_json
-from .base import Check
+from .base import REBUILD, Check
 from .meshes import measured_by_file, read_mesh, to_manifold
 
 NOT_PRINTED = {"backbone"}     # roles cut from stock rather than printed: no build-volume check
@@ -66,7 +66,7 @@ def load_parts(folder: Path, manifest: dict) -> tuple[list[LoadedPart], list[Che
             sha, mesh = read_mesh(p.stl_in(folder))
         except Exception as e:  # unreadable file: say so and go on with the others
             checks.append(Check("part.mesh", "error", False, f"{p.name}: cannot read {p.stl_in(folder).name} ({e})",
-                                None, None, {"part": p.name}))
+                                None, None, {"part": p.name}, fix=REBUILD))
             continue
         parts.append(LoadedPart(p.name, p.role, mesh, p.placement, p.volume_mm3, p.entry, sha))
     return parts, checks
@@ -104,7 +104,7 @@ def mesh_checks(parts: list[LoadedPart]) -> list[Check]:
         where = {"part": p.name}
         if faults:
             out.append(Check("part.mesh", "error", False, f"{p.name}: mesh is " + ", ".join(faults),
-                             None, None, where))
+                             None, None, where, fix=REBUILD))
         else:
             out.append(Check("part.mesh", "error", True,
                              f"{p.name}: watertight manifold, {m['triangles']} triangles, {vol:.1f} mm³",
@@ -114,7 +114,8 @@ def mesh_checks(parts: list[LoadedPart]) -> list[Check]:
             ok = rel <= VOLUME_REL_TOL
             out.append(Check("part.volume", "warning", ok,
                              f"{p.name}: STL volume {vol:.1f} mm³ {'matches' if ok else 'differs from'} the solid's "
-                             f"{p.volume_mm3:.1f} mm³ ({rel * 100:.2f} %)", rel, VOLUME_REL_TOL, where))
+                             f"{p.volume_mm3:.1f} mm³ ({rel * 100:.2f} %)", rel, VOLUME_REL_TOL, where,
+                             fix="" if ok else REBUILD))
     return out
 
 
@@ -151,7 +152,9 @@ def interference_checks(parts: list[LoadedPart], tol_mm3: float) -> list[Check]:
         where = {"parts": [a.name, b.name]}
         msg = (f"{a.name} and {b.name}: no interference ({vol:.4f} mm³ shared)" if ok else
                f"{a.name} and {b.name} interfere: they share {vol:.3f} mm³ (tolerance {tol_mm3:g} mm³)")
-        out.append(Check("part.interference", "error", ok, msg, vol, tol_mm3, where))
+        fix = "" if ok else (f"if a position you gave puts them together (disks.tip_mount.positions, "
+                             f"base_mount.disk_screws), move it; else {REBUILD}")
+        out.append(Check("part.interference", "error", ok, msg, vol, tol_mm3, where, fix=fix))
     out.append(Check("part.interference.boxes", "info", True,
                      f"{len(parts)} parts: {tested} pair(s) with touching bounding boxes intersected, "
                      f"the other {len(parts) * (len(parts) - 1) // 2 - tested} are apart", float(tested), None, {}))
@@ -171,7 +174,12 @@ def build_volume_checks(parts: list[LoadedPart], build_volume) -> list[Check]:
         where = {"part": p.name}
         msg = (f"{p.name}: {size} mm fits the build volume {bx:g} × {by:g} × {bz:g} mm" if fits else
                f"{p.name}: {size} mm does not fit the build volume {bx:g} × {by:g} × {bz:g} mm")
-        out.append(Check("part.build_volume", "error", fits, msg, float(max(ext)), float(max(build_volume)), where))
+        fix = "" if fits else (
+            f"a printer that takes {size} mm (process.build_volume; turning about Z is allowed), or a smaller part"
+            + (": disks.outer_diameter under the bed's shorter side" if p.role == "disk" else
+               ": the jig is cut into pieces to fit the bed, a fault of hwgen's if one does not" if p.fixture else ""))
+        out.append(Check("part.build_volume", "error", fits, msg, float(max(ext)), float(max(build_volume)), where,
+                         fix=fix))
     return out
 
 

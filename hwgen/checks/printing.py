@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Check
+from .base import REBUILD, Check
 from .parts import NOT_PRINTED, LoadedPart
 from .meshes import to_manifold
 from .polygons import signed_area
@@ -66,7 +66,8 @@ def printing_checks(parts: list[LoadedPart], technology: str) -> list[Check]:
         voids = p.measured("print closed voids", None, lambda: closed_voids(p.mesh))
         if voids:
             out.append(Check("print.void", "error", False, f"{p.name}: holds {voids} closed void(s) that "
-                             f"cannot drain: give each a drain hole", float(voids), 0.0, where))
+                             f"cannot drain: give each a drain hole", float(voids), 0.0, where,
+                             fix=f"hwgen drains every cavity it makes: {REBUILD}"))
         if technology != "SLA":
             continue
         found = p.measured("print cups", (LAYER_MM, CUP_MIN_AREA_MM2), lambda: cups(p.mesh))
@@ -75,7 +76,8 @@ def printing_checks(parts: list[LoadedPart], technology: str) -> list[Check]:
             msg = (f"{p.name}: {len(found)} cavit{'y' if len(found) == 1 else 'ies'} closed below in its print "
                    f"orientation, the largest {a:.1f} mm² at Z = {z:.1f} mm (file X, Y = {c[0]:.1f}, {c[1]:.1f}): "
                    f"it holds resin against the vat's film; vent its floor or turn the part")
-            out.append(Check("print.cup", "error", False, msg, a, CUP_MIN_AREA_MM2, where))
+            out.append(Check("print.cup", "error", False, msg, a, CUP_MIN_AREA_MM2, where,
+                             fix=f"hwgen turns and vents its parts for resin: {REBUILD}"))
         else:
             out.append(Check("print.cup", "error", True, f"{p.name}: no cavity closed below in its print orientation "
                              f"(sliced every {LAYER_MM:g} mm; holes under {CUP_MIN_AREA_MM2:g} mm² ignored)",

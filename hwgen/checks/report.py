@@ -28,6 +28,8 @@ class CheckRecord(TypedDict):
     measured: float | None
     limit: float | None
     where: dict[str, Any]         # part(s), tendon(s), channel, station: what :func:`place` prints
+    fix: str                      # when it fails: what to change, which way, how far where computed
+    lowered_by: str               # the design setting that states its failure as a warning ("" if none)
 
 
 class SweepRecord(TypedDict):
@@ -90,6 +92,7 @@ class Report(_Named):
     seats: list[dict[str, Any]]   # checks.anchors
     gravity: dict[str, Any]       # checks.gravity
     tension: dict[str, Any]       # checks.tension
+    stiffening: dict[str, Any] | None   # the tendon states' statics: hwgen.model.stiffness.stiffening
 
 
 def write_report(report: Report, folder: Path) -> None:
@@ -140,12 +143,14 @@ def write_junit(report: dict, path: Path) -> None:
             name += f" #{seen[name]}"
         case = ET.SubElement(suite, "testcase", classname=f"hwgen.{report['design']}.{c['id']}", name=name)
         detail = f"measured={c['measured']} limit={c['limit']} where={json.dumps(c['where'])}"
+        fix = c.get("fix") or ""
         if not c["passed"] and c["severity"] == "error":
             fail = ET.SubElement(case, "failure", message=c["message"], type=c["id"])
-            fail.text = detail
+            fail.text = detail + (f"\nfix: {fix}" if fix else "")
         else:
             out = ET.SubElement(case, "system-out")
-            out.text = ("" if c["passed"] else f"{c['severity'].upper()}: ") + c["message"]
+            out.text = ("" if c["passed"] else f"{c['severity'].upper()}: ") + c["message"] + (
+                f"\nfix: {fix}" if fix and not c["passed"] else "")
     ET.indent(suites)
     atomic.write_text(path, '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(suites, encoding="unicode") + "\n")
 
@@ -175,6 +180,83 @@ def as_built_lines(report: dict) -> list[str]:
         out.append(f"- actuating pair {' and '.join(pair['tendons'])}: {pair['taut_mm']:.3f} mm of slack to take up "
                    f"(taut, nominal), {pair['p95_mm']:.3f} mm at p95")
     return out
+
+
+def _finding(c: dict) -> str:
+    """A failing check in summary.md: its id, what was found and, on a line of its own, the fix."""
+    text = f"- `{c['id']}` {c['message']}"
+    if c.get("lowered_by"):
+        text += f" (an error stated as a warning: {c['lowered_by']})"
+    return text + (f"  \n  **Fix:** {c['fix']}" if c.get("fix") else "")
+
+
+# the unit a check's measured value and limit are in ("%": a share, printed as a percentage)
+UNITS = {"disk.tilt": "°", "disk.station": " mm", "gravity.strip_stress": " MPa", "backbone.bend_stress": " MPa",
+         "tendon.clearance": " mm", "tendon.robust": " mm", "tendon.length": " mm", "tendon.taut": " N",
+         "tendon.overload": " N", "actuation.tension": " N", "actuation.coupling": "%", "mount.stiffness": "%",
+         "eyelet.wall.edge": " mm", "eyelet.wall.eyelet": " mm", "eyelet.wall.slot": " mm", "eyelet.min_hole": " mm",
+         "eyelet.tendon_angle": " mm", "eyelet.position": " mm", "hub.tendon_clearance": " mm",
+         "tensioner.tendon_clearance": " mm", "part.interference": " mm³", "part.build_volume": " mm",
+         "part.volume": "%", "backbone.hole_angle": " mm", "backbone.crossing": " mm", "gear.center_distance": " mm",
+         "gear.gap": " mm", "gear.interference": " mm³", "gear.shaft_angle": "°", "gear.lewis": "×", "gear.hertz": "×",
+         "print.cup": " mm²", "tendon.seat": " mm", "routing.table_vs_function": " mm",
+         "mount.clamp": " mm", "mount.foot": " mm", "jig.hold": " mm²"}
+
+
+def _value(v, unit: str) -> str:
+    if unit == "%":
+        return f"{v * 100:.3g} %"
+    if isinstance(v, float):
+        return f"{0.0 if abs(v) < 5e-5 else v:.4g}{unit}"
+    return f"{v}{unit}"
+
+
+def finding_line(c: dict) -> str:
+    """One failing check on a line: its id, what it looked at, the value measured against its limit,
+    and the change that fixes it (else what it found)."""
+    unit = UNITS.get(c["id"], "")
+    head = " ".join(dict.fromkeys(bit for bit in (c["id"], *place(c).split(" ")) if bit))   # "C1 C1": tendon, channel
+    if c.get("measured") is not None and c.get("limit") is not None:
+        head += f": {_value(c['measured'], unit)} against {_value(c['limit'], unit)}"
+    if c.get("lowered_by"):
+        head += f" (stated as a warning: {c['lowered_by']})"
+    return f"{head}; fix: {c['fix']}" if c.get("fix") else f"{head}: {c['message']}"
+
+
+def lowered_settings(report: dict, files: dict[str, str] | None = None) -> str:
+    """The design's settings that state failing checks as warnings, and how many each lowers
+    ("check.robust_severity: warning (in params/prototype.yaml) states failing checks as warnings
+    (2 tendon.robust)"); "" when none does. ``files``: setting -> the file that wrote it."""
+    by: dict[str, list[str]] = {}
+    for c in report["checks"]:
+        if not c["passed"] and c.get("lowered_by"):
+            by.setdefault(c["lowered_by"], []).append(c["id"])
+    out = []
+    for setting, ids in by.items():
+        counts = ", ".join(f"{ids.count(i)} {i}" for i in dict.fromkeys(ids))
+        where = f" (in {files[setting]})" if files and setting in files else ""
+        out.append(f"{setting}: warning{where} states failing checks as warnings ({counts})")
+    return "; ".join(out)
+
+
+def verdict_lines(report: dict, summary: Path | str, files: dict[str, str] | None = None) -> list[tuple[str, str]]:
+    """What `hwgen build` and `hwgen check` end with, as (label, text): one line per failed check
+    (:func:`finding_line`), then the warnings, then the verdict naming ``summary`` and the settings
+    that lowered a failing check's severity."""
+    checks = report["checks"]
+    fails = [c for c in checks if not c["passed"] and c["severity"] == "error"]
+    warns = [c for c in checks if not c["passed"] and c["severity"] == "warning"]
+    out = [("failed:", finding_line(c)) for c in fails] + [("warning:", finding_line(c)) for c in warns]
+    lowered = lowered_settings(report, files)
+    text = (f"{'PASS' if report['ok'] else 'FAIL'}: {len(checks)} checks, {len(fails)} failed, {len(warns)} warning(s)"
+            + (f"; severity lowered by the design: {lowered}" if lowered else "") + f"; see {summary}")
+    return out + [("verdict", text)]
+
+
+def stiffening_lines(report: dict) -> list[str]:
+    """What locking the stiffening tendons adds, in words (the statics' ``stiffening``), after a blank line."""
+    st = report.get("stiffening") or {}
+    return ["", *st["lines"]] if st.get("lines") else ["", st["skipped"] + "."] if st.get("skipped") else []
 
 
 def write_summary(report: dict, path: Path) -> None:
@@ -215,16 +297,21 @@ def write_summary(report: dict, path: Path) -> None:
         case = g["cases"][g["gravity"]]
         lines += ["", f"Own weight, no tendon tensioned (state N): tip sag {case['tip_sag_mm']:.1f} mm, strip stress "
                       f"{case['max_stress_mpa']:.0f} MPa (allowable {g['allowable_stress_mpa']:g} MPa). Plot: `sag.png`."]
+    lines += stiffening_lines(report)
     if errs:
-        lines += ["", "## Failed", ""] + [f"- `{c['id']}` {c['message']}" for c in errs]
+        lines += ["", "## Failed", ""] + [_finding(c) for c in errs]
     if warns:
-        lines += ["", "## Warnings", ""] + [f"- `{c['id']}` {c['message']}" for c in warns]
+        lines += ["", "## Warnings", ""] + [_finding(c) for c in warns]
+    lowered = lowered_settings(report)
+    if lowered:
+        lines += ["", f"Severity lowered by the design: {lowered}."]
     lines += ["", "Plots: `lengths.png`, `tolerance.png`. Every check: `report.json`.", ""]
     atomic.write_text(path, "\n".join(lines))
 
 
 def print_report(report: dict, console, verbose: bool = False) -> None:
-    """Rich tables: tendons, then the findings (failures and warnings; every check if verbose).
+    """Rich tables: tendons, then the findings (failures and warnings; every check if verbose);
+    the verdict follows (:func:`verdict_lines`).
 
     Styles are given as Text spans, never as markup, so nothing in a message is read as markup."""
     from rich.table import Table
@@ -253,8 +340,5 @@ def print_report(report: dict, console, verbose: bool = False) -> None:
         ft.add_row(Text(s, style=style.get(s, "")), c["id"], Text(place(c)), _fmt(c["measured"]), _fmt(c["limit"]),
                    Text(c["message"]))
     console.print(ft)
-    n_fail = sum(1 for c in report["checks"] if not c["passed"] and c["severity"] == "error")
-    n_warn = sum(1 for c in report["checks"] if not c["passed"] and c["severity"] == "warning")
-    verdict = Text("PASS", style="bold green") if report["ok"] else Text("FAIL", style="bold red")
-    console.print(Text.assemble(f"{report['design']}: ", verdict, f": {len(report['checks'])} checks, {n_fail} failed, "
-                                f"{n_warn} warning(s)"))
+    if (report.get("stiffening") or {}).get("headline"):
+        console.print(Text(report["stiffening"]["headline"] + " (summary.md, stiffness.json)"))

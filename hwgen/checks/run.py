@@ -16,9 +16,10 @@ from ..cad.manifest import manifest_files, manifest_parts, sha256
 from ..model import kinematics as kin
 from ..model.routing import table_deviations
 from .anchors import seat_checks
-from .base import Check
+from .base import REBUILD, Check
 from .clearances import backbone_checks, hole_checks, tendon_pair_checks, wall_checks
 from .eyelets import backbone_section, locate_eyelets, measure_disk
+from .fixtures import jig_checks, mount_checks
 from .gear_mesh import gear_checks, gear_pairs
 from .gravity import gravity_checks
 from .lengths import length_checks, pair_take_up, sweep_angles, tendon_lengths
@@ -66,14 +67,15 @@ def _file_checks(folder: Path, manifest: dict) -> list[Check]:
             changed.append(f.path)
     if missing:
         out.append(Check("files.present", "error", False, f"missing: {', '.join(missing)}", float(len(missing)),
-                         0.0, {"files": missing}))
+                         0.0, {"files": missing}, fix="build again (hwgen build) to write them"))
     else:
         out.append(Check("files.present", "error", True, f"all {len(entries)} files of the manifest are present",
                          0.0, 0.0, {}))
     if changed:
         out.append(Check("files.unchanged", "warning", False,
                          f"changed since the build (sha256 differs from the manifest), measured as found: "
-                         f"{', '.join(changed)}", float(len(changed)), 0.0, {"files": changed}))
+                         f"{', '.join(changed)}", float(len(changed)), 0.0, {"files": changed},
+                         fix="build again (hwgen build) for the files the design makes, or keep the edits knowingly"))
     else:
         out.append(Check("files.unchanged", "warning", True, "every file is as the build wrote it", 0.0, 0.0, {}))
     return out
@@ -83,7 +85,9 @@ def _strip_clamp_checks(manifest: dict) -> list[Check]:
     """A warning where the tensioner was laid out without the block that clamps the strip's tip
     (a tendon leaves the tip where it would stand): as its housing's layout record says."""
     return [Check("tensioner.strip_clamp", "warning", False,
-                  f"{p['name']}: strip clamp {p['layout_search']['strip_clamp']}", None, None, {"part": p["name"]})
+                  f"{p['name']}: strip clamp {p['layout_search']['strip_clamp']}", None, None, {"part": p["name"]},
+                  fix="route the tendons to leave the tip disk clear of the strip's end (tendons[].routing at the "
+                      "tip station), or hold the strip's tip in the housing by other means")
             for p in manifest["parts"] if "strip_clamp" in p.get("layout_search", {})]
 
 
@@ -160,6 +164,7 @@ def _measure(folder: Path, manifest: dict, plan) -> Measured:
     checks += interference_checks(parts, s.interference_tol_mm3)
     checks += build_volume_checks(parts, proc.build_volume)
     checks += printing_checks(parts, proc.technology)
+    checks += mount_checks(parts, disks, plan) + jig_checks(parts, disks, plan)
     # the tendon runs are measured against the placed solids the interference check has just made
     # (their place in the report is further down)
     runs = tendon_checks(folder, manifest, plan) if gear_pairs(manifest) else []   # no tensioner: no runs
@@ -251,13 +256,14 @@ def _measure_disks(folder: Path, manifest: dict, meshes: dict, tol: float):
                               recess.get(int(p.station), 0.0))
         except Exception as e:
             checks.append(Check("disk.section", "error", False, f"{p.name}: cannot be measured ({e})",
-                                None, None, {"part": p.name}))
+                                None, None, {"part": p.name}, fix=REBUILD))
             continue
         disks.append(dk)
         dy = abs(dk.y_mid - ys[dk.station])
         checks.append(Check("disk.station", "error", dy <= tol,
                             f"{dk.part}: mid-plane at y={dk.y_mid:.4f} mm, station {dk.station} is at "
-                            f"y={ys[dk.station]:g} mm", dy, tol, {"part": dk.part, "station": dk.station}))
+                            f"y={ys[dk.station]:g} mm", dy, tol, {"part": dk.part, "station": dk.station},
+                            fix="" if dy <= tol else REBUILD))
     return disks, checks
 
 
@@ -270,7 +276,7 @@ def _measure_strip(folder: Path, manifest: dict):
         return (*backbone_section(bb.stl_in(folder), bb.entry["placement"]), [])
     except Exception as e:
         return None, None, None, [Check("backbone.section", "error", False, f"{bb.name}: cannot be measured "
-                                        f"({e})", None, None, {"part": bb.name})]
+                                        f"({e})", None, None, {"part": bb.name}, fix=REBUILD)]
 
 
 def _routing_checks(plan, stations_y: np.ndarray, angles: np.ndarray):
@@ -294,7 +300,9 @@ def _routing_checks(plan, stations_y: np.ndarray, angles: np.ndarray):
                             f"{name}: eyelet table matches its eq. (3) function within {big:.4f} mm" if ok else
                             f"{name}: eyelet table departs from the eq. (3) function it names by up to {big:.2f} mm "
                             f"(stations {at}); the geometry follows the table",
-                            big, TABLE_MATCH_MM, {"tendon": name, "stations": at}))
+                            big, TABLE_MATCH_MM, {"tendon": name, "stations": at},
+                            fix="" if ok else f"make {name}'s routing.table and routing.function agree, or give only "
+                                              f"the one you mean (the geometry follows the table)"))
     return devs, fdelta, checks
 
 

@@ -173,7 +173,8 @@ def tilt_checks(fits: list[SlotFit], max_tilt_deg: float, radius: dict[int, floa
         where = {"part": f.part, "station": f.station}
         if f.play_z < 0:
             out.append(Check("disk.tilt", "error", False, f"{f.part}: the strip does not fit its slot "
-                                                          f"({-f.play_z:.3f} mm too tight)", f.play_z, 0.0, where))
+                                                          f"({-f.play_z:.3f} mm too tight)", f.play_z, 0.0, where,
+                             fix=f"a wider slot: disks.slot_clearance up by at least {-f.play_z / 2:.3f} mm a side"))
             continue
         tilt = max(abs(v) for v in f.tilt_x)
         ok = tilt <= max_tilt_deg + ANGLE_TOL_DEG        # the limit, to what the measurement resolves
@@ -187,8 +188,19 @@ def tilt_checks(fits: list[SlotFit], max_tilt_deg: float, radius: dict[int, floa
                f"{r * math.tan(math.radians(tilt)):.3f} mm along the backbone), yaw ±"
                f"{max(abs(v) for v in f.tilt_z):.3f}°, roll ±{max(abs(v) for v in f.tilt_y):.3f}°, slide "
                f"{f.play_x:.3f} mm across the strip")
-        out.append(Check("disk.tilt", "error", ok, msg, tilt, max_tilt_deg, where))
+        out.append(Check("disk.tilt", "error", ok, msg, tilt, max_tilt_deg, where,
+                         fix="" if ok else _tilt_fix(f, tilt, max_tilt_deg)))
     return out
+
+
+def _tilt_fix(f: SlotFit, tilt: float, limit: float) -> str:
+    """How far each of the three settings that hold a disk's pitch must move for this disk."""
+    tan = math.tan(math.radians(limit))
+    need = f.play_z / tan
+    return (f"disks.slot_clearance to at most {f.engagement * tan / 2:.3f} mm a side (its {f.play_z:.3f} mm of play "
+            f"then holds {limit:g}° over the {f.engagement:.2f} mm it has); or {need:.1f} mm of engagement, for "
+            f"which the hubs need more room between the disks (a larger disks.spacing, or fewer disks: "
+            f"disks.count); or allow disks.hub.max_tilt_deg of at least {math.ceil(tilt * 100) / 100:g}°")
 
 
 def hub_checks(emap: EyeletMap, fits: list[SlotFit], meshes: dict, placements: dict, tendon_d: float,
@@ -247,6 +259,10 @@ def hub_checks(emap: EyeletMap, fits: list[SlotFit], meshes: dict, placements: d
             msg = (f"{f.part}: the hub is in tendon {name}'s way at {ang:+g}° bending: its line passes "
                    f"{'inside the hub' if gap < 0 else f'{gap:.3f} mm from it'}, less than the tendon's radius "
                    f"{tendon_d / 2:g} mm")
+        fix = "" if ok else (
+            f"route {name} at least {tendon_d / 2 - gap:.2f} mm further from the strip at station {f.station} "
+            f"(tendons[].routing), or shorter hubs (disks.hub.length, disks.hub.max_tilt_deg) or a thinner hub "
+            f"wall (disks.hub.wall)")
         out.append(Check("hub.tendon_clearance", "error", ok, msg, gap, tendon_d / 2,
-                         {**where, "tendon": name, "angle_deg": ang}))
+                         {**where, "tendon": name, "angle_deg": ang}, fix=fix))
     return out

@@ -22,7 +22,7 @@ from .. import cache
 from ..errors import InputError, clip
 from ..model import scatter as mc
 from ..model import taut as tp
-from .base import Check
+from .base import REBUILD, Check
 from .eyelets import EyeletMap
 
 SAMPLES_ENV = "HWGEN_CHECK_SAMPLES"   # a count: overrides check.samples (smoke runs, the test suite)
@@ -150,7 +150,9 @@ def as_built(emap: EyeletMap, rep: dict, manifest: dict, plan, fits, angles: np.
     if res.unconverged:
         checks.append(Check("tendon.taut_solver", "warning", False,
                             f"{res.unconverged} taut-path solves stopped before converging: their lengths are "
-                            f"upper bounds", float(res.unconverged), 0.0, {}))
+                            f"upper bounds", float(res.unconverged), 0.0, {},
+                            fix=f"nothing in the design: a tendon.robust that passes on upper bounds holds; one that "
+                                f"fails by little may pass; {REBUILD}"))
     if res.take_up is not None and len(res.take_up):
         i, j = act
         pair = {"channel": channel, "tendons": [names[i], names[j]],
@@ -299,4 +301,26 @@ def _verdict(row: dict, s, n: int, devs: list) -> Check:
         msg += (f". Its eyelet table does not sample the eq. (3) function it names: it departs by up to {m:.2f} mm "
                 f"at stations {[j for j, d in big if d > 0.5 * m]}")
     return Check("tendon.robust", s.robust_severity, ok, msg, row["robust_mm"], row["budget_mm"],
-                 {"tendon": row["name"], "channel": row["channel"], "statistic": s.robust if n else "nominal"})
+                 {"tendon": row["name"], "channel": row["channel"], "statistic": s.robust if n else "nominal"},
+                 fix="" if ok else _robust_fix(row, s),
+                 lowered_by="check.robust_severity" if not ok and s.robust_severity == "warning" else "")
+
+
+def _robust_fix(row: dict, s) -> str:
+    """What to change for a tendon whose length change as built is over its budget, led by the
+    largest of its three parts: the routing (through the hole centres), the eyelets' play (the taut
+    path cutting corners in them) and the print's scatter."""
+    name, budget = row["name"], row["budget_mm"]
+    centre, taut = row["centreline_max_abs_delta_mm"], row["taut_max_abs_delta_mm"]
+    robust = row["robust_mm"] if row.get("robust_mm") is not None else taut
+    parts = [(centre, f"route {name} so its length changes less over the bend (tendons[].routing: eq. (3) with a "
+                      f"smaller amplitude or more half waves): through the hole centres it changes {centre:.3f} mm"),
+             (taut - centre, f"tighter eyelets (process.hole_clearance; tube eyelets pressed in): the line's play in "
+                             f"its eyelets lets the taut path cut {max(taut - centre, 0.0):.3f} mm of corners"),
+             (robust - taut, f"a more precise print (process.position_sigma, diameter_sigma; jig.station_tolerance_mm): "
+                             f"the scatter adds {max(robust - taut, 0.0):.3f} mm at {s.robust}")]
+    parts.sort(key=lambda p: -p[0])
+    return ("; or ".join(text for share, text in parts if share > 0.01 * budget)
+            + f"; or a larger budget (tendons[].budget_mm, now {budget:g} mm) if the robot bears the coupling"
+            + ("" if s.robust_severity == "warning" else
+               "; or state it as a warning (check.robust_severity: warning) with its reason in this design's file"))

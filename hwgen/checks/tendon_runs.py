@@ -11,7 +11,7 @@ import numpy as np
 
 from ..cad.manifest import manifest_parts
 from .axes import across
-from .base import Check
+from .base import REBUILD, Check
 from .meshes import placed_manifold
 
 TENDON_SEARCH_MM = 5.0        # a tendon's nearest other part is reported up to this far
@@ -39,7 +39,7 @@ def tendon_checks(folder: Path, manifest: dict, plan) -> list[Check]:
     every = manifest_parts(manifest)
     runs = [(p.name, r) for p in every for r in p.entry.get("tendon_runs", [])]
     if not runs:
-        return [Check("tensioner.tendon_clearance", "error", False, "no tendon runs in the manifest")]
+        return [Check("tensioner.tendon_clearance", "error", False, "no tendon runs in the manifest", fix=REBUILD)]
     parts = [p for p in every if not (p.role == "disk" and p.entry.get("disk_role") == "tip")]
     solids = {}
     out = []
@@ -74,7 +74,8 @@ def tendon_checks(folder: Path, manifest: dict, plan) -> list[Check]:
                          f"{own_gap:.3f} mm short of the winding point (needs ≥ the tendon diameter {d:g} mm)",
                          min(worst, own_gap), d,
                          {"tendon": r["tendon"], "part": own if own_gap <= worst else worst_part,
-                          "nearest_other_part": worst_part, "nearest_other_mm": min(worst, TENDON_SEARCH_MM)}))
+                          "nearest_other_part": worst_part, "nearest_other_mm": min(worst, TENDON_SEARCH_MM)},
+                         fix="" if ok else f"hwgen lays the tensioner out around each tendon's run: {REBUILD}"))
         out.append(Check("tensioner.exit_angle", "info", True,
                          f"tendon {r['tendon']}: turns {r['exit_angle_deg']:.1f}° at its tip eyelet toward its spool",
                          r["exit_angle_deg"], None, {"tendon": r["tendon"]}))

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import DesignError, InputError
 from ..params import Design
-from .fixing import CHAMBER_HEIGHT_MM, disk_gaps, disk_thicknesses, seat_diameter
+from .fixing import disk_gaps, disk_thicknesses, seat_diameter
 from .fixtures import mount_problems
 from .gearing import worm_pair
 from .holes import straight_hole
@@ -22,11 +22,10 @@ from .materials import material_problem
 from .routing import sample_function
 from .tensioner_layout import spool_wall_problem
 
-EYELET_CUT_FRACTION = 1 / 8  # the checks cut a disk this share of its thickness off its mid-plane (keep clear)
 
-
-def problems(d: Design) -> list[tuple[str, str]]:
-    """(field path, what is wrong) for every reason this design cannot be built, in YAML order."""
+def problems(d: Design) -> list[tuple[str | tuple[str, ...], str]]:
+    """(field path, what is wrong) for every reason this design cannot be built, in YAML order; a
+    rule over several fields gives their paths, the one to change first."""
     out = []
     material = material_problem(d.process)
     if material:
@@ -62,7 +61,7 @@ def _spacing_problems(d: Design) -> list[tuple[str, str]]:
         if gap <= 0:
             where = (f"disks.stations[{i + 1}]" if d.disks.stations is not None else
                      "disks.spacing" if d.disks.spacing is not None else "disks.count")
-            return [(where, f"disk {i} and disk {i + 1} overlap: their stations are "
+            return [((where, "backbone.length", "disks.thickness", "disks.end_thickness"), f"disk {i} and disk {i + 1} overlap: their stations are "
                             f"{d.stations[i + 1] - d.stations[i]:g} mm apart and they are "
                             f"{disk_thicknesses(d)[i] / 2 + disk_thicknesses(d)[i + 1] / 2:g} mm thick "
                             f"between their mid-planes (disks.thickness, disks.end_thickness)")]
@@ -70,8 +69,9 @@ def _spacing_problems(d: Design) -> list[tuple[str, str]]:
 
 
 def _anchor_problems(d: Design) -> list[tuple[str, str]]:
-    """Every termination larger than the smallest seat the process prints; the seat plate clear of the
-    eyelets' measuring cuts; no tendon starting inside the strip's slot."""
+    """Every termination larger than the smallest seat the process prints; no tendon starting inside
+    the strip's slot. (The seat plate is less than half the base disk (:mod:`hwgen.params`); the
+    chambers over it are laid out short of the mid-plane: :func:`hwgen.model.fixing.chamber_height`.)"""
     out = []
     seat = seat_diameter(d)
     terms = [("tendon_material.termination", d.tendon_material.termination)]
@@ -80,11 +80,6 @@ def _anchor_problems(d: Design) -> list[tuple[str, str]]:
         if t.diameter <= seat:
             out.append((f"{path}.diameter", f"a {t.diameter:g} mm {t.kind} pulls through the smallest seat the process "
                                             f"makes, Ø{seat:g} mm (process.min_hole, tendon and hole clearance)"))
-    T = disk_thicknesses(d)[0]          # the base disk's
-    room = T / 2 - T * EYELET_CUT_FRACTION
-    if d.disks.anchors.plate + CHAMBER_HEIGHT_MM >= room:
-        out.append(("disks.anchors.plate", f"{d.disks.anchors.plate:g} mm of seat plate and the chamber over it reach "
-                                           f"into the base disk's eyelets ({room:g} mm from its face are free)"))
     half_w = d.backbone.height / 2 + d.disks.slot_clearance
     half_t = d.backbone.thickness / 2 + d.disks.slot_clearance
     for i, t in enumerate(d.tendons):
@@ -114,6 +109,7 @@ def _eyelets_outside(d: Design) -> list[tuple[str, str]]:
         j = int(over[0])
         x, z = (float(v) for v in pts[j])
         p = f"tendons[{i}].routing.table[{j}]" if table is not None else f"tendons[{i}].routing.function"
+        p = (p, "disks.outer_diameter")
         if r[j] >= r_out:
             out.append((p, f"eyelet at station {j} (x={x:g}, z={z:g}) lies outside the disk (radius {r_out:g} mm)"))
         else:
@@ -135,9 +131,9 @@ def _slot_problems(d: Design) -> list[tuple[str, str]]:
     if math.hypot(w / 2, h / 2) + wall <= r:
         return []
     if w / 2 >= r:
-        return [("disks.outer_diameter", f"{dk.outer_diameter} mm does not enclose the backbone slot ({w:g} mm)")]
+        return [(("disks.outer_diameter", "backbone.height"), f"{dk.outer_diameter} mm does not enclose the backbone slot ({w:g} mm)")]
     field = "backbone.thickness" if w / 2 + wall < r else "disks.outer_diameter"
-    return [(field, f"the backbone slot ({w:g} × {h:g} mm: the strip and disks.slot_clearance) reaches past "
+    return [((field, "disks.outer_diameter", "backbone.height", "disks.slot_clearance"), f"the backbone slot ({w:g} × {h:g} mm: the strip and disks.slot_clearance) reaches past "
                     f"the rim of the Ø{dk.outer_diameter:g} mm disk, or leaves less than "
                     f"process.min_wall = {wall:g} mm of it")]
 
@@ -149,7 +145,7 @@ def _tendon_size_problems(d: Design) -> list[tuple[str, str]]:
     hole = straight_hole(d.tendon_material.diameter, d.process.hole_clearance, d.process.min_hole)
     if hole + 2 * d.process.min_wall <= room:
         return []
-    return [("tendon_material.diameter",
+    return [(("tendon_material.diameter", "disks.outer_diameter", "process.hole_clearance"),
              f"a Ø{d.tendon_material.diameter:g} mm tendon needs eyelets of at least Ø{hole:g} mm "
              f"(with process.hole_clearance); with {d.process.min_wall:g} mm walls they do not fit between the "
              f"backbone slot and the rim of a Ø{dk.outer_diameter:g} mm disk")]
@@ -187,9 +183,10 @@ def tendon_field(d: Design, name: str) -> str:
 
 def plan_problems(plan, d: Design) -> list[tuple[str, str]]:
     """(field path, what is wrong) for holes the plan sized but no part can take: an eyelet
-    that breaks through its disk's rim, a strip hole as wide as the strip. Both come from a
-    tendon that meets the disk or the strip almost edge-on (its hole grows as 1/cos α). ``d``: the
-    design the plan was made from (the fields to name)."""
+    that breaks through its disk's rim (a tendon that meets the disk almost edge-on: its hole
+    grows as 1/cos α), a strip hole as wide as the strip (a strip narrower than the straight hole
+    the tendon passes: the plan cuts an oblique crossing's hole at most half the strip, and
+    backbone.hole_angle fails). ``d``: the design the plan was made from (the fields to name)."""
     out = []
     for disk in plan.disks:
         r_out = disk.outer_diameter / 2
@@ -203,13 +200,13 @@ def plan_problems(plan, d: Design) -> list[tuple[str, str]]:
                             f"Ø{disk.outer_diameter:g} mm disk"))
                 return out
     height = plan.backbone.height
-    for h in plan.backbone.holes:
-        if not math.isfinite(h.diameter) or h.diameter >= height:
+    for h in plan.backbone.holes:          # the plan cuts them at most half the strip, but never below the
+        if not math.isfinite(h.diameter) or h.diameter >= height:       # straight hole the tendon passes
             dia = f"a Ø{h.diameter:.3g} mm" if math.isfinite(h.diameter) else "an endless"
             out.append((tendon_field(d, h.tendon),
-                        f"{h.tendon} crosses the backbone at station {h.station:g} so obliquely that the strip "
-                        f"would need {dia} hole, wider than the {height:g} mm strip: route it across the "
-                        f"strip more squarely, or not through the strip"))
+                        f"{h.tendon} crosses the backbone at station {h.station:g}, where the strip would need "
+                        f"{dia} hole to let it through, wider than the {height:g} mm strip: route it "
+                        f"not through the strip, or make the strip wider"))
             return out
     return out
 
@@ -221,6 +218,8 @@ def check_plan(plan, d: Design) -> None:
 
 
 def check(d: Design, file: str | Path) -> None:
-    """Raise :class:`InputError` for the first problem (the order of :func:`problems`)."""
-    for path, message in problems(d):
-        raise InputError(file, path, message)
+    """Raise one :class:`InputError` carrying every problem (in the order of :func:`problems`; a
+    rule over several fields named by the first of them)."""
+    found = problems(d)
+    if found:
+        raise InputError.of([InputError(file, p if isinstance(p, str) else p[0], m) for p, m in found])

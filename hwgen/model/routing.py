@@ -39,7 +39,7 @@ class TendonPath:
     function_points: np.ndarray | None  # (N, 2): the named eq. (3) function, where given with a table
     budget_mm: float | None         # allowed length change; None = no budget (actuating)
     source: str                     # "table" or "function"
-    pretension_n: float             # what it is locked at when its channel is tensioned, N
+    pretension_n: float | None      # what it is pulled to at its turn in the protocol, N (None: the protocol finds it)
     termination: Termination        # how it ends at the base disk: its own, else the material's
     mirrored_from: str | None = None
 

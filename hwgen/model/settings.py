@@ -34,6 +34,9 @@ class CheckSettings:
     taut_floor_n: float
     tendon_safety_factor: float
     max_coupling: float
+    working_tension_n: float
+    straight_within_mm: float
+    stiffness_push_n: float
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -77,6 +80,7 @@ class TendonMaterialSettings:
     termination: Termination      # the material's; a tendon's own is its path's (TendonPath.termination)
     axial_stiffness_n: float
     tie_off_compliance_mm_per_n: float
+    eyelet_friction: float | None     # μ of the line in an eyelet; None: the bounds only
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -142,7 +146,9 @@ def check_settings(d: Design) -> CheckSettings:
                          seed=c.seed, robust=c.robust, robust_confidence=c.robust_confidence,
                          robust_precision_mm=c.robust_precision_mm, robust_severity=c.robust_severity,
                          taut_floor_n=c.taut_floor_n, tendon_safety_factor=c.tendon_safety_factor,
-                         max_coupling=c.max_coupling)
+                         max_coupling=c.max_coupling, working_tension_n=c.working_tension_n,
+                         straight_within_mm=c.straight_within_mm,
+                         stiffness_push_n=c.stiffness_push_n)
 
 
 def process_settings(d: Design) -> ProcessSettings:
@@ -161,7 +167,8 @@ def tendon_material_settings(d: Design) -> TendonMaterialSettings:
     tm = d.tendon_material
     return TendonMaterialSettings(name=tm.name, diameter=tm.diameter, break_load=tm.break_load,
                                   termination=termination(tm.termination), axial_stiffness_n=tm.axial_stiffness_n,
-                                  tie_off_compliance_mm_per_n=tm.tie_off_compliance_mm_per_n)
+                                  tie_off_compliance_mm_per_n=tm.tie_off_compliance_mm_per_n,
+                                  eyelet_friction=tm.eyelet_friction)
 
 
 def tensioner_settings(d: Design) -> TensionerSettings:

@@ -138,13 +138,18 @@ class Stiffening:
 class TendonLine:
     """A tendon through eyelets: ``points`` (M, 2) its (x, z) in the disk frames at arc lengths
     ``stations`` (M,), base first; ``stiffness`` k (N/mm) of the locked tendon as one spring
-    (its free length, the run to its drum included, over EA, in series with the tie-off)."""
+    (its free length, the run to its drum included, over EA, in series with the tie-off).
+    For eyelet friction (:mod:`hwgen.model.friction`): ``compliances`` (M,), mm/N, of its M-1
+    segments between eyelets and of its run beyond the tip eyelet, summing to 1/k (empty: 1/k
+    shared by the segments by length); ``exit``, the run's direction in the tip frame (None: +y)."""
 
     name: str
     channel: str
     stations: tuple[float, ...]
     points: np.ndarray
     stiffness: float
+    compliances: tuple[float, ...] = ()
+    exit: tuple[float, float, float] | None = None
 
 
 @dataclass(frozen=True)

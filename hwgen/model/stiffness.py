@@ -1,7 +1,7 @@
 """The robot of a plan described for :mod:`hwgen.model.statics`, and what the statics says of it:
-stiffness per tendon state (the paper's Fig. 8), shape under its own weight (Fig. 7), and how
-the stiffening tendons' tensions swing when the actuating pair bends the robot (numpy and scipy
-only; everything from the plan, no CAD).
+stiffness per tendon state as the paper measured it (its Fig. 8), per orientation of the robot
+and between the bounds eyelet friction sets, and the shape under its own weight (Fig. 7)
+(numpy and scipy only; everything from the plan, no CAD).
 
 Robot. The strip (E = backbone.modulus_gpa, G = backbone.shear_modulus_gpa, h × t) clamped at the
 base disk's mid-plane, tip at the tip disk's. Each disk's plate holds the strip rigid over its
@@ -13,37 +13,61 @@ is the tip disk's tensioner as the layout sizes it (housing members, each wheel 
 flange's cylinder, each worm as its pitch cylinder) plus the strip beyond the tip, at its centre
 of mass; the base disk is the clamp's. Tendons are the plan's eyelets (eq. (2)); each one's
 spring is its free length (path plus run to the drum) over ``tendon_material.axial_stiffness_n``
-in series with ``tendon_material.tie_off_compliance_mm_per_n``.
+in series with ``tendon_material.tie_off_compliance_mm_per_n`` (half at the knot, half at the
+drum, for the friction bounds: :mod:`hwgen.model.friction`).
 
-States. A state is the set of channels whose tendons are pre-tensioned and locked (the worm
+States. A state is the set of channels whose tendons are tensioned and locked (the worm
 self-locks); the others are slack. The paper's nine (Fig. 8) are N, the actuating channel alone,
-and it with every combination of the stiffening channels, in the paper's order. Each locked
-tendon is locked at the length that gives its ``pretension_n`` with the robot held straight and
-weightless (as in the jig); let go, the robot settles under its weight and the tendons with it.
+and it with every combination of the stiffening channels, in the paper's order. Each state is
+tensioned by the paper's protocol (:mod:`hwgen.model.protocol`) in each orientation: the
+actuating pair straight with the strip on edge, at the least tension that keeps it taut once
+turned; each further channel at the least tension that holds the backbone (nearly) straightest;
+a tendon's ``pretension_n``, where the design gives one, instead.
 
-Stiffness. The robot horizontal, its flexible direction (z) along gravity; a small push at a
-disk along gravity, force over displacement there (the tangent stiffness of the settled state:
-one-way springs as they are there). Torsion: torque over twist at the tip, about its tangent.
+Orientations (:data:`ORIENTATIONS`). The robot horizontal with its flexible direction (z) along
+gravity, gravity toward −z (C1's base eyelet up: the way the paper's protocol can hold the robot
+straight with C1, so taken as the paper's, :data:`REFERENCE`) and toward +z (turned over), and
+weightless.
+
+Stiffness. A small push at a disk along z, force over displacement there: the tangent stiffness
+of the locked state (one-way springs as they are there), between two bounds of eyelet friction,
+``none`` (frictionless chords) and ``stuck`` (each segment between eyelets its own spring), and,
+when the design gives ``tendon_material.eyelet_friction``, the capstan model between them for a
+push of ``check.stiffness_push_n`` at the tip either way (:mod:`hwgen.model.friction`). Torsion:
+torque over twist at the tip, about its tangent.
+
+For another model to compare with (a simulation): :func:`study` returns every result as a plain
+dict; ``study(plan)["states"]`` holds one entry per state, orientation and friction, each with
+``"state"``, ``"orientation"``, ``"gravity"`` (the unit vector in the base frame, or None),
+``"friction"`` (and for capstan ``"push"``: "+z" or "-z"), ``"tensions_n"`` (every locked
+tendon's tension in that equilibrium, N), ``"locks_mm"`` (each one's rest length ℓ₀) and
+``"tip_stiffness_n_per_mm"``; :func:`tip_stiffness` indexes them.
 """
 from __future__ import annotations
 
 import dataclasses
 import itertools
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
 
+from . import friction as fr
+from . import protocol
+from . import statics as st
 from .intervals import interval_difference
 from .sag import Span
-from . import statics as st
 
-GRAVITY = (0.0, 0.0, -1.0)        # robot horizontal, its flexible direction along gravity (Fig. 7)
-PUSH = (0.0, 0.0, 1.0)            # the push: along gravity's line (its sign does not change a tangent stiffness)
+ORIENTATIONS = {"gravity -z": (0.0, 0.0, -1.0),     # horizontal, flexible direction along gravity (Fig. 7)
+                "gravity +z": (0.0, 0.0, 1.0),      # ... turned over
+                "weightless": None}
+REFERENCE = "gravity -z"          # the orientation the headline ratio and the bending sweep's locks are of
+PUSH = (0.0, 0.0, 1.0)            # the push: along z, the flexible direction
 PAPER_ENDPOINT_RATIO = 4.85       # abstract and Sect. VI: AC1C2H over A at the endpoint
 MAX_COMBINED = 4                  # more stiffening channels than this: each alone and all together only
 CURVE_POINTS = 120
+STUDY_H_MAX = 3.0                 # mm: the study's rod segments (tip stiffness within 1e-4 of 1.5 mm's)
+STUDY_MAX_DOF = 1500              # a longer robot than this resolves is not studied (a ValueError says so)
 
 
 @dataclass(frozen=True)
@@ -56,15 +80,19 @@ class State:
 
 @dataclass(frozen=True)
 class Described:
-    """A plan's robot for the statics, and where its numbers came from."""
+    """A plan's robot for the statics, where its numbers came from, and how it is tensioned."""
 
     robot: st.Robot
-    pretension: dict                 # tendon name -> N
+    pretension: dict                 # tendon name -> N given by the design, None: the protocol finds it
     actuating: tuple[str, ...]       # tendons of the actuating channel
     stiffening: tuple[str, ...]      # tendons with a budget (stiffening)
     channel_of: dict                 # tendon name -> channel
     stations: tuple[float, ...]
     masses: dict                     # what the weights are, for the report
+    rules: protocol.Rules            # the tensioning protocol's floor, ceiling and straightness
+    eyelet_friction: float | None    # μ; None: the friction bounds only
+    push_n: float                    # the capstan push at the tip, N
+    channels: tuple[str, ...]        # the channels that have tendons, actuating first, then the tensioner's order
 
 
 def states(plan) -> list[State]:
@@ -231,36 +259,49 @@ def describe(plan, measured: dict | None = None) -> Described:
         lam = float(measured["strip"]["lambda_g_mm"])
         section = dataclasses.replace(section, lin_density=lam)
         how = "measured from the built files' STLs (the check report's gravity section)"
-    runs = {r.tendon: r.length for r in plan.tensioner_layout.runs} if plan.tensioner_layout else {}
+    runs = {r.tendon: r for r in plan.tensioner_layout.runs} if plan.tensioner_layout else {}
     tm = plan.tendon_material
     stations = tuple(float(s) for s in plan.stations)
     pre = {p.name: p.pretension_n for p in plan.paths}
-    lines = []
-    for p in plan.paths:
-        P = np.column_stack([np.zeros(len(stations)), stations, np.zeros(len(stations))])
-        P[:, 0], P[:, 2] = p.points[:, 0], p.points[:, 1]
-        path = float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum())
-        k = 1.0 / ((path + runs.get(p.name, 0.0)) / tm.axial_stiffness_n + tm.tie_off_compliance_mm_per_n)
-        lines.append(st.TendonLine(p.name, p.channel, stations, np.asarray(p.points, float), k))
+    lines = [_tendon_line(p, stations, runs.get(p.name), tm) for p in plan.paths]
     robot = st.Robot(bb.length, section, stiffening, tuple(lines), tuple((s, m) for _, s, m in disks),
                      tip["mass_g"], (tip["a_mm"], tip["b_mm"]))
     act = plan.tensioner.actuating_channel
     masses = {"disks": [{"part": n, "s_mm": s, "mass_g": m} for n, s, m in disks], "tip_assembly": tip,
               "strip_g_per_mm": lam, "printed_density_g_mm3": rho, "how": how}
+    chk = plan.check
+    rules = protocol.Rules(act, chk.taut_floor_n, tm.break_load / chk.tendon_safety_factor, chk.straight_within_mm)
     return Described(robot, pre, tuple(p.name for p in plan.paths if p.channel == act),
                      tuple(p.name for p in plan.paths if p.budget_mm is not None),
-                     {p.name: p.channel for p in plan.paths}, stations, masses)
+                     {p.name: p.channel for p in plan.paths}, stations, masses, rules, tm.eyelet_friction,
+                     chk.stiffness_push_n, _channels(plan))
 
 
-def state_loads(desc: Described, model: st.Model, state: State, gravity=GRAVITY,
-                forces=()) -> tuple[st.Loads, np.ndarray]:
-    """The loads of a tendon state: its channels' tendons locked where each carries its pre-tension
-    with the robot weightless (tensioned on the bench), then the weight and the forces; and the
-    weightless shape (a start for the solver)."""
-    names = [t.name for t in desc.robot.tendons if t.channel in state.channels]
-    locks, settled = st.locked_settled(model, {n: desc.pretension[n] for n in names})
-    return st.Loads(tendons=locks, gravity=gravity, forces=tuple(forces)), settled.q
+def _channels(plan) -> tuple[str, ...]:
+    act = plan.tensioner.actuating_channel
+    used = {p.channel for p in plan.paths}
+    return tuple(dict.fromkeys(c for c in (act, *plan.tensioner.channels) if c in used))
 
+
+def _tendon_line(p, stations, run, tm) -> st.TendonLine:
+    """A plan's tendon for the statics: its spring (path plus run over EA, with the tie-off), and its
+    segments' and run's compliances (the tie-off half at the knot, half at the drum) and the run's
+    direction off the tip eyelet (+y where the design has no tensioner layout)."""
+    P = np.column_stack([p.points[:, 0], stations, p.points[:, 1]])
+    chords = np.linalg.norm(np.diff(P, axis=0), axis=1)
+    ea, tie = tm.axial_stiffness_n, tm.tie_off_compliance_mm_per_n
+    run_mm = run.length if run is not None else 0.0
+    comp = np.r_[chords / ea, run_mm / ea + tie / 2]
+    comp[0] += tie / 2
+    k = 1.0 / ((float(chords.sum()) + run_mm) / ea + tie)
+    exit_dir = None
+    if run is not None and run_mm > 0:
+        exit_dir = tuple(float(v) for v in np.subtract(run.end, run.start) / run_mm)
+    return st.TendonLine(p.name, p.channel, stations, np.asarray(p.points, float), k, tuple(float(c) for c in comp),
+                         exit_dir)
+
+
+# ------------------------------------------------------------------ one state in one orientation
 
 def _curve(eq: st.Equilibrium) -> dict:
     k = max(1, len(eq.s) // CURVE_POINTS)
@@ -269,143 +310,300 @@ def _curve(eq: st.Equilibrium) -> dict:
             "x_mm": eq.p[idx, 0].tolist()}
 
 
-def state_result(desc: Described, model: st.Model, state: State, q0=None) -> tuple[dict, st.Equilibrium]:
-    """One state settled under its weight: shape, tensions, stiffness at every disk, tip torsion."""
-    loads, settled = state_loads(desc, model, state)
-    eq = st.solve(model, loads, settled if q0 is None else q0)
-    k = eq.point_stiffnesses(desc.stations[1:], PUSH)
-    disks = [{"disk": i, "s_mm": s, "stiffness_n_per_mm": float(v)}
-             for i, (s, v) in enumerate(zip(desc.stations[1:], k), start=1)]
-    L = desc.robot.length
-    tip = eq.at(L)
-    return ({"state": state.name, "channels": list(state.channels),
-             "locked": [t.name for t in desc.robot.tendons if t.channel in state.channels],
-             "tensions_n": {k: v for k, v in eq.tensions.items() if k in
-                            [t.name for t in desc.robot.tendons if t.channel in state.channels]},
-             "disks": disks,
-             "tip_stiffness_n_per_mm": disks[-1]["stiffness_n_per_mm"],
-             "tip_torsion_nmm_per_rad": eq.twist_stiffness(),
-             "tip_sag_mm": float(-tip[2]), "tip_angle_deg": math.degrees(eq.tip_angle()),
-             "curve": _curve(eq), "solver": {"iterations": eq.iterations, "residual_nmm": eq.residual,
-                                             "seconds": eq.solve_time, "dof": model.n_dof}}, eq)
+def _push_rows(model: st.Model, eq: st.Equilibrium, stations) -> np.ndarray:
+    """(K, n_dof): the displacement along :data:`PUSH` of the centre of each disk at ``stations``."""
+    kin = tuple(x[0] for x in model.forward(eq.q[None, :]))
+    nodes = protocol.station_nodes(model, stations)
+    move, _ = fr.point_rows(model, kin, nodes, kin[0][nodes])
+    return move @ np.asarray(PUSH, float)
 
 
-def study(plan, which: list[str] | None = None, h_max: float = st.H_MAX, measured: dict | None = None) -> dict:
-    """Every state (or those named) of a plan: the stiffness report (see the module's docstring);
-    ``measured``: as :func:`describe` takes it."""
-    t0 = time.perf_counter()
+def _slack_push(b: fr.Bounds, jtip: np.ndarray, friction: str) -> dict:
+    """The tip push (N, either way along z) at which the first locked segment would go slack, as the
+    tangent stiffness has it (None: none slackens that way)."""
+    rates = b.tension_rates(jtip, friction)
+    out = {}
+    for key, sign in (("+z", 1.0), ("-z", -1.0)):
+        r = sign * rates
+        falling = r < -1e-12
+        out[key] = float(np.min(b.tension[falling] / -r[falling])) if np.any(falling) else None
+    return out
+
+
+def _largest(values: np.ndarray) -> float:
+    """The value of largest magnitude (a stuck tendon's segments each change by their own)."""
+    return float(values[np.argmax(np.abs(values))])
+
+
+def evaluate(desc: Described, model: st.Model, state: State, orientation: str, memo: dict | None = None) -> list[dict]:
+    """One state in one orientation (a key of :data:`ORIENTATIONS`): tensioned by the protocol, then
+    its entries: friction ``none`` and ``stuck`` (stiffness at every disk, tip torsion, the push
+    that would slacken a tendon, per locked tendon its tension and its tension's change per newton
+    of tip push), and ``capstan`` toward +z and −z when the design gives a friction coefficient.
+    ``memo``: shared by the states of one orientation (and model)."""
+    gravity = ORIENTATIONS[orientation]
+    done = protocol.tension_state(model, state.channels, gravity, desc.pretension, desc.rules, desc.stations, memo)
+    eq = done.equilibrium
+    b = fr.bounds(eq)
+    rows = _push_rows(model, eq, desc.stations[1:])
+    twist = model.rotation_jacobian(eq.q, desc.robot.length, (0.0, 1.0, 0.0))
+    locked = [t.name for t in desc.robot.tendons if t.channel in state.channels]
+    tip = eq.at(desc.robot.length)
+    common = {"state": state.name, "channels": list(state.channels), "orientation": orientation,
+              "gravity": None if gravity is None else list(gravity), "locked": locked,
+              "tensions_n": {n: eq.tensions[n] for n in locked}, "set_n": {n: done.set_n.get(n) for n in locked},
+              "tension_from": {n: done.source[n] for n in locked},
+              "locks_mm": {n: done.locks[n][1] for n in locked}, "notes": list(done.notes)}
+    out = []
+    for friction in fr.FRICTIONS:
+        k = 1.0 / b.compliance(rows, friction)
+        rates = b.tension_rates(rows[-1], friction)
+        per_tendon = {n: _largest(rates[[o == n for o in b.owner]]) if n in b.tendons else 0.0 for n in locked}
+        entry = {**common, "friction": friction,
+                 "disks": [{"disk": i, "s_mm": s, "stiffness_n_per_mm": float(v)}
+                           for i, (s, v) in enumerate(zip(desc.stations[1:], k), start=1)],
+                 "tip_stiffness_n_per_mm": float(k[-1]),
+                 "tip_torsion_nmm_per_rad": float(1.0 / b.compliance(twist, friction)[0]),
+                 "tension_per_tip_n": per_tendon, "slack_at_tip_push_n": _slack_push(b, rows[-1], friction),
+                 "tip_x_mm": float(tip[0]), "tip_z_mm": float(tip[2]), "tip_angle_deg": math.degrees(eq.tip_angle())}
+        if friction == "none":
+            entry["curve"] = _curve(eq)
+            entry["solver"] = {"iterations": eq.iterations, "residual_nmm": eq.residual, "dof": model.n_dof}
+        out.append(entry)
+    if desc.eyelet_friction is not None:
+        for key, sign in (("+z", 1.0), ("-z", -1.0)):
+            p = fr.capstan_push(b, sign * rows[-1], desc.push_n, desc.eyelet_friction)
+            out.append({**common, "friction": "capstan", "push": key, "push_n": desc.push_n,
+                        "eyelet_friction": desc.eyelet_friction, "tip_stiffness_n_per_mm": p.stiffness,
+                        "reached_n": p.reached_n, "slack_within_push": p.slack, "slipped": p.slipped,
+                        "eyelets": p.eyelets, "first_slip_n": p.first_slip_n})
+    return out
+
+
+def tip_stiffness(report: dict) -> dict:
+    """{(state, orientation, friction): tip stiffness N/mm} of a :func:`study` report; a capstan
+    entry's key is (state, orientation, "capstan +z") or ("capstan -z")."""
+    return {(e["state"], e["orientation"], e["friction"] + (" " + e["push"] if "push" in e else "")):
+            e["tip_stiffness_n_per_mm"] for e in report["states"]}
+
+
+# ------------------------------------------------------------------ every state, and what they say together
+
+LOW_STIFFENING = 1.2       # under this (all tendons over the actuating pair at the tip), the report says why
+IDLE_SHARE = 0.05          # a locked tendon whose tension changes less than this share of the actuating one's is idle
+SOFTER = 1e-3              # a state this much under one with a channel fewer is named in the notes
+
+
+def study(plan, which: list[str] | None = None, orientations: list[str] | None = None, h_max: float = STUDY_H_MAX,
+          measured: dict | None = None) -> dict:
+    """Every state (or those named) of a plan in every orientation (or those named): the stiffness
+    report (see the module's docstring); ``measured``: as :func:`describe` takes it."""
     desc = describe(plan, measured)
     model = st.Model(desc.robot, h_max)
-    todo = states(plan)
-    if which:
-        todo = [s for s in todo if s.name in which]
-    out = []
-    for s in todo:
-        res, _ = state_result(desc, model, s)
-        out.append(res)
-    by = {r["state"]: r for r in out}
+    if model.n_dof > STUDY_MAX_DOF:
+        raise ValueError(f"{model.n_dof} joint coordinates, more than the {STUDY_MAX_DOF} the statics is run with")
+    todo = [s for s in states(plan) if not which or s.name in which]
+    names = list(orientations or ORIENTATIONS)
+    entries = []
+    for o in names:
+        memo: dict = {}
+        for s in todo:
+            entries += evaluate(desc, model, s, o, memo)
     act = plan.tensioner.actuating_channel
     full = max(todo, key=lambda s: len(s.channels)).name if todo else None
-    ratio = None
-    if act in by and full in by and full != act:
-        ratio = by[full]["tip_stiffness_n_per_mm"] / by[act]["tip_stiffness_n_per_mm"]
+    pair = [full, act] if act in {s.name for s in todo} and full != act else None
+    ratios = _ratios(entries, pair) if pair else []
     sec = desc.robot.section
-    return {
+    report = {
         "model": "discrete elastic rod (a joint per ≤ %.2g mm segment: E·I both ways, G·J), rigid disks at their "
-                 "stations, tendons as eq. (2) chords through the eyelets, one-way springs locked at their "
-                 "pre-tension; energy minimisation (hwgen.model.statics)" % h_max,
+                 "stations, tendons as eq. (2) chords through the eyelets, one-way springs locked by the paper's "
+                 "tensioning protocol; energy minimisation (hwgen.model.statics); eyelet friction as bounds "
+                 "(hwgen.model.friction)" % h_max,
+        "protocol": protocol.SUMMARY,
+        "orientations": {o: ORIENTATIONS[o] and list(ORIENTATIONS[o]) for o in names},
+        "frictions": {"none": "frictionless eyelets: each tendon one spring over its whole length",
+                      "stuck": "every segment held at its eyelets: each its own spring (the small-push limit of "
+                               "static friction)",
+                      "capstan": (f"μ {desc.eyelet_friction:g} at every eyelet, a {desc.push_n:g} N push at the tip "
+                                  "followed through each eyelet's slip (e^(μθ)); secant stiffness"
+                                  if desc.eyelet_friction is not None else "not reported: no "
+                                  "tendon_material.eyelet_friction")},
         "assumptions": [
-            "robot horizontal, its flexible direction (z) along gravity; pushes along gravity; tangent stiffness",
-            "each locked tendon carries its pre-tension in the weightless robot as those tensions settle it "
-            "(tensioned on the bench, then locked: ℓ0 = ℓ − τ/k); then turned horizontal under its weight",
+            "robot horizontal, its flexible direction (z) along gravity (either way), or weightless; pushes along z",
+            "tensions by the protocol (hwgen.model.protocol), or a tendon's pretension_n at its turn; tangent "
+            "stiffness (capstan: a secant over its push)",
             "strip inextensible and unshearable; disks' plates rigid, hubs glued and as their sections say",
-            "eyelets without play or friction (the taut-path study covers play); tendons weightless",
+            "eyelets without play (the taut-path study covers play); tendons weightless",
             "masses " + desc.masses["how"],
             "the base disk and its mount are a rigid clamp"],
+        "rules": {"taut_floor_n": desc.rules.floor_n, "allowable_n": desc.rules.allowable_n,
+                  "straight_within_mm": desc.rules.within_mm},
         "section": {"E_mpa": sec.E, "G_mpa": sec.G, "EI_flex_nmm2": sec.ei_flex, "EI_stiff_nmm2": sec.ei_stiff,
                     "GJ_nmm2": sec.gj},
         "tendons": [{"name": t.name, "channel": t.channel, "spring_n_per_mm": t.stiffness,
+                     "segment_springs_n_per_mm": [1.0 / c if c > 0 else None for c in t.compliances],
                      "pretension_n": desc.pretension[t.name]} for t in desc.robot.tendons],
         "masses": desc.masses,
-        "states": out,
-        "endpoint_ratio": {"states": [full, act], "ratio": ratio, "paper": PAPER_ENDPOINT_RATIO},
+        "states": entries,
+        "ratios": ratios,
+        "endpoint_ratio": _endpoint(ratios, pair, names),
+        "notes": _softer(entries, todo, act),
         "dof": model.n_dof,
-        "seconds": time.perf_counter() - t0,
     }
+    report["stiffening"] = stiffening(report, desc) if pair else None
+    return report
 
 
-# ------------------------------------------------------------------ the bending sweep
-
-SWEEP_H_MAX = 3.0          # mm: the sweep's rod segments (tensions agree with 1.5 mm to 4 digits; 4× faster)
-SWEEP_FIRST_DEG = 5.0      # the first haul-in aims at this angle; later ones a sweep step further
-SWEEP_MAX_SOLVES = 24      # per side: a drive that stops bending the robot is not chased further
-PROBE_N = 1e-3             # N at the tip: the push that tells which actuating tendon shortens which way
+def _entry(entries, state, orientation, friction, push=None):
+    return next((e for e in entries if e["state"] == state and e["orientation"] == orientation
+                 and e["friction"] == friction and e.get("push") == push), None)
 
 
-def _inner(desc: Described, model: st.Model, sign: int) -> tuple[str | None, float]:
-    """The actuating tendon that shortens most when the robot bends toward sign·z, and how many mm
-    it shortens per degree there; (None, 0) if none shortens."""
-    eq = st.solve(model, st.Loads(forces=((desc.robot.length, (0.0, 0.0, sign * PROBE_N)),)))
-    base = st.straight_lengths(model)
-    turn = abs(math.degrees(eq.tip_angle()))
-    if not desc.actuating or turn == 0.0:
-        return None, 0.0
-    name = min(desc.actuating, key=lambda n: eq.lengths[n] - base[n])
-    per_deg = (base[name] - eq.lengths[name]) / turn
-    return (name, per_deg) if per_deg > 1e-6 else (None, 0.0)
-
-
-def inner_tendons(desc: Described, model: st.Model) -> dict:
-    """:func:`_inner` of either side (sign +1, -1): what a sweep hauls in there, whichever tendons it
-    locks (a probe of the weightless robot alone: the sweeps with and without the stiffening
-    tendons share it)."""
-    return {sign: _inner(desc, model, sign) for sign in (1, -1)}
-
-
-def sweep(desc: Described, model: st.Model, max_deg: float, step_deg: float, locked: bool = True,
-          inner_of: dict | None = None) -> dict:
-    """Bend the weightless robot from straight to ±max_deg by hauling in the actuating tendon on the
-    inside of the bend (displacement-controlled, its drum turning), the other actuating tendons
-    held at their pre-tension by the drive, the stiffening tendons locked where they carry their
-    pre-tension (``locked``) or slack. At each angle of the sweep: every tendon's tension, N.
-
-    Each side is a continuation: each haul-in aims a step further by the last step's angle per
-    millimetre, each solve starting from the last; the tensions are then interpolated (linearly)
-    at the sweep's angles. A side no actuating tendon bends, or where hauling in stops bending the
-    robot, ends where it got to (``reached_deg``). ``inner_of``: :func:`inner_tendons` of this robot,
-    if already at hand."""
-    stiff = [n for n in desc.stiffening if locked]
-    angles = np.arange(0.0, max_deg + 1e-9, step_deg)
-    if angles[-1] < max_deg - 1e-9:
-        angles = np.r_[angles, max_deg]
-    out = {}
-    for sign in (1, -1):
-        key = "+" if sign > 0 else "-"
-        inner, per_deg = inner_of[sign] if inner_of else _inner(desc, model, sign)
-        if inner is None:
-            out[key] = {"inner": None, "angles_deg": [], "tensions_n": {}, "reached_deg": 0.0, "solves": 0}
-            continue
-        others = [n for n in desc.actuating if n != inner]
-        base = {n: ("tension", desc.pretension[n]) for n in others}
-        held, eq = st.locked_settled(model, {n: desc.pretension[n] for n in [inner, *stiff]}, st.Loads(tendons=base))
-        ell0 = held[inner][1]
-        start = sign * math.degrees(eq.tip_angle())
-        rows = [(start, dict(eq.tensions))]
-        q, delta, ang, per_mm = eq.q, 0.0, start, 1.0 / per_deg
-        while len(rows) < SWEEP_MAX_SOLVES and ang < max_deg - 1e-6:
-            target = min(max_deg, ang + (SWEEP_FIRST_DEG if len(rows) == 1 else step_deg))
-            step = (target - ang) / per_mm * (1.02 if target >= max_deg else 1.0)
-            eq = st.solve(model, st.Loads(tendons={**held, **base, inner: ("locked", ell0 - delta - step)}), q)
-            new = sign * math.degrees(eq.tip_angle())
-            if new <= ang + 1e-3:
-                break                                 # hauling in no longer bends it this way
-            per_mm = (new - ang) / step
-            q, delta, ang = eq.q, delta + step, new
-            rows.append((ang, dict(eq.tensions)))
-        a = np.array([r[0] for r in rows])
-        inside = angles[(angles > a[0] + 1e-9) & (angles < a[-1] - 1e-9)]
-        reach = np.r_[a[0], inside, a[-1]] if len(a) > 1 else a
-        table = {n: np.interp(reach, a, [r[1][n] for r in rows]).tolist() for n in rows[0][1]}
-        out[key] = {"inner": inner, "angles_deg": (sign * reach).tolist(), "tensions_n": table,
-                    "reached_deg": float(a[-1]), "solves": len(rows)}
+def _ratios(entries, pair) -> list[dict]:
+    """Per orientation and friction: the first state of ``pair`` over the second at the tip, and
+    (frictionless and stuck) the least over the disks and where."""
+    out = []
+    for o in dict.fromkeys(e["orientation"] for e in entries):
+        for friction, push in (("none", None), ("stuck", None), ("capstan", "+z"), ("capstan", "-z")):
+            a, b = (_entry(entries, s, o, friction, push) for s in pair)
+            if a is None or b is None:
+                continue
+            row = {"orientation": o, "friction": friction, "states": list(pair),
+                   "tip": a["tip_stiffness_n_per_mm"] / b["tip_stiffness_n_per_mm"]}
+            if push:
+                row["push"] = push
+            if "disks" in a:
+                r = [x["stiffness_n_per_mm"] / y["stiffness_n_per_mm"] for x, y in zip(a["disks"], b["disks"])]
+                i = int(np.argmin(r))
+                row["least_over_disks"] = {"ratio": r[i], "disk": a["disks"][i]["disk"]}
+            out.append(row)
     return out
+
+
+def _endpoint(ratios, pair, orientations) -> dict:
+    """The headline: the first state of ``pair`` over the second at the tip in the reference
+    orientation (or the first studied), frictionless (``ratio``), its band over the frictions, and
+    the paper's 4.85× placed against it."""
+    o = REFERENCE if REFERENCE in orientations else orientations[0]
+    rows = [r for r in ratios if r["orientation"] == o]
+    if not pair or not rows:
+        return {"states": pair, "orientation": o, "ratio": None, "paper": PAPER_ENDPOINT_RATIO}
+    tips = [r["tip"] for r in rows]
+    band = [min(tips), max(tips)]
+    return {"states": pair, "orientation": o, "ratio": next(r["tip"] for r in rows if r["friction"] == "none"),
+            "by_friction": {r["friction"] + (" " + r["push"] if "push" in r else ""): r["tip"] for r in rows},
+            "band": band, "paper": PAPER_ENDPOINT_RATIO,
+            "paper_inside": band[0] <= PAPER_ENDPOINT_RATIO <= band[1]}
+
+
+def _softer(entries, todo, actuating) -> list[str]:
+    """States under the state with one stiffening channel fewer at the tip, in words."""
+    notes = []
+    names = {s.name: s for s in todo}
+    for e in entries:
+        if e["friction"] not in fr.FRICTIONS:
+            continue
+        s = names[e["state"]]
+        for c in s.channels:
+            if c == actuating:
+                continue
+            fewer = next((t for t in todo if set(t.channels) == set(s.channels) - {c}), None)
+            f = fewer and _entry(entries, fewer.name, e["orientation"], e["friction"])
+            if f and e["tip_stiffness_n_per_mm"] < (1 - SOFTER) * f["tip_stiffness_n_per_mm"]:
+                drop = 1 - e["tip_stiffness_n_per_mm"] / f["tip_stiffness_n_per_mm"]
+                notes.append(f"{s.name} is {100 * drop:.1f} % less stiff at the tip than {fewer.name} ({e['orientation']}, "
+                             f"friction {e['friction']}): {c}'s tension, carried by the strip, softens it against this push "
+                             f"more than {c}'s own spring stiffens it (the compression the paper names, Sect. V)")
+    return notes
+
+
+def stiffening(report: dict, desc: Described) -> dict:
+    """What locking every tendon adds over the actuating pair alone, per orientation: at the tip and
+    the least over the disks, frictionless and stuck (and capstan); each locked stiffening tendon's
+    share of the push's load in the reference orientation (frictionless); and, when the tip gains
+    under :data:`LOW_STIFFENING` there, why. ``lines``: the same in words (summary.md)."""
+    ep = report["endpoint_ratio"]
+    full, act = ep["states"]
+    ref = ep["orientation"]
+    rows = {(r["orientation"], r["friction"] + (" " + r["push"] if "push" in r else "")): r for r in report["ratios"]}
+    by = []
+    for o in report["orientations"]:
+        got = {f: rows[(o, f)] for f in ("none", "stuck", "capstan +z", "capstan -z") if (o, f) in rows}
+        by.append({"orientation": o, "tip": {f: r["tip"] for f, r in got.items()},
+                   "least_over_disks": {f: r["least_over_disks"] for f, r in got.items() if "least_over_disks" in r}})
+    entry = _entry(report["states"], full, ref, "none")
+    tendons = _shares(entry, desc)
+    tip = next(b["tip"]["none"] for b in by if b["orientation"] == ref)
+    low = tip < LOW_STIFFENING
+    why = _why(tendons, desc) if low else []
+    lines = [f"Stiffening, {full} over {act} at the tip (and the least over the disks, counted from 1 at the clamped "
+             f"base as the paper does; `stiffness.json`, `stiffness.png`), tensioned by the paper's protocol:", ""]
+    lines += [f"- {b['orientation']}: {_words(b, desc)}" for b in by]
+    lines += ["", f"Locked in {full}, {ref}: " + ", ".join(
+        f"{n} {v:.2f} N" + (" (its pretension_n)" if entry["tension_from"][n] == "pretension_n" else "")
+        for n, v in entry["tensions_n"].items()) + f"; protocol: {protocol.SUMMARY}."]
+    if low:
+        lines += ["", f"Under {LOW_STIFFENING:g}× ({ref}, frictionless): " + " ".join(why)]
+    b = next(b for b in by if b["orientation"] == ref)
+    headline = (f"stiffening {full}/{act} at the tip ({ref}): {b['tip']['none']:.2f}× frictionless to "
+                f"{b['tip']['stuck']:.2f}× with the eyelets stuck" + (f"; under {LOW_STIFFENING:g}×: " + " ".join(why)
+                                                                      if low else ""))
+    return {"states": [full, act], "reference": ref, "by_orientation": by, "tendons": tendons, "low": low,
+            "why": why, "headline": headline, "lines": lines}
+
+
+def _words(b: dict, desc: Described) -> str:
+    t, d = b["tip"], b["least_over_disks"]
+
+    def least(f):
+        return f" ({d[f]['ratio']:.2f}× at disk {d[f]['disk'] + 1})" if f in d else ""
+
+    out = f"{t['none']:.2f}×{least('none')} frictionless to {t['stuck']:.2f}×{least('stuck')} with every eyelet stuck"
+    if "capstan +z" in t:
+        out += (f"; with eyelet friction μ {desc.eyelet_friction:g} over a {desc.push_n:g} N push at the tip "
+                f"{t['capstan +z']:.2f}× pushed toward +z, {t['capstan -z']:.2f}× toward −z")
+    return out
+
+
+def _shares(entry: dict, desc: Described) -> list[dict]:
+    """Per locked stiffening tendon of ``entry``: its tension, its tension's change per newton of tip
+    push, that as a share of the most an actuating tendon's changes, and how far its eyelets lie
+    off the strip's neutral plane for the push (|z|, the largest)."""
+    per = entry["tension_per_tip_n"]
+    act = max((abs(per[n]) for n in desc.actuating if n in per), default=0.0)
+    out = []
+    for n in entry["locked"]:
+        if n in desc.actuating:
+            continue
+        z = float(np.abs(desc.robot.tendon(n).points[:, 1]).max())
+        out.append({"name": n, "tension_n": entry["tensions_n"][n], "tension_per_tip_n": per[n],
+                    "share": abs(per[n]) / act if act > 0 else None, "eyelet_offset_mm": z})
+    return out
+
+
+def _why(tendons: list[dict], desc: Described) -> list[str]:
+    """Why the stiffening tendons add little: which carries no change of load, and the routing
+    property behind it."""
+    floor = desc.rules.floor_n
+    act_z = max((float(np.abs(desc.robot.tendon(n).points[:, 1]).max()) for n in desc.actuating), default=0.0)
+    out = []
+    for t in tendons:
+        if t["tension_n"] <= fr.SLACK_N:
+            out.append(f"{t['name']} is slack in this state (it carries nothing, so it holds nothing).")
+        elif t["share"] is not None and t["share"] < IDLE_SHARE:
+            if t["eyelet_offset_mm"] <= IDLE_SHARE * act_z:
+                out.append(f"{t['name']} carries no change of load: its eyelets lie on the neutral plane of the pushed "
+                           f"direction (|z| ≤ {t['eyelet_offset_mm']:.2f} mm), so bending the strip that way does "
+                           f"not change its length.")
+            else:
+                out.append(f"{t['name']} carries almost no change of load ({100 * t['share']:.1f} % of the actuating "
+                           f"tendon's): its eyelets change side of the strip along its length, so what its path gains "
+                           f"where the push bends the strip one way it gives back where they lie on the other.")
+        elif t["tension_n"] < floor:
+            out.append(f"{t['name']} is barely taut ({t['tension_n']:.2f} N, under the {floor:g} N floor).")
+    if not out:
+        springs = ", ".join(f"{t['name']} {desc.robot.tendon(t['name']).stiffness:.2f} N/mm" for t in tendons)
+        out.append(f"every stiffening tendon takes load, but their springs ({springs}) are soft against the strip "
+                   f"(E·I {desc.robot.section.ei_flex:.0f} N·mm²): a stiffer line or shorter free length would add more.")
+    return out
+

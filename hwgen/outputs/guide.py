@@ -219,7 +219,9 @@ def _markdown(manifest: dict, ss: list[Step], pictures: bool) -> str:
     for i, s in enumerate(ss, start=1):
         L += [f"## {i}. {s.title}", ""]
         if pictures:
-            L += [f"![{s.title}: {', '.join(s.highlight) or 'the tendons'} highlighted]({s.picture})", ""]
+            # assembly.md sits in the guide's folder beside its pictures: linked from there
+            L += [f"![{s.title}: {', '.join(s.highlight) or 'the tendons'} highlighted]"
+                  f"({Path(s.picture).relative_to(FOLDER).as_posix()})", ""]
         L += [f"- {line}" for line in s.lines] + [""]
     return "\n".join(L)
 

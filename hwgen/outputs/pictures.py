@@ -87,11 +87,81 @@ def station_labels(posed: list[Posed], view: View) -> list[tuple[str, np.ndarray
     return out
 
 
+WARNING_ROLE, WARNING_COLOUR = "(failing check)", (1.0, 0.0, 0.55)   # a vivid magenta no family or tendon has
+MARKED = ("exploded.png", "bent.png")      # the pictures that mark what fails
+
+
+def failing_marks(checks) -> tuple[dict[str, list[str]], dict[str, list[str]]]:
+    """(part -> check ids, tendon -> check ids) of the checks that fail the design (errors), from
+    the part(s) and tendon(s) each names where it looked."""
+    parts: dict[str, list[str]] = {}
+    tendons: dict[str, list[str]] = {}
+    for c in checks or []:
+        if c.get("passed", True) or c.get("severity") != "error":
+            continue
+        w = c.get("where") or {}
+        for key, into in (("part", parts), ("parts", parts), ("tendon", tendons), ("tendons", tendons)):
+            v = w.get(key)
+            for name in ([v] if isinstance(v, str) else v if isinstance(v, list) else []):
+                for one in str(name).split("+"):          # "A1+A2": the tendons of one eyelet
+                    ids = into.setdefault(one, [])
+                    if c["id"] not in ids:
+                        ids.append(c["id"])
+    return parts, tendons
+
+
+def _marked(posed: list[Posed], parts: dict[str, list[str]]) -> list[Posed]:
+    return [ps.as_role(WARNING_ROLE) if ps.part.name in parts else ps for ps in posed]
+
+
+def _part_labels(posed: list[Posed], view: View, parts: dict[str, list[str]]) -> list[tuple]:
+    """The failing checks' ids beside the marked parts (right of them on the screen; a part along
+    the backbone at a third of its length), once for parts that fail the same checks, in the
+    warning colour."""
+    right, up, _ = view.axes()
+    groups: dict[str, list[np.ndarray]] = {}
+    for ps in posed:
+        if ps.part.name not in parts:
+            continue
+        v = ps.vertices
+        if ps.part.station is None and np.ptp(v[:, 1]) > 0.5 * np.ptp(v, axis=0).max():   # along the backbone
+            y = np.percentile(v[:, 1], 33)
+            v = v[np.abs(v[:, 1] - y) <= np.ptp(v[:, 1]) * 0.02]
+        groups.setdefault(", ".join(parts[ps.part.name]), []).append(v[np.argmax(v @ right)])
+    return [(text, max(pts, key=lambda p: p @ right) + right * LABEL_GAP_MM, WARNING_COLOUR)
+            for text, pts in groups.items()]
+
+
+def _tendon_marks(tubes: dict, tendons: dict[str, list[str]], view: View) -> tuple[dict, list[tuple]]:
+    """Tubes of tendons with a failing check in the warning colour, and a label beside each (spread
+    along the tubes, so that two do not meet)."""
+    right, _, _ = view.axes()
+    out, labels = {}, []
+    marked = [n for n in tubes if n in tendons]
+    for name, (pts, rgb) in tubes.items():
+        if name in tendons:
+            out[name] = (pts, WARNING_COLOUR)
+            k = marked.index(name)
+            at = pts[min(len(pts) - 1, int(len(pts) * (k + 1) / (len(marked) + 1)))]
+            labels.append((f"{name}: {', '.join(tendons[name])}", at + right * LABEL_GAP_MM, WARNING_COLOUR))
+        else:
+            out[name] = (pts, rgb)
+    return out, labels
+
+
+def _warning_legend(parts: dict, tendons: dict) -> list[tuple[str, tuple]]:
+    what = [f"{len(d)} {word}{'s' if len(d) > 1 else ''}" for d, word in ((parts, "part"), (tendons, "tendon")) if d]
+    return [(f"failing check: {' and '.join(what)} (summary.md)", WARNING_COLOUR)] if what else []
+
+
 def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table: list[dict] | None = None,
-                    renderer: Renderer | None = None, steps: list[dict] | None = None) -> dict:
+                    renderer: Renderer | None = None, steps: list[dict] | None = None,
+                    only: tuple[str, ...] | None = None) -> dict:
     """exploded.png, assembled.png, bent.png, jig.png when the design has an assembly jig (and
     exploded.svg when a parts table is given; the assembly guide's step pictures when ``steps``
-    are given, see :func:`hwgen.outputs.guide.picture_jobs`)."""
+    are given, see :func:`hwgen.outputs.guide.picture_jobs`); ``only``: just these of them.
+    When the manifest holds the checks, exploded.png and bent.png draw every part and tendon of
+    a failing check in the warning colour, labelled with the check's id."""
     folder = Path(folder)
     timings = {}
     t0 = time.perf_counter()
@@ -105,42 +175,52 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
     timings["load_s"] = time.perf_counter() - t0
     fam_legend = [(f"{family_label(role)} ({sum(p.role == role for p in parts)})", colours[role]) for role in colours]
     images = {}
+    marks = failing_marks(manifest.get("checks"))
+    warned = colours | {WARNING_ROLE: WARNING_COLOUR}
+    wanted = set(only or (*OUTPUTS, "guide"))
 
     t = time.perf_counter()
     d = np.asarray(ISOMETRIC.toward_camera, float)
     d /= np.linalg.norm(d)
     ex = exploded_placements(parts, st, settings.explode_mm, ISOMETRIC.toward_camera)
     exploded = [pose_rigid(p, ex[p.name], d) for p in parts]     # drawn again as exploded.svg
-    _, W, H = r.draw(exploded, colours, ISOMETRIC, folder / "exploded.png", labels=station_labels(exploded, ISOMETRIC),
-                     texts=_legend(fam_legend, f"{manifest['design']}: exploded, "
-                                               f"{settings.explode_mm:g} mm between disks"))
-    images["exploded.png"] = {"width": W, "height": H}
+    if "exploded.png" in wanted:
+        labels = station_labels(exploded, ISOMETRIC) + _part_labels(exploded, ISOMETRIC, marks[0])
+        _, W, H = r.draw(_marked(exploded, marks[0]), warned, ISOMETRIC, folder / "exploded.png", labels=labels,
+                         texts=_legend(fam_legend + _warning_legend(marks[0], {}),
+                                       f"{manifest['design']}: exploded, {settings.explode_mm:g} mm between disks"))
+        images["exploded.png"] = {"width": W, "height": H}
     timings["exploded_s"] = time.perf_counter() - t
 
     t = time.perf_counter()
     # every part where the manifest places it: drawn again by the jig and the guide's steps
-    placed = {p.name: pose_rigid(p, p.placement, d) for p in parts + aids}
-    posed = [placed[p.name] for p in parts]
-    straight = {n: (pts, tcol[n]) for n, pts in tendon_polylines(report, 0.0).items()}
-    _, W, H = r.draw(posed, colours, ISOMETRIC, folder / "assembled.png", tubes=straight,
-                     texts=_legend(fam_legend + [(n, tcol[n]) for n in straight], f"{manifest['design']}: assembled"))
-    images["assembled.png"] = {"width": W, "height": H}
+    placed = {p.name: pose_rigid(p, p.placement, d) for p in parts + aids} if wanted - set(MARKED) else {}
+    if "assembled.png" in wanted:
+        posed = [placed[p.name] for p in parts]
+        straight = {n: (pts, tcol[n]) for n, pts in tendon_polylines(report, 0.0).items()}
+        _, W, H = r.draw(posed, colours, ISOMETRIC, folder / "assembled.png", tubes=straight,
+                         texts=_legend(fam_legend + [(n, tcol[n]) for n in straight], f"{manifest['design']}: assembled"))
+        images["assembled.png"] = {"width": W, "height": H}
     timings["assembled_s"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    kappa = float(kin.kappas_for_angles([settings.bend_deg], st[-1] - st[0])[0])
-    b = np.asarray(BENT.toward_camera, float)
-    b /= np.linalg.norm(b)
-    posed = [pose_bent(p, st, kappa, b) for p in parts]
-    bent = {n: (pts, tcol[n]) for n, pts in tendon_polylines(report, kappa).items()}
-    texts = _legend([(n, tcol[n]) for n in bent],
-                    f"{manifest['design']}: bent {settings.bend_deg:g}° (constant curvature, eq. 1)")
-    texts.append((reachable_note(manifest), TEXT_COLOUR, (0.015, 0.02), 22, None))
-    _, W, H = r.draw(posed, colours, BENT, folder / "bent.png", tubes=bent, aspect_range=(0.6, 1.0), texts=texts)
-    images["bent.png"] = {"width": W, "height": H}
+    if "bent.png" in wanted:
+        kappa = float(kin.kappas_for_angles([settings.bend_deg], st[-1] - st[0])[0])
+        b = np.asarray(BENT.toward_camera, float)
+        b /= np.linalg.norm(b)
+        posed = [pose_bent(p, st, kappa, b) for p in parts]
+        bent, tube_labels = _tendon_marks({n: (pts, tcol[n]) for n, pts in tendon_polylines(report, kappa).items()},
+                                          marks[1], BENT)
+        texts = _legend([(n, tcol[n]) for n in bent] + _warning_legend(*marks),
+                        f"{manifest['design']}: bent {settings.bend_deg:g}° (constant curvature, eq. 1)")
+        texts.append((reachable_note(manifest), TEXT_COLOUR, (0.015, 0.02), 22, None))
+        _, W, H = r.draw(_marked(posed, marks[0]), warned, BENT, folder / "bent.png", tubes=bent,
+                         aspect_range=(0.6, 1.0), texts=texts,
+                         labels=_part_labels(posed, BENT, marks[0]) + tube_labels)
+        images["bent.png"] = {"width": W, "height": H}
     timings["bent_s"] = time.perf_counter() - t
 
-    if aids:
+    if aids and "jig.png" in wanted:
         t = time.perf_counter()
         holds = {n for a in aids for n in a.meta.get("holds", [])}
         shown = [p for p in parts if p.name in holds] + aids
@@ -157,12 +237,15 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
               "palette": {k: list(v) for k, v in colours.items()},
               "tendon_colours": {k: list(v) for k, v in tcol.items()},
               "explode_mm": settings.explode_mm, "bend_deg": settings.bend_deg}
-    if steps:
+    if any(marks):
+        result["failing"] = {"parts": marks[0], "tendons": marks[1], "colour": list(WARNING_COLOUR),
+                             "pictures": list(MARKED)}
+    if steps and "guide" in wanted:
         t = time.perf_counter()
         for job in steps:
             images[job["file"]] = draw_step(r, folder, manifest, job, placed, tcol)
         timings["guide_s"] = time.perf_counter() - t
-    if svg_table is not None:
+    if svg_table is not None and "exploded.svg" in wanted:
         t = time.perf_counter()
         result["svg"] = write_exploded_svg(r, exploded, colours, svg_table, folder / "exploded.svg",
                                            title=f"{manifest['design']}: exploded assembly")
@@ -211,13 +294,14 @@ def reachable_note(manifest: dict) -> str:
 # --------------------------------------------------------------------------- in a child process
 
 def run_child(folder: Path, manifest: dict, settings: Settings, svg_table: list[dict] | None,
-              steps: list[dict] | None = None) -> dict:
-    """Draw the pictures in a fresh Python process; raise RenderUnavailable if it cannot."""
+              steps: list[dict] | None = None, only: tuple[str, ...] | None = None) -> dict:
+    """Draw the pictures (``only``: just these) in a fresh Python process; raise RenderUnavailable
+    if it cannot."""
     if os.environ.get(BACKEND_ENV, "").lower() == "none":
         raise RenderUnavailable(f"{BACKEND_ENV}=none: offscreen rendering switched off")
     store = cache.active()
     job = json.dumps({"folder": str(folder), "manifest": manifest, "settings": settings.__dict__,
-                      "svg_table": svg_table, "steps": steps,
+                      "svg_table": svg_table, "steps": steps, "only": list(only) if only else None,
                       # where the child finds the meshes read before (checks.meshes: by their bytes)
                       "store": str(store.folder) if store is not None and store.enabled else None})
     attempts = [dict(os.environ)]
@@ -253,7 +337,8 @@ def _child_main() -> int:
     try:
         with cache.using(store) if store is not None else nullcontext():
             result = render_pictures(Path(job["folder"]), job["manifest"], Settings(**job["settings"]),
-                                     job.get("svg_table"), steps=job.get("steps"))
+                                     job.get("svg_table"), steps=job.get("steps"),
+                                     only=tuple(job["only"]) if job.get("only") else None)
     except RenderUnavailable as e:
         print(f"RenderUnavailable: {e}", file=sys.stderr)
         return EXIT_NO_BACKEND
@@ -288,6 +373,30 @@ def draw(folder: Path, manifest: dict, render, svg_table: list[dict], steps: lis
         result.pop("timings_s", None)       # the manifest holds no times: rebuilds are byte-identical
         entry |= {"status": "ok", "files": files} | result
     manifest["render"] = entry
+
+
+def mark_failures(folder: Path, manifest: dict, render) -> None:
+    """exploded.png and bent.png drawn again with every part and tendon of a failing check in the
+    warning colour, once the checks are in the manifest (a build draws its pictures beside the
+    checks, before their verdict). Nothing is drawn when no check fails, when they were drawn with
+    these marks already, or when the pictures could not be drawn; a renderer that fails now leaves
+    the unmarked pictures and says so in ``manifest["render"]["failing"]``."""
+    entry = manifest.get("render") or {}
+    parts, tendons = failing_marks(manifest.get("checks"))
+    if entry.get("status") != "ok" or not (parts or tendons):
+        return
+    if (entry.get("failing") or {}).get("parts") == parts and entry["failing"].get("tendons") == tendons:
+        return
+    folder = Path(folder)
+    settings = Settings(render.width_px, render.explode_mm, render.bend_deg)
+    try:
+        result = run_child(folder, manifest, settings, None, only=MARKED)
+    except (RenderUnavailable, RenderFailed) as e:
+        entry["failing"] = {"parts": parts, "tendons": tendons, "message": f"not marked in the pictures: {e}"}
+        return
+    for name, size in result["images"].items():
+        entry["files"][name] = {"path": name, "sha256": sha256(folder / name)} | size
+    entry["failing"] = result["failing"]
 
 
 if __name__ == "__main__":

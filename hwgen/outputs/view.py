@@ -248,7 +248,7 @@ class Renderer:
         for pts, rgb in (tubes or {}).values():
             ren.AddActor(_tube_actor(pts, rgb, TENDON_TUBE_MM))
         allpts = np.vstack([ps.vertices for ps in posed] + [pts for pts, _ in (tubes or {}).values()]
-                           + [np.asarray([pt for _, pt in labels]).reshape(-1, 3)])
+                           + [np.asarray([lb[1] for lb in labels]).reshape(-1, 3)])
         W, H = self._fit(ren, view, allpts, margin, aspect_range, width or self.width)
         if shading:
             kit = rc.vtkLightKit()
@@ -280,16 +280,22 @@ class Renderer:
         if labels:
             # the camera (set by _fit) and the window's size map world points to the screen: no
             # render is needed before (one took 0.17 s for exploded.png; the labels land on the same pixels)
-            for text, point in labels:
+            for text, point, *rgb in labels:
+                # (text, point): centred on it; (text, point, colour): a callout starting there, on white
                 ren.SetWorldPoint(*point, 1.0)
                 ren.WorldToDisplay()
                 x, y, _ = ren.GetDisplayPoint()
                 t = rc.vtkTextActor()
                 t.SetInput(text)
-                t.GetTextProperty().SetColor(*TEXT_COLOUR)
+                t.GetTextProperty().SetColor(*(rgb[0] if rgb else TEXT_COLOUR))
                 t.GetTextProperty().SetFontSize(int(24 * self.width / 1800))
                 t.GetTextProperty().BoldOn()
-                t.GetTextProperty().SetJustificationToCentered()
+                if rgb:
+                    t.GetTextProperty().SetJustificationToLeft()
+                    t.GetTextProperty().SetBackgroundColor(*BACKGROUND)
+                    t.GetTextProperty().SetBackgroundOpacity(0.8)
+                else:
+                    t.GetTextProperty().SetJustificationToCentered()
                 t.GetTextProperty().SetVerticalJustificationToCentered()
                 t.SetDisplayPosition(int(x), int(y))
                 ren.AddViewProp(t)

@@ -1,6 +1,7 @@
 """The sweep file: a base design, axes over parameter paths, and how to combine them (pydantic).
 
-A sweep file names a base design (a design YAML, relative to the sweep file) and axes, each over
+A sweep file names a base design (a design YAML, relative to the sweep file, read as a design
+file's own ``base`` is: :mod:`hwgen.designfile`, so it may build on a base itself) and axes, each over
 one parameter path of the design (``tendons[1].routing.function.k``, ``disks.count``,
 ``backbone.length``) with a list of ``values``, a ``range`` (start, stop included, step) or seeded
 ``random`` draws. ``mode: grid`` takes every combination of the axes' values; ``mode: samples``
@@ -20,24 +21,20 @@ import hashlib
 import itertools
 import json
 import math
-import re
-import types
-import typing
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Any, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from .. import params, yamlfile
-from ..errors import DesignError, InputError, clip, echo
+from .. import designfile, params, yamlfile
+from ..errors import DesignError, InputError, echo
 from ..model import feasibility
 
 LEVELS = ("lengths", "robust", "coupling", "build")
 MAX_VARIANTS = 5_000_000     # a grid larger than this is a mistake in the sweep file, not a sweep
 MAX_AXIS_VALUES = 1_000_000
-PATH_TOKEN = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)")
 
 
 class _Model(BaseModel):
@@ -150,39 +147,7 @@ class Variant:
 
 # ---------------------------------------------------------------- paths
 
-def parse_path(text: str) -> list[str | int]:
-    """``tendons[1].routing.k`` -> ['tendons', 1, 'routing', 'k']; ValueError when malformed."""
-    out: list[str | int] = []
-    for part in text.split("."):
-        m = PATH_TOKEN.fullmatch(part)
-        if not m:
-            raise ValueError(f"{echo(text)} is not a parameter path (names joined by '.', list items as [i])")
-        out.append(m.group(1))
-        out += [int(i) for i in re.findall(r"\[(\d+)\]", m.group(2))]
-    return out
-
-
-def _unwrap(ann):
-    """The type inside Optional / Annotated: (kind, inner) with kind "model", "seq", "dict" or "leaf"."""
-    while True:
-        origin = typing.get_origin(ann)
-        if origin is Annotated:
-            ann = typing.get_args(ann)[0]
-        elif origin in (typing.Union, types.UnionType):
-            args = [a for a in typing.get_args(ann) if a is not type(None)]
-            ann = args[0] if len(args) == 1 else ann
-            if len(args) != 1:
-                return "leaf", ann
-        else:
-            break
-    if isinstance(ann, type) and issubclass(ann, BaseModel):
-        return "model", ann
-    if typing.get_origin(ann) in (tuple, list):
-        args = typing.get_args(ann)
-        return "seq", (args[0] if args else Any)
-    if typing.get_origin(ann) is dict:
-        return "dict", ann
-    return "leaf", ann
+parse_path = designfile.parse_path       # one rule for a field path, written once
 
 
 def check_path(keys: list[str | int], base: dict) -> str | None:
@@ -195,7 +160,7 @@ def check_path(keys: list[str | int], base: dict) -> str | None:
         if kind == "model":
             if not isinstance(key, str) or key not in cur.model_fields:
                 return f"{where}: not a field of the design (see `hwgen schema`)"
-            kind, cur = _unwrap(cur.model_fields[key].annotation)
+            kind, cur = params.unwrap(cur.model_fields[key].annotation)
             node = node.get(key) if isinstance(node, dict) else None
         elif kind == "seq":
             if not isinstance(key, int):
@@ -203,7 +168,7 @@ def check_path(keys: list[str | int], base: dict) -> str | None:
             if not isinstance(node, list) or key >= len(node):
                 have = len(node) if isinstance(node, list) else 0
                 return f"{where}: the base design has {have} item(s) there"
-            kind, cur = _unwrap(cur)
+            kind, cur = params.unwrap(cur)
             node = node[key]
         else:                         # a dict of names, or a leaf holding a list (a table row): not checked deeper
             return None
@@ -232,7 +197,7 @@ def set_path(doc: dict, keys, value) -> dict:
 # ---------------------------------------------------------------- loading
 
 def _error(e: ValidationError, path: Path) -> InputError:
-    return params.validation_error(e, path)
+    return params.validation_error(e, path, Sweep)
 
 
 def load(path: str | Path) -> Loaded:
@@ -251,12 +216,10 @@ def load(path: str | Path) -> Loaded:
         raise _error(e, path) from None
     if not params.SAFE_NAME.match(spec.sweep):
         raise InputError(path, "sweep", f"{echo(spec.sweep)} is not a safe file name (letters, digits, _ and -)")
-    base_path = (path.parent / spec.base) if not Path(spec.base).is_absolute() else Path(spec.base)
-    if not base_path.is_file():
-        raise InputError(path, "base", f"{clip(str(base_path), 120)} is not a file")
-    base_raw = params._read_bytes(base_path)
-    base, _ = params.document(base_raw, base_path)
-    params.validate(copy.deepcopy(base), base_path)           # a bad base is bad input, named in its own file
+    base_path = designfile.base_file(path, spec.base)          # as a design file's base: one rule
+    layers = designfile.read_layers(base_path)                 # which may build on a base of its own
+    base = layers.doc
+    params.validate(copy.deepcopy(base), base_path, layers)    # a bad base is bad input, named in its own file
     names, columns = [], {}
     for i, ax in enumerate(spec.axes):
         try:
@@ -391,6 +354,7 @@ def resolve_doc(doc: dict, index: int, values: tuple, where: str) -> Resolved:
         design = params.validate(doc, where)
         feasibility.check(design, where)
     except (InputError, DesignError) as e:
-        path = e.path or "<document>"
-        return Resolved(index, values, doc, digest({"bad": doc}), None, f"{path}: {e.message}")
+        found = e.problems if isinstance(e, InputError) else [e]
+        return Resolved(index, values, doc, digest({"bad": doc}), None,
+                        "; ".join(f"{p.path or '<document>'}: {p.message}" for p in found))
     return Resolved(index, values, doc, digest(design.model_dump(mode="json")), design, "")

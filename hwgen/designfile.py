@@ -1,0 +1,341 @@
+"""A design file as written: its bytes, the bases it builds on, and which file wrote each value.
+
+A design file may build on another: ``base: prototype.yaml`` (a path relative to the file, or
+absolute) takes that design and merges this file over it. Mappings merge key by key, to any
+depth; anything else (a number, a name, a list such as ``tendons`` or a routing table) replaces
+the base's value whole; ``null`` removes the base's value, so hwgen derives it as if it had never
+been given. A base may have a base of its own (a chain, at most :data:`MAX_CHAIN` files); a file
+met twice on the way is a cycle, and bad input.
+
+Settings that lower a check's severity (:data:`NOT_INHERITED`) are the judgement of one robot,
+stated beside its reason in its own file: a design does not take them from its base. A new
+robot's verdict then never hides a failing check behind what was decided for another; the file
+that means it writes the setting again.
+
+A sweep file's ``base`` is read the same way (:func:`read_layers`), so a sweep can start from a
+design that itself builds on the prototype. Every value of the merged document keeps the file it
+came from (:class:`Layers`), so a bad value is reported in the file that wrote it.
+
+Reading a file is bounded (:mod:`hwgen.yamlfile`); keys that moved to another section are moved
+(:data:`MOVED_KEYS`), with a warning, before the file is merged.
+"""
+from __future__ import annotations
+
+import copy
+import hashlib
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import yaml
+
+from . import yamlfile
+from .errors import InputError, clip
+
+BASE_KEY = "base"
+MAX_CHAIN = 16                  # files in one chain of bases: far more than a lab keeps
+# (section, key): a setting that lowers a failing check's severity, for one robot and its reason
+NOT_INHERITED = (("check", "robust_severity"), ("check", "overstress"))
+# Keys that moved: (old section, key) -> (new section, key). Read from the old place for one release.
+MOVED_KEYS = {("render", "tie_off_mm"): ("bom", "tie_off_mm"), ("render", "spool_mm"): ("bom", "spool_mm"),
+              ("tensioner", "backlash"): ("tensioner", "center_offset")}
+PATH_TOKEN = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)")
+
+
+# ---------------------------------------------------------------- field paths
+
+def parse_path(text: str) -> list[str | int]:
+    """``tendons[1].routing.k`` -> ['tendons', 1, 'routing', 'k']; ValueError when malformed."""
+    from .errors import echo
+    out: list[str | int] = []
+    for part in text.split("."):
+        m = PATH_TOKEN.fullmatch(part)
+        if not m:
+            raise ValueError(f"{echo(text)} is not a parameter path (names joined by '.', list items as [i])")
+        out.append(m.group(1))
+        out += [int(i) for i in re.findall(r"\[(\d+)\]", m.group(2))]
+    return out
+
+
+def keys_of(path: str) -> tuple:
+    """A dotted field path as a tuple of keys (a path that does not parse: the whole text, one key)."""
+    try:
+        return tuple(parse_path(path))
+    except ValueError:
+        return (path,)
+
+
+def dotted(keys) -> str:
+    """('tendons', 2, 'routing') -> ``tendons[2].routing``."""
+    out = ""
+    for k in keys:
+        out = yamlfile.join(out, k)
+    return out
+
+
+def value_at(doc, keys):
+    """The value at ``keys`` in a document; KeyError when it is not there."""
+    node = doc
+    for k in keys:
+        if isinstance(k, int) and isinstance(node, list) and 0 <= k < len(node):
+            node = node[k]
+        elif isinstance(k, str) and isinstance(node, dict) and k in node:
+            node = node[k]
+        else:
+            raise KeyError(k)
+    return node
+
+
+# ---------------------------------------------------------------- one file
+
+def read_bytes(path: Path) -> bytes:
+    """The file's bytes, at most :data:`hwgen.yamlfile.MAX_BYTES` of them (a device such as
+    /dev/zero, or a 50 MB file, is refused after reading that much, not read to the end)."""
+    try:
+        with open(path, "rb") as f:
+            raw = f.read(yamlfile.MAX_BYTES + 1)
+    except OSError as e:
+        raise InputError(path, "", f"cannot read the file ({e.strerror or e})") from None
+    if len(raw) > yamlfile.MAX_BYTES:
+        raise InputError(path, "", f"larger than {yamlfile.MAX_BYTES >> 20} MiB; a design file is a few kB")
+    return raw
+
+
+def document(raw: bytes, path: str | Path) -> tuple[dict, list[str]]:
+    """A design file's bytes as its mapping of sections (deprecated keys moved to their new place),
+    and the warnings about those keys; raise :class:`InputError` when it is no such mapping."""
+    path = Path(path)
+    try:
+        data = yamlfile.load(raw.decode("utf-8"))
+    except UnicodeDecodeError:
+        raise InputError(path, "", "not UTF-8 text") from None
+    except yamlfile.YamlFault as e:
+        raise InputError(path, e.path, e.message) from None
+    except yaml.YAMLError as e:
+        mark = getattr(e, "problem_mark", None)
+        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
+        problem = getattr(e, "problem", None) or str(e)
+        context = getattr(e, "context", None)
+        problem += f" ({context})" if context else ""
+        raise InputError(path, "", f"YAML syntax: {where}{clip(problem, 160)}") from None
+    except ValueError as e:      # a scalar Python cannot convert (a date such as 2024-02-30)
+        raise InputError(path, "", f"a value YAML cannot read: {clip(str(e), 80)}") from None
+    if not isinstance(data, dict):
+        raise InputError(path, "", "the document must be a mapping of sections (design, backbone, disks, ...)")
+    return data, _move_deprecated(data, path)
+
+
+def _move_deprecated(data: dict, path: Path) -> list[str]:
+    """Move keys from their old section to their new one; a warning for each, an error if given twice."""
+    warnings = []
+    for (old, key), (new, new_key) in MOVED_KEYS.items():
+        section = data.get(old)
+        if not isinstance(section, dict) or key not in section:
+            continue
+        target = data.setdefault(new, {})
+        if not isinstance(target, dict):
+            continue          # the schema reports the malformed section
+        if new_key in target:
+            raise InputError(path, f"{old}.{key}", f"given here and as {new}.{new_key}; keep only {new}.{new_key}")
+        target[new_key] = section.pop(key)
+        warnings.append(f"{path}: {old}.{key} is deprecated, write it as {new}.{new_key} "
+                        f"(read from {old}.{key}: for this release only)")
+    return warnings
+
+
+def base_file(file: Path, value, key: str = BASE_KEY) -> Path:
+    """Where ``base: value`` written in ``file`` points: relative to the file's folder, or absolute;
+    raise :class:`InputError` (naming ``file`` and ``key``) when it is no readable file."""
+    if not isinstance(value, str) or not value.strip():
+        raise InputError(file, key, "the path of a design file (relative to this file), e.g. base: prototype.yaml")
+    p = Path(value)
+    p = p if p.is_absolute() else Path(file).parent / p
+    if not p.is_file():
+        raise InputError(file, key, f"{clip(str(p), 120)} is not a file")
+    return p
+
+
+# ---------------------------------------------------------------- a chain of files
+
+@dataclass
+class Layers:
+    """A design document merged from a file and its chain of bases, and where each value came from.
+
+    ``files[0]`` is the file itself, ``files[1]`` its base, and so on; ``origins`` maps the keys
+    of every value a file wrote (and every key a ``null`` removed) to that file's index."""
+
+    doc: dict
+    files: tuple[Path, ...]
+    raws: tuple[bytes, ...]
+    origins: dict[tuple, int] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def sha256(self) -> str:
+        """The file's own sha256 when it has no base; else the sha256 of its files' sha256s in
+        chain order (an edit to any file of the chain makes another design)."""
+        if len(self.raws) == 1:
+            return hashlib.sha256(self.raws[0]).hexdigest()
+        return hashlib.sha256(b"".join(hashlib.sha256(r).digest() for r in self.raws)).hexdigest()
+
+    def origin(self, keys) -> int | None:
+        """The index in ``files`` of the file that wrote the value at ``keys`` (or a mapping or list
+        holding it); None when no file did (a default, or a value hwgen derives)."""
+        keys = tuple(keys)
+        if keys in self.origins:
+            return self.origins[keys]
+        try:
+            value_at(self.doc, keys)
+        except KeyError:
+            return None
+        for n in range(len(keys), 0, -1):
+            if keys[:n] in self.origins:
+                return self.origins[keys[:n]]
+        return None
+
+    def file_of(self, path: str) -> Path:
+        """The file to name for a field: the one that wrote it, else the design's own file."""
+        i = self.origin(keys_of(path))
+        return self.files[i if i is not None else 0]
+
+
+def single(doc: dict, file: str | Path) -> Layers:
+    """A document read from one file (or made in memory, as a sweep's variant): every key its own."""
+    origins: dict[tuple, int] = {}
+    _mark(doc, (), 0, origins)
+    return Layers(doc, (Path(file),), (b"",), origins)
+
+
+def _mark(node, keys: tuple, index: int, origins: dict) -> None:
+    if keys:
+        origins[keys] = index
+    if isinstance(node, dict):
+        for k, v in node.items():
+            _mark(v, (*keys, k), index, origins)
+
+
+def merge(base: dict, over: dict, index: int, origins: dict, keys: tuple = ()) -> dict:
+    """``over`` merged onto a copy of ``base`` (see the module's docstring); the keys ``over`` writes
+    (or removes with ``null``) are marked as file ``index``'s in ``origins``."""
+    out = dict(base)
+    for k, v in over.items():
+        here = (*keys, k)
+        if v is None:
+            out.pop(k, None)
+            _unmark(here, origins)
+            origins[here] = index
+        elif isinstance(v, dict) and isinstance(out.get(k), dict):
+            origins.setdefault(here, index)
+            out[k] = merge(out[k], v, index, origins, here)
+        else:
+            _unmark(here, origins)
+            out[k] = copy.deepcopy(v)
+            _mark(v, here, index, origins)
+    return out
+
+
+def _unmark(keys: tuple, origins: dict) -> None:
+    """Forget where the values at and below ``keys`` came from (they are replaced)."""
+    n = len(keys)
+    for k in [k for k in origins if k[:n] == keys]:
+        del origins[k]
+
+
+def read_layers(path: str | Path) -> Layers:
+    """Read a design file and its chain of bases, merged; raise :class:`InputError` naming the file
+    (and ``base`` for a base that is not there, or one that leads back to a file of the chain)."""
+    files: list[Path] = []
+    raws: list[bytes] = []
+    docs: list[dict] = []
+    warnings: list[str] = []
+    seen: dict[Path, int] = {}
+    here, named = Path(path), None
+    while True:
+        real = here.resolve()
+        if real in seen:
+            loop = " → ".join(str(f) for f in files[seen[real]:]) + f" → {here}"
+            raise InputError(files[-1], BASE_KEY, f"{clip(str(named), 120)} leads back to a file of this chain of "
+                                                  f"bases ({clip(loop, 200)}): a cycle")
+        if len(files) >= MAX_CHAIN:
+            raise InputError(files[0], BASE_KEY, f"more than {MAX_CHAIN} files in this chain of bases")
+        seen[real] = len(files)
+        raw = read_bytes(here)
+        doc, moved = document(raw, here)
+        files.append(here)
+        raws.append(raw)
+        warnings += moved
+        named = doc.pop(BASE_KEY, None)
+        docs.append(doc)
+        if named is None:
+            break
+        here = base_file(here, named)
+    origins: dict[tuple, int] = {}
+    merged: dict = {}
+    for index in range(len(docs) - 1, -1, -1):        # the deepest base first, the file itself last
+        merged = merge(merged, docs[index], index, origins)
+    layers = Layers(merged, tuple(files), tuple(raws), origins, warnings)
+    if len(files) > 1:
+        _drop_lowered(layers)
+    return layers
+
+
+def _drop_lowered(layers: Layers) -> None:
+    """Leave out the settings of :data:`NOT_INHERITED` that only a base wrote (saying so)."""
+    for keys in NOT_INHERITED:
+        i = layers.origin(keys)
+        if not i:                                    # written by the file itself, or by none
+            continue
+        try:
+            value = value_at(layers.doc, keys)
+        except KeyError:
+            continue
+        del value_at(layers.doc, keys[:-1])[keys[-1]]
+        _unmark(keys, layers.origins)
+        layers.warnings.append(
+            f"{layers.files[0]}: {dotted(keys)}: {value} is not taken from the base {layers.files[i]}: a setting "
+            f"that lowers a failing check's severity holds for the robot whose file states it; write it in this "
+            f"file, with its reason, if it holds for this robot too")
+
+
+# ---------------------------------------------------------------- what a field usually holds
+
+# (low, high): the range a field's value falls in for the robots hwgen is made for (a few cm to
+# a metre or two long, printed on a desktop printer). A value outside it that a unit slip explains
+# (metres or inches for millimetres, a decimal point off) is reported with the value meant; not an
+# error: the design is read as written.
+USUAL = {
+    "backbone.length": (40.0, 1500.0, "mm"),
+    "backbone.height": (4.0, 150.0, "mm"),
+    "backbone.thickness": (0.1, 3.0, "mm"),
+    "disks.spacing": (3.0, 150.0, "mm"),
+    "disks.thickness": (0.8, 15.0, "mm"),
+    "disks.end_thickness": (1.0, 30.0, "mm"),
+    "disks.outer_diameter": (10.0, 300.0, "mm"),
+    "tendon_material.diameter": (0.05, 2.0, "mm"),
+    "tendon_material.break_load": (5.0, 3000.0, "N"),
+    "process.min_wall": (0.2, 4.0, "mm"),
+    "process.min_hole": (0.2, 4.0, "mm"),
+}
+# (factor the value is multiplied by to land in its range, what the slip would be); the first that fits
+SLIPS_LOW = ((1000.0, "in metres"), (10.0, "a decimal point off"))
+SLIPS_HIGH = ((0.1, "a decimal point off"), (0.001, "in µm"))
+SLIP_MARGIN = 1.5               # the value meant lies this far inside the usual range, not on its edge
+
+
+def hints(doc: dict) -> dict[str, str]:
+    """Field path -> a word on a value far off its usual range (:data:`USUAL`) that a unit slip
+    explains: ``0.25 mm is under the usual 40-1500 mm: in metres (250 mm)?``."""
+    out = {}
+    for path, (lo, hi, unit) in USUAL.items():
+        try:
+            v = value_at(doc, keys_of(path))
+        except KeyError:
+            continue
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < float("inf") or lo <= v <= hi:
+            continue
+        for f, what in SLIPS_LOW if v < lo else SLIPS_HIGH:
+            if lo * SLIP_MARGIN <= v * f <= hi / SLIP_MARGIN:
+                side = "under" if v < lo else "over"
+                out[path] = f"{v:g} {unit} is {side} the usual {lo:g}-{hi:g} {unit}: {what} ({v * f:.4g} {unit})?"
+                break
+    return out
