@@ -14,6 +14,8 @@ the message ``hwgen build`` would print; one that makes hwgen fail is a row with
 one record a rule: ``id``, ``severity``, ``message``, ``measured``, ``limit`` (for a tune's
 constraints; the sweep's Parquet keeps the message).
 
+``options["screen"]``: a variant that fails at the lengths level (eq. (2), the walls) goes no
+further (its row says ``screened``): a tune's trial that cannot be feasible costs no more.
 ``options["with_plan"]``, when given, is called with each valid variant's plan (made for it at the
 lengths level too) and returns more figures for its row: a tune's objectives
 (:mod:`hwgen.tune.results`).
@@ -65,6 +67,9 @@ def evaluate_batch(batch: list[tuple[int, tuple]], base: dict, names: tuple[str,
         for r in good:
             row = rows[r.index]
             if row["verdict"] == "error":
+                continue
+            if options.get("screen") and any(f["severity"] == "error" for f in row["failures"]):
+                row["screened"] = True          # a tune's trial that fails already: the levels after it not run
                 continue
             t1 = time.process_time()
             try:
@@ -156,9 +161,13 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
         failed, kept = build_and_check(r, options)
         row["checks_failed"] = len(failed)
         row["kept"] = kept
+        # the build's verdict is hwgen check's, which runs every rule above on the built files (eq. (2)
+        # through the centres only as information): the screening figures stay on record as warnings
+        failures = [dict(f, severity="warning") for f in failures]
         failures += [_failure(c["id"], c["message"], c["severity"], c.get("measured"), c.get("limit"))
                      for c in failed]
-        fails = [f for f in fails if f] + [f"{c['id']}: {c['message']}" for c in failed[:3]]
+        warns = [f"screening: {f}" for f in fails if f] + warns
+        fails = [f"{c['id']}: {c['message']}" for c in failed[:3]]
         if len(failed) > 3:
             fails.append(f"and {len(failed) - 3} more failed checks")
     row["per_tendon"] = json.dumps(tendons)
