@@ -24,13 +24,13 @@ def _stiffness(loaded: Loaded, best_design) -> dict | None:
     """Every tendon state's figures of the base and the best (the plans' masses), when the goal reads the statics."""
     if not loaded.states:
         return None
-    from ..model import stiffness as sf
     from ..sweep.spec import resolve_doc
     base = resolve_doc(loaded.base, -1, (), "base").design
     out = {}
     for key, d in (("base", base), ("best", best_design)):
         plan = pipeline.design_plan(_loaded(d, key))
-        out[key] = {r["state"]: results.state_figures(r) for r in sf.study(plan)["states"]}
+        g = loaded.spec.goal
+        out[key] = results.figures(plan, None, g.orientation, g.friction)
     return out
 
 

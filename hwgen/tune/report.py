@@ -16,6 +16,7 @@
 """
 from __future__ import annotations
 
+import copy
 import io
 import json
 import math
@@ -24,6 +25,7 @@ from pathlib import Path
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from .. import designfile
 from ..atomic import atomic_path, write_text
 from ..outputs.plots import _pyplot, _save
 from ..sweep import spec as sweep_spec
@@ -138,8 +140,11 @@ def best_yaml(loaded: Loaded, row: dict) -> str:
     doc = y.load(loaded.base_path.read_text())
     changes = dict(loaded.spec.set)
     changes.update((n, v) for n, v, b in zip(loaded.names, row["values"], loaded.base_values) if v != b)
+    layered = "base" in doc
+    if layered:                    # best.yaml lives elsewhere: its base named where it is
+        doc["base"] = str(designfile.base_file(loaded.base_path, doc["base"]).resolve())
     for path, value in changes.items():
-        _put(doc, sweep_spec.parse_path(path), value)
+        _put(doc, sweep_spec.parse_path(path), value, loaded.base, layered)
     name = f"{doc['design']}-{loaded.spec.tune}"
     doc["design"] = name if params_safe(name) else f"tuned-{loaded.spec.tune}"
     buf = io.StringIO()
@@ -155,20 +160,28 @@ def params_safe(name: str) -> bool:
     return bool(SAFE_NAME.match(name))
 
 
-def _put(doc, keys: list, value) -> None:
+def _put(doc, keys: list, value, merged: dict, layered: bool) -> None:
     """Set (or, for None, drop) the value at ``keys`` in a round-trip document, making the mappings
-    on the way; a float that is a whole number stays a float only where the optimiser gave one."""
+    on the way (a mapping merges with its base's; a list the file leaves to its base is copied
+    whole from the merged design ``merged``); a float that is a whole number stays a float only where the optimiser gave one.
+    In a file with a base, None is written as null (it removes the base's value)."""
     node = doc
-    for k, nxt in zip(keys, keys[1:]):
+    for n, (k, nxt) in enumerate(zip(keys, keys[1:])):
         if isinstance(k, int):
             node = node[k]
         else:
             if k not in node or node[k] is None:
-                node[k] = {} if not isinstance(nxt, int) else []
+                try:
+                    there = designfile.value_at(merged, keys[:n + 1])
+                except KeyError:
+                    there = None
+                node[k] = copy.deepcopy(there) if isinstance(there, list) else [] if isinstance(nxt, int) else {}
             node = node[k]
     last = keys[-1]
     if value is None:
-        if not isinstance(last, int) and last in node:
+        if layered:
+            node[last] = None
+        elif not isinstance(last, int) and last in node:
             del node[last]
         return
     if isinstance(value, float):
@@ -223,6 +236,11 @@ def markdown(loaded: Loaded, rows: list[dict], base_row: dict, outcome=None, bui
                                                          if loaded.spec.set else "") + f"; level {loaded.spec.level}; "
              f"goal: {goal}" + (f", subject to {', '.join(bounds(loaded))}" if bounds(loaded) else "")
              + (f"; required even as warnings: {', '.join(g.require)}" if g.require else "") + ".", "",
+             *([f"Statics (the study `hwgen stiffness` runs, the plan's estimated masses): state "
+                f"{g.state or loaded.states[0]}, {g.orientation}, eyelets "
+                f"{'frictionless' if g.friction == 'none' else 'stuck (every segment held at its eyelets)'}; each "
+                f"tendon tensioned by the paper's protocol, or at its own `pretension_n` where the design gives one.",
+                ""] if loaded.states else []),
              f"{len(rows)} trials told, {n_ok} feasible, "
              f"{sum(1 for r in rows if r.get('same_as') is not None)} told from an earlier trial of the same design."]
     if outcome is not None:
@@ -252,7 +270,8 @@ def markdown(loaded: Loaded, rows: list[dict], base_row: dict, outcome=None, bui
     if built:
         lines += ["", "## The best, built", "", built["text"]]
     if stiffness:
-        lines += ["", "## Stiffness per tendon state (hwgen stiffness: the plan's masses)", "",
+        lines += ["", f"## Stiffness per tendon state (hwgen stiffness: the plan's masses; {g.orientation}, "
+                      f"friction {g.friction})", "",
                   "| state | tip N/mm, base | tip N/mm, best | least N/mm, base | least N/mm, best | "
                   "torsion N·mm/rad, base | torsion, best |", "|---|---:|---:|---:|---:|---:|---:|"]
         for s in stiffness["base"]:

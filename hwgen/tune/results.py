@@ -1,13 +1,17 @@
 """What a tune can maximise, minimise or bound: the results of the statics and of the checks, by name.
 
-Statics (:func:`hwgen.model.stiffness.study`, the physics of ``hwgen stiffness``: the robot
-horizontal under its own weight, the tendons of the state locked at their pre-tensions), of the
-goal's ``state`` or of the one named after ``@`` (``tip_stiffness@A``):
+Statics: :func:`hwgen.model.stiffness.study`, the physics of ``hwgen stiffness`` (each tendon state
+tensioned by the paper's protocol, a tendon's own ``pretension_n`` instead where the design gives
+one; the plan's estimated masses), read through :func:`statics` only, in the goal's
+``orientation`` (default ``gravity -z``, the orientation ``hwgen stiffness`` headlines) and
+``friction`` bound (default ``none``, frictionless eyelets, its headline too; ``stuck``: every
+segment held at its eyelets), of the goal's ``state`` or of the one named after ``@``
+(``tip_stiffness@A``):
 
-- ``tip_stiffness``: N/mm, a small push at the tip disk along gravity;
+- ``tip_stiffness``: N/mm, a small push at the tip disk along z;
 - ``least_stiffness``: N/mm, the least of those pushes over the disks;
 - ``tip_torsion``: N·mm/rad, torque over twist at the tip;
-- ``tip_sag``: mm, the tip's drop under the robot's weight.
+- ``tip_sag``: mm, how far the tip lies off the straight line along z in that state (|z|).
 
 Checks (the sweep's row of the level, :mod:`hwgen.sweep.levels`): ``centre_mm`` (the worst
 budgeted tendon's length change by eq. (2) through the hole centres), ``taut_mm`` (its nominal taut
@@ -17,8 +21,6 @@ eyelet), ``mass_g`` (disks and strip), ``coupling`` (the actuating tension's ris
 ``checks_failed`` (build level). One tendon's: ``centre_mm.C1``, ``taut_mm.C1``, ``robust_mm.C1``.
 
 ``distance``: the trial's distance from the base (:func:`hwgen.tune.spec.distance`).
-
-:func:`state_figures` is the one place that reads a state's result of the statics.
 """
 from __future__ import annotations
 
@@ -36,21 +38,42 @@ LEVELS = ("lengths", "robust", "coupling", "build")
 CHECK_ID = re.compile(r"[a-z_]+(\.[a-z_]+)+")
 
 
-def state_figures(result: dict) -> dict[str, float]:
-    """The figures a tune reads from one state's result of :func:`hwgen.model.stiffness.study`."""
-    return {"tip_stiffness": float(result["tip_stiffness_n_per_mm"]),
-            "least_stiffness": float(min(d["stiffness_n_per_mm"] for d in result["disks"])),
-            "tip_torsion": float(result["tip_torsion_nmm_per_rad"]),
-            "tip_sag": float(result["tip_sag_mm"])}
+ORIENTATIONS = tuple(sf.ORIENTATIONS)          # gravity -z, gravity +z, weightless
+FRICTIONS = ("none", "stuck")                 # the friction bounds every disk's stiffness is given for
+ORIENTATION, FRICTION = sf.REFERENCE, "none"  # hwgen stiffness's headline: gravity -z, frictionless
 
 
-def statics(plan, states: tuple[str, ...]) -> dict[str, float]:
+def state_figures(entry: dict) -> dict[str, float]:
+    """The figures a tune reads from one entry (a state in one orientation, one friction bound) of
+    :func:`hwgen.model.stiffness.study`."""
+    return {"tip_stiffness": float(entry["tip_stiffness_n_per_mm"]),
+            "least_stiffness": float(min(d["stiffness_n_per_mm"] for d in entry["disks"])),
+            "tip_torsion": float(entry["tip_torsion_nmm_per_rad"]),
+            "tip_sag": abs(float(entry["tip_z_mm"]))}
+
+
+def by_state(report: dict, orientation: str = ORIENTATION, friction: str = FRICTION) -> dict[str, dict]:
+    """state -> its figures in ``orientation`` with ``friction``, from a study's report (stiffness.json)."""
+    return {e["state"]: state_figures(e) for e in report["states"]
+            if e["orientation"] == orientation and e["friction"] == friction and "push" not in e}
+
+
+def figures(plan, states: tuple[str, ...] | None = None, orientation: str = ORIENTATION,
+            friction: str = FRICTION) -> dict[str, dict]:
+    """state -> its figures, for the named states (None: every state) of a plan: the one adapter
+    from the study ``hwgen stiffness`` runs (:func:`hwgen.model.stiffness.study`, the plan's
+    estimated masses) to a tune's figures."""
+    report = sf.study(plan, list(states) if states else None, [orientation])
+    return by_state(report, orientation, friction)
+
+
+def statics(plan, states: tuple[str, ...] | None, orientation: str = ORIENTATION, friction: str = FRICTION) -> dict:
     """Every statics figure of the named states of a plan, keyed ``name@state`` (the worker's hook:
     ``options["with_plan"]`` of :func:`hwgen.sweep.levels.evaluate_batch`)."""
-    if not states:
+    if states is not None and not states:
         return {}
-    report = sf.study(plan, list(states))
-    return {"statics": {f"{k}@{r['state']}": v for r in report["states"] for k, v in state_figures(r).items()}}
+    return {"statics": {f"{k}@{s}": v for s, fig in figures(plan, states, orientation, friction).items()
+                        for k, v in fig.items()}}
 
 
 def is_statics(name: str) -> bool:

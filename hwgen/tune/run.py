@@ -144,7 +144,7 @@ def within(loaded: Loaded, values: tuple) -> bool:
         if fr.choices is not None:
             if v not in fr.choices:
                 return False
-        elif not (fr.low <= v <= fr.high) or (fr.integer and v != int(v)):
+        elif v is None or not (fr.low <= v <= fr.high) or (fr.integer and v != int(v)):
             return False
     return True
 
@@ -198,9 +198,12 @@ def _plain(v):
 
 
 def _options(loaded: Loaded, folder: Path, cache, p) -> dict:
-    opts = {"robust_samples": loaded.spec.robust_samples, "keep": [], "out": str(folder), "cache": cache}
+    opts = {"robust_samples": loaded.spec.robust_samples, "keep": [], "out": str(folder), "cache": cache,
+            "screen": loaded.spec.goal.checks == "all"}
     if loaded.states:
-        opts["with_plan"] = partial(results.statics, states=loaded.states)
+        g = loaded.spec.goal
+        opts["with_plan"] = partial(results.statics, states=loaded.states, orientation=g.orientation,
+                                    friction=g.friction)
     if p.client is not None:
         opts["numba_threads"] = 1           # a worker has a core of its own
     return opts

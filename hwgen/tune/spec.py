@@ -10,7 +10,9 @@ optional fixed changes to it (``set``: parameter path → value, applied before 
   (:mod:`hwgen.tune.results` names them), subject to every check of ``level`` passing, to
   ``require`` (checks that must pass even where the design makes them warnings) and to
   ``at_least`` / ``at_most`` (a number, or ``base``: the base design's own figure). More than one
-  result gives a Pareto front. ``checks: required`` leaves out every check not under ``require``
+  result gives a Pareto front. The statics' results are of ``state`` (default: every tendon
+  locked), ``orientation`` (default ``gravity -z``) and ``friction`` (default ``none``), as
+  ``hwgen stiffness`` headlines them. ``checks: required`` leaves out every check not under ``require``
   (an unconstrained search: a known answer, or a design to be fixed afterwards).
 - ``pass: true``: the design nearest the base (each free parameter's change over its bound's
   range, root mean square) that passes every check.
@@ -29,8 +31,8 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, model_validator
 
-from .. import params, yamlfile
-from ..errors import InputError, clip, echo
+from .. import designfile, params, yamlfile
+from ..errors import InputError, echo
 from ..sweep import spec as sweep_spec
 from . import results
 
@@ -94,6 +96,12 @@ class Goal(_Model):
     pass_: bool = Field(False, alias="pass", description="the passing design nearest the base")
     state: str | None = Field(None, description="the tendon state the statics' results are of (default: "
                                                 "every tendon locked)")
+    orientation: Literal["gravity -z", "gravity +z", "weightless"] = Field(
+        "gravity -z", description="the robot's orientation the statics' results are of (hwgen stiffness's headline: "
+                                  "horizontal, gravity toward -z)")
+    friction: Literal["none", "stuck"] = Field(
+        "none", description="the eyelet friction bound the statics' results are of: none (frictionless, hwgen "
+                            "stiffness's headline) or stuck (every segment held at its eyelets)")
     at_least: dict[str, Bound] = Field(default_factory=dict)
     at_most: dict[str, Bound] = Field(default_factory=dict)
     require: list[str] = Field(default_factory=list, description="checks that must pass even where the design "
@@ -171,11 +179,10 @@ def load(path: str | Path) -> Loaded:
         raise params.validation_error(e, path) from None
     if not params.SAFE_NAME.match(spec.tune):
         raise InputError(path, "tune", f"{echo(spec.tune)} is not a safe file name (letters, digits, _ and -)")
-    base_path = (path.parent / spec.base) if not Path(spec.base).is_absolute() else Path(spec.base)
-    if not base_path.is_file():
-        raise InputError(path, "base", f"{clip(str(base_path), 120)} is not a file")
-    base, _ = params.document(params._read_bytes(base_path), base_path)
-    params.validate(copy.deepcopy(base), base_path)             # a bad base is bad input, named in its own file
+    base_path = designfile.base_file(path, spec.base)          # as a design file's base: one rule
+    layers = designfile.read_layers(base_path)                 # which may build on a base of its own
+    base = layers.doc
+    params.validate(copy.deepcopy(base), base_path, layers)    # a bad base is bad input, named in its own file
     for key, value in spec.set.items():
         keys = _keys(path, f"set.{key}", key, base)
         base = sweep_spec.set_path(base, keys, value) if value is not None else _drop(base, keys)
@@ -191,7 +198,7 @@ def load(path: str | Path) -> Loaded:
     dump = fixed.design.model_dump(mode="json")
     values = tuple(_value_at(dump, sweep_spec.parse_path(n)) for n in names)
     for i, (fr, v) in enumerate(zip(spec.free, values)):
-        if fr.choices is None and (not isinstance(v, (int, float)) or isinstance(v, bool)):
+        if fr.choices is None and v is not None and (not isinstance(v, (int, float)) or isinstance(v, bool)):
             raise InputError(path, f"free[{i}].path", f"the base's value there is {echo(v)}, not a number: give "
                                                       f"'choices'")
     from ..model.plan import make_plan        # the base's tendon states: the statics' results name one
@@ -265,9 +272,12 @@ def _check_goal(path: Path, spec: Tune, known: tuple[str, ...]) -> tuple[str, ..
 
 def distance(loaded: Loaded, values: tuple) -> float:
     """How far a trial is from the base: each free parameter's change over its bound's range (a
-    change of choice counts one), root mean square."""
+    change of choice, or a value where the base has none, counts one), root mean square."""
     total = 0.0
     for fr, v, b in zip(loaded.free, values, loaded.base_values):
-        d = (0.0 if v == b else 1.0) if fr.choices is not None else (float(v) - float(b)) / fr.range
+        if fr.choices is not None or v is None or b is None:       # a value given where the base leaves it unset
+            d = 0.0 if v == b else 1.0                              # (pretension_n: the protocol's) counts one range
+        else:
+            d = (float(v) - float(b)) / fr.range
         total += d * d
     return math.sqrt(total / len(values))
