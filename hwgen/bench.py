@@ -364,7 +364,8 @@ def sweep_rows(params_path: Path, tmp: Path, level: str = "lengths", axes: str =
     return rows
 
 
-TUNE_RATE = re.compile(r"(\d+) evaluated .* in ([\d.]+) s on (\d+) worker\(s\): ([\d.]+) trials/s, ([\d.]+) (m?s) CPU")
+TUNE_RATE = re.compile(r"(\d+) evaluated .* in ([\d.]+) s on (\d+) worker\(s\): ([\d.]+) trials/s, ([\d.]+) (m?s) CPU"
+                       r" a trial(?: \(([\d.]+) s each of the (\d+) through every level\))?")
 TUNE_BEST = re.compile(r"best: trial (\d+): (.*?)(?: \(found ([\d.]+) s into this run\))?$", re.M)
 
 
@@ -378,8 +379,9 @@ def tune_rows(tmp: Path, budget: int = 60) -> list[tuple]:
     m, b = TUNE_RATE.search(r[5]), TUNE_BEST.search(r[5])
     note = "no throughput line"
     if m:
-        n, sec, workers, rate, cpu, unit = m.groups()
-        note = f"{rate} trials/s over {n} trials on {workers} workers ({sec} s, {cpu} {unit} CPU a trial)"
+        n, sec, workers, rate, cpu, unit, whole, k = m.groups()
+        note = (f"{rate} trials/s over {n} trials on {workers} workers ({sec} s, {cpu} {unit} CPU a trial"
+                + (f"; {whole} s each of the {k} through every level" if whole else "") + ")")
     if b:
         note += f"; best {b.group(2)} at trial {b.group(1)}" + (f", {b.group(3)} s in" if b.group(3) else "")
     return [(*r[:4], "; ".join(x for x in (r[4], note) if x))]

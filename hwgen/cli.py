@@ -646,6 +646,8 @@ def tune(tune_file: Path = typer.Argument(..., help="tune YAML: a base design, f
     rate = f"{o.evaluated / o.seconds:.3g} trials/s" if o.seconds > 0 and o.evaluated else "nothing to evaluate"
     per = o.cpu_s / o.evaluated if o.evaluated else 0.0
     cpu = (f", {per:.2f} s CPU a trial" if per >= 0.1 else f", {1000 * per:.2f} ms CPU a trial") if o.evaluated else ""
+    if o.whole and o.whole < o.evaluated:
+        cpu += f" ({o.whole_cpu_s / o.whole:.2f} s each of the {o.whole} through every level)"
     start = f"; local cluster started in {o.start_seconds:.1f} s" if o.start_seconds else ""
     out.print(f"{loaded.spec.tune} ({loaded.spec.level}): {o.done_before} trials told before, {o.evaluated} evaluated "
               f"and {o.repeated} told from an earlier trial of the same design in {o.seconds:.1f} s on {o.workers} "

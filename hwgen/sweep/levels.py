@@ -1,7 +1,8 @@
 """What each level of a sweep computes for a batch of variants, on a worker: one row per variant.
 
 ``lengths`` (:mod:`.lengths`): the plan's eyelets, eq. (2) and the nominal taut path, many
-variants at once. ``robust``: the full plan (:func:`hwgen.model.plan.make_plan`) and the as-built Monte
+variants at once. ``robust``: the full plan (:func:`hwgen.model.plan.make_plan`: its tip disk's
+eyelets turned toward the drums, whose overlaps the lengths level cannot see) and the as-built Monte
 Carlo of :mod:`hwgen.model.scatter` on the plan's holes, seats and tensioner runs, judged at
 ``check.robust`` like ``hwgen check``'s ``tendon.robust``. ``coupling``: the tendon statics of
 :mod:`hwgen.checks.tension` on that plan (tautness, overload, the actuating tension's rise).
@@ -134,6 +135,10 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
     warns = []
     budgeted = [t for t in taut_rows if t["budget_mm"] is not None]
     failures = [f for f in row["failures"]]
+    tip = _tip_overlaps(plan)
+    if tip and not any(f["id"] == "eyelet.overlap" for f in failures):
+        fails.append(tip["message"])
+        failures.append(tip)
     for t in budgeted:
         if t["robust_mm"] > t["budget_mm"]:
             text = (f"{t['name']} changes {t['robust_mm']:.3f} mm at {d.check.robust} as built, "
@@ -174,6 +179,19 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
     row["failures"] = failures
     row["verdict"] = "fail" if any(fails) else "pass"
     row["message"] = "; ".join([f for f in fails if f] + [f"warning: {w}" for w in warns])[:2000]
+
+
+def _tip_overlaps(plan: Plan) -> dict | None:
+    """The full plan's tip disk, its eyelets turned toward the drums (which the lengths level sizes
+    without the turn, so can only find smaller): tendons whose holes run into one opening there
+    (the plan's "overlap" merges, which ``hwgen check`` fails as ``eyelet.overlap``)."""
+    tip = plan.disks[-1].index
+    hit = [m for m in plan.merges if m.kind == "overlap" and m.station == tip]
+    if not hit:
+        return None
+    names = "; ".join(" and ".join(m.tendons) for m in hit)
+    return _failure("eyelet.overlap", f"tendons routed into each other share one opening on the tip disk "
+                                      f"(its eyelets turned toward the drums): {names}")
 
 
 def robot(plan: Plan) -> mc.Robot:

@@ -263,10 +263,10 @@ def markdown(loaded: Loaded, rows: list[dict], base_row: dict, outcome=None, bui
             lines.append(f"| {n} | {_fmt(results.value(n, base_row, state))} | "
                          f"{_fmt(results.value(n, best_row, state))} |")
         lines.append(f"| verdict ({loaded.spec.level}) | {base_row['verdict']} | {best_row['verdict']} |")
-        fails = [f"{f['id']}" for f in base_row.get("failures") or [] if f["severity"] == "error"
-                 or f["id"] in g.require]
-        if fails:
-            lines += ["", "The base fails: " + ", ".join(sorted(set(fails))) + "."]
+    fails = [f"{f['id']}" for f in base_row.get("failures") or [] if f["severity"] == "error"
+             or f["id"] in g.require]
+    if fails:
+        lines += ["", "The base fails: " + ", ".join(sorted(set(fails))) + "."]
     if built:
         lines += ["", "## The best, built", "", built["text"]]
     if stiffness:

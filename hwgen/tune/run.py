@@ -56,6 +56,8 @@ class Outcome:
     start_seconds: float
     cpu_s: float
     first_best_s: float | None = None     # wall time from the start to the best trial's result (this run)
+    whole: int = 0              # trials this run evaluated through every level (not screened out early)
+    whole_cpu_s: float = 0.0    # their CPU
     verdicts: dict = field(default_factory=dict)
 
 
@@ -97,7 +99,9 @@ def sampler(loaded: Loaded, told: int):
         return optuna.samplers.RandomSampler(seed=seed)
     if kind == "nsga2":
         return optuna.samplers.NSGAIISampler(population_size=max(8, min(50, budget // 6)), seed=seed)
-    return optuna.samplers.TPESampler(n_startup_trials=max(4, min(10, budget // 10)), multivariate=True,
+    # a tenth of the budget drawn at random first (4 to 40): the first basins found are TPE's to refine,
+    # and with a dozen free parameters ten random trials leave most of them unseen
+    return optuna.samplers.TPESampler(n_startup_trials=max(4, min(40, budget // 10)), multivariate=True,
                                       constant_liar=True, seed=seed)
 
 
@@ -122,9 +126,11 @@ def open_study(loaded: Loaded, folder: Path):
     else:
         study = optuna.create_study(study_name=name, storage=storage, directions=directions)
         study.set_user_attr("digest", loaded.digest)
-        if within(loaded, loaded.base_values):
-            # the base is the first trial (told the base's own evaluation): the search starts from what works
-            study.enqueue_trial(dict(zip(loaded.names, loaded.base_values)))
+        start = {n: v for fr, n, v in zip(loaded.free, loaded.names, loaded.base_values) if _within(fr, v)}
+        if start:
+            # the base is the first trial (told the base's own evaluation): the search starts from what works;
+            # a value the base leaves unset (pretension_n: the protocol's) or outside the bounds is drawn
+            study.enqueue_trial(start)
     told = len(study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)))
     study.sampler = sampler(loaded, told)
     for t in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
@@ -138,15 +144,11 @@ def constraint_names(loaded: Loaded) -> list[str]:
     return ["checks", *(f"{n} >= {b}" for n, b in g.at_least.items()), *(f"{n} <= {b}" for n, b in g.at_most.items())]
 
 
-def within(loaded: Loaded, values: tuple) -> bool:
-    """Whether values lie within the free parameters' bounds (a choice among the choices)."""
-    for fr, v in zip(loaded.free, values):
-        if fr.choices is not None:
-            if v not in fr.choices:
-                return False
-        elif v is None or not (fr.low <= v <= fr.high) or (fr.integer and v != int(v)):
-            return False
-    return True
+def _within(fr, v) -> bool:
+    """Whether a value lies within a free parameter's bounds (a choice among the choices)."""
+    if fr.choices is not None:
+        return v in fr.choices
+    return v is not None and fr.low <= v <= fr.high and not (fr.integer and v != int(v))
 
 
 def score(loaded: Loaded, row: dict, base_row: dict | None) -> tuple[list[float], list[float], bool]:
@@ -324,6 +326,9 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
                 row["trial"] = trial.number
                 out.evaluated += 1
                 out.cpu_s += row.get("cpu_s") or 0.0
+                if row["verdict"] in ("pass", "fail") and not row.get("screened"):
+                    out.whole += 1
+                    out.whole_cpu_s += row.get("cpu_s") or 0.0
                 by_hash[h] = row
                 tell(trial, row)
                 for twin, v in waiting.pop(h, []):
