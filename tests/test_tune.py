@@ -59,6 +59,9 @@ def _trials(out: Path, name: str = "t") -> list[dict]:
      "base"),
     ({"goal": {"maximize": "tip_stiffness", "require": ["Taut"]}}, "goal.require[0]", "not a check id"),
     ({"goal": {"pass": True, "maximize": "tip_stiffness"}}, "goal", "not both"),
+    ({"goal": {"maximize": "tip_stiffness", "orientation": "upside down"}}, "goal.orientation", "gravity -z"),
+    ({"goal": {"maximize": "tip_stiffness", "friction": "capstan"}}, "goal.friction", "stuck"),
+    ({"base": "nowhere.yaml"}, "base", "is not a file"),
     ({"goal": {}}, "goal", "give 'maximize'"),
     ({"set": {"disks.cont": 20}}, "set.disks.cont", "not a field"),
     ({"set": {"disks.count": 1}}, "set", "not a design"),
@@ -86,6 +89,7 @@ def test_the_shipped_tune_files_load():
         loaded = spec.load(PARAMS / name)
         assert loaded.names and loaded.objectives
     twenty = spec.load(PARAMS / "tune-fix-twenty-disks.yaml")
+    assert twenty.base_path == PARAMS / "twenty-disks.yaml"          # main's robot, not a copy
     assert twenty.base["disks"]["count"] == 20 and "spacing" not in twenty.base["disks"]
     assert twenty.base_values[twenty.names.index("disks.count")] == 20
 
@@ -234,12 +238,12 @@ def test_the_statics_a_tune_reads_are_hwgen_stiffness(tmp_path):
     from hwgen.model.plan import make_plan
     from hwgen.sweep import levels
     loaded = params.read(PROTOTYPE)
-    rep, folder = pipeline.stiffness(loaded, tmp_path, ["AC1C2H", "A"], cache_dir=False)
+    rep, folder = pipeline.stiffness(loaded, tmp_path, ["AC1C2H"], cache_dir=False)
     written = json.loads((folder / "stiffness.json").read_text())
     plan = make_plan(loaded.design)
     for orientation, friction in (("gravity -z", "none"), ("weightless", "stuck")):
-        got = results.statics(plan, ("AC1C2H", "A"), orientation, friction)["statics"]
-        for state in ("AC1C2H", "A"):
+        got = results.statics(plan, ("AC1C2H",), orientation, friction)["statics"]
+        for state in ("AC1C2H",):
             e = next(e for e in written["states"] if e["state"] == state and e["orientation"] == orientation
                      and e["friction"] == friction)
             assert got[f"tip_stiffness@{state}"] == pytest.approx(e["tip_stiffness_n_per_mm"], rel=1e-9)
@@ -442,12 +446,12 @@ def test_the_statics_a_tune_reads_are_hwgen_stiffness(tmp_path):
     from hwgen.model.plan import make_plan
     from hwgen.sweep import levels
     loaded = params.read(PROTOTYPE)
-    rep, folder = pipeline.stiffness(loaded, tmp_path, ["AC1C2H", "A"], cache_dir=False)
+    rep, folder = pipeline.stiffness(loaded, tmp_path, ["AC1C2H"], cache_dir=False)
     written = json.loads((folder / "stiffness.json").read_text())
     plan = make_plan(loaded.design)
     for orientation, friction in (("gravity -z", "none"), ("weightless", "stuck")):
-        got = results.statics(plan, ("AC1C2H", "A"), orientation, friction)["statics"]
-        for state in ("AC1C2H", "A"):
+        got = results.statics(plan, ("AC1C2H",), orientation, friction)["statics"]
+        for state in ("AC1C2H",):
             e = next(e for e in written["states"] if e["state"] == state and e["orientation"] == orientation
                      and e["friction"] == friction)
             assert got[f"tip_stiffness@{state}"] == pytest.approx(e["tip_stiffness_n_per_mm"], rel=1e-9)

@@ -16,7 +16,9 @@ one record a rule: ``id``, ``severity``, ``message``, ``measured``, ``limit`` (f
 constraints; the sweep's Parquet keeps the message).
 
 ``options["screen"]``: a variant that fails at the lengths level (eq. (2), the walls) goes no
-further (its row says ``screened``): a tune's trial that cannot be feasible costs no more.
+further (its row says ``screened``): a tune's trial that cannot be feasible costs no more;
+``options["stop"]``, called with the row once ``with_plan``'s figures are in, does the same for
+a trial those figures rule out (a tune's bound on the statics).
 ``options["with_plan"]``, when given, is called with each valid variant's plan (made for it at the
 lengths level too) and returns more figures for its row: a tune's objectives
 (:mod:`hwgen.tune.results`).
@@ -128,6 +130,9 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
     if options.get("with_plan"):
         row.update(options["with_plan"](plan))
     if level == "lengths":
+        return
+    if options.get("stop") and options["stop"](row):
+        row["screened"] = True         # a tune's trial its figures already rule out: the checks after them not run
         return
     centre = {t["name"]: t["centre_mm"] for t in json.loads(row["per_tendon"])}
     taut_rows = robust(plan, d.disks.slot_clearance, options.get("robust_samples", 200))

@@ -17,7 +17,9 @@ attributes) in the study's journal (``JournalStorage(JournalFileBackend)``,
 ``OUT/tunes/<name>/journal.log``), so an interrupted tune resumes from its trials: those told are
 never evaluated again, those in flight when it stopped are asked again first. A trial whose
 design (by the sweep's hash of the resolved design) was already evaluated is told that result
-without evaluating it again.
+without evaluating it again. A trial that cannot be feasible stops early on its worker (its row
+says ``screened``): one that fails at the lengths level (eq. (2), the walls), and one whose
+statics already miss a bound of the goal (:func:`short_of_bounds`); it is told what was found.
 """
 from __future__ import annotations
 
@@ -184,6 +186,31 @@ def score(loaded: Loaded, row: dict, base_row: dict | None) -> tuple[list[float]
     return values, cons, all(c <= 0 for c in cons)
 
 
+def bound_limits(loaded: Loaded, base_row: dict) -> list[tuple[str, float, float]]:
+    """(result, +1 for at least / -1 for at most, the bound's value) of each statics bound of the goal
+    (``base``: the base's own figure), for :func:`short_of_bounds` on a worker."""
+    g = loaded.spec.goal
+    state = g.state or (loaded.states[0] if loaded.states else "")
+    out = []
+    for how, sign in (("at_least", 1.0), ("at_most", -1.0)):
+        for name, bound in getattr(g, how).items():
+            if not results.is_statics(name):
+                continue
+            if bound == "base":
+                bound = results.value(name, base_row, state)
+            if bound is not None:
+                key = name if "@" in name else f"{name}@{state}"
+                out.append((key, sign, float(bound)))
+    return out
+
+
+def short_of_bounds(limits: list[tuple[str, float, float]], row: dict) -> bool:
+    """Whether a row's statics already miss a bound of the goal (the worker's ``stop``: such a trial
+    is infeasible whatever its checks say, so the checks after the statics are not run)."""
+    got = row.get("statics") or {}
+    return any(key in got and sign * (bound - got[key]) > 0 for key, sign, bound in limits)
+
+
 def _excess(f: dict) -> float:
     m, lim = f.get("measured"), f.get("limit")
     if not isinstance(m, (int, float)) or not isinstance(lim, (int, float)) or not math.isfinite(m):
@@ -254,6 +281,10 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
         options = _options(loaded, folder, cache, p)
         t0 = time.perf_counter()
         base = base_row(loaded, study, p, options)
+        if options.get("screen") and loaded.spec.level != "lengths":
+            limits = bound_limits(loaded, base)
+            if limits:
+                options = dict(options, stop=partial(short_of_bounds, limits))
         by_hash.setdefault(base["hash"], base)
         doc = p.scatter(loaded.base)
         per_task = TRIALS_PER_TASK[loaded.spec.level]
