@@ -60,12 +60,13 @@ def bounds(loaded: Loaded) -> list[str]:
     return [f"{name} ≥ {b}" for name, b in g.at_least.items()] + [f"{name} ≤ {b}" for name, b in g.at_most.items()]
 
 
-def best(loaded: Loaded, rows: list[dict]) -> tuple[dict | None, list[dict]]:
+def best(loaded: Loaded, rows: list[dict], rejected=()) -> tuple[dict | None, list[dict]]:
     """(the best feasible trial, the front): one objective, the best value (ties: the earlier
     trial); several, the feasible trials no other feasible trial dominates, and as the best the
-    front's best in the first objective."""
+    front's best in the first objective. Designs whose hash is in ``rejected`` (their build failed
+    a check) are left out."""
     signs = [1.0 if how == "maximize" else -1.0 for _, how in loaded.objectives]
-    ok = [r for r in rows if r["feasible"]]
+    ok = [r for r in rows if r["feasible"] and r.get("hash") not in rejected]
     if not ok:
         return None, []
 
@@ -225,8 +226,9 @@ def importances(loaded: Loaded, rows: list[dict]) -> dict[str, dict[str, float]]
 
 
 def markdown(loaded: Loaded, rows: list[dict], base_row: dict, outcome=None, built: dict | None = None,
-             stiffness: dict | None = None) -> str:
-    best_row, front = best(loaded, rows)
+             stiffness: dict | None = None, rejected=None) -> str:
+    rejected = rejected or {}
+    best_row, front = best(loaded, rows, rejected)
     g = loaded.spec.goal
     goal = "pass every check, nearest the base" if g.pass_ else ", ".join(f"{how} {n}" for n, how in
                                                                           loaded.objectives)
@@ -269,6 +271,9 @@ def markdown(loaded: Loaded, rows: list[dict], base_row: dict, outcome=None, bui
         lines += ["", "The base fails: " + ", ".join(sorted(set(fails))) + "."]
     if built:
         lines += ["", "## The best, built", "", built["text"]]
+    if rejected:
+        lines += ["", f"Set aside after their build ({len(rejected)}; the tune's level does not screen for what "
+                      f"failed): " + "; ".join(f"`{h[:12]}` {', '.join(ids)}" for h, ids in rejected.items()) + "."]
     if stiffness:
         lines += ["", f"## Stiffness per tendon state (hwgen stiffness: the plan's masses; {g.orientation}, "
                       f"friction {g.friction})", "",
@@ -372,11 +377,12 @@ def write(loaded: Loaded, study, folder: Path, outcome=None, built=None, stiffne
     base_row = base(loaded, study)
     write_trials(loaded, [base_row, *rows], folder / "trials.parquet")
     files = [folder / "trials.parquet"]
-    best_row, front = best(loaded, rows)
+    rejected = study.user_attrs.get("rejected", {})
+    best_row, front = best(loaded, rows, rejected)
     if best_row is not None:
         write_text(folder / "best.yaml", best_yaml(loaded, best_row))
         files.append(folder / "best.yaml")
-    write_text(folder / "summary.md", markdown(loaded, rows, base_row, outcome, built, stiffness))
+    write_text(folder / "summary.md", markdown(loaded, rows, base_row, outcome, built, stiffness, rejected))
     convergence(loaded, rows, folder / "convergence.png")
     files += [folder / "summary.md", folder / "convergence.png"]
     return {"best": best_row, "front": front, "files": files, "rows": rows, "base": base_row}
