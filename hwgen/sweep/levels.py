@@ -2,8 +2,8 @@
 
 ``lengths`` (:mod:`.lengths`): the plan's eyelets, eq. (2) and the nominal taut path, many
 variants at once. ``robust``: the full plan (:func:`hwgen.model.plan.make_plan`: its tip disk's
-eyelets turned toward the drums, whose overlaps the lengths level cannot see) and the as-built Monte
-Carlo of :mod:`hwgen.model.scatter` on the plan's holes, seats and tensioner runs, judged at
+eyelets turned toward the drums and the base disk's seats, which the lengths level cannot see;
+:func:`_plan_screens`) and the as-built Monte Carlo of :mod:`hwgen.model.scatter` on the plan's holes, seats and tensioner runs, judged at
 ``check.robust`` like ``hwgen check``'s ``tendon.robust``. ``coupling``: the tendon statics of
 :mod:`hwgen.checks.tension` on that plan (tautness, overload, the actuating tension's rise).
 ``build``: the whole pipeline (:mod:`.build`), with ``hwgen check``'s report. Each level includes
@@ -140,10 +140,10 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
     warns = []
     budgeted = [t for t in taut_rows if t["budget_mm"] is not None]
     failures = [f for f in row["failures"]]
-    tip = _tip_overlaps(plan)
-    if tip and not any(f["id"] == "eyelet.overlap" for f in failures):
-        fails.append(tip["message"])
-        failures.append(tip)
+    for f in _plan_screens(plan, d.process.min_wall):
+        if not any(g["id"] == f["id"] for g in failures):
+            fails.append(f["message"])
+            failures.append(f)
     for t in budgeted:
         if t["robust_mm"] > t["budget_mm"]:
             text = (f"{t['name']} changes {t['robust_mm']:.3f} mm at {d.check.robust} as built, "
@@ -186,17 +186,34 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
     row["message"] = "; ".join([f for f in fails if f] + [f"warning: {w}" for w in warns])[:2000]
 
 
-def _tip_overlaps(plan: Plan) -> dict | None:
-    """The full plan's tip disk, its eyelets turned toward the drums (which the lengths level sizes
-    without the turn, so can only find smaller): tendons whose holes run into one opening there
-    (the plan's "overlap" merges, which ``hwgen check`` fails as ``eyelet.overlap``)."""
-    tip = plan.disks[-1].index
-    hit = [m for m in plan.merges if m.kind == "overlap" and m.station == tip]
-    if not hit:
-        return None
-    names = "; ".join(" and ".join(m.tendons) for m in hit)
-    return _failure("eyelet.overlap", f"tendons routed into each other share one opening on the tip disk "
-                                      f"(its eyelets turned toward the drums): {names}")
+def _plan_screens(plan: Plan, min_wall: float) -> list[dict]:
+    """What the full plan says that the lengths level cannot (``hwgen check`` fails each): on the tip
+    disk, its eyelets turned toward the drums (sized there without the turn), tendons whose holes run
+    into one opening (the plan's "overlap" merges: ``eyelet.overlap``) or a wall between two holes
+    under ``process.min_wall`` (their circles on the mid-plane: ``eyelet.wall``); on the base disk, a
+    seat as wide as its knot or crimp (a steep tendon's slanted seat: ``tendon.seat``)."""
+    out = []
+    tip = plan.disks[-1]
+    hit = [m for m in plan.merges if m.kind == "overlap" and m.station == tip.index]
+    if hit:
+        out.append(_failure("eyelet.overlap", "tendons routed into each other share one opening on the tip disk "
+                                              "(its eyelets turned toward the drums): "
+                            + "; ".join(" and ".join(m.tendons) for m in hit)))
+    holes = tip.holes
+    walls = [(math.hypot(a.x - b.x, a.z - b.z) - (a.diameter + b.diameter) / 2, a, b)
+             for i, a in enumerate(holes) for b in holes[i + 1:]]
+    if walls:
+        w, a, b = min(walls, key=lambda t: t[0])
+        if w < min_wall:
+            out.append(_failure("eyelet.wall", f"wall {w:.2f} mm between the tip disk's eyelets for "
+                                               f"{'+'.join(a.tendons)} and {'+'.join(b.tendons)} (turned toward the "
+                                               f"drums), under process.min_wall {min_wall:g} mm", "error", w, min_wall))
+    for seat in plan.disks[0].seats:
+        if seat.termination and seat.diameter >= seat.termination:
+            out.append(_failure("tendon.seat", f"{seat.tendon}'s seat on the base disk opens to Ø{seat.diameter:.2f} "
+                                               f"mm: its Ø{seat.termination:g} mm termination pulls through", "error",
+                                seat.diameter, seat.termination, seat.tendon))
+    return out
 
 
 def robot(plan: Plan) -> mc.Robot:

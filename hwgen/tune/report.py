@@ -88,7 +88,8 @@ def table(loaded: Loaded, rows: list[dict]) -> pa.Table:
     cols: dict[str, list] = {"trial": [], "hash": []}
     for n in loaded.names:
         cols[n] = []
-    extra = ["verdict", "feasible", "violation", *(n for n, _ in loaded.objectives), *bounds(loaded), "distance",
+    objectives = [n for n, _ in loaded.objectives if n != "distance"]      # distance: its own column
+    extra = ["verdict", "feasible", "violation", *objectives, *bounds(loaded), "distance",
              "failed_checks", "same_as", "message", "cpu_s"]
     for c in extra:
         cols[c] = []
@@ -103,7 +104,8 @@ def table(loaded: Loaded, rows: list[dict]) -> pa.Table:
         cols["feasible"].append(r["feasible"])
         cols["violation"].append(float(sum(r["constraints"])))
         for (n, _), v in zip(loaded.objectives, r["objectives"]):
-            cols[n].append(v if n == "distance" or results.value(n, r, state) is not None else None)
+            if n != "distance":
+                cols[n].append(v if results.value(n, r, state) is not None else None)
         for label, n in zip(bounds(loaded), bound_names):
             cols[label].append(results.value(n, r, state))
         cols["distance"].append(r.get("distance"))
