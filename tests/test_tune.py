@@ -523,3 +523,25 @@ def test_the_shipped_twenty_disk_tune_builds_every_trial(tmp_path):
     assert rows[1]["same_as"] == -1                 # the base as the first trial, not built again
     summary = (tmp_path / "tunes" / "fix-twenty-disks" / "summary.md").read_text()
     assert "disk.tilt" in summary
+
+
+def test_the_full_plan_screens_what_hwgen_check_fails():
+    """The robust level and above screen the full plan for what the lengths level cannot see: the
+    prototype passes; a helix steep at the base disk (a 26 mm, 5 half turns) has a seat wider than
+    its 1.5 mm knot (hwgen check's tendon.seat); one ending on A2's eyelet at the tip (a 28 mm, 5
+    half turns) shares its opening there (eyelet.overlap)."""
+    from hwgen.model.plan import make_plan
+    from hwgen.sweep import levels
+    from hwgen.sweep.spec import Variant, resolve
+    loaded = spec.load(PARAMS / "tune-stiffness.yaml")
+    tuned = dict(zip(loaded.names, (10.5, 31.6, 1, 0, -4.3, 8.2, 29.1, 1, 0, 9.3, 4.0, 26, 5, 0)))
+
+    def screens(values: dict) -> dict:
+        d = resolve(loaded.base, loaded.names, Variant(0, tuple(values[n] for n in loaded.names))).design
+        return {f["id"]: f for f in levels._plan_screens(make_plan(d), d.process.min_wall)}
+
+    assert screens(dict(zip(loaded.names, (8.0, *loaded.base_values[1:5], 6.0, *loaded.base_values[6:10], 6.0,
+                                           *loaded.base_values[11:])))) == {}
+    seat = screens(tuned)
+    assert set(seat) == {"tendon.seat"} and seat["tendon.seat"]["measured"] > 1.5 == seat["tendon.seat"]["limit"]
+    assert "eyelet.overlap" in screens({**tuned, "tendons[3].routing.function.a": 28})
