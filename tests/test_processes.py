@@ -7,6 +7,7 @@ import subprocess
 import sys
 
 from hwgen import processes
+from hwgen.engine import WORKER_PRELOAD
 
 
 def _state(name: str) -> tuple[bool, str | None, int]:
@@ -15,16 +16,16 @@ def _state(name: str) -> tuple[bool, str | None, int]:
 
 def test_a_worker_starts_with_the_kernel_imported_and_the_callers_environment(monkeypatch):
     monkeypatch.setenv("HWGEN_TEST_PROCESSES", "before")
-    with processes.pool(1) as pool:
+    with processes.pool(1, WORKER_PRELOAD) as pool:
         imported, seen, parent = pool.submit(_state, "HWGEN_TEST_PROCESSES").result()
     assert imported                 # preloaded by the server, not imported by the job
     assert seen == "before"
     assert parent != os.getpid()    # a fork of the server, not of this process
     monkeypatch.setenv("HWGEN_TEST_PROCESSES", "after")         # the server started before this
-    with processes.pool(1) as pool:
+    with processes.pool(1, WORKER_PRELOAD) as pool:
         assert pool.submit(_state, "HWGEN_TEST_PROCESSES").result()[1] == "after"
     monkeypatch.delenv("HWGEN_TEST_PROCESSES")
-    with processes.pool(1) as pool:
+    with processes.pool(1, WORKER_PRELOAD) as pool:
         assert pool.submit(_state, "HWGEN_TEST_PROCESSES").result()[1] is None
 
 
@@ -50,7 +51,7 @@ def test_a_worker_has_the_kernel_without_all_of_vtk_until_vtk_is_used():
     """OCP imports ``vtk`` as it starts, which would load all of VTK's modules (hwgen.cad makes
     that wait): the server's CadQuery has loaded the few it names, and the first use of ``vtk``
     loads the rest."""
-    with processes.pool(1) as pool:
+    with processes.pool(1, WORKER_PRELOAD) as pool:
         before, name, after = pool.submit(_vtk_state).result()
     assert name == "vtkPolyData"
     assert 0 < before < after / 2

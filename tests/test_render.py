@@ -228,7 +228,7 @@ def test_no_backend_still_builds(tmp_path, monkeypatch):
     from hwgen.pipeline import build
     monkeypatch.setenv(pictures.BACKEND_ENV, "none")
     res = build(load(ROOT / "params" / "prototype.yaml"), tmp_path)
-    entry = res.manifest["render"]
+    entry = res.manifest.render
     assert entry["status"] == "unavailable"
     assert "apt-get install" in entry["message"] and "vtk-osmesa" in entry["message"]
     assert (res.folder / "bom.csv").exists() and (res.folder / "stl" / "disk_00.stl").exists()

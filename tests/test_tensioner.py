@@ -231,7 +231,7 @@ def test_moved_wheels_and_an_edited_mesh_are_caught(proto, tmp_path):
     mesh = load_mesh(stl)
     mesh.apply_translation(0.05 * ph[:3, :3].T @ away)                  # the same move, in the file's frame
     mesh.export(stl)
-    checks = gear_checks(work, moved, p)
+    checks = gear_checks(work, moved["parts"], p)
     a, c1, c2, h = (_gear_checks_of(checks, ch) for ch in ("A", "C1", "C2", "H"))
     assert all(c.passed for c in a.values() if c.severity == "error")
     for ch in (c1, c2, h):
@@ -250,7 +250,7 @@ def test_counts_are_read_from_the_sections(proto):
     folder, man, p = proto
     ts = _design().tensioner.model_copy(update={"wheel_teeth": 25, "module": 1.2})
     lay = dataclasses.replace(p.tensioner_layout, pair=worm_pair(ts, p.min_wall))
-    one = {"parts": [_by_role(man, "tensioner_worm")["C1"], _by_role(man, "tensioner_wheel")["C1"]]}
+    one = [_by_role(man, "tensioner_worm")["C1"], _by_role(man, "tensioner_wheel")["C1"]]
     checks = gear_checks(folder, one, dataclasses.replace(p, tensioner_layout=lay))
     teeth = next(c for c in checks if c.id == "gear.teeth")
     assert not teeth.passed and teeth.measured == 24 and teeth.limit == 25
@@ -284,7 +284,7 @@ def test_tendon_runs_start_at_the_tip_eyelets(proto):
 
 def test_gear_checks_pass_on_the_prototype(proto):
     folder, man, p = proto
-    checks = gear_checks(folder, man, p)
+    checks = gear_checks(folder, man["parts"], p)
     failed = [c.message for c in checks if c.severity == "error" and not c.passed]
     assert not failed
     ids = {c.id for c in checks}

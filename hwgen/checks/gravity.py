@@ -23,6 +23,7 @@ import math
 
 import numpy as np
 
+from ..cad.manifest import Manifest
 from ..model import sag
 from .base import REBUILD, Check
 from .polygons import section_moments
@@ -55,10 +56,10 @@ def _spans(fits: list[SlotFit], length: float, ei_strip: float, e_print: float) 
     return spans
 
 
-def loads(parts, manifest: dict, length: float):
+def loads(parts, manifest: Manifest, length: float):
     """(strip mass per mm in g/mm and its record, [(part, s, mass)], tip assembly record) from the
     STLs (volume, centroid) and the manifest's densities."""
-    entries = {p["name"]: p for p in manifest["parts"]}
+    entries = {p["name"]: p for p in manifest.parts}
     strip, points, tip = None, [], []
     for p in parts:
         e = entries.get(p.name, {})
@@ -95,7 +96,7 @@ def _case(r: sag.SagResult) -> dict:
                        "base_moment_nmm": abs(r.lin_base_moment)}}
 
 
-def gravity_checks(parts, manifest: dict, plan, fits: list[SlotFit], strip_h: float | None,
+def gravity_checks(parts, manifest: Manifest, plan, fits: list[SlotFit], strip_h: float | None,
                    strip_t: float | None, length: float) -> tuple[dict, list[Check]]:
     """State N, the mount's stiffness and the strip under the actuating pair: (report, checks)."""
     bb = plan.backbone
