@@ -4,7 +4,7 @@ made again.
 The part cache (:mod:`hwgen.pipeline.units`) keeps whole units; when a unit has to be built again
 because one of its inputs changed, the costly solids inside it whose own inputs did not (the
 throated wheel's gear: one tooth's sector cut and turned round, the costliest boolean; the
-worm's swept thread, about a second) come from here: an edit that moves the tensioner but not
+worm's swept thread) come from here: an edit that moves the tensioner but not
 its gearing reuses both. The tensioner's channels, units of their own made in several processes
 at once, share their worm, gear, drive shaft, clamp plate and wheels through it too (a build
 without a cache keeps them in a store of its own): each is made once, by whichever unit comes
@@ -80,7 +80,7 @@ def kept(kind: str, inputs, make: Callable[[], object]):
             if solid is None:
                 solid = make()
                 # its volume and centroid with it: whoever reads it back finds it sound and measures
-                # it for the manifest without integrating it again (half a second for a wheel)
+                # it for the manifest without integrating it again
                 volume, com = mass_properties(solid)
                 store.put_record(key, {"brep": store.put_bytes(write_brep(solid)), "mass": [volume, list(com)]})
     _MADE_AS[solid] = key

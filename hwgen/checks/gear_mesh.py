@@ -56,7 +56,7 @@ CENTER_TOL_MM = 0.005         # axes fitted to STL crests at 0.01 mm chord: a fe
 SHAFT_ANGLE_TOL_DEG = 0.02
 GAP_SEARCH_MM = 1.0           # min_gap search length between worm and wheel, beyond the centre offset
 NEAR_GAP_MM = 0.2             # searched first: a gap found within it is the one the longer search finds
-#                               (the closest pair of triangles is among the pairs nearer than it), 4× faster
+#                               (the closest pair of triangles is among the pairs nearer than it), far fewer pairs
 SWEEP_STEPS = 6               # worm angles over one thread period for interference and gap
 SENSE_ANGLES = (math.pi / 3, 2 * math.pi / 3)   # worm angles at which the wheel's turning sense is told
 ZONE_GAP_MM = 0.05            # a flank point this close to the worm carries load (≈ the Hertz approach at break load)

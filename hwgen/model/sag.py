@@ -26,7 +26,7 @@ is scanned over ψ_L in [-π, π] in one vectorised integration, each sign chang
 Brent's method; where a heavy load admits several equilibria (the others loop the strip over
 itself) the one with the least potential energy (bending + gravity) is kept, the stable state
 reached by loading the straight strip. At the 1 mm default step the error is about 1e-12 of the
-tip sag (it falls as h⁴), and one solve takes some 20-40 ms.
+tip sag (it falls as h⁴).
 
 The small-deflection (Euler-Bernoulli) estimate with the same loads and undeformed lever arms
 is computed too (unit-load method, 3-point Gauss per step): it is the upper bound of the base

@@ -1,10 +1,10 @@
 """exploded.svg: a hidden-line drawing of the exploded assembly, balloons and a parts table.
 
 Hidden lines are removed against a depth buffer rather than by the CAD kernel (CadQuery's
-projection of a whole assembly with gears takes about 40 s): the exploded parts are drawn
+projection of a whole assembly with gears is far too slow for a build): the exploded parts are drawn
 once, flat, into an offscreen depth buffer; every sharp mesh edge and every silhouette edge
 of the same view is sampled about once per pixel and kept where nothing lies in front of it.
-The result is the line drawing of the PNG's view, to scale, in about a second.
+The result is the line drawing of the PNG's view, to scale.
 """
 from __future__ import annotations
 

@@ -51,8 +51,8 @@ EXIT_NO_BACKEND = 3      # the child's exit code for RenderUnavailable
 # same bytes, and the checks drawn beside them keep the other core
 RASTER_THREADS_ENV = "LP_NUM_THREADS"
 # OpenBLAS likewise: its threads for the small products here (a part's face normals turned to the
-# view, (m, 3) @ (3, 3)) cost more than they do, about a second of the child's CPU on the prototype,
-# most of it waiting for the other core; one thread gives the same bytes
+# view, (m, 3) @ (3, 3)) cost more than they do, most of it waiting for the other core; one
+# thread gives the same bytes
 BLAS_THREADS_ENV = "OPENBLAS_NUM_THREADS"
 
 

@@ -5,7 +5,7 @@ Everything starts from the files: each printed part's STL (the file is in print 
 its largest flat face on z = 0) and its manifest entry. Libraries:
 
 * rectpack (Apache-2.0) packs the parts' footprints, rotations by 90° allowed; the fewest
-  plates of a few of its packing and sorting heuristics is kept (it is a heuristic: 1-2 ms a try);
+  plates of a few of its packing and sorting heuristics is kept (it is a heuristic, and cheap);
 * lib3mf (BSD-3, the 3MF consortium's own library) writes the 3MF: strict to the standard,
   object names kept, and byte-identical from one build to the next once the UUIDs are fixed
   (uuid5 of the part's name); trimesh's writer draws random UUIDs and zip times.
@@ -213,8 +213,8 @@ def write_3mf(path: Path, objects: list[tuple[str, np.ndarray, np.ndarray]]) -> 
 
 @lru_cache(maxsize=1)
 def _wrapper():
-    """lib3mf's wrapper, loaded once (loading it looks up every function of the library: a tenth of a
-    second each time); every model made through it is its own."""
+    """lib3mf's wrapper, loaded once (loading it looks up every function of the library); every
+    model made through it is its own."""
     import lib3mf
     return lib3mf.get_wrapper()
 

@@ -110,8 +110,7 @@ def _surface_actor(surface, rgb, shading: bool = True):
     prop = actor.GetProperty()
     # a part's faces turned away from the camera are never seen: its mesh is closed and wound
     # outward (checks/parts.py fails any part that is open or inside out), so its near side covers
-    # them. Not rasterising them saves about a twentieth of the renderer's CPU; the pixels and the
-    # SVG's depth buffer are the same
+    # them. They are not rasterised; the pixels and the SVG's depth buffer are the same
     prop.BackfaceCullingOn()
     prop.SetColor(*rgb)
     if shading:
@@ -279,7 +278,7 @@ class Renderer:
         self.window.SetSize(W, H)
         if labels:
             # the camera (set by _fit) and the window's size map world points to the screen: no
-            # render is needed before (one took 0.17 s for exploded.png; the labels land on the same pixels)
+            # render is needed before (the labels land on the same pixels)
             for text, point, *rgb in labels:
                 # (text, point): centred on it; (text, point, colour): a callout starting there, on white
                 ren.SetWorldPoint(*point, 1.0)
@@ -336,9 +335,8 @@ class Renderer:
 
 
 
-# zlib's level for the PNGs. Measured on the twelve pictures of each shipped design (1000-1800 px
-# wide): Pillow's optimize=True (level 9) took 1.45 s of CPU for 1.92 MB; level 6, 0.37 s for 1.86 MB
-# (level 9 alone 1.41 s, 1.83 MB; level 5, 0.34 s, 1.87 MB). The pixels are the same at any level.
+# zlib's level for the PNGs: on the shipped designs' pictures, level 9 (Pillow's optimize=True)
+# made files a few per cent smaller for about four times the CPU. The pixels are the same at any level.
 PNG_COMPRESS_LEVEL = 6
 
 

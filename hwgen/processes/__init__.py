@@ -1,8 +1,8 @@
 """The processes a build starts for the CAD kernel and the gear checks: forked from one server
 process that imported their libraries once.
 
-A worker started with ``spawn`` imports CadQuery (OCP and the VTK it imports) again: 1.3-3 s of
-CPU each, on a machine already busy with the other workers, and a plain ``fork`` of a process that has built
+A worker started with ``spawn`` imports CadQuery (OCP and the VTK it imports) again, each on a
+machine already busy with the other workers, and a plain ``fork`` of a process that has built
 CadQuery geometry hangs (FIELD-NOTES). The ``forkserver`` start method sits between: one server
 process, started on first use, imports the modules its first caller names and builds no geometry; each worker is a
 fork of it, ready at once. Like spawn, a worker inherits nothing of the build's own state (its
