@@ -285,12 +285,12 @@ def test_own_weight_point_mass_matches_the_cantilever_and_disks_add(built):
     assert I == pytest.approx(bb.height * bb.thickness ** 3 / 12, rel=1e-3)     # h t³/12 of the strip's STL
     P = 0.01 * E * I / L ** 2                                         # P L²/EI = 0.01: linear
     m = P / (9.81e-3)
-    alone = sag.solve_sag(L, [L], [m], E=E, I=I, thickness=t, strip_lin_density=0.0)
+    alone = sag.solve_sag(L, [L], [m], sag.Strip(E, I, t, 0.0))
     assert alone.tip_sag == pytest.approx(P * L ** 3 / (3 * E * I), rel=0.01)
     disks = g["disks"]
     assert len(disks) == 12 and all(12 < x["mass_g"] < 40 for x in disks)
     more = sag.solve_sag(L, [L] + [x["s_mm"] for x in disks], [m] + [x["mass_g"] for x in disks],
-                         E=E, I=I, thickness=t, strip_lin_density=0.0)
+                         sag.Strip(E, I, t, 0.0))
     assert more.tip_sag > alone.tip_sag
     # the build's state N: the tensioner from the files, the hubs stiffen, the plot is written
     worst = g["cases"][g["gravity"]]

@@ -57,7 +57,9 @@ def test_one_worm_drive_per_channel(proto):
 def test_worm_and_wheel_files_are_closed_solids(proto):
     folder, man, _ = proto
     for role in ("tensioner_worm", "tensioner_wheel", "tensioner_clamp", "tensioner_drive", "tensioner_housing"):
-        for q in (x for x in man["parts"] if x["role"] == role):
+        of_role = [x for x in man["parts"] if x["role"] == role]
+        assert of_role, role                # a renamed role must not pass with nothing measured
+        for q in of_role:
             mesh = load_mesh(ManifestPart.of(q).stl_in(folder))
             assert mesh.is_watertight and mesh.is_winding_consistent and mesh.is_volume, q["name"]
             assert mesh.volume == pytest.approx(q["volume_mm3"], rel=0.01), q["name"]
@@ -107,7 +109,7 @@ def test_worm_has_a_thread_and_wheel_has_teeth(proto):
 
     wheel_q = _by_role(man, "tensioner_wheel")["C1"]
     lay = layout(_design(), p.paths, p.disks[-1])
-    unit = lay.unit("C1")
+    unit = next(u for u in lay.units if u.channel == "C1")
     z_file = (lay.wheel_flip(unit) @ [0, 0, unit.z_wheel_mid - unit.z_part[0], 1])[2]
     sec = placed_manifold(folder, wheel_q, np.eye(4)).slice(z_file).to_polygons()
     pts = np.vstack(sec)

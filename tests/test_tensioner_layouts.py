@@ -180,7 +180,7 @@ def test_opposite_winding_puts_the_pair_on_either_side_of_its_drum(tmp_path):
     f = tmp_path / "opposite.yaml"
     f.write_text(yaml.safe_dump(doc))
     lay = make_plan(load(f).design).tensioner_layout
-    unit = lay.unit("A")
+    unit = next(u for u in lay.units if u.channel == "A")
     centre = (lay.turn @ [unit.center[0], unit.center[1], 0, 1])[0]
     runs = {r.tendon: r for r in lay.runs if r.channel == "A"}
     assert sorted(r.sense for r in runs.values()) == [-1, 1]

@@ -29,7 +29,8 @@ from OCP.TopoDS import TopoDS
 
 from ..model.gearing import GearDesignError, WormPair
 from ..model.tensioner_layout import Fastening, TensionerLayout, Unit, joint
-from ..model.tensioner_layout.sizes import ANCHOR_HOLE, CAP, CLAMP_PLATE, M2_CLEARANCE, NUT, NUT_PLAY, PIN_ENGAGE
+from ..model.hardware import NUT_PLAY
+from ..model.tensioner_layout.sizes import ANCHOR_HOLE, CAP, CLAMP_PLATE, M2_CLEARANCE, NUT, PIN_ENGAGE
 from . import location
 from .bspline import interpolating_surface
 from .primitives import TOOL, cylinder, hex_prism, one

@@ -113,15 +113,15 @@ def gravity_checks(parts, manifest: Manifest, plan, fits: list[SlotFit], strip_h
     spans = _spans(fits, length, E * I, e_print)
     st = [s for _, s, _ in points]
     ms = [m for _, _, m in points]
-    common = dict(E=E, I=I, thickness=t, strip_lin_density=strip["lambda_g_mm"], tip_mass=tip["mass_g"])
+    section = sag.Strip(E, I, t, strip["lambda_g_mm"])
     cases = {}
     for down, sign in (("-z", 1.0), ("+z", -1.0)):
-        cases[down] = sag.solve_sag(length, st, ms, tip_offset=(tip["a_mm"], sign * tip["z_mm"]), spans=spans,
-                                    **common)
+        cases[down] = sag.solve_sag(length, st, ms, section, tip=sag.Tip(tip["mass_g"], (tip["a_mm"], sign * tip["z_mm"])),
+                                    spans=spans)
     worst_key = max(cases, key=lambda k: cases[k].max_stress)
     r = cases[worst_key]
-    bare = sag.solve_sag(length, st, ms, tip_offset=(tip["a_mm"], (1 if worst_key == "-z" else -1) * tip["z_mm"]),
-                         **common)
+    bare = sag.solve_sag(length, st, ms, section,
+                         tip=sag.Tip(tip["mass_g"], (tip["a_mm"], (1 if worst_key == "-z" else -1) * tip["z_mm"])))
     allow = bb.allowable_stress_mpa
     s, y, z, stress = _downsample([r.s, r.y, r.z, r.stress], CURVE_POINTS)
     report = {
@@ -262,9 +262,8 @@ class _StripStudy:
     def _own_weight(self, t: float, h: float) -> float:
         I = sag.second_moment(h, t)
         r = self.r
-        return sag.solve_sag(r.L, r.stations, r.point_masses, E=self.E, I=I, thickness=t,
-                             strip_lin_density=r.strip_lin_density * t * h / (r.thickness * self.h),
-                             tip_mass=r.tip_mass, tip_offset=r.tip_offset,
+        section = sag.Strip(self.E, I, t, r.strip_lin_density * t * h / (r.thickness * self.h))
+        return sag.solve_sag(r.L, r.stations, r.point_masses, section, tip=sag.Tip(r.tip_mass, r.tip_offset),
                              spans=_spans(self.fits, self.length, self.E * I, self.e_print)).max_stress
 
     def bend(self, t: float, ang: float | None = None) -> float:

@@ -17,7 +17,7 @@ from ..model import kinematics as kin
 from ..model.routing import table_deviations
 from .anchors import seat_checks
 from .base import REBUILD, Check
-from .clearances import backbone_checks, hole_checks, tendon_pair_checks, wall_checks
+from .clearances import StripBend, backbone_checks, hole_checks, tendon_pair_checks, wall_checks
 from .eyelets import backbone_section, locate_eyelets, measure_disk
 from .gear_mesh import gear_checks, gear_pairs
 from .gravity import gravity_checks
@@ -158,7 +158,7 @@ def _measure(folder: Path, manifest: Manifest, plan) -> Measured:
     checks += hole_checks(emap, proc.min_hole, td, angles, L, tip_exits(manifest))
     checks += tendon_pair_checks(emap, rep_in, td, angles, L)
     checks += backbone_checks(emap, folder / backbone_template(manifest), bb_outline, bb_holes, td,
-                              s.position_tol_mm, rep_in.get("findings", []), strip_t, angles, L)
+                              s.position_tol_mm, rep_in.get("findings", []), StripBend(strip_t, angles, L))
     checks += mesh_checks(parts)
     checks += interference_checks(parts, s.interference_tol_mm3)
     checks += build_volume_checks(parts, proc.build_volume)

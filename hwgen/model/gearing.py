@@ -44,6 +44,7 @@ DEDENDUM = 1.25           # dedendum / module: 0.25 m tip clearance
 CLEARANCE = DEDENDUM - ADDENDUM   # the hob's thread tip over the worm's = the wheel's root clearance, modules
 MAX_OUTSIDE_EXTRA = 1.0   # the wheel's outside radius is at most ra2 + this, modules
 RIM_CHAMFER = 0.3         # 45° chamfer on the outside rim at each face, modules
+MIN_TIP = 0.8             # mm: the thinnest wheel tooth tip unless the process says (its minimum wall)
 HOB_SECTION_SAMPLES = 600  # points per flank of the hob's section in one plane
 # Hertz allowable: under a line contact the first yield starts below the surface when the
 # peak pressure p0 reaches about 1.67 σ_y (Tresca; Johnson, Contact Mechanics §4.2: τ_max =
@@ -87,7 +88,7 @@ class WormPair:
     face_width: float
     worm_length: float
     center_offset: float
-    min_tip: float = 0.8
+    min_tip: float = MIN_TIP
 
     # ---- basic dimensions -------------------------------------------------------------
     @property
@@ -442,7 +443,7 @@ def meshing_length(pair: WormPair, planes: int = 41) -> float:
     return float(2 * np.sqrt(np.max(reach[inside] ** 2 - worm_tip[inside] ** 2)))
 
 
-def worm_pair(t, min_tip: float = 0.8) -> WormPair:
+def worm_pair(t, min_tip: float = MIN_TIP) -> WormPair:
     """The pair described by a :class:`hwgen.params.Tensioner` section; ``min_tip`` is the
     process's minimum wall (the thinnest tooth tip the wheel's outside radius may leave)."""
     return WormPair(module=t.module, starts=t.worm_starts, teeth=t.wheel_teeth,

@@ -34,7 +34,7 @@ from .bom import family_label
 from .drawing import write_exploded_svg
 from .scene import (Posed, exploded_placements, family_colours, load_parts, pose_bent, pose_rigid,
                     tendon_colours, tendon_polylines)
-from .view import BACKEND_ENV, BENT, ISOMETRIC, TEXT_COLOUR, Renderer, RenderUnavailable, View
+from .view import BACKEND_ENV, BENT, ISOMETRIC, TEXT_COLOUR, Look, Renderer, RenderUnavailable, View
 
 CHILD_TIMEOUT_S = 300
 INSTALL_HINT = (
@@ -215,7 +215,7 @@ def render_pictures(folder: Path, manifest: Manifest, settings: Settings, svg_ta
                         f"{manifest.name}: bent {settings.bend_deg:g}° (constant curvature, eq. 1)")
         texts.append((reachable_note(manifest), TEXT_COLOUR, (0.015, 0.02), 22, None))
         _, W, H = r.draw(_marked(posed, marks[0]), warned, BENT, folder / "bent.png", tubes=bent,
-                         aspect_range=(0.6, 1.0), texts=texts,
+                         look=Look(aspect_range=(0.6, 1.0)), texts=texts,
                          labels=_part_labels(posed, BENT, marks[0]) + tube_labels)
         images["bent.png"] = {"width": W, "height": H}
     timings["bent_s"] = time.perf_counter() - t
@@ -270,7 +270,7 @@ def draw_step(r: Renderer, folder: Path, manifest: Manifest, job: dict, placed: 
         if job["tendons"] else None
     (Path(folder) / job["file"]).parent.mkdir(parents=True, exist_ok=True)
     _, W, H = r.draw(posed, colours, ISOMETRIC, Path(folder) / job["file"], tubes=tubes,
-                     texts=[(job["title"], TEXT_COLOUR, (0.015, 0.95), 40, None)], width=GUIDE_WIDTH_PX)
+                     texts=[(job["title"], TEXT_COLOUR, (0.015, 0.95), 40, None)], look=Look(width=GUIDE_WIDTH_PX))
     return {"width": W, "height": H}
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -190,6 +191,16 @@ ISOMETRIC = View((0.62, -0.58, 0.55), (0.0, 0.25, 1.0))
 BENT = View((1.0, -0.25, 0.35), (0.0, 0.0, 1.0))
 
 
+class Look(NamedTuple):
+    """How :meth:`Renderer.draw` frames and draws a picture."""
+
+    aspect_range: tuple[float, float] = (0.45, 1.3)   # height over width, clipped to this
+    margin: float = 0.04            # around the drawn points, of their extent
+    edges: bool = True              # the parts' sharp edges drawn as lines
+    shading: bool = True            # lit faces (else flat colour, no anti-aliasing)
+    width: int | None = None        # pixels (None: the renderer's)
+
+
 class Renderer:
     """One offscreen window reused for every picture of the process."""
 
@@ -227,13 +238,12 @@ class Renderer:
         return W, H
 
     def draw(self, posed: list[Posed], colours: dict[str, tuple], view: View, path: Path | None,
-             tubes: dict[str, tuple[np.ndarray, tuple]] | None = None, texts=(),
-             labels=(), aspect_range=(0.45, 1.3), margin=0.04, edges: bool = True, shading: bool = True,
-             width: int | None = None):
+             tubes: dict[str, tuple[np.ndarray, tuple]] | None = None, texts=(), labels=(), look: Look = Look()):
         """Draw posed parts (and tendon tubes), write a PNG when a path is given.
 
         Returns (renderer, width, height) so a caller can read the depth buffer.
         """
+        aspect_range, margin, edges, shading, width = look
         rc = self.rc
         self.release()                  # the last picture's scene goes before this one is built
         ren = rc.vtkRenderer()

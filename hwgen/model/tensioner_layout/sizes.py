@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 from ...params import Design, Tensioner
 from .. import hardware
+from ..hardware import NUT_PLAY
 from ..gearing import WormPair, worm_pair
 from ..specs import DiskSpec
 
@@ -45,7 +46,6 @@ TENDON_HOLE = 3.0         # minimum hole through a base bar around a tendon
 # Fasteners by process (data/fasteners.csv). Resin: hex nuts (ISO 4032) in traps, with play over
 # the nut; thermoplastic: heat-set inserts.
 NUT = {t: hardware.nut(t) for t in ("M2", "M3")}          # across flats, height
-NUT_PLAY = hardware.size("nut trap", "any", "play")
 INSERT = {t: hardware.insert(t) for t in ("M2", "M3")}    # bore, length
 SET_SCREW = hardware.size("set screw", "M3", "length")    # the strip clamp's M3 set screws
 SPINE = 4.0              # spine wall: the drive shaft's bearing and the worm's thrust face
