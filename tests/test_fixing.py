@@ -12,7 +12,7 @@ import shutil
 import numpy as np
 import pytest
 
-from hwgen.cad.manifest import ManifestPart
+from hwgen.cad.manifest import Manifest, ManifestPart
 from hwgen.cad.disk import build_disk
 from hwgen.cad.export import write_stl
 from hwgen.checks.meshes import load_mesh, to_manifold
@@ -37,7 +37,7 @@ def _manifest(folder) -> dict:
 
 
 def _check(folder, design):
-    return run_checks(folder, _manifest(folder), make_plan(design))
+    return run_checks(folder, Manifest.of(_manifest(folder)), make_plan(design))
 
 
 def _failed(rep, cid):
@@ -370,6 +370,6 @@ def test_bill_of_materials_has_adhesive_mount_hardware_and_crimps(built, tmp_pat
     crimp = d.tendon_material.termination.model_copy(update={"kind": "crimp", "diameter": 1.3, "length": 4.0,
                                                             "name": "copper crimp sleeve 0.5 mm bore"})
     d2 = d.model_copy(update={"tendon_material": d.tendon_material.model_copy(update={"termination": crimp})})
-    rows2, _ = bom.bom_rows(folder, _manifest(folder), make_plan(d2), read_report(folder))
+    rows2, _ = bom.bom_rows(folder, Manifest.of(_manifest(folder)), make_plan(d2), read_report(folder))
     (sleeves,) = [r for r in rows2 if r["part"] == "crimp sleeve"]
     assert sleeves["qty"] == 5 and sleeves["size"] == "Ø1.3 × 4 mm"

@@ -213,7 +213,7 @@ def test_new_families_are_drawn_without_code_changes(proto, tmp_path):
                            "files": {"stl": {"path": f"stl/{name}.stl", "sha256": ""},
                                      "step": {"path": f"step/{name}.step", "sha256": ""}}})
     design = load(ROOT / "params" / "prototype.yaml").design
-    table = bom.family_table(m, design.process.name)
+    table = bom.family_table(Manifest.of(m), design.process.name)
     res = pictures.render_pictures(tmp_path, Manifest.of(m), pictures.Settings(1600, 20.0, 90.0), table)
     assert set(res["palette"]) == {p["role"] for p in m["parts"] if not p.get("fixture")} and "worm" in res["palette"]
     for role, c in res["palette"].items():      # the disk's manifest colour, yet a colour of its own

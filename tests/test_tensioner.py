@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from hwgen.cad.manifest import ManifestPart
+from hwgen.cad.manifest import Manifest, ManifestPart
 from hwgen.checks.axes import fit_axis
 from hwgen.checks.gear_mesh import GAP_TOL_MM, INTERFERENCE_TOL_MM3, count_teeth, gear_checks, measure_pair, mesh_measure, toward
 from hwgen.checks.meshes import load_mesh, placed_manifold, placed_mesh
@@ -263,7 +263,7 @@ def test_counts_are_read_from_the_sections(proto):
 
 def test_every_tendon_clears_every_other_part(proto):
     folder, man, p = proto
-    checks = tendon_checks(folder, man, p)
+    checks = tendon_checks(folder, Manifest.of(man), p)
     clear = [c for c in checks if c.id == "tensioner.tendon_clearance"]
     assert sorted(c.where["tendon"] for c in clear) == sorted(t.name for t in p.paths)
     d = p.tendon_material.diameter
@@ -422,7 +422,7 @@ def test_tendon_clearance_check_sees_a_part_in_the_way(proto):
     h = next(q for q in moved["parts"] if q["role"] == "tensioner_housing")
     z_run = min((r["start"][2] for q in man["parts"] for r in q.get("tendon_runs", [])), key=abs)
     h["placement"][2][3] += z_run - 2.0          # the bar spans z -1.5..6 about the strip
-    failed = [c for c in tendon_checks(folder, moved, p) if c.id == "tensioner.tendon_clearance" and not c.passed]
+    failed = [c for c in tendon_checks(folder, Manifest.of(moved), p) if c.id == "tensioner.tendon_clearance" and not c.passed]
     assert failed and all(c.where["part"] == "tensioner_housing" for c in failed)
 
 
