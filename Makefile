@@ -2,19 +2,20 @@
 #   make build   set up .venv, install hwgen, build out/prototype/ from params/prototype.yaml
 #   make test    same set-up, then the whole test suite
 #   make test-fast  the tests that build no part with the CAD kernel (under a minute)
+#   make docs    the documentation site into site/ (open site/index.html)
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: build test test-fast bench stability docs-images clean venv clients slicer-check bytecode
+.PHONY: build test test-fast bench stability docs docs-images clean venv clients slicer-check bytecode
 
 venv: $(STAMP)
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[test]"
+	$(BIN)/python -m pip install --quiet -e ".[test,docs]"
 	touch $(STAMP)
 
 # hwgen's modules compiled ahead (as pip compiles an installed package): every process a build
@@ -65,13 +66,21 @@ bench: $(STAMP) bytecode
 stability: $(STAMP) bytecode
 	$(BIN)/python -m tests.stability --robots 100
 
-# the README's pictures, from a fresh build of the prototype
+# the pictures of the README and the site (docs/images/), from fresh builds of the prototype (with
+# its MuJoCo model) and of the twenty-disk robot, which fails checks (exit 1) and marks them in its
+# pictures; docs/pictures.py names them and keeps each small
 docs-images: $(STAMP)
 	rm -rf .docs-build
 	$(BIN)/hwgen build params/prototype.yaml --out .docs-build -q
-	cp .docs-build/prototype/exploded.png docs/images/prototype-exploded.png
-	cp .docs-build/prototype/bent.png docs/images/prototype-bent.png
+	$(BIN)/hwgen sim params/prototype.yaml --out .docs-build -q
+	$(BIN)/hwgen build params/twenty-disks.yaml --out .docs-build -q || [ $$? -eq 1 ]
+	$(BIN)/python docs/pictures.py .docs-build docs/images
 	rm -rf .docs-build
+
+# the documentation site into site/ (open site/index.html): every link and anchor must resolve, the
+# parameter reference is written from the schema, and every check of the code must have its row
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --site-dir site
 
 clean:
 	rm -rf out/*/ .pytest_cache

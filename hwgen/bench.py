@@ -228,7 +228,8 @@ def disk_scad(spec) -> str:
     from :func:`hwgen.cad.disk.eyelet_profiles`), seat, seat chamber and glue port cut at once. Left
     out: turning the tip disk over for printing (orientation only). OpenSCAD writes meshes only:
     no STEP or exact BREP, which hwgen's disks also write."""
-    from hwgen.cad.disk import NORMAL_AXIS_TOL, SEAT_OVERLAP, TOOL_OVERRUN, _to_file, eyelet_profiles
+    from hwgen.cad.disk import NORMAL_AXIS_TOL, TOOL_OVERRUN, _to_file, eyelet_profiles
+    from hwgen.model.fixing import seat_overlap
     T, seated = spec.thickness, bool(spec.seats)
     normal = [h for h in spec.holes if abs(abs(h.axis[1]) - 1) < NORMAL_AXIS_TOL and not seated]
     slanted = [h for h in spec.holes if h not in normal]
@@ -265,7 +266,7 @@ def disk_scad(spec) -> str:
         tools += revolved(h, False)
     for st in spec.seats:
         tools.append(f"translate({_v((*_to_file(st.x, st.z), -TOOL_OVERRUN))}) "
-                     f"cylinder(d={st.diameter:.6f}, h={spec.seat_plate + SEAT_OVERLAP + TOOL_OVERRUN:.6f});")
+                     f"cylinder(d={st.diameter:.6f}, h={spec.seat_plate + seat_overlap(T, spec.seat_plate) + TOOL_OVERRUN:.6f});")
     for x, z, dia, height in spec.seat_chambers:
         tools.append(f"translate({_v((*_to_file(x, z), spec.seat_plate))}) cylinder(d={dia:.6f}, h={height:.6f});")
     if hub is not None and hub.port is not None:

@@ -57,10 +57,19 @@ class Outcome:
 
 
 def describe(doc: dict) -> str:
-    kinds = collections.Counter(t["routing"]["function"]["kind"] for t in doc["tendons"])
-    return (f"{doc['disks']['count']} disks over {doc['backbone']['length']:g} mm, strip "
-            f"{doc['backbone']['height']:g} × {doc['backbone']['thickness']:g}, slot ±"
-            f"{doc['disks']['slot_clearance']:g}, tendons " + " ".join(f"{n} {k}" for k, n in sorted(kinds.items())))
+    """What the robot is, in a few words: disks, strip, its ends, process and tendons."""
+    def kind(t: dict) -> str:
+        f = t["routing"].get("function")
+        k = "table" if f is None or "table" in t["routing"] else (
+            f"cosine {f.get('axis', 'z')}" if f["kind"] == "cosine" else f["kind"])
+        return k + (" mirrored" if t["routing"].get("mirror") else "")
+    kinds = collections.Counter(kind(t) for t in doc["tendons"])
+    bb, dk = doc["backbone"], doc["disks"]
+    return (f"{dk['count']} disks{' (listed)' if dk.get('stations') else ''} Ø{dk['outer_diameter']:g} × "
+            f"{dk.get('thickness', 0):g}/{dk.get('end_thickness', 0):g} over {bb['length']:g} mm, strip "
+            f"{bb['height']:g} × {bb['thickness']:g} + {bb.get('extra_base', '-')}/{bb.get('extra_tip', 0):g}, "
+            f"slot ±{dk['slot_clearance']:g}, {doc['process']['material']}, tendons "
+            + ", ".join(f"{n} {k}" for k, n in sorted(kinds.items())))
 
 
 def build_one(index: int, doc: dict, root: Path) -> Outcome:

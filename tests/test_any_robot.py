@@ -21,7 +21,7 @@ from hwgen.params import Design
 from hwgen.pipeline import design_plan, load
 
 from .conftest import PARAMS
-from .robots import BASE, random_robot
+from .robots import BASE, classic_robot, random_robot
 from .stability import SEED, build_one
 
 PLAN_ROBOTS = 100
@@ -183,15 +183,28 @@ def test_jig_pieces_fit_the_printer_and_cut_clear_of_the_slots(count, length):
             or any(abs(p.y0 - (b + a2) / 2) < 1e-9 for (_, b), (a2, _) in zip(lay.slots, lay.slots[1:]))
 
 
-def test_the_jig_walls_clear_the_strip_and_hubs():
-    """A 66 mm strip in 72 mm disks: the comb walls start beyond the strip's edges and the hubs'
-    sides, so the disks' rims enter them less deep."""
+@pytest.mark.parametrize("height, od", [(60.0, 72.0), (66.0, 72.0), (73.2, 77.5), (62.1, 82.5), (67.9, 72.5)])
+def test_the_jig_walls_take_the_disks_rims_clear_of_the_strip_and_hubs(height, od):
+    """The comb walls take JIG_ENGAGE of every disk's rim. Beside the strip where the strip and the
+    hubs leave them room (the prototype), else under them: a 73.2 mm strip in 77.5 mm disks (its
+    hubs reach past the rim) once crashed on the walls' height (math domain error)."""
+    from hwgen.model.fixtures import JIG_CLEAR, JIG_ENGAGE
     doc = copy.deepcopy(BASE)
-    doc["backbone"]["height"] = 66.0
+    doc["backbone"]["height"] = height
+    doc["disks"]["outer_diameter"] = od
     d = _design(doc)
     lay = jig_layout(d)
-    assert lay.x_inner >= 66.0 / 2 + d.disks.slot_clearance + d.disks.hub.wall
-    assert lay.x_inner < d.disks.outer_diameter / 2
+    r = od / 2
+    assert lay.x_inner == pytest.approx(r - JIG_ENGAGE)
+    hub_x = height / 2 + d.disks.slot_clearance + d.disks.hub.wall
+    hub_z = d.backbone.thickness / 2 + d.disks.slot_clearance + d.disks.hub.wall
+    assert lay.low == (lay.x_inner < hub_x + JIG_CLEAR)
+    if lay.low:
+        assert lay.z_top <= -(hub_z + JIG_CLEAR) + 1e-9
+        assert math.sqrt(r**2 - lay.x_inner**2) > -lay.z_top      # the rim reaches below the walls' top
+    else:
+        assert lay.z_top > math.sqrt(r**2 - lay.x_inner**2)
+    assert (height, od) != (60.0, 72.0) or not lay.low
 
 
 @pytest.mark.slow
@@ -209,7 +222,8 @@ def test_lab_robots_build_without_breaking_their_own_parts(index, tmp_path):
 @pytest.mark.slow
 @pytest.mark.parametrize("index, station", [(25, 13), (72, 1)])
 def test_eyelets_routed_into_each_other_share_one_opening_in_a_closed_disk(index, station, tmp_path):
-    """Robot 25 of the stability draw routes two helical tendons 0.8 mm apart through its disks,
+    """Robot 25 of the first stability draw (tests/robots.py: classic_robot) routes two helical
+    tendons 0.8 mm apart through its disks,
     robot 72 two cosine tendons 0.3 mm apart: their near-coincident slanted bores left the disks'
     meshes open. The plan gives them one opening; measured from the exported STL, the disk is a
     closed mesh and one hole, where the plan put it, holds both tendons' routed positions; the
@@ -222,7 +236,7 @@ def test_eyelets_routed_into_each_other_share_one_opening_in_a_closed_disk(index
     from hwgen.checks.polygons import inside
 
     rng = np.random.default_rng(SEED)
-    doc = [random_robot(rng, f"robot{i:03d}") for i in range(index + 1)][index]
+    doc = [classic_robot(rng, f"robot{i:03d}") for i in range(index + 1)][index]
     p = make_plan(_design(doc))
     spec = p.disks[station]
     merged = [m for m in p.merges if m.station == station and m.kind == "overlap"]
@@ -247,14 +261,14 @@ def test_eyelets_routed_into_each_other_share_one_opening_in_a_closed_disk(index
 def test_the_spines_leave_room_at_the_strip_clamps_ends_for_its_nuts(index):
     """The clamp's set-screw nuts slide in from its ends, corners first: a spine's inner face stands
     at least an M3 nut's width across corners (5.5 / cos 30° = 6.35 mm) and its play beyond the clamp.
-    Robot 64 of the stability draw (a 75.5 mm strip) had its clamp run 1.8 mm into the spines; the
+    Robot 64 of the first stability draw (a 75.5 mm strip) had its clamp run 1.8 mm into the spines; the
     prototype left 5.97 mm."""
     from hwgen.model.tensioner_layout.sizes import NUT, NUT_PLAY
     if index is None:
         d = load(PARAMS / "prototype.yaml").design
     else:
         rng = np.random.default_rng(SEED)
-        d = _design([random_robot(rng, f"robot{i:03d}") for i in range(index + 1)][index])
+        d = _design([classic_robot(rng, f"robot{i:03d}") for i in range(index + 1)][index])
     lay = make_plan(d).tensioner_layout
     assert lay is not None and lay.clamp_block is not None and lay.fastening == "nut"
     corners = NUT["M3"][0] / math.cos(math.radians(30))
@@ -263,7 +277,7 @@ def test_the_spines_leave_room_at_the_strip_clamps_ends_for_its_nuts(index):
 
 @pytest.mark.slow
 def test_chamfers_on_steep_eyelets_leave_no_cup(tmp_path):
-    """Robot 2 of the stability draw slants helical eyelets 47-55° from the disk normal. A 45° chamfer
+    """Robot 2 of the first stability draw slants helical eyelets 47-55° from the disk normal. A 45° chamfer
     cone around such an axis reaches below its own start on the downhill side: a pocket of about
     3 mm² closed below as the disk prints face down (print.cup on 14 of its 16 disks). The cones are
     narrowed there; sliced from the exported STL, the disk holds no cup."""
@@ -274,7 +288,7 @@ def test_chamfers_on_steep_eyelets_leave_no_cup(tmp_path):
     from hwgen.checks.printing import cups
 
     rng = np.random.default_rng(SEED)
-    doc = [random_robot(rng, f"robot{i:03d}") for i in range(3)][2]
+    doc = [classic_robot(rng, f"robot{i:03d}") for i in range(3)][2]
     spec = make_plan(_design(doc)).disks[1]
     assert max(math.degrees(math.acos(abs(h.axis[1]))) for h in spec.holes) > 47
     stl = tmp_path / "disk_01.stl"

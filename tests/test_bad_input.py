@@ -48,10 +48,6 @@ CASES = {
                       "disks.spacing", "disk 0 and disk 1 overlap"),
     "crimp-without-length": (_edit(PROTO, "    kind: knot", "    kind: crimp"),
                              "tendon_material.termination", "needs its 'length'"),
-    # each field is fine, but C1 and H would have to wind on one drum in the same plane
-    "tensioner-cannot-be-laid-out": (_edit(_edit(PROTO, "    channel: H", "    channel: C1"),
-                                           "channels: [A, C1, C2, H]", "channels: [A, C1, C2]"),
-                                     "tensioner", "too close to wind side by side"),
 }
 
 

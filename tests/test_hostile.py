@@ -256,10 +256,6 @@ add("value", "sixty-five-tendons", Case(tree_edit(PROTO, lambda d: d["tendons"].
 add("value", "sweep-60-check-90", Case(tree_edit(PROTO, lambda d: (setter("disks.eyelets.sweep_deg", 60)(d),
                                                                    setter("check.max_angle_deg", 90)(d))),
                                        "check.max_angle_deg", ("±60°",)))
-STRIP_TABLE = "\n".join(f"        - [10, {z}]" for z in (5, 3, 1, 0, 0, 0, 0, 0, 0, 0, -1, -3, -5))
-add("value", "tendon-routed-in-the-strip", Case(edit(PROTO, "      function: {kind: helix, a: 25, k: 3}",
-                                                     "      table:\n" + STRIP_TABLE),
-                                                "tendons[3].routing.table", ("wider than the 60 mm strip",)))
 add("value", "channel-without-tendon", Case(edit(PROTO, "channels: [A, C1, C2, H]", "channels: [A, C1, C2, H, X]"),
                                             "tensioner", ("'X' has no tendon",)))
 

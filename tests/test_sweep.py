@@ -164,18 +164,18 @@ def test_lengths_level_sizes_eyelets_as_the_plan_and_takes_eq2_as_kinematics():
 
 @pytest.mark.parametrize("index", [25, 72])
 def test_lengths_level_merges_eyelets_routed_into_each_other_as_the_plan(index):
-    """Robots 25 and 72 of the stability draw route two tendons 0.8 and 0.3 mm apart: the plan
+    """Robots 25 and 72 of the first stability draw (classic_robot) route two tendons 0.8 and 0.3 mm apart: the plan
     gives each such pair one opening around both. The lengths level has the plan's openings
     (centre, axis, diameter, which tendons), counts no wall between their tendons, and fails the
     variant naming the overlap, as hwgen check fails eyelet.overlap."""
     from hwgen.model.plan import make_plan
     from hwgen.params import Design
 
-    from .robots import random_robot
+    from .robots import classic_robot
     from .stability import SEED
 
     rng = np.random.default_rng(SEED)
-    doc = [random_robot(rng, f"robot{i:03d}") for i in range(index + 1)][index]
+    doc = [classic_robot(rng, f"robot{i:03d}") for i in range(index + 1)][index]
     d = Design.model_validate(doc)
     p = make_plan(d)
     overlaps = [m for m in p.merges if m.kind == "overlap" and m.station < len(p.disks) - 1]

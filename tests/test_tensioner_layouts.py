@@ -14,7 +14,7 @@ import yaml
 from hwgen.cad.manifest import ManifestPart
 
 from .conftest import PARAMS
-from .robots import random_robot, reordered, turned_over
+from .robots import classic_robot, reordered, turned_over
 
 STABILITY_ROBOTS = 24
 STABILITY_SEED = 20261121
@@ -42,7 +42,7 @@ def _verdict(doc: dict):
 @pytest.fixture(scope="module")
 def stability_run():
     rng = np.random.default_rng(STABILITY_SEED)
-    robots = [random_robot(rng, f"random{i:02d}") for i in range(STABILITY_ROBOTS)]
+    robots = [classic_robot(rng, f"random{i:02d}") for i in range(STABILITY_ROBOTS)]
     variants = [(i, kind, doc) for i, r in enumerate(robots)
                 for kind, doc in (("as drawn", r), ("reordered", reordered(r)), ("turned over", turned_over(r)))]
     with mp.get_context("spawn").Pool(2) as pool:

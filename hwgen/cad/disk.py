@@ -13,6 +13,8 @@ import math
 import cadquery as cq
 import numpy as np
 
+from ..model.fixing import seat_overlap
+from ..model.holes import AXIS_CUT_FRACTION
 from ..model.specs import DiskSpec, Hole, HubSpec
 from . import DISK_ROTATION, Part, disk_placement
 
@@ -22,7 +24,7 @@ TOOL_OVERRUN = 1.0                  # tools run this far past the faces, mm
 CONE_HALF_ANGLE_DEG = 45.0          # the chamfer cones around the eyelet axes
 CONE_FLOOR_DEG = 5.0                # ... are narrowed on axes steeper than 90° - this - 45°, so their lowest line rises
 CONE_MIN_DEG = 10.0                 # narrower than this, a slanted eyelet gets no chamfer
-SEAT_OVERLAP = 0.3                  # a seat hole runs this far past the plate into the bore above it, mm
+MIN_EDGE = 0.05                     # a chamfer smaller than this (mm) is left off
 
 
 def _to_file(x: float, z: float) -> tuple[float, float]:
@@ -51,14 +53,20 @@ def eyelet_profiles(h: Hole, thickness: float, edge: float, base_side: bool, tip
     """What is removed for one eyelet, as closed (radius, axial) profiles to revolve about its axis:
     (origin in file coordinates, unit axis in file coordinates, profiles). The bore (if slanted) and
     the chamfer cones at the rims, along the hole axis from the mid-plane crossing; the cones start
-    where the rim on the steep side of a slanted hole meets the face, so the chamfer is never
-    smaller than ``edge`` and never reaches the mid-plane.
+    where the rim on the steep side of a slanted hole meets the face, so the chamfer is ``edge``
+    (smaller, or none, where a wide steep hole in a thin disk leaves no room clear of the checks'
+    axis cuts, AXIS_CUT_FRACTION off the mid-plane) and never reaches the mid-plane.
     """
     ax = np.array([h.axis[0], -h.axis[2], h.axis[1]])   # robot disk axes -> file axes
     cos_t = abs(ax[2])
     r = h.diameter / 2
     tan_t = math.sqrt(max(0.0, 1 - cos_t**2)) / cos_t
     u_face = thickness / 2 / cos_t                     # axial distance mid-plane -> face
+    # the cones start clear of where the checks cut the bore (a wide, steep hole in a thin disk
+    # leaves less room than ``edge``: a smaller chamfer there, or none)
+    room = (0.5 - AXIS_CUT_FRACTION) * thickness / cos_t - 2 * r * tan_t
+    if room < edge:
+        edge = room if room >= MIN_EDGE else 0.0
     u_cone = u_face - edge - r * tan_t                  # where the chamfer cone starts
     u_end = u_face + r * tan_t + TOOL_OVERRUN
     r_end = r + edge + (u_end - u_face) + r * tan_t     # 45° cone
@@ -148,9 +156,10 @@ def blank_and_tools(spec: DiskSpec) -> tuple[cq.Solid, list[cq.Solid]]:
         tools.append(_truncated(tool, spec.seat_plate, spec) if seated and not h.in_slot else tool)
     for h in normal:
         tools.extend(_eyelet_tool(h, T, spec.edge_size, base_side, True, with_bore=False))
+    overlap = seat_overlap(T, spec.seat_plate)
     for s in spec.seats:
         fx, fy = _to_file(s.x, s.z)
-        tools.append(cq.Solid.makeCylinder(s.diameter / 2, spec.seat_plate + SEAT_OVERLAP + TOOL_OVERRUN,
+        tools.append(cq.Solid.makeCylinder(s.diameter / 2, spec.seat_plate + overlap + TOOL_OVERRUN,
                                            cq.Vector(fx, fy, -TOOL_OVERRUN)))
     for x, z, dia, height in spec.seat_chambers:
         fx, fy = _to_file(x, z)

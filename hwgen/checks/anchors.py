@@ -25,7 +25,8 @@ PLANE_STEP_MM = 0.1         # depth between cuts
 INSCRIBED_STEPS = 40        # grid across a loop for its largest inscribed circle, per zoom
 INSCRIBED_ZOOMS = 4         # each zoom refines ±4 cells around the best point so far
 SAME_SHAPE = 1e-3           # a loop whose area is within this share of the last one's is the same hole
-SEAT_SEARCH_FRACTION = 3 / 8    # cuts reach this share of the disk's thickness in from its outer face
+SEAT_SEARCH_FRACTION = 3 / 8    # cuts reach this share of the disk's thickness in from its outer face (a plate
+#                                 thicker than that is measured as this deep: the least it holds)
 SAG_MM = STL_TOLERANCE_MM   # the STL's chordal error: section polygons lie this far inside round holes
 
 

@@ -20,6 +20,7 @@ from ..cad.export import STL_TOLERANCE_MM
 from ..model import kinematics as kin
 from ..model.crossings import crossing_angles, strip_crossings
 from ..model.holes import hole_diameter
+from ..model.plan import STRIP_HOLE_SHARE
 from .base import REBUILD, Check
 from .eyelets import EyeletMap, joined_holes
 from .polygons import inside, loop_gap, num, points_to_polyline
@@ -298,6 +299,19 @@ class StripBend(NamedTuple):
     length: float
 
 
+def _hole_angle_fix(name: str, at: str, need: float, height: float) -> str:
+    """What lets a tendon through the strip untouched: where the hole it needs is wider than the plan
+    cuts any strip hole (STRIP_HOLE_SHARE of the strip), a squarer crossing or a wider strip; else
+    hwgen cut it too small."""
+    if need <= STRIP_HOLE_SHARE * height:
+        return (f"drill the strip's hole Ø{need:.2f} mm; hwgen sizes it for the steepest crossing over "
+                f"disks.eyelets.sweep_deg: {REBUILD}")
+    return (f"route {name} across the strip more squarely {at} (tendons[].routing: the hole it needs grows as "
+            f"1/cos of its angle to the strip's normal; a smaller disks.eyelets.sweep_deg bends it less), or a "
+            f"wider strip, whose hole may take {STRIP_HOLE_SHARE:.0%} of it: backbone.height ≥ "
+            f"{math.ceil(need / STRIP_HOLE_SHARE * 10) / 10:.1f} mm (it is {height:.1f})")
+
+
 def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendon_d: float, tol: float,
                     findings: list[str], bend: StripBend | None = None) -> list[Check]:
     """Every crossing of the strip has a hole in the DXF template and in the strip's STL, and
@@ -351,8 +365,7 @@ def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendo
                    f"(bending {angles_deg[k]:+g}°): a hole drilled square to the strip needs Ø{need:.2f} mm")
             msg = (f"{txt}; it is Ø{have:.2f} mm" if ok else
                    f"{txt} to let it through untouched, it is Ø{have:.2f} mm: the line bears on the hole's edge")
-            fix = "" if ok else (f"drill the strip's hole Ø{need:.2f} mm; hwgen sizes it for the steepest crossing "
-                                 f"over disks.eyelets.sweep_deg: {REBUILD}")
+            fix = "" if ok else _hole_angle_fix(name, at, need, 2 * half_h)
             out.append(Check("backbone.hole_angle", "error", ok, msg, have, float(need),
                              {**where, "angle_deg": float(angles_deg[k])}, fix=fix))
     for f in findings:

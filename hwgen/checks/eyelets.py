@@ -19,12 +19,13 @@ from pathlib import Path
 
 import numpy as np
 
+from ..model.holes import AXIS_CUT_FRACTION
 from .base import REBUILD, Check
 from .meshes import load_mesh
 from .polygons import area_centroid, inside, num
 from .sections import Loop, chain_loops, disk_slab, section_loops
 
-OFF_PLANE_FRACTION = 1 / 8   # the axis cuts sit this fraction of the thickness either side of the mid-plane,
+OFF_PLANE_FRACTION = AXIS_CUT_FRACTION   # the axis cuts sit this fraction of the thickness either side of the mid-plane,
 CLEAR_FRACTION = 1 / 2       # or this fraction of the way from the mid-plane to a recess floor, if nearer
 NEAR_FACTOR = 3.0            # an unmatched hole within this many design diameters is "moved", not "missing"
 
@@ -318,12 +319,12 @@ def _crowded(rd: dict, tendons) -> bool:
 
 
 def _reaches_slot(rd: dict, tendons) -> bool:
-    """Whether the design's own hole for ``tendons`` (its circle on the mid-plane, with its chamfer at
-    the faces) reaches the slot."""
+    """Whether the design's own hole for ``tendons`` (its footprint on the faces: its circle, its
+    chamfer and a slanted axis's drift, :func:`_footprint`) reaches the slot."""
     w, h = rd["slot_mm"]
     for hole in rd["holes"]:
         if tuple(hole["tendons"]) == tuple(tendons):
-            r = hole["diameter_mm"] / 2 + rd.get("edge_mm", 0.0)
+            r = _footprint(rd, hole)
             dx, dz = max(abs(hole["x"]) - w / 2, 0.0), max(abs(hole["z"]) - h / 2, 0.0)
             return math.hypot(dx, dz) < r
     return False

@@ -19,6 +19,7 @@ from .anchors import seat_checks
 from .base import REBUILD, Check
 from .clearances import StripBend, backbone_checks, hole_checks, tendon_pair_checks, wall_checks
 from .eyelets import backbone_section, locate_eyelets, measure_disk
+from .fixtures import jig_checks, mount_checks
 from .gear_mesh import gear_checks, gear_pairs
 from .gravity import gravity_checks
 from .lengths import length_checks, pair_take_up, sweep_angles, tendon_lengths
@@ -163,6 +164,7 @@ def _measure(folder: Path, manifest: Manifest, plan) -> Measured:
     checks += interference_checks(parts, s.interference_tol_mm3)
     checks += build_volume_checks(parts, proc.build_volume)
     checks += printing_checks(parts, proc.technology)
+    checks += mount_checks(parts, disks, plan) + jig_checks(parts, disks, plan)
     # the tendon runs are measured against the placed solids the interference check has just made
     # (their place in the report is further down)
     runs = tendon_checks(folder, manifest, plan) if gear_pairs(manifest.parts) else []   # no tensioner: no runs

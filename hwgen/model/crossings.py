@@ -48,15 +48,19 @@ def crossing_angles(stations, xz: np.ndarray, station: float, kappa) -> np.ndarr
     so this sets the strip hole's size.
     """
     ys = np.asarray(stations, dtype=float)
+    xz = np.asarray(xz, dtype=float)
     kappa = np.atleast_1d(np.asarray(kappa, dtype=float))
     i = int(station)
+    # only the disks either side count: the kinematics of those alone (each disk's point and frame
+    # depend on its own arc length only: the same numbers, bit for bit, as over the whole robot)
     if float(station).is_integer():
-        into, outof = kin.segment_directions_local(ys, xz, kappa)
-        c = np.fmin(np.abs(np.nan_to_num(into[:, i] @ STRIP_NORMAL, nan=1.0)),
-                    np.abs(np.nan_to_num(outof[:, i] @ STRIP_NORMAL, nan=1.0)))
+        lo = max(i - 1, 0)
+        into, outof = kin.segment_directions_local(ys[lo:i + 2], xz[lo:i + 2], kappa)
+        c = np.fmin(np.abs(np.nan_to_num(into[:, i - lo] @ STRIP_NORMAL, nan=1.0)),
+                    np.abs(np.nan_to_num(outof[:, i - lo] @ STRIP_NORMAL, nan=1.0)))
     else:
-        P = kin.points_in_space(ys, xz, kappa)
-        seg = P[:, i + 1] - P[:, i]
+        P = kin.points_in_space(ys[i:i + 2], xz[i:i + 2], kappa)
+        seg = P[:, 1] - P[:, 0]
         seg /= np.linalg.norm(seg, axis=1, keepdims=True)
         R, _ = kin.frames([ys[i] + (station - i) * (ys[i + 1] - ys[i])], kappa)
         c = np.abs(np.einsum("ki,ki->k", seg, R[:, 0] @ STRIP_NORMAL))

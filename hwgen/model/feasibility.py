@@ -14,15 +14,14 @@ import numpy as np
 
 from ..errors import DesignError, InputError
 from ..params import Design
-from .fixing import CHAMBER_HEIGHT_MM, disk_gaps, disk_thicknesses, seat_diameter
+from .fixing import disk_gaps, disk_thicknesses, seat_diameter
 from .fixtures import mount_problems
 from .gearing import worm_pair
 from .holes import straight_hole
 from .materials import material_problem
 from .routing import sample_function
+from .specs import slot_size
 from .tensioner_layout import spool_wall_problem
-
-EYELET_CUT_FRACTION = 1 / 8  # the checks cut a disk this share of its thickness off its mid-plane (keep clear)
 
 
 def problems(d: Design) -> list[tuple[str | tuple[str, ...], str]]:
@@ -71,8 +70,9 @@ def _spacing_problems(d: Design) -> list[tuple[str, str]]:
 
 
 def _anchor_problems(d: Design) -> list[tuple[str, str]]:
-    """Every termination larger than the smallest seat the process prints; the seat plate clear of the
-    eyelets' measuring cuts; no tendon starting inside the strip's slot."""
+    """Every termination larger than the smallest seat the process prints; no tendon starting inside
+    the strip's slot. (The seat plate is less than half the base disk (:mod:`hwgen.params`); the
+    chambers over it are laid out short of the mid-plane: :func:`hwgen.model.fixing.chamber_height`.)"""
     out = []
     seat = seat_diameter(d)
     terms = [("tendon_material.termination", d.tendon_material.termination)]
@@ -81,11 +81,6 @@ def _anchor_problems(d: Design) -> list[tuple[str, str]]:
         if t.diameter <= seat:
             out.append((f"{path}.diameter", f"a {t.diameter:g} mm {t.kind} pulls through the smallest seat the process "
                                             f"makes, Ø{seat:g} mm (process.min_hole, tendon and hole clearance)"))
-    T = disk_thicknesses(d)[0]          # the base disk's
-    room = T / 2 - T * EYELET_CUT_FRACTION
-    if d.disks.anchors.plate + CHAMBER_HEIGHT_MM >= room:
-        out.append(("disks.anchors.plate", f"{d.disks.anchors.plate:g} mm of seat plate and the chamber over it reach "
-                                           f"into the base disk's eyelets ({room:g} mm from its face are free)"))
     half_w = d.backbone.height / 2 + d.disks.slot_clearance
     half_t = d.backbone.thickness / 2 + d.disks.slot_clearance
     for i, t in enumerate(d.tendons):
@@ -132,7 +127,7 @@ def _slot_problems(d: Design) -> list[tuple[str, str]]:
     """The strip's slot (strip plus clearance) must leave a wall all round inside the disk: the one
     rule that the slot fits the disk."""
     dk, wall = d.disks, d.process.min_wall
-    w, h = d.backbone.height + 2 * dk.slot_clearance, d.backbone.thickness + 2 * dk.slot_clearance
+    w, h = slot_size(d.backbone.height, d.backbone.thickness, dk.slot_clearance)
     r = dk.outer_diameter / 2
     if math.hypot(w / 2, h / 2) + wall <= r:
         return []
@@ -189,9 +184,10 @@ def tendon_field(d: Design, name: str) -> str:
 
 def plan_problems(plan, d: Design) -> list[tuple[str, str]]:
     """(field path, what is wrong) for holes the plan sized but no part can take: an eyelet
-    that breaks through its disk's rim, a strip hole as wide as the strip. Both come from a
-    tendon that meets the disk or the strip almost edge-on (its hole grows as 1/cos α). ``d``: the
-    design the plan was made from (the fields to name)."""
+    that breaks through its disk's rim (a tendon that meets the disk almost edge-on: its hole
+    grows as 1/cos α), a strip hole as wide as the strip (a strip narrower than the straight hole
+    the tendon passes: the plan cuts an oblique crossing's hole at most half the strip, and
+    backbone.hole_angle fails). ``d``: the design the plan was made from (the fields to name)."""
     out = []
     for disk in plan.disks:
         r_out = disk.outer_diameter / 2
@@ -205,13 +201,13 @@ def plan_problems(plan, d: Design) -> list[tuple[str, str]]:
                             f"Ø{disk.outer_diameter:g} mm disk"))
                 return out
     height = plan.backbone.height
-    for h in plan.backbone.holes:
-        if not math.isfinite(h.diameter) or h.diameter >= height:
+    for h in plan.backbone.holes:          # the plan cuts them at most half the strip, but never below the
+        if not math.isfinite(h.diameter) or h.diameter >= height:       # straight hole the tendon passes
             dia = f"a Ø{h.diameter:.3g} mm" if math.isfinite(h.diameter) else "an endless"
             out.append((tendon_field(d, h.tendon),
-                        f"{h.tendon} crosses the backbone at station {h.station:g} so obliquely that the strip "
-                        f"would need {dia} hole, wider than the {height:g} mm strip: route it across the "
-                        f"strip more squarely, or not through the strip"))
+                        f"{h.tendon} crosses the backbone at station {h.station:g}, where the strip would need "
+                        f"{dia} hole to let it through, wider than the {height:g} mm strip: route it "
+                        f"not through the strip, or make the strip wider"))
             return out
     return out
 

@@ -26,7 +26,10 @@ Seats. Each tendon ends on its own seat: a hole through a plate on the base disk
 smaller than its knot or crimp sleeve. The eyelet bore stops at the plate, so the routing point
 (the eyelet's centre at the disk's mid-plane) stays where the design puts it; tendons that share
 an eyelet get seats spaced around the bore's exit, at least a wall and at least a termination
-apart, in the angular order in which the tendons would leave the eyelet backwards.
+apart, in the angular order in which the tendons would leave the eyelet backwards, joined to the
+bore by a chamber over the plate. The plate is as thick as the YAML says (less than half the disk);
+the chamber is lower on a thin base disk (:func:`chamber_height`), so plate and chamber always end
+short of the mid-plane and the eyelet is a bore there, whatever the disk's thickness.
 """
 from __future__ import annotations
 
@@ -34,7 +37,7 @@ import math
 
 import numpy as np
 
-from ..params import Design, Termination
+from ..params import MAX_MM, Design, Termination
 from .holes import straight_hole
 from .intervals import interval_difference
 from .specs import Hole, HubSpec, Seat
@@ -43,9 +46,13 @@ LENGTH_STEP_MM = 0.1        # hub engagement lengths are rounded up to this
 HUB_GAP_MM = 1.0            # the least gap a derived hub leaves before the next disk (or that disk's hub)
 HUB_SAMPLES = 9             # planes across the hub at which each tendon's path is tested
 SEAT_MARGIN_MM = 0.2        # a chamber over the plate reaches this far beyond the outermost seat
-CHAMBER_HEIGHT_MM = 0.6     # height of that chamber above the plate
+CHAMBER_HEIGHT_MM = 0.6     # height of that chamber above the plate ...
+SEAT_OVERLAP_MM = 0.3       # a seat hole runs this far past the plate into the bore or chamber above it
+CHAMBER_ROOM_SHARE = 0.5    # ... or this share of what the plate leaves below the mid-plane, if less: the bore
+#                             stays open at the mid-plane, where the routing puts the eyelet and the checks cut it
 SEAT_STEP_MM = 0.1          # a single seat differs from a slanted bore it continues by at least this (diameter)
 SLANT_TOL = 1e-9            # a bore whose axis is this close to the disk's normal is not slanted
+AXIS_FLOOR = 1e-9           # the least axial share of a bore's axis the seat's geometry divides by
 SEAT_WALL_MARGIN = 0.1      # over the minimum wall between two seats: the STL's chords and the printer's ±0.05 mm
 
 
@@ -59,7 +66,9 @@ def engagement_length(design: Design) -> float:
     if hub.length is not None:
         return float(hub.length)
     g = 2 * design.disks.slot_clearance
-    ell = g / math.tan(math.radians(hub.max_tilt_deg))
+    tan = math.tan(math.radians(hub.max_tilt_deg))
+    # no play holds at any length; a tilt so small its tangent is 0 asks for more than any robot is long
+    ell = 0.0 if g <= 0 else MAX_MM if tan <= g / MAX_MM else g / tan
     return math.ceil(ell / LENGTH_STEP_MM - 1e-9) * LENGTH_STEP_MM
 
 
@@ -193,6 +202,20 @@ def seat_diameter(design: Design) -> float:
     return straight_hole(design.tendon_material.diameter, p.hole_clearance, p.min_hole)
 
 
+def chamber_height(design: Design, thickness: float) -> float:
+    """Height of a seat chamber over the plate of a base disk ``thickness`` mm thick:
+    CHAMBER_HEIGHT_MM, or CHAMBER_ROOM_SHARE of the room the plate leaves below the mid-plane."""
+    room = max(thickness / 2 - design.disks.anchors.plate, 0.0)
+    return min(CHAMBER_HEIGHT_MM, CHAMBER_ROOM_SHARE * room)
+
+
+def seat_overlap(thickness: float, plate: float) -> float:
+    """How far a seat hole runs past the plate into the chamber or bore above it, mm: SEAT_OVERLAP_MM,
+    or half the least chamber (:func:`chamber_height`), if less: never up to where the checks cut
+    the bore."""
+    return min(SEAT_OVERLAP_MM, CHAMBER_ROOM_SHARE * max(thickness / 2 - plate, 0.0) / 2)
+
+
 def seats_for(design: Design, hole: Hole, thickness: float, directions: dict[str, np.ndarray]
               ) -> tuple[list[Seat], tuple[float, float, float, float] | None]:
     """Seats for the tendons of one base-disk eyelet, and the chamber over the plate that joins
@@ -205,15 +228,19 @@ def seats_for(design: Design, hole: Hole, thickness: float, directions: dict[str
     dia = seat_diameter(design)
     ax = np.asarray(hole.axis, dtype=float)
     depth = -thickness / 2 + plate                       # local y of the plate's top face
-    c = np.array([hole.x, hole.z]) + ax[[0, 2]] * depth / ax[1]
+    ay = max(abs(float(ax[1])), AXIS_FLOOR)              # an axis in the disk's plane: no bore to speak of
+    c = np.array([hole.x, hole.z]) + ax[[0, 2]] * depth / math.copysign(ay, ax[1])
     terms = {t: termination_of(design, t) for t in hole.tendons}
     n = len(hole.tendons)
     if n == 1:
         (t,) = hole.tendons
         if abs(abs(ax[1]) - 1) > SLANT_TOL and abs(hole.diameter - dia) < SEAT_STEP_MM:
             # a slanted bore the seat's own size would meet the seat's wall tangentially where it
-            # enters the plate (a seam no mesher closes): the seat steps out past the bore instead
-            dia = hole.diameter + SEAT_STEP_MM
+            # enters the plate (a seam no mesher closes): the seat steps out past the bore instead,
+            # past its oblique width and its drift over the seat's overlap into it
+            cos = ay
+            drift = 2 * seat_overlap(thickness, plate) * math.sqrt(max(1 - cos**2, 0.0)) / cos
+            dia = max(hole.diameter / cos + drift, hole.diameter) + SEAT_STEP_MM
         return [Seat(t, float(c[0]), float(c[1]), dia, terms[t].diameter)], None
     s = max(dia + design.process.min_wall + SEAT_WALL_MARGIN, max(tm.diameter for tm in terms.values()))
     rho = s / (2 * math.sin(math.pi / n))
@@ -230,5 +257,6 @@ def seats_for(design: Design, hole: Hole, thickness: float, directions: dict[str
         p = c + rho * np.array([math.cos(phi), math.sin(phi)])
         seats.append(Seat(t, float(p[0]), float(p[1]), dia, terms[t].diameter))
     reach = rho + dia / 2 + SEAT_MARGIN_MM
-    chamber = None if reach <= hole.diameter / 2 else (float(c[0]), float(c[1]), 2 * reach, CHAMBER_HEIGHT_MM)
+    chamber = (None if reach <= hole.diameter / 2 else
+               (float(c[0]), float(c[1]), 2 * reach, chamber_height(design, thickness)))
     return seats, chamber

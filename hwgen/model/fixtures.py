@@ -8,11 +8,18 @@ Base mount. Two printed jaws clamp the strip's base length (``backbone.extra_bas
 base disk) between them; the lower jaw stands on a column and a foot that bolts to the table, the
 upper jaw is screwed down onto the strip, and the base disk bolts to the front of both jaws. The
 column stands back from the base disk (ACCESS_MM) so the seats on its outer face stay within reach;
-the foot's holes are on the table's grid.
+the foot's holes are on the table's grid. The jaws are never shorter than their two rows of screws
+need (JAW_LEAST): a shorter ``extra_base`` is honoured, the strip ends inside them, and the check
+``mount.clamp`` fails naming the least that clamps. Under a small disk (the table close to the
+strip) the column shrinks to nothing and the lower jaw sits on the foot; where even that leaves
+the jaw too thin for its nut traps, ``mount.foot`` fails naming the table clearance that works.
 
 Jig. A floor with two comb walls, one each side of the disks: each disk drops into a slot in both
 walls, the floor under its rim, so it stands square at its station while the adhesive cures. The
 jig is split between two disks into pieces that fit the printer, joined by dovetails in the floor.
+The walls take JIG_ENGAGE of each disk's rim beside the strip; where the strip or the hubs reach
+that far out (a disk barely wider than its strip), the walls stop under them instead, and hold the
+disk's lower rim (``jig.hold`` measures how much of each disk's face the walls cover).
 """
 from __future__ import annotations
 
@@ -45,11 +52,14 @@ STRIP_RECESS_CLEARANCE = 0.1  # per side, strip to recess, mm
 JAW_STANDOFF = 0.01         # each jaw stands this far off the strip until the jaw screws close them on it, mm
 JAW_SCREW_FROM_END = 7.0    # jaw screws this far from the jaws' front and back faces, mm
 NUT_AF, NUT_THICK = hardware.nut("M3")                       # ISO 4032 M3 nut (data/fasteners.csv)
-NUT_PLAY = hardware.size("nut trap", "any", "play")           # the room it slides in with
+NUT_PLAY = hardware.NUT_PLAY                                 # the room it slides in with
 JAW_NUT_WALL = 1.0          # resin between the two rows of jaw screws' nut traps, mm
 # the least strip the jaws clamp beyond the base disk: two rows of screws whose nut traps keep a wall between them, mm
 JAW_LEAST = math.ceil(2 * JAW_SCREW_FROM_END + NUT_AF + NUT_PLAY + JAW_NUT_WALL - JAW_BEYOND_STRIP)
 NUT_DEPTH = 3.5             # nut traps this far below the lower jaw's top face, mm
+# the lower jaw's least depth under its top face: the nut traps (with their play) and a wall under them, mm
+LOWER_JAW_LEAST = NUT_DEPTH + NUT_THICK + NUT_PLAY + JAW_NUT_WALL
+MOUNT_SLIVER = 0.5          # where the table leaves no room at all, foot and jaw keep this much each (mount.foot fails), mm
 M3_HEAD = hardware.size("socket head cap screw", "M3", "head_diameter")   # for access around the disk screws
 
 JIG_ENGAGE = 3.0            # a disk's rim enters each comb wall this deep (x), mm
@@ -61,6 +71,7 @@ DOVETAIL = (8.0, 12.0, 6.0)  # neck width, end width, depth of each dovetail key
 DOVETAIL_X = 20.0           # two keys at x = ±this, mm
 DOVETAIL_PLAY = 0.1         # per side, key in its socket, mm
 PRINT_MARGIN = 2.0          # a jig piece stays this far inside the printer's longest axis, mm
+JIG_PIECES_MAX = 40         # the jig is cut into at most this many pieces
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -89,6 +100,11 @@ class MountLayout:
     bolt_pattern: str           # the table's grid, as the YAML names it (base_mount.bolt_pattern)
     disk_thickness: float       # the base disk's thickness: the disk screws' grip with the jaws
     max_tip_share: float        # base_mount.max_tip_share: the share of the tip's sag the mount's give may add (checks)
+    least_clamp: float          # the least strip the jaws clamp beyond the base disk (JAW_LEAST; checks)
+    extra_base: float | None    # backbone.extra_base as the YAML gives it (None: derived; checks name it)
+    table_clearance: float      # base_mount.table_clearance (checks name it)
+    least_below_strip: float    # table to the strip's underside that a full foot under a lower jaw deep
+    #                             enough for its nut traps needs (checks)
 
 
 def base_length(d: Design) -> float:
@@ -106,12 +122,16 @@ def mount_layout(d: Design, disk_screws=()) -> MountLayout:
     pitch, hole, bolt = BOLT_PATTERNS[bm.bolt_pattern]
     base_t = disk_thicknesses(d)[0]
     y_face = -base_t / 2
-    y_back = -base_length(d) - JAW_BEYOND_STRIP
+    # the jaws run past the strip's end, and are never shorter than their two rows of screws need
+    y_back = min(-base_length(d), y_face - JAW_LEAST) - JAW_BEYOND_STRIP
     y_col = y_face - ACCESS_MM
     t = bb.thickness
     jaw_x = bb.height / 2 + JAW_MARGIN
     half_x = jaw_x + bm.screw_hole / 2 + JAW_EDGE
     z_table = -(d.disks.outer_diameter / 2 + bm.table_clearance)
+    z_lower_top = -t / 2 + STRIP_RECESS_FRACTION * t
+    z_recess = -t / 2 - JAW_STANDOFF
+    z_foot_top, z_jaw_bottom = _foot_and_jaw(z_table, z_lower_top, z_recess)
     fx = FOOT_PITCHES_X * pitch / 2
     rows = (y_col - FOOT_EDGE, y_col - FOOT_EDGE - FOOT_PITCHES_Y * pitch)
     feet = tuple((sx * fx, y) for y in rows for sx in (-1, 1))
@@ -119,13 +139,32 @@ def mount_layout(d: Design, disk_screws=()) -> MountLayout:
                    for sx in (-1, 1))
     return MountLayout(
         y_face=y_face, y_back=y_back, y_column_front=y_col, y_foot_back=min(rows) - FOOT_EDGE,
-        jaw_half_x=half_x, z_table=z_table, z_foot_top=z_table + FOOT_THICKNESS, z_jaw_bottom=JAW_BOTTOM,
-        z_lower_top=-t / 2 + STRIP_RECESS_FRACTION * t, z_recess=-t / 2 - JAW_STANDOFF, z_upper_bottom=t / 2 + JAW_STANDOFF,
+        jaw_half_x=half_x, z_table=z_table, z_foot_top=z_foot_top, z_jaw_bottom=z_jaw_bottom,
+        z_lower_top=z_lower_top, z_recess=z_recess, z_upper_bottom=t / 2 + JAW_STANDOFF,
         z_upper_top=t / 2 + JAW_STANDOFF + UPPER_JAW, recess_half_x=bb.height / 2 + STRIP_RECESS_CLEARANCE,
         jaw_screws=screws, disk_screws=tuple((float(x), float(z)) for x, z in disk_screws),
         screw_hole=bm.screw_hole, foot_holes=feet, foot_hole=hole, bolt=bolt, pitch=pitch,
         foot_half_x=fx + FOOT_EDGE, bolt_pattern=bm.bolt_pattern, disk_thickness=base_t,
-        max_tip_share=bm.max_tip_share)
+        max_tip_share=bm.max_tip_share, least_clamp=float(JAW_LEAST), extra_base=bb.extra_base,
+        table_clearance=bm.table_clearance,
+        least_below_strip=(-t / 2 - z_lower_top) + LOWER_JAW_LEAST + FOOT_THICKNESS)
+
+
+def _foot_and_jaw(z_table: float, z_lower_top: float, z_recess: float) -> tuple[float, float]:
+    """(the foot's top, the lower jaw's bottom): the foot FOOT_THICKNESS thick on the table, the jaw
+    down to JAW_BOTTOM, the column between them. Where the table is nearer the strip, the column
+    goes and the jaw sits on the foot; nearer still, the jaw keeps the depth its nut traps need
+    (LOWER_JAW_LEAST) and the foot thins, and with no room for either each keeps MOUNT_SLIVER:
+    always table < foot top <= jaw bottom < the strip's recess."""
+    foot_top = z_table + FOOT_THICKNESS
+    jaw_bottom = max(JAW_BOTTOM, foot_top)
+    if jaw_bottom > z_lower_top - LOWER_JAW_LEAST:
+        jaw_bottom = z_lower_top - LOWER_JAW_LEAST
+        foot_top = min(foot_top, jaw_bottom)
+    room = z_recess - z_table
+    if foot_top - z_table < MOUNT_SLIVER or z_recess - jaw_bottom < MOUNT_SLIVER:
+        foot_top = jaw_bottom = z_table + min(MOUNT_SLIVER, room / 2)
+    return foot_top, jaw_bottom
 
 
 def disk_screw_region(d: Design) -> tuple[tuple[tuple[float, float], tuple[float, float]], float]:
@@ -134,7 +173,7 @@ def disk_screw_region(d: Design) -> tuple[tuple[tuple[float, float], tuple[float
     the jaw's side, clear of the jaw screws and their nut traps)."""
     lay = mount_layout(d)
     h = lay.screw_hole / 2 + d.process.min_wall
-    bands = ((lay.z_upper_bottom + h, lay.z_upper_top - h), (JAW_BOTTOM + h, lay.z_recess - h))
+    bands = ((lay.z_upper_bottom + h, lay.z_upper_top - h), (lay.z_jaw_bottom + h, lay.z_recess - h))
     jaw_x = abs(lay.jaw_screws[0][0])
     nut = (NUT_AF + NUT_PLAY) / math.sqrt(3)           # the nut trap's half width across corners
     x_max = min(lay.jaw_half_x - h, jaw_x - max(lay.screw_hole / 2, nut) - h)
@@ -142,25 +181,19 @@ def disk_screw_region(d: Design) -> tuple[tuple[tuple[float, float], tuple[float
 
 
 def mount_problems(d: Design) -> list[tuple[str, str]]:
-    """Why the mount cannot be made for this design: (field path, message)."""
+    """Why the base disk's screws the YAML gives (``base_mount.disk_screws``) cannot be used:
+    (field path, message). What the mount derives never refuses: a short ``backbone.extra_base``
+    or a table close to the strip is built and fails its check (``mount.clamp``, ``mount.foot``)."""
     out = []
     lay = mount_layout(d, d.base_mount.disk_screws or ())
-    clamp = lay.y_face + base_length(d)
-    least = JAW_LEAST
-    if clamp < least:
-        out.append(("backbone.extra_base", f"{d.backbone.extra_base:g} mm leaves {clamp:g} mm of strip between the "
-                                           f"base mount's jaws beyond the base disk; they need {least:g} mm "
-                                           f"(extra_base ≥ {least - lay.y_face:g})"))
-    if lay.z_table + FOOT_THICKNESS >= JAW_BOTTOM:
-        out.append(("base_mount.table_clearance", "the foot would reach the jaws"))
     r = d.disks.outer_diameter / 2
     for k, (x, z) in enumerate(lay.disk_screws):
         h = lay.screw_hole / 2
         if not (lay.z_upper_bottom + h + d.process.min_wall <= z <= lay.z_upper_top - h - d.process.min_wall
-                or JAW_BOTTOM + h + d.process.min_wall <= z <= lay.z_recess - h - d.process.min_wall):
+                or lay.z_jaw_bottom + h + d.process.min_wall <= z <= lay.z_recess - h - d.process.min_wall):
             out.append((f"base_mount.disk_screws[{k}]", f"z = {z:g} mm is not inside a jaw with a wall around "
                                                         f"the screw (upper jaw {lay.z_upper_bottom:.2f} to "
-                                                        f"{lay.z_upper_top:.2f}, lower {JAW_BOTTOM:g} to "
+                                                        f"{lay.z_upper_top:.2f}, lower {lay.z_jaw_bottom:g} to "
                                                         f"{lay.z_recess:.2f} mm)"))
         elif math.hypot(x, z) + M3_HEAD / 2 > r or abs(x) + h + d.process.min_wall > lay.jaw_half_x:
             out.append((f"base_mount.disk_screws[{k}]", f"({x:g}, {z:g}) is not inside the base disk and the jaws"))
@@ -190,6 +223,7 @@ class JigLayout:
     dovetail_x: tuple[float, ...]
     play: float
     station_tolerance_mm: float  # how far the jig may set a disk off its station (design data for the checks)
+    low: bool = False           # the walls stop under the strip and the hubs (z_top below them)
 
 
 def jig_inner_floor(d: Design) -> float:
@@ -199,9 +233,16 @@ def jig_inner_floor(d: Design) -> float:
     return max(d.backbone.height / 2, hub) + JIG_CLEAR
 
 
+def jig_low_top(d: Design) -> float:
+    """The highest z low walls may rise to: JIG_CLEAR under the strip and the hubs."""
+    hub = d.backbone.thickness / 2 + d.disks.slot_clearance + d.disks.hub.wall
+    return -(max(d.backbone.thickness / 2, hub) + JIG_CLEAR)
+
+
 def jig_engagement(d: Design) -> float:
-    """How deep each disk's rim enters the comb walls, mm: JIG_ENGAGE, or less where the strip or
-    the hubs reach further out than the walls would start (a disk barely wider than its strip)."""
+    """How deep each disk's rim enters the comb walls along x, mm: JIG_ENGAGE, or, where the strip
+    or the hubs reach further out than the walls would start (and the walls do not stop under
+    them), less."""
     return d.disks.outer_diameter / 2 - jig_layout(d).x_inner
 
 
@@ -232,7 +273,8 @@ def jig_layout(d: Design) -> JigLayout:
     slots = tuple((y - t / 2 - jg.clearance, y + t / 2 + jg.clearance) for y, t in zip(st, thick))
     y0 = slots[0][0] - JIG_END_TOOTH
     y1 = slots[-1][1] + JIG_END_TOOTH
-    longest = max(d.process.build_volume[:2]) - PRINT_MARGIN - DOVETAIL[2]
+    # pieces the printer takes; never more than JIG_PIECES_MAX (a printer too small for them: part.build_volume)
+    longest = max(max(d.process.build_volume[:2]) - PRINT_MARGIN - DOVETAIL[2], (y1 - y0) / JIG_PIECES_MAX)
     n = max(1, math.ceil((y1 - y0) / longest))
     # cut in the middle of the gap between two disks nearest each equal division; where that makes
     # a piece too long for the printer (disks far apart), as near each division as the slots allow
@@ -242,10 +284,13 @@ def jig_layout(d: Design) -> JigLayout:
     if max(b - a for a, b in zip(ends, ends[1:])) > longest:
         ends = _free_cuts(y0, y1, longest, slots, gaps)
     pieces = tuple(JigPiece(k, a, b, k < len(ends) - 2, k > 0) for k, (a, b) in enumerate(zip(ends, ends[1:])))
-    x_in = max(r - JIG_ENGAGE, jig_inner_floor(d))
+    x_in = max(r - JIG_ENGAGE, 0.0)
     z_floor_top = -r - jg.clearance
+    # walls beside the disks while the strip and hubs leave them their JIG_ENGAGE, else under them
+    low = jig_inner_floor(d) > x_in
+    z_top = jig_low_top(d) if low else math.sqrt(max(r**2 - x_in**2, 0.0)) + JIG_WALL_ABOVE
+    z_top = max(z_top, z_floor_top + JIG_WALL_ABOVE)          # a wall however small the disk
     return JigLayout(pieces=pieces, slots=slots, x_inner=x_in, x_outer=x_in + jg.wall, x_slot=r + jg.clearance,
                      z_floor_bottom=z_floor_top - jg.floor, z_floor_top=z_floor_top,
-                     z_top=math.sqrt(r**2 - x_in**2) + JIG_WALL_ABOVE, dovetail=DOVETAIL,
-                     dovetail_x=(-DOVETAIL_X, DOVETAIL_X), play=DOVETAIL_PLAY,
-                     station_tolerance_mm=jg.station_tolerance_mm)
+                     z_top=z_top, dovetail=DOVETAIL, dovetail_x=(-DOVETAIL_X, DOVETAIL_X), play=DOVETAIL_PLAY,
+                     station_tolerance_mm=jg.station_tolerance_mm, low=low)

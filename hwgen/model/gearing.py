@@ -33,6 +33,7 @@ cylinder, length b / cos γ. Self-locking and the worm torque use one friction a
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from functools import cached_property
@@ -445,8 +446,15 @@ def meshing_length(pair: WormPair, planes: int = 41) -> float:
 
 def worm_pair(t, min_tip: float = MIN_TIP) -> WormPair:
     """The pair described by a :class:`hwgen.params.Tensioner` section; ``min_tip`` is the
-    process's minimum wall (the thinnest tooth tip the wheel's outside radius may leave)."""
-    return WormPair(module=t.module, starts=t.worm_starts, teeth=t.wheel_teeth,
-                    worm_pitch_diameter=t.worm_pitch_diameter, pressure_angle_deg=t.pressure_angle_deg,
-                    face_width=t.face_width, worm_length=t.worm_length, center_offset=t.center_offset,
-                    min_tip=min_tip)
+    process's minimum wall (the thinnest tooth tip the wheel's outside radius may leave). The same
+    object for the same numbers, so what it works out once (its outside radius) is kept."""
+    return _pair(t.module, t.worm_starts, t.wheel_teeth, t.worm_pitch_diameter, t.pressure_angle_deg, t.face_width,
+                 t.worm_length, t.center_offset, min_tip)
+
+
+@functools.lru_cache(maxsize=64)
+def _pair(module, starts, teeth, worm_pitch_diameter, pressure_angle_deg, face_width, worm_length, center_offset,
+          min_tip) -> WormPair:
+    return WormPair(module=module, starts=starts, teeth=teeth, worm_pitch_diameter=worm_pitch_diameter,
+                    pressure_angle_deg=pressure_angle_deg, face_width=face_width, worm_length=worm_length,
+                    center_offset=center_offset, min_tip=min_tip)

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+AXIS_CUT_FRACTION = 1 / 8   # the checks find an eyelet's axis from cuts this share of the disk's thickness off
+#                             its mid-plane (hwgen.checks.eyelets): the bore is plain there, no chamfer reaches in
+
 
 def hole_diameter(d: float, thickness: float, alpha: float, clearance: float = 0.0, minimum: float = 0.0) -> float:
     """Smallest hole a tendon of diameter d passes at angle alpha (rad) to the hole's axis through a

@@ -24,11 +24,16 @@ from .settings import (AnchorsSettings, BomSettings, CheckSettings, HubSettings,
                        RenderSettings, TendonMaterialSettings, TensionerSettings, anchors_settings, bom_settings,
                        check_settings, hub_settings, plates_settings, process_settings, render_settings,
                        tendon_material_settings, tensioner_settings)
-from .specs import BackboneHole, BackboneSpec, DiskSpec, Hole, Merge
+from .specs import BackboneHole, BackboneSpec, DiskSpec, Hole, Merge, slot_size
 from .tensioner_layout import TensionerLayout, layout
 
 SAME_POSITION_MM = 1e-6  # eyelets closer than this share one hole
+STRIP_HOLE_SHARE = 0.5   # a strip hole is never wider than this share of the strip (the rest carries its bending):
+#                          one that a tendon crossing the strip almost edge-on would need wider is cut this wide,
+#                          and backbone.hole_angle fails, measuring what it lets through
 SWEEP_STEP_DEG = 1.0     # resolution of the bending sweep used to size eyelets
+AXIS_SNAP = 1e-6         # an eyelet axis component this small is zero: it slants the bore by under a microradian,
+#                          and OCCT, cutting a bore slanted by 0.004 along x and 2e-9 along z, cut nothing at all
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -111,18 +116,18 @@ def _worst_angles(sweep: Sweep, axes: np.ndarray) -> np.ndarray:
 
 
 def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, np.ndarray],
-               exits: dict[str, np.ndarray] | None = None,
-               sweeps: dict[str, Sweep] | None = None) -> tuple[DiskSpec, list[Merge]]:
+               exits: dict[str, np.ndarray] | None = None, sweeps: dict[str, Sweep] | None = None,
+               hubs: tuple[float, ...] | None = None) -> tuple[DiskSpec, list[Merge]]:
     """Disk i with a hole per eyelet position, and its shared and overlapping eyelets.
 
     ``exits`` (tip disk only): each tendon's direction onward from the disk in its frame,
     toward the tensioner, which is fixed to the tip and so does not turn with bending.
-    ``sweeps``: the tendons' directions over the sweep, when the caller already has them.
+    ``sweeps``: the tendons' directions over the sweep, when the caller already has them; ``hubs``:
+    every disk's hub length (:func:`hwgen.model.fixing.hub_lengths`), likewise.
     """
     sweeps = sweeps if sweeps is not None else _sweeps(d, paths)
     dk = d.disks
-    slot_w = d.backbone.height + 2 * dk.slot_clearance
-    slot_h = d.backbone.thickness + 2 * dk.slot_clearance
+    slot_w, slot_h = slot_size(d.backbone.height, d.backbone.thickness, dk.slot_clearance)
     role, thick = disk_role(i, len(d.stations)), disk_thicknesses(d)[i]
     groups, holes = _eyelet_holes(d, i, paths, rest_axes, sweeps, exits)
     # a hole around tendons at one position is shared by design; one around several, an overlap
@@ -134,7 +139,8 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
         found = [seats_for(d, h, thick, leaving) for h in holes if not h.in_slot]
         seats = tuple(s for group, _ in found for s in group)
         chambers = tuple(c for _, c in found if c is not None)
-    hub = hub_spec(d, role, hub_lengths(d)[i], thick, slot_w, slot_h, tuple(holes), {p.name: p.points[i] for p in paths},
+    hubs = hubs if hubs is not None else hub_lengths(d)
+    hub = hub_spec(d, role, hubs[i], thick, slot_w, slot_h, tuple(holes), {p.name: p.points[i] for p in paths},
                    {p.name: (sweeps[p.name][0][:, i], sweeps[p.name][1][:, i]) for p in paths})
     mounts = _mount_holes(d, role, holes, seats, chambers, (slot_w, slot_h), hub)
     spec = DiskSpec(index=i, y=float(d.stations[i]), role=role, thickness=thick, outer_diameter=dk.outer_diameter,
@@ -150,8 +156,7 @@ def _eyelet_holes(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[st
     """Disk i's eyelet holes and the tendons of each: one per position, sized for the worst angle
     over the sweep (and the exit, on the tip disk), holes that would run into each other merged."""
     proc = d.process
-    slot_w = d.backbone.height + 2 * d.disks.slot_clearance
-    slot_h = d.backbone.thickness + 2 * d.disks.slot_clearance
+    slot_w, slot_h = slot_size(d.backbone.height, d.backbone.thickness, d.disks.slot_clearance)
     thick = disk_thicknesses(d)[i]
     exits = exits or {}
     groups: list[list[TendonPath]] = []
@@ -167,6 +172,10 @@ def _eyelet_holes(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[st
         own = [rest_axes[p.name][i] + exits.get(p.name, 0.0) for p in g]
         ax = np.sum([v / np.linalg.norm(v) for v in own], axis=0)
         ax /= np.linalg.norm(ax)
+        tiny = (np.abs(ax) < AXIS_SNAP) & (ax != 0.0)
+        if tiny.any():                  # (normalised again only then: the same bits as before otherwise)
+            ax = np.where(tiny, 0.0, ax)
+            ax /= np.linalg.norm(ax)
         alpha = max(_worst_angles((sweeps[p.name][0][:, i:i + 1], sweeps[p.name][1][:, i:i + 1]), ax[None])[0]
                     for p in g)
         for p in g:
@@ -245,9 +254,10 @@ def make_plan(design: Design, tensioner_record: dict | None = None) -> Plan:
     paths = tendon_paths(d)
     rest_axes = {p.name: _rest_axes(d, p) for p in paths}
     sweeps = _sweeps(d, paths)
+    hubs = hub_lengths(d)
     disks, merges = [], []
     for i in range(len(d.stations)):
-        spec, m = _disk_spec(d, i, paths, rest_axes, sweeps=sweeps)
+        spec, m = _disk_spec(d, i, paths, rest_axes, sweeps=sweeps, hubs=hubs)
         disks.append(spec)
         merges += m
     bb_holes, findings = _backbone_holes(d, paths, disks)
@@ -267,14 +277,15 @@ def make_plan(design: Design, tensioner_record: dict | None = None) -> Plan:
     except ValueError as e:
         return replace(first, tensioner_error=str(e))
     exits = {r.tendon: np.subtract(r.end, r.start) / r.length for r in lay.runs}
-    tip, tip_merges = _disk_spec(d, len(disks) - 1, paths, rest_axes, exits, sweeps)
+    tip, tip_merges = _disk_spec(d, len(disks) - 1, paths, rest_axes, exits, sweeps, hubs)
     merges = [m for m in merges if m.station != tip.index] + tip_merges
     return replace(first, disks=(*disks[:-1], tip), merges=tuple(merges), tensioner_layout=lay)
 
 
 def _backbone_holes(d: Design, paths: list[TendonPath], disks: list[DiskSpec]):
     """Holes the strip needs where tendons cross its plane (z = 0) within its height,
-    each sized for the steepest angle the tendon meets the strip at over the sweep."""
+    each sized for the steepest angle the tendon meets the strip at over the sweep, at most
+    STRIP_HOLE_SHARE of the strip (never less than the straight hole the tendon passes)."""
     half_h = d.backbone.height / 2
     kappa = _sweep(d)
     out, findings = [], []
@@ -285,6 +296,9 @@ def _backbone_holes(d: Design, paths: list[TendonPath], disks: list[DiskSpec]):
             beta = float(crossing_angles(d.stations, p.points, station, kappa).max())
             dia = hole_diameter(d.tendon_material.diameter, d.backbone.thickness, beta,
                                 d.process.hole_clearance, d.process.min_hole)
+            least = hole_diameter(d.tendon_material.diameter, d.backbone.thickness, 0.0,
+                                  d.process.hole_clearance, d.process.min_hole)
+            dia = max(least, min(dia, STRIP_HOLE_SHARE * d.backbone.height))
             out.append(BackboneHole(p.name, float(station), float(x), float(y), float(dia)))
         findings += [f"{p.name}: runs in the backbone plane between stations {i} and {i + 1}"
                      for i in in_strip_plane(p.points, half_h)]

@@ -22,7 +22,8 @@ import numpy as np
 
 from . import hardware
 
-GRID_MM = 0.5            # the search grid on the disk face
+GRID_MM = 0.5            # the search grid on the disk face ...
+GRID_POINTS = 400        # ... coarser where a band is longer than this many steps (a disk over 200 mm across)
 MARGIN_CAP_MM = 1.0      # clearance beyond what is required that still counts toward a better place
 MARGIN_STEP_MM = 0.05    # clearances this close count as equal, and the wider stance decides
 WASHER_OD = hardware.size("washer", "M3", "outer_diameter")   # ISO 7089 M3 washer under each head: what must clear
@@ -61,8 +62,9 @@ def place(keep: Keepout, bands: tuple[tuple[float, float], tuple[float, float]],
     out = []
     for z0, z1 in bands:
         for sx in (1.0, -1.0):
-            xs = np.arange(0.0, max(x_max, 0.0) + 1e-9, GRID_MM) * sx
-            zs = np.arange(math.ceil(z0 / GRID_MM) * GRID_MM, z1 + 1e-9, GRID_MM)
+            step = max(GRID_MM, max(x_max, z1 - z0, 0.0) / GRID_POINTS)
+            xs = np.arange(0.0, max(x_max, 0.0) + 1e-9, step) * sx
+            zs = np.arange(math.ceil(z0 / step) * step, z1 + 1e-9, step)
             if len(zs) == 0:
                 zs = np.array([(z0 + z1) / 2])
             X, Z = np.meshgrid(xs, zs)

@@ -11,8 +11,9 @@ the worm's hex bore; the shaft's flange outside the spine carries the socket for
 key. The worm's end faces bear on the spine and the post (its thrust).
 
 Every tendon runs in its own plane z = z_e (its tip eyelet's z) in one straight line from
-the tip eyelet to a tangent point of its channel's drum, where it winds in its own groove;
-the drum's winding zones sit at those z, the gear at one end of the drum, the housing's
+the tip eyelet to a tangent point of its channel's drum, where it winds in its own groove (two
+of one channel that leave the tip closer than a groove and its flanges share one, wide enough
+for both); the drum's winding zones sit at those z, the gear at one end of the drum, the housing's
 shelves above and below. Units stand in a right column (+x) and a left one (a right unit
 turned 180° about z); both share one wheel-axis |x| (x_u) and a spine wall on their outer
 side that carries the worms. Units are stacked along +y; those whose parts would reach the

@@ -40,7 +40,7 @@ Eyelets = dict[str, list[tuple[str, float, float]]]   # channel -> [(tendon, x, 
 
 
 def tip_eyelets(paths: list[TendonPath], channels) -> Eyelets:
-    """(tendon, x, z) of every tendon at the tip disk, per channel; refuses what one drum cannot wind."""
+    """(tendon, x, z) of every tendon at the tip disk, per channel; refuses a channel with none."""
     eyelets: Eyelets = {c: [] for c in channels}
     for p in paths:
         x, z = (float(v) for v in p.points[-1])
@@ -49,14 +49,22 @@ def tip_eyelets(paths: list[TendonPath], channels) -> Eyelets:
         if not here:
             raise NoFit(f"tensioner channel {c!r} has no tendon: give it one (tendons[].channel) or drop it "
                         f"from tensioner.channels")
-    for c, here in eyelets.items():
-        srt = sorted(here, key=lambda t: t[2])
-        for (n0, _, z0), (n1, _, z1) in zip(srt, srt[1:]):
-            if z1 - z0 < WIND_WIDTH + 2 * FLANGE:
-                raise NoFit(f"channel {c!r}: tendons {n0} and {n1} leave the tip at z = {z0:g} and {z1:g}, too "
-                            f"close to wind side by side on one drum ({WIND_WIDTH + 2 * FLANGE:g} mm apart needed, "
-                            f"each in its own groove); put one on its own channel (tendons[].channel)")
     return eyelets
+
+
+def winding_zones(zs: list[float]) -> tuple[tuple[float, float], ...]:
+    """The drum's winding zones (z ranges) for tendons that wind at heights ``zs``: one groove
+    WIND_WIDTH wide around each, between flanges; tendons of one channel that leave the tip closer
+    than a groove and its flanges (a mirrored pair near the strip's plane, two tendons through one
+    tip eyelet) share one groove as wide as they need, side by side at their own heights."""
+    half = WIND_WIDTH / 2
+    groups: list[list[float]] = []
+    for z in sorted(zs):
+        if groups and z - groups[-1][-1] < WIND_WIDTH + 2 * FLANGE:
+            groups[-1].append(z)
+        else:
+            groups.append([z])
+    return tuple((g[0] - half, g[-1] + half) for g in groups)
 
 
 def turned_over(eyelets: Eyelets, turn: int) -> Eyelets:
@@ -75,8 +83,7 @@ def _wheel_stack(zs: list[float], b: float, worm_radius: float, gear_low: bool):
     cap there.
     """
     zs = sorted(zs)
-    half = WIND_WIDTH / 2
-    zones = tuple((z - half, z + half) for z in zs)
+    zones = winding_zones(zs)
     flanges = []
     for lo, hi in zones:
         flanges += [(lo - FLANGE, lo), (hi, hi + FLANGE)]
@@ -162,6 +169,19 @@ def clamp_blockers(eyelets: Eyelets, clamp, sz: Sizes) -> list[tuple[str, float,
         return []
     return [(n, x, z) for v in eyelets.values() for n, x, z in v
             if abs(x) < clamp[1] + sz.need and clamp[4] - sz.need < z < clamp[5] + sz.need]
+
+
+def strip_keepout(sz: Sizes, clamp):
+    """What the units keep clear of along y, in the strip clamp's form (x0, x1, y0, y1, z0, z1): the
+    clamp, or where there is none (left off, or too little strip to clamp) the strip's own tip
+    beyond the base bars; None when the strip ends within them."""
+    if clamp is not None:
+        return clamp
+    y0 = sz.y_face + sz.base_t
+    if sz.y_end <= y0:
+        return None
+    return (-sz.strip_half_x - STRIP_CLAMP_X, sz.strip_half_x + STRIP_CLAMP_X, y0, sz.y_end + 2.0,
+            -sz.strip_half_z, sz.strip_half_z)
 
 
 def meets_clamp(stack: Stack, clamp) -> bool:

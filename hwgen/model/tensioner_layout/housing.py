@@ -33,7 +33,7 @@ def housing_members(fr: Frame, clamp, sz: Sizes, mounts, fast: str, shaft_diamet
         sx = 1.0 if x >= 0 else -1.0
         members.append(Member(f"base bar ({x:g}, {z:g})", "box", (sx * (abs(x) - MOUNT_BAR / 2), sx * sp1, yb0, yb1,
                                                                  z - MOUNT_BAR / 2, z + MOUNT_BAR / 2)))
-    cz = (clamp[4], clamp[5]) if clamp is not None else STRIP_CLAMP_Z
+    cz = _cross_bar(clamp, _passages(fr, sz), sp1)
     members.append(Member("cross bar", "box", (-sp1, sp1, yb0, yb1, *cz)))     # joins the columns
     if clamp is not None:
         members.append(Member("strip clamp", "box", clamp))
@@ -57,10 +57,14 @@ def housing_members(fr: Frame, clamp, sz: Sizes, mounts, fast: str, shaft_diamet
                 y_from, prev = top - SHELF, (z0, z1)
                 continue
             r_boss = max(DRIVE_FLANGE[0] / 2, pair.ra1) + FRAME      # the worm's thrust face and the shaft's flange
+            # a tip-disk screw under the spine runs its hole into it: solid around that too
+            under = [(yb0, yb1 + 1 + FRAME, z - M3_CLEARANCE / 2 - FRAME, z + M3_CLEARANCE / 2 + FRAME)
+                     for x, z in mounts if min(x0, x1) - M3_CLEARANCE / 2 < x < max(x0, x1) + M3_CLEARANCE / 2]
             cuts += _windows(f"{u.channel} spine", 0, x0 - s, x1 + s, (y_from, top), (z0, z1),
                              [(y_from, y_from + SHELF + FRAME, z0, z1),
                               (u.worm_y - r_boss, u.worm_y + r_boss, u.worm_z - r_boss, u.worm_z + r_boss),
-                              (y_from, top, z0, u.lower_bar[1] + FRAME), (y_from, top, u.upper_shelf[0] - FRAME, z1)])
+                              (y_from, top, z0, u.lower_bar[1] + FRAME), (y_from, top, u.upper_shelf[0] - FRAME, z1)]
+                             + under)
             y_from, prev = top - SHELF, (z0, z1)
     for u in fr.units:
         _unit_members(u, fr, sz, members, cuts if with_cuts else None,
@@ -68,6 +72,29 @@ def housing_members(fr: Frame, clamp, sz: Sizes, mounts, fast: str, shaft_diamet
     if with_cuts:
         _base_cuts(fr, clamp, sz, mounts, fast, members, cuts)
     return members, cuts if with_cuts else []
+
+
+def _passages(fr: Frame, sz: Sizes) -> dict[tuple[float, float], float]:
+    """Each tendon's passage through the base bars: (x, z) of its tip eyelet -> the hole's diameter
+    (TENDON_HOLE, and its drift over the bars at its exit angle)."""
+    holes: dict[tuple[float, float], float] = {}
+    for r in fr.runs:
+        drift = sz.base_t * math.tan(math.radians(r.exit_angle_deg))
+        key = (round(r.start[0], 6), round(r.start[2], 6))
+        holes[key] = max(holes.get(key, 0.0), TENDON_HOLE + 2 * drift)
+    return holes
+
+
+def _cross_bar(clamp, passages: dict[tuple[float, float], float], half_x: float) -> tuple[float, float]:
+    """The cross bar's z range: the strip clamp's (STRIP_CLAMP_Z without one), reaching FRAME past
+    every tendon passage through it, so the bar keeps a whole band beyond them and still joins the
+    columns (passages either side of the strip's slot would cut a bar of the clamp's height)."""
+    z0, z1 = (clamp[4], clamp[5]) if clamp is not None else STRIP_CLAMP_Z
+    through = [(z, dia / 2) for (x, z), dia in passages.items()
+               if abs(x) < half_x + dia / 2 and z0 - dia / 2 < z < z1 + dia / 2]
+    if not through:
+        return z0, z1
+    return min(z0, min(z - r for z, r in through) - FRAME), max(z1, max(z + r for z, r in through) + FRAME)
 
 
 def _free(lo: float, hi: float, keep: list[tuple[float, float]]) -> list[tuple[float, float]]:
@@ -195,12 +222,7 @@ def _base_cuts(fr: Frame, clamp, sz: Sizes, mounts, fast: str, members, cuts) ->
     if clamp is not None:
         _set_screws(clamp, sz, fast, cuts)
     _tip_screws(sz, mounts, fast, cuts)
-    holes: dict[tuple[float, float], float] = {}
-    for r in fr.runs:
-        drift = sz.base_t * math.tan(math.radians(r.exit_angle_deg))
-        key = (round(r.start[0], 6), round(r.start[2], 6))
-        holes[key] = max(holes.get(key, 0.0), TENDON_HOLE + 2 * drift)
-    for (x, z), dia in holes.items():
+    for (x, z), dia in _passages(fr, sz).items():
         in_base = any(m.kind == "box" and m.dims[2] <= yb0 + 1e-9 and m.dims[0] - dia / 2 < x < m.dims[1] + dia / 2
                       and m.dims[4] - dia / 2 < z < m.dims[5] + dia / 2 for m in members)
         if in_base:

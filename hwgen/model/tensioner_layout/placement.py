@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..gearing import WORM_TO_MESH
-from .arrangement import Arrangement, Eyelets, Stack, meets_clamp
+from .arrangement import Arrangement, Eyelets, Stack, meets_clamp, strip_keepout
 from .result import TendonRun, Unit
 from .sizes import (AXIAL_PLAY, BOSS, CLAMP_HEAD, CLAMP_PLATE, DRIVE_FLANGE, GAP, MAX_LIFTS, POST, UNIT_GAP, WORM_END,
                     X_COARSE, X_SEARCH, X_STEP, NoFit, Sizes)
@@ -29,7 +29,7 @@ class Failure:
 
 def place_units(arr: Arrangement, stacks: dict[str, Stack], clamp, sz: Sizes, lift: float) -> dict[str, float]:
     """Wheel-axis heights y: in each column units stack along +y; a unit whose z span meets the
-    strip clamp goes beyond it."""
+    strip clamp (or, with none, the strip's tip) goes beyond it."""
     pair = sz.pair
     wheel_reach = max(pair.outside_radius, sz.r_f, BOSS) + UNIT_GAP / 2
     worm_reach = pair.center_distance + max(pair.ra1, DRIVE_FLANGE[0] / 2, POST / 2) + UNIT_GAP / 2
@@ -37,7 +37,8 @@ def place_units(arr: Arrangement, stacks: dict[str, Stack], clamp, sz: Sizes, li
     y_next = {1: sz.y_face + sz.base_t + GAP + lift, -1: sz.y_face + sz.base_t + GAP + lift}
     for c, s in zip(arr.order, arr.sides):
         below, above = (wheel_reach, worm_reach) if s > 0 else (worm_reach, wheel_reach)
-        floor = clamp[3] + GAP if meets_clamp(stacks[c], clamp) else y_next[s]
+        keep = strip_keepout(sz, clamp)
+        floor = keep[3] + GAP if meets_clamp(stacks[c], keep) else y_next[s]
         yc = max(y_next[s], floor) + below
         centers_y[c] = yc
         y_next[s] = yc + above

@@ -12,7 +12,7 @@ from ...params import Design, Tensioner
 from ..routing import TendonPath
 from ..specs import DiskSpec
 from .arrangement import (CLAMP_MIN, GEAR_RULES, Arrangement, Eyelets, arrangements, clamp_blockers, meets_clamp,
-                          pin_length, strip_clamp, tip_eyelets, turned_over, unit_stack)
+                          pin_length, strip_clamp, strip_keepout, tip_eyelets, turned_over, unit_stack)
 from .housing import housing_members
 from .placement import Failure, Frame, Infeasible, lifted, solve, x_floor
 from .result import Member, TendonRun, TensionerLayout
@@ -111,7 +111,7 @@ def _search(design: Design, paths: list[TendonPath], tip: DiskSpec, wanted, reco
                 if touch in clamp_sets:
                     continue
                 clamp_sets.add(touch)
-                for arr in arrangements(turn, up, gear_rule, eyelets, stacks, clamp):
+                for arr in arrangements(turn, up, gear_rule, eyelets, stacks, strip_keepout(sz, clamp)):
                     if wanted is not None and not wanted(arr):
                         continue
                     fr = lifted(x_min, arr, stacks, eyelets, ts.winding, clamp, sz)

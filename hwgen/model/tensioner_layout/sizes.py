@@ -68,7 +68,8 @@ NUT = {t: hardware.nut(t) for t in ("M2", "M3")}          # across flats, height
 INSERT = {t: hardware.insert(t) for t in ("M2", "M3")}    # bore, length
 SET_SCREW = hardware.size("set screw", "M3", "length")    # the strip clamp's M3 set screws
 SPINE = _SIZE["spine"]
-BASE = {"nut": _SIZE["base_nut"], "insert": _SIZE["base_insert"]}    # base bars on the tip disk (y)
+BASE = {"nut": _SIZE["base_nut"], "insert": _SIZE["base_insert"]}    # base bars on the tip disk (y), or deeper: base_bars()
+NUT_BACKING = _SIZE["nut_backing"]
 # stock lengths: the clamps' M2 button head screws, the tip disk's M3 socket head cap screws
 SCREW_LENGTHS = {"M2": hardware.lengths("button head screw", "M2"), "M3": hardware.lengths("socket head cap screw", "M3")}
 # Layout search
@@ -114,7 +115,7 @@ def joint(fast: str, thread: str, grip: float, body: float) -> Fastening:
         af, h = NUT[thread]
         screw = standard_screw(thread, grip + body)
         far = screw - grip                                     # the screw's end, deep in the body
-        if far < h + 0.6:
+        if far < h + NUT_BACKING:
             raise NoFit(f"a {thread} nut and its screw do not fit in {body:g} mm of resin")
         clear = M3_CLEARANCE if thread == "M3" else M2_CLEARANCE
         return Fastening("nut", thread, screw, clear, far - h - NUT_PLAY / 2, far + NUT_PLAY / 2, body)
@@ -186,7 +187,8 @@ class Sizes:
                      need=td / 2 + ts.tendon_clearance + td / 2, max_exit=math.radians(ts.max_exit_deg),
                      r_s=r_s, r_w=r_s + td / 2, r_f=r_s + FLANGE_HEIGHT,
                      hub_r=max(ts.shaft_diameter / 2 + ts.running_fit / 2 + HUB_WALL, r_s),
-                     spine_hole=DRIVE_SHAFT + ts.running_fit, spine_t=SPINE, base_t=BASE[fast], tip_t=tip.thickness,
+                     spine_hole=DRIVE_SHAFT + ts.running_fit, spine_t=SPINE, base_t=base_bars(fast, tip.thickness),
+                     tip_t=tip.thickness,
                      strip_half_x=d.backbone.height / 2, strip_half_z=d.backbone.thickness / 2,
                      y_end=d.backbone.length + d.backbone.extra_tip, fast=fast)
 
@@ -197,6 +199,18 @@ def standard_screw(kind: str, reach: float) -> float:
     if n is None:
         raise NoFit(f"no standard {kind} screw is as short as {reach:.1f} mm")
     return float(n)
+
+
+def base_bars(fast: str, tip_thickness: float) -> float:
+    """The base bars' depth along y: BASE, or deeper where no standard screw through a tip disk
+    this thick would end inside them past its nut: as deep as the shortest screw that does, with its
+    nut trap and NUT_BACKING of resin behind it."""
+    base = BASE[fast]
+    if fast != "nut":
+        return base
+    need = tip_thickness + NUT["M3"][1] + NUT_BACKING           # as joint() asks of the screw's far end
+    screw = float(hardware.shortest_reaching(SCREW_LENGTHS["M3"], need))
+    return max(base, screw - tip_thickness + NUT_PLAY / 2 + NUT_BACKING)
 
 
 def tip_joint(fast: str, tip_thickness: float, base_t: float) -> Fastening:
