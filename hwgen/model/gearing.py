@@ -448,13 +448,13 @@ def worm_pair(t, min_tip: float = MIN_TIP) -> WormPair:
     """The pair described by a :class:`hwgen.params.Tensioner` section; ``min_tip`` is the
     process's minimum wall (the thinnest tooth tip the wheel's outside radius may leave). The same
     object for the same numbers, so what it works out once (its outside radius) is kept."""
-    return _pair(t.module, t.worm_starts, t.wheel_teeth, t.worm_pitch_diameter, t.pressure_angle_deg, t.face_width,
-                 t.worm_length, t.center_offset, min_tip)
+    return _interned(WormPair(module=t.module, starts=t.worm_starts, teeth=t.wheel_teeth,
+                              worm_pitch_diameter=t.worm_pitch_diameter, pressure_angle_deg=t.pressure_angle_deg,
+                              face_width=t.face_width, worm_length=t.worm_length, center_offset=t.center_offset,
+                              min_tip=min_tip))
 
 
 @functools.lru_cache(maxsize=64)
-def _pair(module, starts, teeth, worm_pitch_diameter, pressure_angle_deg, face_width, worm_length, center_offset,
-          min_tip) -> WormPair:
-    return WormPair(module=module, starts=starts, teeth=teeth, worm_pitch_diameter=worm_pitch_diameter,
-                    pressure_angle_deg=pressure_angle_deg, face_width=face_width, worm_length=worm_length,
-                    center_offset=center_offset, min_tip=min_tip)
+def _interned(pair: WormPair) -> WormPair:
+    """The first pair made with these numbers (a frozen pair hashes and compares by its fields)."""
+    return pair

@@ -140,7 +140,7 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
         seats = tuple(s for group, _ in found for s in group)
         chambers = tuple(c for _, c in found if c is not None)
     hubs = hubs if hubs is not None else hub_lengths(d)
-    hub = hub_spec(d, role, hubs[i], thick, slot_w, slot_h, tuple(holes), {p.name: p.points[i] for p in paths},
+    hub = hub_spec(d, role, hubs[i], thick, (slot_w, slot_h), tuple(holes), {p.name: p.points[i] for p in paths},
                    {p.name: (sweeps[p.name][0][:, i], sweeps[p.name][1][:, i]) for p in paths})
     mounts = _mount_holes(d, role, holes, seats, chambers, (slot_w, slot_h), hub)
     spec = DiskSpec(index=i, y=float(d.stations[i]), role=role, thickness=thick, outer_diameter=dk.outer_diameter,
