@@ -625,9 +625,9 @@ def _end() -> None:
     """The last exit handler (main() registers it before anything else can): once the
     interpreter has joined its threads and run every other handler, the process ends with
     main()'s code without the interpreter's teardown, which only frees what the process holds
-    (after a build: the checks' meshes, the report, the libraries' modules). Kept for the no-op
-    rebuild, the command a user waits on most, where the teardown is a tenth of the wall time
-    (measured in issue 35's closing note)."""
+    (after a build: the checks' meshes, the report, the libraries' modules). Kept because what it
+    saves is measured on paths a user waits for, a check that measures and the no-op rebuild
+    (issue 35's closing note; the bench has no row for it)."""
     if "code" not in _EXIT or "coverage" in sys.modules:
         # not ended through main(), or measured by coverage.py, whose handler (registered at start,
         # so after this one) writes its data: the interpreter's own way
