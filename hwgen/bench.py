@@ -498,7 +498,7 @@ def main(argv: list[str]) -> None:
         from hwgen.cad.manifest import read_manifest
         with timed("gear checks from the meshes", "axes, counts and sweeps per distinct worm and wheel; "
                                                   "backlash, loaded face and Lewis Y on one pair"):
-            gear_checks(res.folder, read_manifest(res.folder), plan)
+            gear_checks(res.folder, read_manifest(res.folder).parts, plan)
         if res.report is not None:
             _monte_carlo(res.report)
 

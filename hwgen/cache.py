@@ -111,8 +111,67 @@ def _text(obj) -> bytes:
 
 
 def key(*parts) -> str:
-    """The sha256 of the canonical form of ``parts``."""
+    """The sha256 of the canonical form of ``parts`` (equal values, equal digests). A store's
+    entries are named by :func:`entry_key`, which is made with it."""
     return hashlib.sha256(_text(canonical(list(parts)))).hexdigest()
+
+
+# the parts of hwgen's code (folders of the package, "data" its tables) a kept value may depend on
+ALL_CODE = ("",)                        # the whole package
+SOLID_CODE = ("cad", "model", "data")   # what makes the solids: the model, the CAD and the tables they read
+NO_CODE = ()                            # a value no hwgen code shapes (a library's parse of a file)
+
+# the libraries whose versions a remembered value depends on unless it names its own
+LIBRARIES = ("numpy", "scipy", "numba", "trimesh", "manifold3d", "matplotlib", "vtk", "pillow", "ezdxf",
+             "cadquery", "cadquery-ocp", "lib3mf", "rectpack")
+
+
+def entry_key(kind: str, inputs, *, code: tuple[str, ...] = ALL_CODE, libraries: tuple[str, ...] = ()) -> str:
+    """The one rule every entry of the store is named by: what kind of entry it is, its inputs (any
+    value :func:`canonical` takes), hwgen's version and the digest of the parts of its code the
+    value depends on (:func:`code_digest`), and the versions of the libraries it names. An entry
+    made by other code, or by another version of a library it names, is not found."""
+    return key(kind, inputs, _version(), code_digest(tuple(code)) if code else None,
+               {dist: library_version(dist) for dist in libraries})
+
+
+def _version() -> str:
+    from . import __version__
+    return __version__
+
+
+@lru_cache(maxsize=None)
+def code_files(scope: tuple[str, ...]) -> tuple[Path, ...]:
+    """The files of hwgen's package under the folders ``scope`` names ("": all of it; "data": its
+    tables): every .py file there, and every table in data/ when the whole package or "data" is named."""
+    root = Path(__file__).resolve().parent
+    out = set()
+    for part in scope:
+        if part == "data" or part == "":
+            out |= set(root.glob("data/*"))
+        if part != "data":
+            out |= set((root / part).rglob("*.py") if part else root.rglob("*.py"))
+    return tuple(sorted(out))
+
+
+@lru_cache(maxsize=None)
+def code_digest(scope: tuple[str, ...]) -> str:
+    """The sha256 of :func:`code_files` (their paths and bytes)."""
+    root = Path(__file__).resolve().parent
+    h = hashlib.sha256()
+    for f in code_files(scope):
+        h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+@lru_cache(maxsize=None)
+def library_version(dist: str) -> str | None:
+    """The installed version of the distribution ``dist`` (None: not installed)."""
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return version(dist)
+    except PackageNotFoundError:
+        return None
 
 
 def sha256(data: bytes) -> str:
@@ -317,8 +376,6 @@ _RECALL_ONLY: ContextVar[bool] = ContextVar("hwgen_recall_only", default=False)
 
 class NotRemembered(Exception):
     """A :func:`remembered` value that is not in the store, met under :func:`recalling_only`."""
-LIBRARIES = ("numpy", "scipy", "numba", "trimesh", "manifold3d", "matplotlib", "vtk", "pillow", "ezdxf",
-             "cadquery", "cadquery-ocp")
 
 
 @contextmanager
@@ -347,24 +404,6 @@ def recalling_only() -> Iterator[None]:
         _RECALL_ONLY.reset(token)
 
 
-@lru_cache(maxsize=1)
-def code() -> dict:
-    """hwgen's code and data (the sha256 of every file of the package) and the versions of the
-    libraries its results depend on: what every remembered result also depends on."""
-    from importlib.metadata import PackageNotFoundError, version
-    root = Path(__file__).resolve().parent
-    h = hashlib.sha256()
-    for f in sorted([*root.rglob("*.py"), *root.glob("data/*")]):
-        h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes() + b"\0")
-    versions = {}
-    for dist in LIBRARIES:
-        try:
-            versions[dist] = version(dist)
-        except PackageNotFoundError:
-            versions[dist] = None
-    return {"package": h.hexdigest(), "libraries": versions}
-
-
 def as_json(value):
     """``value`` as JSON gives it back (numpy scalars and arrays as Python numbers and lists): what
     :func:`remembered` hands out, fresh or kept."""
@@ -379,17 +418,17 @@ def _plain(obj):
     raise TypeError(f"{type(obj).__name__} is not JSON")
 
 
-def kept_arrays(kind: str, inputs, compute: Callable[[], dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+def kept_arrays(kind: str, inputs, compute: Callable[[], dict[str, np.ndarray]], *,
+                code: tuple[str, ...] = ALL_CODE, libraries: tuple[str, ...] = LIBRARIES) -> dict[str, np.ndarray]:
     """``compute()``, a few named numpy arrays, or the very arrays it gave last time for ``kind``
     and ``inputs`` when a store is active (:func:`using`): dtype, shape and bytes as they were,
-    each array its own writable copy. Unlike :func:`remembered`, the key holds no code digest:
-    ``inputs`` must name everything the arrays depend on (a library's version, say), so that an
-    edit of hwgen's code keeps them. The bytes are one object of the store (``objects/``, checked
-    by its hash on every read), its record lists each array's name, dtype and shape."""
+    each array its own writable copy. Keyed as every entry is (:func:`entry_key`: the code and
+    the libraries the arrays depend on). The bytes are one object of the store (``objects/``,
+    checked by its hash on every read), its record lists each array's name, dtype and shape."""
     store = _ACTIVE.get()
     if store is None or not store.enabled:
         return compute()
-    k = key("arrays", kind, inputs)
+    k = entry_key("arrays " + kind, inputs, code=code, libraries=libraries)
     rec = store.get_record(k)
     if isinstance(rec, dict) and isinstance(rec.get("arrays"), list):
         data = store.get_bytes(str(rec.get("object", "")))
@@ -420,9 +459,11 @@ def _split_arrays(buffer: bytearray, layout: list) -> dict[str, np.ndarray] | No
     return out if at == len(buffer) else None
 
 
-def remembered(kind: str, inputs, compute: Callable[[], object]):
+def remembered(kind: str, inputs, compute: Callable[[], object], *, code: tuple[str, ...] = ALL_CODE,
+               libraries: tuple[str, ...] = LIBRARIES):
     """``compute()`` as JSON gives it back, or what it gave last time for ``kind`` and ``inputs``
-    (and this code, :func:`code`) when a store is active (:func:`using`). The value is the same
+    (keyed as every entry is, :func:`entry_key`: by default on all of hwgen's code and the
+    versions of :data:`LIBRARIES`) when a store is active (:func:`using`). The value is the same
     either way: a fresh one goes through JSON too. It is computed under the entry's lock: a caller
     that finds another process or thread computing it waits and reads what that one kept (a
     build's checks meet the work its own thread began ahead of them)."""
@@ -431,7 +472,7 @@ def remembered(kind: str, inputs, compute: Callable[[], object]):
         if _RECALL_ONLY.get():
             raise NotRemembered(kind)
         return as_json(compute())
-    k = key("remembered", kind, inputs, code())
+    k = entry_key("remembered " + kind, inputs, code=code, libraries=libraries)
     rec = store.get_record(k)
     if isinstance(rec, dict) and "value" in rec:
         return rec["value"]

@@ -26,6 +26,9 @@ from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError,
 
 from . import designfile, yamlfile
 from .errors import InputError, clip, echo
+from .fasteners import size as _fastener
+
+M3_CLEARANCE = _fastener("clearance hole", "M3", "normal")     # ISO 273 normal series (data/fasteners.csv)
 
 SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
 MAX_MM = 10_000.0        # no length or coordinate of a design is beyond 10 m
@@ -115,7 +118,7 @@ class Anchors(_Model):
 class TipMount(_Model):
     """Bolt pattern on the tip disk that the tensioner housing fastens to."""
 
-    hole_diameter: Length = Field(3.4, description="clearance hole for the screws (M3 normal fit), mm")
+    hole_diameter: Length = Field(M3_CLEARANCE, description="clearance hole for the screws (M3 normal fit), mm")
     positions: tuple[tuple[Coord, Coord], ...] | None = Field(
         None, description="hole centres (x, z) on the tip disk, mm (default: four, placed clear of this "
                           "robot's tip eyelets, slot and hub)")
@@ -307,7 +310,7 @@ class BaseMount(_Model):
     disk_screws: tuple[tuple[Coord, Coord], ...] | None = Field(
         None, description="(x, z) of the screws that fasten the base disk to the mount, mm (default: four, "
                           "placed clear of this robot's eyelets, seats, slot and hub)")
-    screw_hole: Length = Field(3.4, description="clearance hole for those screws and the jaw screws (M3), mm")
+    screw_hole: Length = Field(M3_CLEARANCE, description="clearance hole for those screws and the jaw screws (M3), mm")
     table_clearance: Length = Field(4.0, description="between the base disk's rim and the table, mm")
     max_tip_share: Finite = Field(0.01, gt=0, le=1,
                                   description="largest share of the own-weight tip sag the mount's give may add")

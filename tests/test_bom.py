@@ -15,6 +15,7 @@ from hwgen.outputs import bom
 from hwgen.model import kinematics as kin
 from hwgen.model.plan import make_plan
 from hwgen.pipeline import load
+from hwgen.cad.manifest import Manifest
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -81,7 +82,7 @@ def test_rest_lengths_come_from_the_report_when_there_is_one(proto, tmp_path):
     folder, _, _, d = proto
     m = _copy(folder, tmp_path)
     # no report: eq. (2) at zero curvature on the design's eyelets
-    rows, source = bom.bom_rows(tmp_path, m, make_plan(d), read_report(tmp_path))
+    rows, source = bom.bom_rows(tmp_path, Manifest.of(m), make_plan(d), read_report(tmp_path))
     assert source.startswith("eq. (2)")
     st = m["design_report"]["stations_mm"]
     for t in m["design_report"]["tendons"]:
@@ -92,7 +93,7 @@ def test_rest_lengths_come_from_the_report_when_there_is_one(proto, tmp_path):
     fake = {"tendons": [{"name": t["name"], "rest_length_mm": 100.0 + i}
                         for i, t in enumerate(m["design_report"]["tendons"])]}
     (tmp_path / "report.json").write_text(json.dumps(fake))
-    rows, source = bom.bom_rows(tmp_path, m, make_plan(d), read_report(tmp_path))
+    rows, source = bom.bom_rows(tmp_path, Manifest.of(m), make_plan(d), read_report(tmp_path))
     assert source.startswith("report.json")
     cut = [float(r["cut_length_mm"]) for r in rows if r["family"] == "tendon"]
     allowance = d.bom.tie_off_mm + d.bom.spool_mm
@@ -104,7 +105,7 @@ def test_allowances_are_parameters(proto, tmp_path):
     m = _copy(folder, tmp_path)
     shutil.copy(folder / "report.json", tmp_path)
     d2 = d.model_copy(update={"bom": d.bom.model_copy(update={"tie_off_mm": 10.0, "spool_mm": 5.0})})
-    rows, _ = bom.bom_rows(tmp_path, m, make_plan(d2), read_report(tmp_path))
+    rows, _ = bom.bom_rows(tmp_path, Manifest.of(m), make_plan(d2), read_report(tmp_path))
     before = {r["part"]: float(r["rest_length_mm"]) for r in rows0 if r["family"] == "tendon"}
     for r in rows:
         if r["family"] == "tendon":
@@ -120,7 +121,7 @@ def test_fasteners_from_the_tip_mount_and_part_hardware(proto, tmp_path):
     m = _copy(folder, tmp_path)
     for p, k in zip(m["parts"][:3], (1, 2, 3)):
         p["hardware"] = [{"item": "dowel pin", "size": "Ø3 × 16", "qty": k, "material": "steel"}]
-    rows2, _ = bom.bom_rows(tmp_path, m, make_plan(d), read_report(tmp_path))
+    rows2, _ = bom.bom_rows(tmp_path, Manifest.of(m), make_plan(d), read_report(tmp_path))
     (pins,) = [r for r in rows2 if r["part"] == "dowel pin"]
     assert int(pins["qty"]) == 6 and pins["size"] == "Ø3 × 16"
 
@@ -173,7 +174,7 @@ def test_tensioner_hardware_matches_its_parts(proto, tmp_path):
     m2_ = _copy(folder, tmp_path)
     for p in m2_["parts"]:
         p.pop("hardware", None)
-    rows2, _ = bom.bom_rows(tmp_path, m2_, make_plan(d), read_report(tmp_path))
+    rows2, _ = bom.bom_rows(tmp_path, Manifest.of(m2_), make_plan(d), read_report(tmp_path))
     assert any("nut" in r["part"] for r in rows2 if r["family"] == "hardware")
 
 

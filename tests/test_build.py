@@ -165,7 +165,7 @@ def test_failed_build_leaves_previous_outputs(tmp_path, monkeypatch):
     first = build_mod.build(loaded, tmp_path, post_build=False).folder
     before = {p.relative_to(tmp_path): p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
 
-    def boom(plan, folder, manifest, report):
+    def boom(given):
         raise RuntimeError("simulated failure after the parts were written")
 
     monkeypatch.setattr(build_mod, "AFTER_FILES", [("boom", boom)])

@@ -90,9 +90,9 @@ def test_an_entry_being_made_by_another_process_is_locked_until_it_ends(tmp_path
 def test_a_kept_solid_another_build_is_making_is_set_aside_not_made(tmp_path):
     """Under setting_aside(), a kept solid whose lock another process holds raises Busy without
     making it (the pipeline then builds its other units first and comes back)."""
-    from hwgen.cad.memo import Busy, kept, kept_in, setting_aside
-    store, salt = cache.Store(tmp_path), {"salt": 1}
-    k = cache.key("solid", "gear", 7, salt)
+    from hwgen.cad.memo import Busy, key_of, kept, kept_in, setting_aside
+    store = cache.Store(tmp_path)
+    k = key_of("gear", 7)
     holder = subprocess.Popen([sys.executable, "-c", (
         "import sys, time\nfrom hwgen import cache\n"
         "with cache.Store(sys.argv[1]).lock(sys.argv[2]):\n    print('held', flush=True)\n    time.sleep(60)\n"),
@@ -100,7 +100,7 @@ def test_a_kept_solid_another_build_is_making_is_set_aside_not_made(tmp_path):
     made = []
     try:
         assert holder.stdout.readline().strip() == "held"
-        with kept_in(store, salt), setting_aside(), pytest.raises(Busy):
+        with kept_in(store), setting_aside(), pytest.raises(Busy):
             kept("gear", 7, lambda: made.append(1))
     finally:
         holder.kill()
@@ -115,10 +115,10 @@ def test_a_tensioner_unit_whose_gear_another_build_is_making_is_set_aside(tmp_pa
     setting_aside(); the pipeline then makes the other units first."""
     from hwgen import pipeline
     from hwgen.cad.families import build_unit, units
-    from hwgen.cad.memo import Busy, kept_in, setting_aside
+    from hwgen.cad.memo import Busy, key_of, kept_in, setting_aside
     plan = pipeline.design_plan(pipeline.load(PARAMS / "prototype.yaml"))
-    store, salt = cache.Store(tmp_path), pipeline._salt()
-    k = cache.key("solid", "throated wheel gear", plan.tensioner_layout.pair, salt)
+    store = cache.Store(tmp_path)
+    k = key_of("throated wheel gear", plan.tensioner_layout.pair)
     holder = subprocess.Popen([sys.executable, "-c", (
         "import sys, time\nfrom hwgen import cache\n"
         "with cache.Store(sys.argv[1]).lock(sys.argv[2]):\n    print('held', flush=True)\n    time.sleep(120)\n"),
@@ -126,7 +126,7 @@ def test_a_tensioner_unit_whose_gear_another_build_is_making_is_set_aside(tmp_pa
     try:
         assert holder.stdout.readline().strip() == "held"
         family, first, unit = next(u for u in units(plan) if u[0].name == "tensioner")
-        with kept_in(store, salt), setting_aside(), pytest.raises(Busy):
+        with kept_in(store), setting_aside(), pytest.raises(Busy):
             list(build_unit(plan, family, first, unit))
     finally:
         holder.kill()
@@ -170,7 +170,7 @@ def fresh(tmp_path_factory):
     root = tmp_path_factory.mktemp("cache-test")
     loaded = load(PARAMS / "prototype.yaml")
     res = build(loaded, root / "fresh", post_build=False, cache_dir=root / "cache")
-    assert sorted(res.built) == sorted(p["name"] for p in res.manifest["parts"])
+    assert sorted(res.built) == sorted(p["name"] for p in res.manifest.parts)
     return loaded, root, _tree(res.folder)
 
 
@@ -238,7 +238,7 @@ def test_editing_one_tendon_rebuilds_exactly_the_parts_whose_specs_changed(tmp_p
     changed = [b.name for a, b in zip(old.disks, new.disks) if a != b]
     changed += [new.backbone.name] if old.backbone != new.backbone else []
     if cache.key(old.tensioner_layout) != cache.key(new.tensioner_layout):     # holds arrays: compared by value
-        changed += [p["name"] for p in first.manifest["parts"] if p["role"].startswith("tensioner")]
+        changed += [p["name"] for p in first.manifest.parts if p["role"].startswith("tensioner")]
     assert "disk_08" in changed and len(changed) < len(new.disks)         # a local edit
     assert second.built == changed
     # the row is in the middle: the tip eyelets, the tendons' runs and the tensioner's layout stay,
@@ -285,43 +285,45 @@ def test_a_stage_is_reused_only_for_the_same_files_manifest_plan_and_environment
     """The stage memo on a stand-in stage: what it wrote and set comes back without running it;
     another input file, manifest, plan (a setting the stages read) or $HWGEN_CHECK_SAMPLES runs it
     again."""
-    from hwgen import pipeline
+    from hwgen.cad.manifest import Added, Manifest
+    from hwgen.engine.context import Hashes, StageInput, StageResult
+    from hwgen.engine.stagecache import cached_stage
     from hwgen.model.plan import make_plan
     from hwgen.pipeline import load
 
     runs = []
 
-    def stage(plan, folder, manifest, report):
+    def stage(s):
         runs.append(1)
-        (folder / "report.json").write_text(json.dumps({"n": len(runs)}))
-        manifest["checks_ok"] = True
-        return {"n": len(runs)}
+        (s.folder / "report.json").write_text(json.dumps({"n": len(runs)}))
+        return StageResult(Added({"checks_ok": True}), {"n": len(runs)})
 
     design = load(PARAMS / "prototype.yaml").design
     P = make_plan(design)
 
     store = cache.Store(tmp_path / "cache")
 
-    def run(files: dict, manifest: dict, plan=P):
+    def run(files: dict, name: str, plan=P):
         folder = tmp_path / f"f{len(list(tmp_path.iterdir()))}"
         folder.mkdir()
-        for name, text in files.items():
-            (folder / name).write_text(text)
+        for path, text in files.items():
+            (folder / path).write_text(text)
         reused = []
-        out = pipeline._cached_stage(store, "checks", stage, plan, folder, manifest, reused, None)
-        return out, manifest, (folder / "report.json").read_text(), reused
+        manifest = Manifest(name, "0", "", "", [], {}, {}, [], {})
+        out = cached_stage(store, Hashes(), "checks", stage, StageInput(plan, folder, manifest), reused)
+        return out, manifest.adding(out.added), (folder / "report.json").read_text(), reused
 
-    first = run({"a.stl": "x"}, {"design": "d"})
+    first = run({"a.stl": "x"}, "d")
     assert first[3] == [] and len(runs) == 1
-    again = run({"a.stl": "x"}, {"design": "d"})
+    again = run({"a.stl": "x"}, "d")
     assert again == (first[0], first[1], first[2], ["checks"]) and len(runs) == 1
-    run({"a.stl": "y"}, {"design": "d"})
-    run({"a.stl": "x"}, {"design": "e"})
+    run({"a.stl": "y"}, "d")
+    run({"a.stl": "x"}, "e")
 
     Q = make_plan(design.model_copy(update={"bom": design.bom.model_copy(update={"spool_mm": 151.0})}))
-    run({"a.stl": "x"}, {"design": "d"}, Q)
+    run({"a.stl": "x"}, "d", Q)
     monkeypatch.setenv("HWGEN_CHECK_SAMPLES", "32")
-    run({"a.stl": "x"}, {"design": "d"})
+    run({"a.stl": "x"}, "d")
     assert len(runs) == 5
 
 
@@ -338,7 +340,7 @@ def test_parts_writes_only_the_parts_it_names_and_the_whole_manifest(built, tmp_
     disks = sorted(p["name"] for p in whole["parts"] if p["name"].startswith("disk_"))
     assert sorted(_tree(res.folder)) == ["manifest.json"] + [f"step/{n}.step" for n in disks] + \
         [f"stl/{n}.stl" for n in disks]
-    assert res.manifest["parts"] == whole["parts"] and res.manifest["parts_written"]["names"] == disks
+    assert res.manifest.parts == whole["parts"] and res.manifest.parts_written["names"] == disks
     for n in disks:
         assert _tree(res.folder)[f"stl/{n}.stl"] == _tree(built("prototype"))[f"stl/{n}.stl"]
     assert "missing" in stale_reason(res.folder, loaded)          # hwgen check builds it whole first
@@ -372,7 +374,7 @@ def test_parts_built_in_worker_processes_have_the_bytes_of_a_serial_build(fresh,
     monkeypatch.setattr(gear_mesh, "measure_pair", lambda *a: gears_here.append(1) or real_gears(*a))
     loaded, _, first = fresh
     res = build(loaded, tmp_path / "out", cache_dir=tmp_path / "cache", jobs=2)
-    assert sorted(res.built) == sorted(p["name"] for p in res.manifest["parts"])
+    assert sorted(res.built) == sorted(p["name"] for p in res.manifest.parts)
     tree = _tree(res.folder)
     assert {f: tree.get(f) for f in first if f != "manifest.json"} == {f: first[f] for f in first if f != "manifest.json"}
     assert measured_in == ["hwgen-measure"] and gears_here == []

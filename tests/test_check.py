@@ -21,7 +21,7 @@ from hwgen.checks.clearances import segment_distance
 from hwgen.pipeline import stale_reason
 from hwgen.checks.run import run_checks
 from hwgen.model.plan import make_plan
-from hwgen.cad.manifest import sha256
+from hwgen.cad.manifest import Manifest, sha256
 from hwgen.pipeline import load
 
 from .conftest import PARAMS
@@ -41,7 +41,7 @@ def _copy(built, tmp_path, name="prototype"):
 
 def _check(folder, params="prototype"):
     manifest = json.loads((folder / "manifest.json").read_text())
-    return run_checks(folder, manifest, make_plan(load(PARAMS / f"{params}.yaml").design))
+    return run_checks(folder, Manifest.of(manifest), make_plan(load(PARAMS / f"{params}.yaml").design))
 
 
 def _failed(rep, cid):
@@ -345,7 +345,7 @@ def test_broken_mesh_and_build_volume(built, tmp_path):
     small = load(PARAMS / "prototype.yaml").design
     small = small.model_copy(update={"process": small.process.model_copy(update={"build_volume": (70, 70, 50)})})
     m = json.loads((built("prototype") / "manifest.json").read_text())
-    rep = run_checks(built("prototype"), m, make_plan(small))
+    rep = run_checks(built("prototype"), Manifest.of(m), make_plan(small))
     bad = _failed(rep, "part.build_volume")
     assert {f"disk_{i:02d}" for i in range(13)} <= {c["where"]["part"] for c in bad}
     # the base disk is 6 mm thick, its hub stands 5.5 mm on it

@@ -67,7 +67,7 @@ def _template_with_one_hole(tmp_path, x: float, y: float, r: float):
 def test_a_strip_hole_through_the_edge_is_called_a_notch(tmp_path):
     """A crossing 0.4 mm inside the 60 mm strip's edge: its Ø1.4 hole opens the edge. The STL has
     no hole loop there, only a notch in the outline; the message says so."""
-    from hwgen.checks.clearances import backbone_checks
+    from hwgen.checks.clearances import StripBend, backbone_checks
     from hwgen.checks.eyelets import EyeletMap
     from hwgen.checks.polygons import area_centroid
     from hwgen.checks.sections import Loop
@@ -79,7 +79,7 @@ def test_a_strip_hole_through_the_edge_is_called_a_notch(tmp_path):
     dxf = _template_with_one_hole(tmp_path, x, y, r)
     emap = EyeletMap(stations_y=np.array([0.0, 10.0]), eyelets=[], positions={"T": np.array([[x, 1.0], [x, -1.0]])},
                      unmeasured={}, via_backbone={}, disks=[])
-    checks = backbone_checks(emap, dxf, loop, [], 0.15, 0.01, [], 0.59, np.array([0.0]), 10.0)
+    checks = backbone_checks(emap, dxf, loop, [], 0.15, 0.01, [], StripBend(0.59, np.array([0.0]), 10.0))
     crossing = next(c for c in checks if c.id == "backbone.crossing")
     assert not crossing.passed
     assert "T crosses the backbone between stations 0 and 1" in crossing.message
@@ -91,7 +91,7 @@ def test_a_strip_hole_through_the_edge_is_called_a_notch(tmp_path):
 def test_a_strip_hole_through_the_end_is_called_a_notch_at_the_end(tmp_path):
     """Found building random robots: a tendon crossing in the slot of the tip disk, 2 mm before
     the strip ends, whose hole opens the strip's end, was said to open its edge."""
-    from hwgen.checks.clearances import backbone_checks
+    from hwgen.checks.clearances import StripBend, backbone_checks
     from hwgen.checks.eyelets import Eyelet, EyeletMap
     from hwgen.checks.polygons import area_centroid
     from hwgen.checks.sections import Loop
@@ -105,7 +105,7 @@ def test_a_strip_hole_through_the_end_is_called_a_notch_at_the_end(tmp_path):
     e = Eyelet(1, "disk_01", ("T",), np.array([x, 0.0]), 1.0, True, status="in_slot")
     emap = EyeletMap(stations_y=np.array([0.0, 270.0]), eyelets=[e],
                      positions={"T": np.array([[x, 5.0], [x, 0.0]])}, unmeasured={}, via_backbone={}, disks=[])
-    checks = backbone_checks(emap, dxf, loop, [], 0.15, 0.01, [], 0.59, np.array([0.0]), 270.0)
+    checks = backbone_checks(emap, dxf, loop, [], 0.15, 0.01, [], StripBend(0.59, np.array([0.0]), 270.0))
     crossing = next(c for c in checks if c.id == "backbone.crossing")
     assert not crossing.passed
     assert ("so near the strip's end that its Ø5.00 hole (reaching y = 272.50 mm, the strip ends at y = 272.00 mm) "

@@ -12,7 +12,7 @@ import shutil
 import numpy as np
 import pytest
 
-from hwgen.cad.manifest import ManifestPart
+from hwgen.cad.manifest import Manifest, ManifestPart
 from hwgen.cad.disk import build_disk
 from hwgen.cad.export import write_stl
 from hwgen.checks.meshes import load_mesh, to_manifold
@@ -37,7 +37,7 @@ def _manifest(folder) -> dict:
 
 
 def _check(folder, design):
-    return run_checks(folder, _manifest(folder), make_plan(design))
+    return run_checks(folder, Manifest.of(_manifest(folder)), make_plan(design))
 
 
 def _failed(rep, cid):
@@ -285,12 +285,12 @@ def test_own_weight_point_mass_matches_the_cantilever_and_disks_add(built):
     assert I == pytest.approx(bb.height * bb.thickness ** 3 / 12, rel=1e-3)     # h t³/12 of the strip's STL
     P = 0.01 * E * I / L ** 2                                         # P L²/EI = 0.01: linear
     m = P / (9.81e-3)
-    alone = sag.solve_sag(L, [L], [m], E=E, I=I, thickness=t, strip_lin_density=0.0)
+    alone = sag.solve_sag(L, [L], [m], sag.Strip(E, I, t, 0.0))
     assert alone.tip_sag == pytest.approx(P * L ** 3 / (3 * E * I), rel=0.01)
     disks = g["disks"]
     assert len(disks) == 12 and all(12 < x["mass_g"] < 40 for x in disks)
     more = sag.solve_sag(L, [L] + [x["s_mm"] for x in disks], [m] + [x["mass_g"] for x in disks],
-                         E=E, I=I, thickness=t, strip_lin_density=0.0)
+                         sag.Strip(E, I, t, 0.0))
     assert more.tip_sag > alone.tip_sag
     # the build's state N: the tensioner from the files, the hubs stiffen, the plot is written
     worst = g["cases"][g["gravity"]]
@@ -370,6 +370,6 @@ def test_bill_of_materials_has_adhesive_mount_hardware_and_crimps(built, tmp_pat
     crimp = d.tendon_material.termination.model_copy(update={"kind": "crimp", "diameter": 1.3, "length": 4.0,
                                                             "name": "copper crimp sleeve 0.5 mm bore"})
     d2 = d.model_copy(update={"tendon_material": d.tendon_material.model_copy(update={"termination": crimp})})
-    rows2, _ = bom.bom_rows(folder, _manifest(folder), make_plan(d2), read_report(folder))
+    rows2, _ = bom.bom_rows(folder, Manifest.of(_manifest(folder)), make_plan(d2), read_report(folder))
     (sleeves,) = [r for r in rows2 if r["part"] == "crimp sleeve"]
     assert sleeves["qty"] == 5 and sleeves["size"] == "Ø1.3 × 4 mm"

@@ -73,14 +73,14 @@ def test_channels_with_the_same_files_and_pose_share_one_measurement(proto, coun
     on its own. What C2 is given is what C2's own files give where the robot has them (the claim
     that the measurement does not move with the pair), to 1e-9 of itself."""
     folder, man, p = proto
-    pairs = gear_pairs(man)
+    pairs = gear_pairs(man["parts"])
     wheels = {c: _stl_sha(pw["wheel"]) for c, pw in pairs.items()}
     worms = {c: _stl_sha(pw["worm"]) for c, pw in pairs.items()}
     assert wheels["C1"] == wheels["C2"] == wheels["H"] != wheels["A"] and len(set(worms.values())) == 1
     groups = distinct_pairs(folder, pairs)
     assert sorted(d.channels for d in groups) == [["A"], ["C1", "C2", "H"]]
     with cache.using(cache.Store(tmp_path / "cache")):
-        checks = gear_checks(folder, man, p)
+        checks = gear_checks(folder, man["parts"], p)
     assert counted == {"measure_pair": 2, "contact": 2}      # two distinct pairs; both flanks of one
     by = _by_channel(checks)
     for ch in ("C2", "H"):
@@ -112,7 +112,7 @@ def test_moving_every_pair_by_a_rigid_motion_measures_nothing_again(proto, count
     folder, man, p = proto
     store = cache.Store(tmp_path / "cache")
     with cache.using(store):
-        before = gear_checks(folder, man, p)
+        before = gear_checks(folder, man["parts"], p)
     moved = copy.deepcopy(man)
     motions = {"A": _rigid(0.7, (1, 2, 3), (5.0, -40.0, 12.5)), "C1": _rigid(-2.1, (0, 0, 1), (0.3, 0.0, -7.0)),
                "C2": _rigid(math.pi, (1, 0, 0), (-100.0, 25.0, 0.0)), "H": _rigid(0.01, (3, -1, 0.5), (0.0, 0.5, 0.0))}
@@ -122,11 +122,11 @@ def test_moving_every_pair_by_a_rigid_motion_measures_nothing_again(proto, count
     assert [q["placement"] for q in moved["parts"]] != [q["placement"] for q in man["parts"]]
     n = dict(counted)
     with cache.using(store):
-        after = gear_checks(folder, moved, p)
+        after = gear_checks(folder, moved["parts"], p)
     assert counted == n                        # nothing measured
     assert [c.to_json() for c in after] == [c.to_json() for c in before]
     with cache.using(cache.Store(None)):
-        fresh = gear_checks(folder, moved, p)
+        fresh = gear_checks(folder, moved["parts"], p)
     assert counted["measure_pair"] == n["measure_pair"] + 2
     assert [c.to_json() for c in fresh] == [c.to_json() for c in before]
 
@@ -138,13 +138,13 @@ def test_a_wheel_moved_toward_its_worm_is_measured_again(proto, counted, tmp_pat
     folder, man, p = proto
     store = cache.Store(tmp_path / "cache")
     with cache.using(store):
-        before = _by_channel(gear_checks(folder, man, p))
+        before = _by_channel(gear_checks(folder, man["parts"], p))
     moved = copy.deepcopy(man)
-    pairs = gear_pairs(moved)
+    pairs = gear_pairs(moved["parts"])
     pairs["C2"]["wheel"]["placement"] = toward(pairs["C2"]["wheel"], pairs["C2"]["worm"], 0.1).tolist()
     n = dict(counted)
     with cache.using(store):
-        after = _by_channel(gear_checks(folder, moved, p))
+        after = _by_channel(gear_checks(folder, moved["parts"], p))
     assert counted == {"measure_pair": n["measure_pair"] + 1, "contact": n["contact"]}
     c2 = after["C2"]
     assert all(c2[cid].where == {"channel": "C2"} for cid in SHARED)
@@ -161,22 +161,22 @@ def test_the_gear_process_is_started_only_for_what_is_not_remembered(proto, coun
     """A build's work ahead asks whether every gear measurement is in the store before it starts a
     process to make them: asking measures nothing; with the measurements kept (also after the
     channels moved, as a routing edit moves them) the answer is yes, with an empty store no."""
-    from hwgen import pipeline
+    from hwgen.engine.concurrency import gears_remembered
     folder, man, p = proto
     store = cache.Store(tmp_path / "cache")
     with cache.using(store):
-        assert not pipeline._gear_checks_remembered(folder, man, p)
+        assert not gears_remembered(folder, man["parts"], p)
     with cache.using(cache.Store(None)):
-        assert not pipeline._gear_checks_remembered(folder, man, p)
+        assert not gears_remembered(folder, man["parts"], p)
     assert counted == {"measure_pair": 0, "contact": 0}
     with cache.using(store):
-        gear_checks(folder, man, p)
+        gear_checks(folder, man["parts"], p)
     moved = copy.deepcopy(man)
     for q in moved["parts"]:
         if q.get("role") in ("tensioner_worm", "tensioner_wheel") and q["channel"] == "C2":
             q["placement"] = (_rigid(0.3, (0, 1, 0), (12.0, 0.0, -3.0)) @ np.asarray(q["placement"])).tolist()
     n = dict(counted)
     with cache.using(store):
-        assert pipeline._gear_checks_remembered(folder, man, p)
-        assert pipeline._gear_checks_remembered(folder, moved, p)
+        assert gears_remembered(folder, man["parts"], p)
+        assert gears_remembered(folder, moved["parts"], p)
     assert counted == n

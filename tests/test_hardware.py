@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import pytest
 
+from hwgen import cache
+
 from hwgen.model import hardware
 
 
@@ -69,6 +71,5 @@ def test_no_screw_is_short_enough_for_too_little_room():
 def test_the_part_cache_is_keyed_by_the_tables_the_solids_read():
     """A cached part made with another fastener (or material) table is not reused: the tables are
     among the files the part cache's key is taken from, beside the model's and the CAD's code."""
-    from hwgen import pipeline
-    names = {f.name for f in pipeline._sources()}
+    names = {f.name for f in cache.code_files(cache.SOLID_CODE)}
     assert {"fasteners.csv", "materials.csv", "hardware.py", "fixtures.py"} <= names

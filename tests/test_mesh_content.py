@@ -12,7 +12,7 @@ import pytest
 import trimesh
 
 from hwgen import cache
-from hwgen.cad.manifest import manifest_parts
+from hwgen.cad.manifest import manifest_parts, read_manifest
 from hwgen.checks import meshes, parts as parts_mod, printing as printing_mod
 from hwgen.checks.parts import LoadedPart, mass_summary, mesh_checks
 from hwgen.checks.printing import printing_checks
@@ -153,7 +153,9 @@ def _count_measures(monkeypatch) -> list:
 
 
 def _checks(ps: list[LoadedPart]) -> list[dict]:
-    manifest = {"parts": [{"name": p.name, **p.entry} for p in ps], "design_report": {"stations_mm": [0.0]}}
+    from hwgen.cad.manifest import Manifest
+    manifest = Manifest("test", "0", "", "", [], {}, {}, [{"name": p.name, **p.entry} for p in ps],
+                        {"stations_mm": [0.0]})
     return ([c.to_json() for c in mesh_checks(ps) + printing_checks(ps, "SLA")]
             + [mass_summary(ps, manifest)[0]])
 
@@ -191,7 +193,7 @@ def test_a_parts_own_checks_are_measured_once_per_file_and_remembered(tmp_path, 
 def test_every_file_of_a_build_rebuilt_from_its_kept_arrays_is_the_mesh_trimesh_loads(built, tmp_path):
     folder = built("prototype")
     store = cache.Store(tmp_path / "store")
-    listed = manifest_parts(json.loads((folder / "manifest.json").read_text()))
+    listed = manifest_parts(read_manifest(folder))
     seen = set()
     for p in listed:
         stl = p.stl_in(folder)

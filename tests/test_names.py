@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from hwgen.cad.manifest import manifest_parts
+from hwgen.cad.manifest import Manifest, manifest_parts
 from tests import clients
 from tests.conftest import PARAMS
 
@@ -49,5 +49,5 @@ def test_freecad_shows_every_instance_under_its_own_name(built, tmp_path):
     # identical parts still share one geometry: fewer products than instances
     text = (folder / "assembly.step").read_text(errors="replace")
     products = text.count("= PRODUCT(") - 1                     # less the assembly's own
-    shared = {p.files["stl"].sha256 for p in manifest_parts(manifest)}      # identical parts, identical meshes
+    shared = {p.files["stl"].sha256 for p in manifest_parts(Manifest.of(manifest))}      # identical parts, identical meshes
     assert products == len(shared) < len(names)

@@ -11,6 +11,7 @@ import pytest
 from PIL import Image
 
 from hwgen import pipeline
+from hwgen.cad.manifest import Manifest
 from hwgen.outputs import pictures, scene
 from hwgen.pipeline import load
 
@@ -94,7 +95,7 @@ def test_jig_picture_shows_the_disks_in_the_jig(proto):
     folder, m = proto
     rec = m["render"]["files"][JIG]
     assert Image.open(folder / JIG).size == (rec["width"], rec["height"])
-    pal = scene.family_colours(m, fixtures=True)
+    pal = scene.family_colours(Manifest.of(m), fixtures=True)
     f = fractions(_image(folder / JIG), {k: pal[k] for k in ("jig", "disk", "backbone", "tensioner_housing")})
     assert f["jig"] > 0.05 and f["disk"] > 0.05 and f["backbone"] > 1e-3, f
     assert f["tensioner_housing"] < 1e-4, f
@@ -129,7 +130,7 @@ def test_bent_differs_from_straight(proto, tmp_path):
         shutil.copy(folder / name, tmp_path / name)
     shutil.copytree(folder / "stl", tmp_path / "stl")
     s = m["render"]["settings"]
-    straight = pictures.render_pictures(tmp_path, m, pictures.Settings(s["width_px"], s["explode_mm"], 0.0))
+    straight = pictures.render_pictures(tmp_path, Manifest.of(m), pictures.Settings(s["width_px"], s["explode_mm"], 0.0))
     a = _foreground(tmp_path / "bent.png")
     b = _foreground(folder / "bent.png")
     iou = (a & b).sum() / (a | b).sum()
@@ -212,8 +213,8 @@ def test_new_families_are_drawn_without_code_changes(proto, tmp_path):
                            "files": {"stl": {"path": f"stl/{name}.stl", "sha256": ""},
                                      "step": {"path": f"step/{name}.step", "sha256": ""}}})
     design = load(ROOT / "params" / "prototype.yaml").design
-    table = bom.family_table(m, design.process.name)
-    res = pictures.render_pictures(tmp_path, m, pictures.Settings(1600, 20.0, 90.0), table)
+    table = bom.family_table(Manifest.of(m), design.process.name)
+    res = pictures.render_pictures(tmp_path, Manifest.of(m), pictures.Settings(1600, 20.0, 90.0), table)
     assert set(res["palette"]) == {p["role"] for p in m["parts"] if not p.get("fixture")} and "worm" in res["palette"]
     for role, c in res["palette"].items():      # the disk's manifest colour, yet a colour of its own
         assert role == "worm" or not scene.confusable(res["palette"]["worm"], c)
@@ -228,7 +229,7 @@ def test_no_backend_still_builds(tmp_path, monkeypatch):
     from hwgen.pipeline import build
     monkeypatch.setenv(pictures.BACKEND_ENV, "none")
     res = build(load(ROOT / "params" / "prototype.yaml"), tmp_path)
-    entry = res.manifest["render"]
+    entry = res.manifest.render
     assert entry["status"] == "unavailable"
     assert "apt-get install" in entry["message"] and "vtk-osmesa" in entry["message"]
     assert (res.folder / "bom.csv").exists() and (res.folder / "stl" / "disk_00.stl").exists()
@@ -252,7 +253,7 @@ def test_a_failing_renderer_is_reported(proto, tmp_path, monkeypatch, child, sta
     (out / "bent.png").write_bytes(b"an old picture")
     m = json.loads(json.dumps(m))
     from hwgen.model.plan import make_plan
-    pipeline.draw(make_plan(load(ROOT / "params" / "prototype.yaml").design), out, m)
+    m = pipeline.draw(make_plan(load(ROOT / "params" / "prototype.yaml").design), out, Manifest.of(m)).to_json()
     assert m["render"]["status"] == status
     for w in words:
         assert w in m["render"]["message"]
@@ -287,7 +288,7 @@ def test_bent_picture_says_whether_the_hardware_reaches_the_pose(proto):
     for p in m2["parts"]:
         if p["role"] == "tensioner_wheel" and p["channel"] == "A":
             p["winding"] = "opposite"
-    assert pictures.reachable_note(m2).startswith("the worm of channel A bends the robot")
+    assert pictures.reachable_note(Manifest.of(m2)).startswith("the worm of channel A bends the robot")
 
 
 def test_chain_joins_segments_into_polylines():

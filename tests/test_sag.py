@@ -23,10 +23,11 @@ STATIONS = 22.5 * np.arange(13)
 DISKS = np.r_[14.95, np.full(11, 12.65), 14.95]   # g
 
 
-def solve(L, stations, masses, *, EI=None, strip_lin_density=STRIP_LAMBDA, **kw):
+def solve(L, stations, masses, *, EI=None, strip_lin_density=STRIP_LAMBDA, tip_mass=0.0, tip_offset=(0.0, 0.0),
+          **kw):
     E = E_LAMINATE if EI is None else EI / I_STRIP
-    return sag.solve_sag(L, stations, masses, E=E, I=I_STRIP, thickness=T, strip_lin_density=strip_lin_density,
-                         **kw)
+    return sag.solve_sag(L, stations, masses, sag.Strip(E, I_STRIP, T, strip_lin_density),
+                         tip=sag.Tip(tip_mass, tip_offset), **kw)
 
 
 def tip_mass_for_force(P):

@@ -331,9 +331,9 @@ def test_state_N_sags_as_the_own_weight_model_shoots_it(prototype):
     r = desc.robot
     eq = st.solve(model, st.Loads(gravity=(0.0, 0.0, -1.0)))
     sec = r.section
-    shot = sag.solve_sag(r.length, [s for s, _ in r.point_masses], [m for _, m in r.point_masses], E=sec.E,
-                         I=sec.ei_flex / sec.E, thickness=sec.thickness, strip_lin_density=sec.lin_density,
-                         tip_mass=r.tip_mass, tip_offset=r.tip_offset, spans=r.stiffening.flex)
+    shot = sag.solve_sag(r.length, [s for s, _ in r.point_masses], [m for _, m in r.point_masses],
+                         sag.Strip(sec.E, sec.ei_flex / sec.E, sec.thickness, sec.lin_density),
+                         tip=sag.Tip(r.tip_mass, r.tip_offset), spans=r.stiffening.flex)
     tip = eq.at(r.length)
     assert shot.tip_sag > 100                          # a large deflection
     assert tip[1] == pytest.approx(shot.tip_y, rel=1e-3) and tip[2] == pytest.approx(shot.tip_z, rel=1e-3)

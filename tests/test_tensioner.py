@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from hwgen.cad.manifest import ManifestPart
+from hwgen.cad.manifest import Manifest, ManifestPart
 from hwgen.checks.axes import fit_axis
 from hwgen.checks.gear_mesh import GAP_TOL_MM, INTERFERENCE_TOL_MM3, count_teeth, gear_checks, measure_pair, mesh_measure, toward
 from hwgen.checks.meshes import load_mesh, placed_manifold, placed_mesh
@@ -57,7 +57,9 @@ def test_one_worm_drive_per_channel(proto):
 def test_worm_and_wheel_files_are_closed_solids(proto):
     folder, man, _ = proto
     for role in ("tensioner_worm", "tensioner_wheel", "tensioner_clamp", "tensioner_drive", "tensioner_housing"):
-        for q in (x for x in man["parts"] if x["role"] == role):
+        of_role = [x for x in man["parts"] if x["role"] == role]
+        assert of_role, role                # a renamed role must not pass with nothing measured
+        for q in of_role:
             mesh = load_mesh(ManifestPart.of(q).stl_in(folder))
             assert mesh.is_watertight and mesh.is_winding_consistent and mesh.is_volume, q["name"]
             assert mesh.volume == pytest.approx(q["volume_mm3"], rel=0.01), q["name"]
@@ -107,7 +109,7 @@ def test_worm_has_a_thread_and_wheel_has_teeth(proto):
 
     wheel_q = _by_role(man, "tensioner_wheel")["C1"]
     lay = layout(_design(), p.paths, p.disks[-1])
-    unit = lay.unit("C1")
+    unit = next(u for u in lay.units if u.channel == "C1")
     z_file = (lay.wheel_flip(unit) @ [0, 0, unit.z_wheel_mid - unit.z_part[0], 1])[2]
     sec = placed_manifold(folder, wheel_q, np.eye(4)).slice(z_file).to_polygons()
     pts = np.vstack(sec)
@@ -231,7 +233,7 @@ def test_moved_wheels_and_an_edited_mesh_are_caught(proto, tmp_path):
     mesh = load_mesh(stl)
     mesh.apply_translation(0.05 * ph[:3, :3].T @ away)                  # the same move, in the file's frame
     mesh.export(stl)
-    checks = gear_checks(work, moved, p)
+    checks = gear_checks(work, moved["parts"], p)
     a, c1, c2, h = (_gear_checks_of(checks, ch) for ch in ("A", "C1", "C2", "H"))
     assert all(c.passed for c in a.values() if c.severity == "error")
     for ch in (c1, c2, h):
@@ -250,7 +252,7 @@ def test_counts_are_read_from_the_sections(proto):
     folder, man, p = proto
     ts = _design().tensioner.model_copy(update={"wheel_teeth": 25, "module": 1.2})
     lay = dataclasses.replace(p.tensioner_layout, pair=worm_pair(ts, p.min_wall))
-    one = {"parts": [_by_role(man, "tensioner_worm")["C1"], _by_role(man, "tensioner_wheel")["C1"]]}
+    one = [_by_role(man, "tensioner_worm")["C1"], _by_role(man, "tensioner_wheel")["C1"]]
     checks = gear_checks(folder, one, dataclasses.replace(p, tensioner_layout=lay))
     teeth = next(c for c in checks if c.id == "gear.teeth")
     assert not teeth.passed and teeth.measured == 24 and teeth.limit == 25
@@ -261,7 +263,7 @@ def test_counts_are_read_from_the_sections(proto):
 
 def test_every_tendon_clears_every_other_part(proto):
     folder, man, p = proto
-    checks = tendon_checks(folder, man, p)
+    checks = tendon_checks(folder, Manifest.of(man), p)
     clear = [c for c in checks if c.id == "tensioner.tendon_clearance"]
     assert sorted(c.where["tendon"] for c in clear) == sorted(t.name for t in p.paths)
     d = p.tendon_material.diameter
@@ -284,7 +286,7 @@ def test_tendon_runs_start_at_the_tip_eyelets(proto):
 
 def test_gear_checks_pass_on_the_prototype(proto):
     folder, man, p = proto
-    checks = gear_checks(folder, man, p)
+    checks = gear_checks(folder, man["parts"], p)
     failed = [c.message for c in checks if c.severity == "error" and not c.passed]
     assert not failed
     ids = {c.id for c in checks}
@@ -420,7 +422,7 @@ def test_tendon_clearance_check_sees_a_part_in_the_way(proto):
     h = next(q for q in moved["parts"] if q["role"] == "tensioner_housing")
     z_run = min((r["start"][2] for q in man["parts"] for r in q.get("tendon_runs", [])), key=abs)
     h["placement"][2][3] += z_run - 2.0          # the bar spans z -1.5..6 about the strip
-    failed = [c for c in tendon_checks(folder, moved, p) if c.id == "tensioner.tendon_clearance" and not c.passed]
+    failed = [c for c in tendon_checks(folder, Manifest.of(moved), p) if c.id == "tensioner.tendon_clearance" and not c.passed]
     assert failed and all(c.where["part"] == "tensioner_housing" for c in failed)
 
 

@@ -120,7 +120,7 @@ def odd_build(request, tmp_path_factory):
 def test_odd_tensioners_build_with_a_housing_in_one_piece(odd_build):
     from hwgen.checks.meshes import load_mesh
     doc, res = odd_build
-    parts = res.manifest["parts"]
+    parts = res.manifest.parts
     channels = set(doc["tensioner"]["channels"])
     assert {p["channel"] for p in parts if p["role"] == "tensioner_worm"} == channels
     (housing,) = [p for p in parts if p["role"] == "tensioner_housing"]
@@ -138,7 +138,7 @@ def test_two_tendons_of_different_x_wind_on_one_drum_in_their_own_grooves(odd_bu
     doc, res = odd_build
     if doc["design"] != "two-x":
         pytest.skip("the two-x robot only")
-    (wheel,) = [p for p in res.manifest["parts"] if p["role"] == "tensioner_wheel" and p["channel"] == "P"]
+    (wheel,) = [p for p in res.manifest.parts if p["role"] == "tensioner_wheel" and p["channel"] == "P"]
     assert sorted(wheel["tendons"]) == ["P1", "P2"]
     zones = wheel["winding_zones_z_mm"]
     assert len(zones) == 2 and zones[0][1] < zones[1][0]      # two grooves, apart
@@ -180,7 +180,7 @@ def test_opposite_winding_puts_the_pair_on_either_side_of_its_drum(tmp_path):
     f = tmp_path / "opposite.yaml"
     f.write_text(yaml.safe_dump(doc))
     lay = make_plan(load(f).design).tensioner_layout
-    unit = lay.unit("A")
+    unit = next(u for u in lay.units if u.channel == "A")
     centre = (lay.turn @ [unit.center[0], unit.center[1], 0, 1])[0]
     runs = {r.tendon: r for r in lay.runs if r.channel == "A"}
     assert sorted(r.sense for r in runs.values()) == [-1, 1]

@@ -5,74 +5,10 @@ face on the XY plane, resting on Z = 0) and the placement that maps it to robot 
 """
 from __future__ import annotations
 
-import importlib.abc
-import importlib.util
-import sys
-import types
 import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
-
-
-class _VtkWhileOcpStarts(importlib.abc.MetaPathFinder):
-    """OCP's packages, as CadQuery imports them (OCP itself, its IVtkOCC and IVtkVTK bindings),
-    each import the ``vtk`` module, which imports every one of VTK's ~160 extension modules: 0.3 s
-    of CPU in each process that imports CadQuery, on the build's critical path (the workers wait
-    for their server's imports). CadQuery itself needs 31 of them, which it imports by name. While
-    CadQuery (or OCP, imported first) starts, ``vtk`` is a stand-in that loads the whole of VTK only
-    if an attribute of it is read; once it has started, the stand-in leaves ``sys.modules``
-    (unless it was used), so that a later ``import vtk`` is the real one. Nothing changes where
-    VTK was imported already, or where CadQuery or OCP was imported before hwgen.cad."""
-
-    STARTS_VTK = ("cadquery", "OCP")
-
-    def __init__(self):
-        self.looking = False
-
-    def find_spec(self, name, path=None, target=None):
-        if name not in self.STARTS_VTK or self.looking:
-            return None
-        self.looking = True                 # the search below asks the finders again, this one too
-        try:
-            spec = importlib.util.find_spec(name)
-        finally:
-            self.looking = False
-        if spec is None or spec.loader is None or not hasattr(spec.loader, "exec_module"):
-            return spec
-        spec.loader = _StartingWithoutVtk(spec.loader)
-        return spec
-
-
-class _StartingWithoutVtk(importlib.abc.Loader):
-    def __init__(self, loader):
-        self.loader = loader
-
-    def create_module(self, spec):
-        return self.loader.create_module(spec)
-
-    def exec_module(self, module) -> None:
-        stand_in = None
-        if "vtk" not in sys.modules:
-            stand_in = sys.modules["vtk"] = types.ModuleType("vtk", "VTK, loaded if used (hwgen.cad)")
-
-            def __getattr__(name: str):
-                if name.startswith("__"):       # introspection (a module's __file__, __path__): not VTK's
-                    raise AttributeError(name)
-                import vtkmodules.all as full
-                sys.modules["vtk"] = full
-                return getattr(full, name)
-            stand_in.__getattr__ = __getattr__
-        try:
-            self.loader.exec_module(module)
-        finally:
-            if stand_in is not None and sys.modules.get("vtk") is stand_in:
-                del sys.modules["vtk"]
-
-
-if not any(isinstance(f, _VtkWhileOcpStarts) for f in sys.meta_path) and "OCP" not in sys.modules \
-        and "cadquery" not in sys.modules:
-    sys.meta_path.insert(0, _VtkWhileOcpStarts())       # before any module of this package imports CadQuery
 
 
 @dataclass(frozen=True)
@@ -120,7 +56,7 @@ MASS_EPS = 1e-6   # relative precision of the volume integration (CadQuery's Vol
 
 def mass_properties(solid) -> tuple[float, tuple[float, float, float]]:
     """Volume (mm³) and centroid (file mm) of a solid, integrated to MASS_EPS: once per solid (a
-    throated wheel's is half a second; a part is found sound by its volume and measured for the
+    throated wheel's is costly; a part is found sound by its volume and measured for the
     manifest by both), or as :func:`known_mass` gave them."""
     found = _MASS.get(solid)
     if found is None:

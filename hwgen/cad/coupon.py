@@ -1,6 +1,6 @@
 """The calibration coupon's solid (:mod:`hwgen.model.coupon` says what is on it): a plate with
 a row of holes and a row of slots cut in one sketch, each with its value engraved below it
-(CadQuery's text, cut in one boolean: the glyphs' curves make it the costly step, ~5 s)."""
+(CadQuery's text, cut in one boolean: the glyphs' curves make it the costly step)."""
 from __future__ import annotations
 
 from ..model.coupon import CouponSpec

@@ -173,8 +173,7 @@ def write_assembly(parts: list[Part], name: str, path: Path) -> None:
 
 def _entities_of(model, kind) -> list:
     """The STEP model's entities of an OCCT type (and its subtypes), in file order, picked out by
-    OCCT: a pass in Python that wrapped every entity took a fifth of a second of the prototype's
-    assembly, this a quarter of that."""
+    OCCT (a pass in Python that wrapped every entity cost several times more)."""
     found = model.Entities()
     found.SelectType(kind.get_type_descriptor_s(), True)
     out = []

@@ -2,7 +2,7 @@
 
 Each family is built in units (:class:`Unit`): a disk each, the strip, each channel of the
 tensioner and its housing, each fixture. A unit names the frozen values its builder reads (its
-``inputs``), so the part cache (:mod:`hwgen.cache`, used by :mod:`hwgen.pipeline`) can key its
+``inputs``), so the part cache (:mod:`hwgen.cache`, used by :mod:`hwgen.engine.units`) can key its
 files by them: a unit whose inputs did not change is not built again. A builder that starts to
 read something new must name it in its unit's inputs.
 

@@ -1,15 +1,19 @@
-"""The manifest: per part its files and their sha256, volume, box and placement, and the design
-report the checks compare the files against. Plain JSON; no CAD kernel.
+"""The manifest: per part its files and their sha256, volume, box and placement, the design
+report the checks compare the files against, and what each stage after the files adds. Plain
+JSON on disk; no CAD kernel.
 
-Written here and read here: :func:`write_manifest` and :func:`read_manifest` for the file, and
-:class:`ManifestPart` for one part's entry as the later stages use it (its files, placement,
-role), so no stage spells the JSON's keys itself."""
+Written here and read here: :class:`Manifest` is the manifest as every stage reads it,
+:func:`read_manifest` its one reader and :func:`write_manifest` its one writer; a stage after
+the files returns what it adds (:class:`Added`) and only the pipeline puts it in
+(:meth:`Manifest.adding`). :class:`ManifestPart` is one part's entry as the later stages use it
+(its files, placement, role), so no stage spells the JSON's keys itself."""
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -24,14 +28,76 @@ if TYPE_CHECKING:
 MANIFEST = "manifest.json"
 
 
-def read_manifest(folder: str | Path) -> dict:
+@dataclass(frozen=True)
+class Added:
+    """What one stage after the files adds to the manifest: its own sections (``checks``,
+    ``bom``, ``plates``, ``render``, ``guide``) and the files it wrote that the manifest lists
+    (key -> {"path", "sha256", ...})."""
+
+    sections: dict = field(default_factory=dict)
+    files: dict = field(default_factory=dict)
+
+    def to_json(self) -> dict:
+        return {"sections": self.sections, "files": self.files}
+
+    @staticmethod
+    def of(doc: Mapping) -> Added:
+        return Added(dict(doc["sections"]), dict(doc["files"]))
+
+
+@dataclass(frozen=True)
+class Manifest:
+    """manifest.json as the stages read it. The fields before ``parts_written`` are the files'
+    (written by the parts' stage); the ones after are the stages' after the files, None until
+    the stage ran (a ``--parts`` build runs none). The JSON holds them in this order."""
+
+    name: str                           # the design's name (the JSON's "design")
+    hwgen_version: str
+    params_file: str
+    params_sha256: str
+    params_base: list                   # the file's base, its base's base, ...: merged under it
+    design_resolved: dict               # the design as read, bases merged
+    files: dict                         # the whole design's files: key -> {"path", "sha256", ...}
+    parts: list                         # each part's entry (:class:`ManifestPart` reads one)
+    design_report: dict                 # :func:`design_report`
+    parts_written: dict | None = None   # a --parts build: the pattern and the parts it wrote
+    checks: list | None = None          # the checks' records (report.json's)
+    checks_ok: bool | None = None
+    bom: dict | None = None
+    plates: dict | None = None
+    render: dict | None = None
+    guide: dict | None = None
+
+    def to_json(self) -> dict:
+        return {_JSON_KEY.get(f.name, f.name): getattr(self, f.name) for f in dataclasses.fields(self)
+                if getattr(self, f.name) is not None or f.default is not None}
+
+    @staticmethod
+    def of(doc: Mapping) -> Manifest:
+        """The manifest a JSON document holds; KeyError or TypeError when it is not one hwgen wrote."""
+        fields = {_JSON_KEY.get(f.name, f.name): f.name for f in dataclasses.fields(Manifest)}
+        return Manifest(**{fields[k]: v for k, v in doc.items() if k in fields})
+
+    def adding(self, added: Added) -> Manifest:
+        """This manifest with a stage's sections and files put in (files already listed keep their place)."""
+        return dataclasses.replace(self, files={**self.files, **added.files}, **added.sections)
+
+    def copy(self) -> Manifest:
+        """A deep copy, for a stage that runs beside others."""
+        return Manifest.of(json.loads(json.dumps(self.to_json())))
+
+
+_JSON_KEY = {"name": "design"}          # a field whose JSON key is another word
+
+
+def read_manifest(folder: str | Path) -> Manifest:
     """The manifest of a built folder, as :func:`write_manifest` wrote it."""
-    return json.loads((Path(folder) / MANIFEST).read_text())
+    return Manifest.of(json.loads((Path(folder) / MANIFEST).read_text()))
 
 
-def write_manifest(folder: str | Path, manifest: dict) -> None:
+def write_manifest(folder: str | Path, manifest: Manifest) -> None:
     """manifest.json into the folder, whole or not at all."""
-    write_json(Path(folder) / MANIFEST, manifest)
+    write_json(Path(folder) / MANIFEST, manifest.to_json())
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -82,15 +148,15 @@ class ManifestPart:
         return Path(folder) / self.stl
 
 
-def manifest_parts(manifest: Mapping) -> list[ManifestPart]:
+def manifest_parts(manifest: Manifest) -> list[ManifestPart]:
     """Every part of a manifest, in its order."""
-    return [ManifestPart.of(e) for e in manifest.get("parts", [])]
+    return [ManifestPart.of(e) for e in manifest.parts]
 
 
-def manifest_files(manifest: Mapping) -> list[PartFile]:
+def manifest_files(manifest: Manifest) -> list[PartFile]:
     """Every file the manifest lists: each part's, then the whole design's (assembly, template, ...)."""
     out = [f for p in manifest_parts(manifest) for f in p.files.values()]
-    return out + [PartFile(path=f["path"], sha256=f["sha256"]) for f in manifest.get("files", {}).values()]
+    return out + [PartFile(path=f["path"], sha256=f["sha256"]) for f in manifest.files.values()]
 
 
 def sha256(path: Path) -> str:
@@ -143,12 +209,6 @@ def describe(part: Part) -> dict:
     return {"name": part.name, "role": part.role, "placement": np.asarray(part.placement).tolist(),
             "color": list(part.color), "station": part.station, "meta": part.meta, "material": part.material,
             "density_g_cm3": part.density_g_cm3}
-
-
-def part_entry(part: Part, files: dict[str, Path], root: Path, material: str, density_g_cm3: float) -> dict:
-    """The manifest entry of one part; ``material`` and ``density_g_cm3`` are the printed material's,
-    used unless the part names its own. Mass and centre of mass come from the solid."""
-    return entry(describe(part), measure(part), files, root, material, density_g_cm3)
 
 
 def entry(described: dict, measured: dict, files: dict[str, Path], root: Path, material: str,

@@ -1,10 +1,10 @@
 """Solids kept between builds: an expensive solid read back from its exact BREP instead of being
 made again.
 
-The part cache (:mod:`hwgen.pipeline`) keeps whole units; when a unit has to be built again
+The part cache (:mod:`hwgen.pipeline.units`) keeps whole units; when a unit has to be built again
 because one of its inputs changed, the costly solids inside it whose own inputs did not (the
 throated wheel's gear: one tooth's sector cut and turned round, the costliest boolean; the
-worm's swept thread, about a second) come from here: an edit that moves the tensioner but not
+worm's swept thread) come from here: an edit that moves the tensioner but not
 its gearing reuses both. The tensioner's channels, units of their own made in several processes
 at once, share their worm, gear, drive shaft, clamp plate and wheels through it too (a build
 without a cache keeps them in a store of its own): each is made once, by whichever unit comes
@@ -21,9 +21,9 @@ from contextvars import ContextVar
 
 from .. import cache
 from . import known_mass, mass_properties
-from .export import read_brep, write_brep
+from .export import read_brep, settings, write_brep
 
-_ACTIVE: ContextVar[tuple[cache.Store, object] | None] = ContextVar("hwgen_kept_solids", default=None)
+_ACTIVE: ContextVar[cache.Store | None] = ContextVar("hwgen_kept_solids", default=None)
 _SET_ASIDE: ContextVar[bool] = ContextVar("hwgen_set_aside_when_busy", default=False)
 # each solid kept() gave, with the key it is kept under
 _MADE_AS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -35,11 +35,19 @@ class Busy(BaseException):
     BaseException so that no handler of the kernel's failures (``except Exception``) takes it."""
 
 
+KERNEL = ("cadquery", "cadquery-ocp")      # the libraries a solid (and its files) depends on
+
+
+def key_of(kind: str, inputs) -> str:
+    """The store's key of a kept solid (:func:`hwgen.cache.entry_key`): its kind and inputs, the
+    export settings its files are written with, the code that makes solids and the CAD kernel's version."""
+    return cache.entry_key("solid", (kind, inputs, settings()), code=cache.SOLID_CODE, libraries=KERNEL)
+
+
 @contextmanager
-def kept_in(store: cache.Store, salt) -> Iterator[None]:
-    """Within: :func:`kept` solids are read from and written to ``store``, keyed with ``salt``
-    (what every file also depends on: versions, code, export settings)."""
-    token = _ACTIVE.set((store, salt))
+def kept_in(store: cache.Store) -> Iterator[None]:
+    """Within: :func:`kept` solids are read from and written to ``store``."""
+    token = _ACTIVE.set(store)
     try:
         yield
     finally:
@@ -58,11 +66,10 @@ def setting_aside() -> Iterator[None]:
 
 def kept(kind: str, inputs, make: Callable[[], object]):
     """``make()``, or the solid it made last time for the same ``kind`` and ``inputs``."""
-    active = _ACTIVE.get()
-    if active is None or not active[0].enabled:
+    store = _ACTIVE.get()
+    if store is None or not store.enabled:
         return make()
-    store, salt = active
-    key = cache.key("solid", kind, inputs, salt)
+    key = key_of(kind, inputs)
     solid = _read(store, key)
     if solid is None:
         lock = store.try_lock(key) if _SET_ASIDE.get() else store.lock(key)   # waits while another makes it
@@ -73,7 +80,7 @@ def kept(kind: str, inputs, make: Callable[[], object]):
             if solid is None:
                 solid = make()
                 # its volume and centroid with it: whoever reads it back finds it sound and measures
-                # it for the manifest without integrating it again (half a second for a wheel)
+                # it for the manifest without integrating it again
                 volume, com = mass_properties(solid)
                 store.put_record(key, {"brep": store.put_bytes(write_brep(solid)), "mass": [volume, list(com)]})
     _MADE_AS[solid] = key
@@ -81,7 +88,7 @@ def kept(kind: str, inputs, make: Callable[[], object]):
 
 
 def made_as(solid) -> str | None:
-    """The key :func:`kept` gave ``solid`` under (its kind, inputs and salt), None for a solid it did
+    """The key :func:`kept` gave ``solid`` under (:func:`key_of`), None for a solid it did
     not give: parts whose solids have one key have one solid, made in whichever unit or process
     (the assembly holds it once)."""
     return _MADE_AS.get(solid)

@@ -73,7 +73,7 @@ def channel_parts(lay: TensionerLayout, u: Unit, *, min_wall: float, tendon_diam
         # it snug; modelled without overlap so the parts' interference check stays meaningful
         worm_inputs = (pair, lay.worm_near_end, DRIVE_HEX, lay.shaft_diameter + lay.running_fit,
                        lay.worm_pin - POST + 0.5)
-        shared["worm"] = kept("worm", worm_inputs, lambda: worm_solid(*worm_inputs))   # the thread's sweep: a second or so
+        shared["worm"] = kept("worm", worm_inputs, lambda: worm_solid(*worm_inputs))   # the thread's sweep: costly
         drive_inputs = (float(lay.spine[1] - lay.spine[0]), float(lay.hex_key))    # through the spine, its key
         shared["drive"] = kept("drive shaft", drive_inputs, lambda: drive_solid(*drive_inputs))
         shared["gear"] = kept("throated wheel gear", pair, lambda: gear_solid(pair))   # the costliest boolean

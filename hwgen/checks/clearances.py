@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from itertools import combinations
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -289,6 +290,15 @@ def _breaks_through(x: float, y: float, r: float, outline) -> str:
             f"the edge is at x = {edge:.2f} mm) breaks through it")
 
 
+class StripBend(NamedTuple):
+    """The strip's thickness (mm) and the sweep (bending angles, °; the robot's length, mm) a
+    crossing's hole is sized against."""
+
+    thickness: float
+    angles_deg: np.ndarray
+    length: float
+
+
 def _hole_angle_fix(name: str, at: str, need: float, height: float) -> str:
     """What lets a tendon through the strip untouched: where the hole it needs is wider than the plan
     cuts any strip hole (STRIP_HOLE_SHARE of the strip), a squarer crossing or a wider strip; else
@@ -303,10 +313,10 @@ def _hole_angle_fix(name: str, at: str, need: float, height: float) -> str:
 
 
 def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendon_d: float, tol: float,
-                    findings: list[str], strip_t: float | None = None, angles_deg: np.ndarray | None = None,
-                    length: float | None = None) -> list[Check]:
+                    findings: list[str], bend: StripBend | None = None) -> list[Check]:
     """Every crossing of the strip has a hole in the DXF template and in the strip's STL, and
-    the hole is wide enough for the steepest angle the tendon crosses the strip at."""
+    (given ``bend``) the hole is wide enough for the steepest angle the tendon crosses the strip at."""
+    strip_t, angles_deg, length = bend if bend is not None else (None, None, None)
     out = []
     half_h = float(bb_outline.extent[0]) / 2 if bb_outline is not None else float("inf")
     circles = dxf_holes(dxf_path) if dxf_path.exists() else []

@@ -56,7 +56,7 @@ CENTER_TOL_MM = 0.005         # axes fitted to STL crests at 0.01 mm chord: a fe
 SHAFT_ANGLE_TOL_DEG = 0.02
 GAP_SEARCH_MM = 1.0           # min_gap search length between worm and wheel, beyond the centre offset
 NEAR_GAP_MM = 0.2             # searched first: a gap found within it is the one the longer search finds
-#                               (the closest pair of triangles is among the pairs nearer than it), 4× faster
+#                               (the closest pair of triangles is among the pairs nearer than it), far fewer pairs
 SWEEP_STEPS = 6               # worm angles over one thread period for interference and gap
 SENSE_ANGLES = (math.pi / 3, 2 * math.pi / 3)   # worm angles at which the wheel's turning sense is told
 ZONE_GAP_MM = 0.05            # a flank point this close to the worm carries load (≈ the Hertz approach at break load)
@@ -262,9 +262,10 @@ class Meshing:
         return {"turn_deg": turns, "extent_mm": extents, "points": int(len(pts))}
 
 
-def gear_pairs(manifest: dict) -> dict[str, dict[str, dict]]:
+def gear_pairs(parts: list[dict]) -> dict[str, dict[str, dict]]:
+    """The tensioner's worm and wheel entries of ``parts`` (manifest entries), per channel."""
     out: dict[str, dict[str, dict]] = {}
-    for p in manifest.get("parts", []):
+    for p in parts:
         if p.get("role") in ("tensioner_worm", "tensioner_wheel"):
             out.setdefault(p["channel"], {})[p["role"].split("_")[1]] = p
     return out
@@ -337,8 +338,8 @@ def distinct_pairs(folder: Path, pairs: dict[str, dict[str, dict]]) -> list[Dist
     return list(groups.values())
 
 
-def gear_checks(folder: Path, manifest: dict, plan) -> list[Check]:
-    """Every distinct worm and wheel (:func:`distinct_pairs`) measured from its files, once. What
+def gear_checks(folder: Path, parts: list[dict], plan) -> list[Check]:
+    """Every distinct worm and wheel of ``parts`` (manifest entries; :func:`distinct_pairs`) measured from its files, once. What
     the measuring finds (most of a check's time) is remembered (:func:`hwgen.cache.remembered`) per
     distinct pair under what it depends on: the two files' bytes, the wheel's pose to its worm and
     the design values it reads (the center offset, beyond which the gap is not searched; for the
@@ -346,10 +347,10 @@ def gear_checks(folder: Path, manifest: dict, plan) -> list[Check]:
     the channels' names. The checks are made from those numbers on every call (their messages name
     each channel, and its loads: tendons × break load × winding radius)."""
     folder = Path(folder)
-    pairs = gear_pairs(manifest)
+    pairs = gear_pairs(parts)
     if not pairs:
         return [Check("gear.parts", "error", False, "no tensioner worm/wheel parts in the manifest", fix=REBUILD)]
-    checks = _pair_checks(folder, manifest, plan, pairs)
+    checks = _pair_checks(folder, plan, pairs)
     return [Check(**c) for c in as_json([c.to_json() for c in checks])]
 
 
@@ -402,7 +403,7 @@ def measure_contact(m: dict, module: float) -> dict:
             "form_factor": tooth_form_factor(m["wheel"], m["wheel_axis"], module)}
 
 
-def _pair_checks(folder: Path, manifest: dict, plan, pairs: dict) -> list[Check]:
+def _pair_checks(folder: Path, plan, pairs: dict) -> list[Check]:
     pair = plan.require_tensioner_layout().pair
     measurer = _Measurer(folder)
     distinct = distinct_pairs(folder, pairs)
@@ -452,16 +453,16 @@ def _pair_checks(folder: Path, manifest: dict, plan, pairs: dict) -> list[Check]
                          f"leaves {flank_gap:.4f} mm per flank by the rack formula)", gap, lo, where,
                          fix="" if lo <= gap <= hi else REBUILD))
     measured = {c: found[d.measured_on] for c, d in of.items()}
-    out += _strength_checks(measured, of, measurer, manifest, plan, pair)
+    out += _strength_checks(measured, of, measurer, pairs, plan, pair)
     return out
 
 
-def _strength_checks(measured: dict, of: dict, measurer: _Measurer, manifest: dict, plan, pair) -> list[Check]:
+def _strength_checks(measured: dict, of: dict, measurer: _Measurer, pairs: dict, plan, pair) -> list[Check]:
     """Backlash and loaded face on the representative pair (the channel with the most tendons, measured
     on the files of the first channel of its distinct pair); Lewis and Hertz on every channel."""
     lay, ts, proc = plan.require_tensioner_layout(), plan.tensioner, plan.process
     mu, load = lay.friction_coefficient, plan.tendon_material.break_load
-    wheels = {p["channel"]: p for p in manifest["parts"] if p.get("role") == "tensioner_wheel"}
+    wheels = {c: pw["wheel"] for c, pw in pairs.items() if "wheel" in pw}
     usable = [c for c, m in measured.items() if "gap" in m]
     if not usable:
         return []

@@ -23,6 +23,7 @@ import math
 
 import numpy as np
 
+from ..cad.manifest import Manifest
 from ..model import sag
 from .base import REBUILD, Check
 from .polygons import section_moments
@@ -55,10 +56,10 @@ def _spans(fits: list[SlotFit], length: float, ei_strip: float, e_print: float) 
     return spans
 
 
-def loads(parts, manifest: dict, length: float):
+def loads(parts, manifest: Manifest, length: float):
     """(strip mass per mm in g/mm and its record, [(part, s, mass)], tip assembly record) from the
     STLs (volume, centroid) and the manifest's densities."""
-    entries = {p["name"]: p for p in manifest["parts"]}
+    entries = {p["name"]: p for p in manifest.parts}
     strip, points, tip = None, [], []
     for p in parts:
         e = entries.get(p.name, {})
@@ -95,7 +96,7 @@ def _case(r: sag.SagResult) -> dict:
                        "base_moment_nmm": abs(r.lin_base_moment)}}
 
 
-def gravity_checks(parts, manifest: dict, plan, fits: list[SlotFit], strip_h: float | None,
+def gravity_checks(parts, manifest: Manifest, plan, fits: list[SlotFit], strip_h: float | None,
                    strip_t: float | None, length: float) -> tuple[dict, list[Check]]:
     """State N, the mount's stiffness and the strip under the actuating pair: (report, checks)."""
     bb = plan.backbone
@@ -112,15 +113,15 @@ def gravity_checks(parts, manifest: dict, plan, fits: list[SlotFit], strip_h: fl
     spans = _spans(fits, length, E * I, e_print)
     st = [s for _, s, _ in points]
     ms = [m for _, _, m in points]
-    common = dict(E=E, I=I, thickness=t, strip_lin_density=strip["lambda_g_mm"], tip_mass=tip["mass_g"])
+    section = sag.Strip(E, I, t, strip["lambda_g_mm"])
     cases = {}
     for down, sign in (("-z", 1.0), ("+z", -1.0)):
-        cases[down] = sag.solve_sag(length, st, ms, tip_offset=(tip["a_mm"], sign * tip["z_mm"]), spans=spans,
-                                    **common)
+        cases[down] = sag.solve_sag(length, st, ms, section, tip=sag.Tip(tip["mass_g"], (tip["a_mm"], sign * tip["z_mm"])),
+                                    spans=spans)
     worst_key = max(cases, key=lambda k: cases[k].max_stress)
     r = cases[worst_key]
-    bare = sag.solve_sag(length, st, ms, tip_offset=(tip["a_mm"], (1 if worst_key == "-z" else -1) * tip["z_mm"]),
-                         **common)
+    bare = sag.solve_sag(length, st, ms, section,
+                         tip=sag.Tip(tip["mass_g"], (tip["a_mm"], (1 if worst_key == "-z" else -1) * tip["z_mm"])))
     allow = bb.allowable_stress_mpa
     s, y, z, stress = _downsample([r.s, r.y, r.z, r.stress], CURVE_POINTS)
     report = {
@@ -261,9 +262,8 @@ class _StripStudy:
     def _own_weight(self, t: float, h: float) -> float:
         I = sag.second_moment(h, t)
         r = self.r
-        return sag.solve_sag(r.L, r.stations, r.point_masses, E=self.E, I=I, thickness=t,
-                             strip_lin_density=r.strip_lin_density * t * h / (r.thickness * self.h),
-                             tip_mass=r.tip_mass, tip_offset=r.tip_offset,
+        section = sag.Strip(self.E, I, t, r.strip_lin_density * t * h / (r.thickness * self.h))
+        return sag.solve_sag(r.L, r.stations, r.point_masses, section, tip=sag.Tip(r.tip_mass, r.tip_offset),
                              spans=_spans(self.fits, self.length, self.E * I, self.e_print)).max_stress
 
     def bend(self, t: float, ang: float | None = None) -> float:

@@ -102,8 +102,8 @@ def _mesh_of(sha: str, data: bytes, kind: str):
     """The mesh of a file's bytes (``sha``: their sha256), rebuilt from the arrays kept for them
     in the active store, or parsed (and its arrays kept)."""
     import trimesh
-    arrays = cache.kept_arrays(MESH_ARRAYS, (sha, kind, trimesh.__version__, np.__version__),
-                               lambda: _parsed(data, kind))
+    arrays = cache.kept_arrays(MESH_ARRAYS, (sha, kind), lambda: _parsed(data, kind),
+                               code=cache.NO_CODE, libraries=("trimesh", "numpy"))
     return trimesh.Trimesh(vertices=arrays["vertices"], faces=arrays["faces"], process=False, validate=False)
 
 

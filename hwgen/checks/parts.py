@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cad.manifest import manifest_parts
+from ..cad.manifest import Manifest, manifest_parts
 from ..cache import as_json
 from .base import REBUILD, Check
 from .meshes import measured_by_file, read_mesh, to_manifold
@@ -59,7 +59,7 @@ class LoadedPart:
         return np.array([v.min(axis=0), v.max(axis=0)])
 
 
-def load_parts(folder: Path, manifest: dict) -> tuple[list[LoadedPart], list[Check]]:
+def load_parts(folder: Path, manifest: Manifest) -> tuple[list[LoadedPart], list[Check]]:
     parts, checks = [], []
     for p in manifest_parts(manifest):
         try:
@@ -183,12 +183,12 @@ def build_volume_checks(parts: list[LoadedPart], build_volume) -> list[Check]:
     return out
 
 
-def mass_summary(parts: list[LoadedPart], manifest: dict) -> tuple[dict, list[Check]]:
+def mass_summary(parts: list[LoadedPart], manifest: Manifest) -> tuple[dict, list[Check]]:
     """Mass and centre of mass of the robot (the base mount included, the jig not) and of everything
     beyond the tip disk, from the STLs (volume and centroid of each closed mesh) and each part's
     density in the manifest (design data: the files do not say what they are printed in)."""
-    entries = {p["name"]: p for p in manifest["parts"]}
-    tip_y = max(manifest["design_report"]["stations_mm"])
+    entries = {p["name"]: p for p in manifest.parts}
+    tip_y = max(manifest.design_report["stations_mm"])
     rows = []
     for p in parts:
         e = entries.get(p.name, {})

@@ -12,12 +12,12 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import __version__
-from ..cad.manifest import manifest_files, manifest_parts, sha256
+from ..cad.manifest import Manifest, manifest_files, manifest_parts, sha256
 from ..model import kinematics as kin
 from ..model.routing import table_deviations
 from .anchors import seat_checks
 from .base import REBUILD, Check
-from .clearances import backbone_checks, hole_checks, tendon_pair_checks, wall_checks
+from .clearances import StripBend, backbone_checks, hole_checks, tendon_pair_checks, wall_checks
 from .eyelets import backbone_section, locate_eyelets, measure_disk
 from .fixtures import jig_checks, mount_checks
 from .gear_mesh import gear_checks, gear_pairs
@@ -55,7 +55,7 @@ def _plain(v):
     return v
 
 
-def _file_checks(folder: Path, manifest: dict) -> list[Check]:
+def _file_checks(folder: Path, manifest: Manifest) -> list[Check]:
     out = []
     entries = manifest_files(manifest)
     changed, missing = [], []
@@ -81,17 +81,17 @@ def _file_checks(folder: Path, manifest: dict) -> list[Check]:
     return out
 
 
-def _strip_clamp_checks(manifest: dict) -> list[Check]:
+def _strip_clamp_checks(manifest: Manifest) -> list[Check]:
     """A warning where the tensioner was laid out without the block that clamps the strip's tip
     (a tendon leaves the tip where it would stand): as its housing's layout record says."""
     return [Check("tensioner.strip_clamp", "warning", False,
                   f"{p['name']}: strip clamp {p['layout_search']['strip_clamp']}", None, None, {"part": p["name"]},
                   fix="route the tendons to leave the tip disk clear of the strip's end (tendons[].routing at the "
                       "tip station), or hold the strip's tip in the housing by other means")
-            for p in manifest["parts"] if "strip_clamp" in p.get("layout_search", {})]
+            for p in manifest.parts if "strip_clamp" in p.get("layout_search", {})]
 
 
-def run_checks(folder: str | Path, manifest: dict, plan, measured: Measured | None = None) -> Report:
+def run_checks(folder: str | Path, manifest: Manifest, plan, measured: Measured | None = None) -> Report:
     """Measure the design in ``folder`` against the intent in its manifest; return the report
     (:class:`hwgen.checks.report.Report`: every key and what it holds): the files' own checks
     (every file of the manifest present and as the build wrote it), then what :func:`measure`
@@ -100,7 +100,7 @@ def run_checks(folder: str | Path, manifest: dict, plan, measured: Measured | No
     folder = Path(folder)
     checks = _file_checks(folder, manifest)
     m = measured if measured is not None else measure(folder, manifest, plan)
-    report = _report(manifest["design"], checks + m.checks, m.angles, plan.check.step_deg, m.tls, m.pair, m.emap,
+    report = _report(manifest.name, checks + m.checks, m.angles, plan.check.step_deg, m.tls, m.pair, m.emap,
                      m.taut)
     report.update(m.sections)
     return report
@@ -117,12 +117,12 @@ class Measured(NamedTuple):
     sections: dict          # the report's mass, as_built, seats, gravity and tension
 
 
-def backbone_template(manifest: dict) -> str:
+def backbone_template(manifest: Manifest) -> str:
     """The strip's DXF template's path in the folder, as the manifest names it."""
-    return manifest.get("files", {}).get("backbone_template", {}).get("path", "backbone_template.dxf")
+    return manifest.files.get("backbone_template", {}).get("path", "backbone_template.dxf")
 
 
-def measure(folder: str | Path, manifest: dict, plan) -> Measured:
+def measure(folder: str | Path, manifest: Manifest, plan) -> Measured:
     """Every check but the files' own, measured from the parts' STLs and the strip's DXF template
     (:func:`backbone_template`; the only entry of the manifest's ``files`` read) against the
     manifest's parts and design report. Every STL is read once and handed to every check that
@@ -131,9 +131,9 @@ def measure(folder: str | Path, manifest: dict, plan) -> Measured:
         return _measure(Path(folder), manifest, plan)
 
 
-def _measure(folder: Path, manifest: dict, plan) -> Measured:
+def _measure(folder: Path, manifest: Manifest, plan) -> Measured:
     s = plan.check
-    rep_in = manifest["design_report"]
+    rep_in = manifest.design_report
     checks: list[Check] = []
     parts, c = load_parts(folder, manifest)
     checks += c
@@ -159,7 +159,7 @@ def _measure(folder: Path, manifest: dict, plan) -> Measured:
     checks += hole_checks(emap, proc.min_hole, td, angles, L, tip_exits(manifest))
     checks += tendon_pair_checks(emap, rep_in, td, angles, L)
     checks += backbone_checks(emap, folder / backbone_template(manifest), bb_outline, bb_holes, td,
-                              s.position_tol_mm, rep_in.get("findings", []), strip_t, angles, L)
+                              s.position_tol_mm, rep_in.get("findings", []), StripBend(strip_t, angles, L))
     checks += mesh_checks(parts)
     checks += interference_checks(parts, s.interference_tol_mm3)
     checks += build_volume_checks(parts, proc.build_volume)
@@ -167,13 +167,13 @@ def _measure(folder: Path, manifest: dict, plan) -> Measured:
     checks += mount_checks(parts, disks, plan) + jig_checks(parts, disks, plan)
     # the tendon runs are measured against the placed solids the interference check has just made
     # (their place in the report is further down)
-    runs = tendon_checks(folder, manifest, plan) if gear_pairs(manifest) else []   # no tensioner: no runs
+    runs = tendon_checks(folder, manifest, plan) if gear_pairs(manifest.parts) else []   # no tensioner: no runs
     drop_solids()           # the whole parts' solids are done with: the Monte Carlo's memory comes next
     heap.trim()
     mass, c = mass_summary(parts, manifest)
     checks += c
     # the gear checks' place in the report; they are measured last, when a build has had them made
-    # meanwhile (in a process of its own, kept in the cache: hwgen.pipeline._Ahead)
+    # meanwhile (in a process of its own, kept in the cache: hwgen.engine.concurrency.Ahead)
     gears_at = len(checks)
     checks += runs
     checks += _strip_clamp_checks(manifest)
@@ -188,7 +188,7 @@ def _measure(folder: Path, manifest: dict, plan) -> Measured:
     gravity, c = gravity_checks(parts, manifest, plan, fits, None if bb_outline is None else bb_outline.extent[0],
                                 strip_t, L)
     checks += c
-    checks[gears_at:gears_at] = gear_checks(folder, manifest, plan)
+    checks[gears_at:gears_at] = gear_checks(folder, manifest.parts, plan)
     return Measured(checks, angles, tls, pair, emap, taut, {
         "mass": _plain(mass),
         "as_built": _plain({
@@ -236,14 +236,14 @@ def _seats(parts, emap, rep_in, plan):
     return rows, out
 
 
-def _measure_disks(folder: Path, manifest: dict, meshes: dict, tol: float):
+def _measure_disks(folder: Path, manifest: Manifest, meshes: dict, tol: float):
     """Every disk's STL sectioned (through its placement), and where its mid-plane lies."""
-    ys = manifest["design_report"]["stations_mm"]
+    ys = manifest.design_report["stations_mm"]
     # how deep the base disk's seat plate and the chambers over it reach from its outer face
     # (design data): the axis cuts stay clear of them
     recess = {d["index"]: (d.get("seat_plate_mm", 0.0) or 0.0)
               + max((c["height_mm"] for c in d.get("seat_chambers", [])), default=0.0)
-              for d in manifest["design_report"]["disks"] if d.get("seats")}
+              for d in manifest.design_report["disks"] if d.get("seats")}
     disks, checks = [], []
     for p in manifest_parts(manifest):
         if p.role != "disk":
@@ -267,7 +267,7 @@ def _measure_disks(folder: Path, manifest: dict, meshes: dict, tol: float):
     return disks, checks
 
 
-def _measure_strip(folder: Path, manifest: dict):
+def _measure_strip(folder: Path, manifest: Manifest):
     """The strip's outline, holes and thickness from its STL (None where it cannot be read)."""
     bb = next((p for p in manifest_parts(manifest) if p.role == "backbone"), None)
     if bb is None or not bb.stl_in(folder).exists():
@@ -351,11 +351,11 @@ def _report(name: str, checks: list[Check], angles, step_deg: float, tls, pair, 
     })
 
 
-def tip_exits(manifest: dict) -> dict[str, np.ndarray]:
+def tip_exits(manifest: Manifest) -> dict[str, np.ndarray]:
     """Each tendon's direction from its tip eyelet toward its spool, from the runs the tensioner
     parts record. The tensioner is fixed to the tip disk, so in the tip frame it never turns."""
     out = {}
-    for part in manifest["parts"]:
+    for part in manifest.parts:
         for r in part.get("tendon_runs", []):
             v = np.subtract(r["end"], r["start"])
             out[r["tendon"]] = v / np.linalg.norm(v)

@@ -18,6 +18,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..cad.manifest import Manifest
 from .. import cache
 from ..errors import InputError, clip
 from ..model import scatter as mc
@@ -31,7 +32,7 @@ HIST_SPAN = 1.08      # over 0 .. this × the largest of it, the budget and the 
 END_RUN_MM = 20.0     # without a tensioner run: the tendon leaves the tip straight along the backbone this far
 
 
-def robot(emap: EyeletMap, rep: dict, manifest: dict, tendon_d: float, length: float) -> mc.Robot:
+def robot(emap: EyeletMap, rep: dict, manifest: Manifest, tendon_d: float, length: float) -> mc.Robot:
     """The measured robot: one hole per physical hole (a shared hole once), every tendon's chain,
     its anchor at its seat and its end at its drum's tangent point."""
     design_holes = {(rd["index"], tuple(h["tendons"])): h for rd in rep["disks"] for h in rd["holes"]}
@@ -53,7 +54,7 @@ def robot(emap: EyeletMap, rep: dict, manifest: dict, tendon_d: float, length: f
             chain[names.index(t), e.station] = seen[key]
     base, tip = rep["disks"][0], rep["disks"][-1]
     seats = {s["tendon"]: s for s in base.get("seats", [])}
-    runs = {r["tendon"]: r for p in manifest["parts"] for r in p.get("tendon_runs", [])}
+    runs = {r["tendon"]: r for p in manifest.parts for r in p.get("tendon_runs", [])}
     anchor, end = [], []
     for k, t in enumerate(names):
         if t in seats:     # the tendon leaves its seat at the plate's inner face
@@ -99,7 +100,7 @@ def _play(n: int, fits: list[dict]) -> tuple[np.ndarray, np.ndarray]:
     return tilt, play
 
 
-def as_built(emap: EyeletMap, rep: dict, manifest: dict, plan, fits, angles: np.ndarray,
+def as_built(emap: EyeletMap, rep: dict, manifest: Manifest, plan, fits, angles: np.ndarray,
              deviations: dict[str, list], centre: dict[str, float]) -> tuple[dict, list[Check]]:
     """The taut-path report section and its checks: one verdict per budgeted tendon, the pair's take-up.
     ``centre``: each tendon's largest |ΔL| by eq. (2) between the measured hole centres (quoted beside)."""
@@ -219,13 +220,13 @@ def kept_sweep(ch: tp.Chains, angles_deg, length: float) -> tuple[np.ndarray, np
     """:func:`hwgen.model.taut.sweep`, each tendon's lengths kept in the active cache under exactly
     what its solves read (:func:`hwgen.model.taut.tendons`: the same lengths to the bit): its holes'
     centres, planes and free radii and its anchor and end in every sample, the disks' stations and
-    slips, the sweep's angles, the length, the solver's tolerance (and this code). An edit that
+    slips, the sweep's angles, the length, the solver's tolerance (and, as every entry, the code). An edit that
     moves one tendon's holes leaves the others' samples as they were (the scatter is drawn per hole
     and per disk), and their solves are not done again; the tendons not kept are swept together."""
     ang = np.asarray(angles_deg, float)
     S, T = ch.C.shape[0], ch.chain.shape[0]
     inputs = [(_digest(ch.C[:, h], ch.E[:, h], ch.r[:, h], ch.hole_disk[h], ch.anchor[:, t], ch.end[:, t],
-                       ch.stations, ch.dy, ang), float(length), tp.TOL, cache.code())
+                       ch.stations, ch.dy, ang), float(length), tp.TOL)
               for t, h in enumerate(ch.chain)]
     got: dict[int, dict] = {}
     for t in range(T):

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cad.manifest import manifest_parts
+from ..cad.manifest import Manifest, manifest_parts
 from .axes import across
 from .base import REBUILD, Check
 from .meshes import placed_manifold
@@ -31,7 +31,7 @@ def tendon_cylinder(p0, p1, radius: float):
     return m3d.Manifold.cylinder(length, radius, radius, TENDON_SEGMENTS).transform(m.tolist())
 
 
-def tendon_checks(folder: Path, manifest: dict, plan) -> list[Check]:
+def tendon_checks(folder: Path, manifest: Manifest, plan) -> list[Check]:
     """Each tendon's free span (tip face to spool) against every part but its own start disk
     and, over the last stretch where it enters between the flanges, its own spool."""
     folder = Path(folder)

@@ -37,7 +37,7 @@ from ..model import statics as st
 from ..model import stiffness as sf
 from .base import REBUILD, Check
 
-SWEEP_STEP_DEG = 15.0      # the statics sweep's step: tensions are smooth in the angle; 7 solves a side
+STATICS_STEP_DEG = 15.0    # the statics sweep's step (eyelets are sized at 1°, model/plan.py): tensions are smooth in it
 FREE_STEP_DEG = 30.0       # the sweep without stiffening tendons is needed only at its end
 
 
@@ -68,7 +68,7 @@ def _sweeps(desc: sf.Described, model: st.Model, work: dict, ang: float) -> tupl
     """The sweep with the stiffening tendons locked and with them slack; which tendon each side
     hauls in is the same for both (probed once)."""
     inner = bd.inner_tendons(desc, model)
-    return (bd.sweep(desc, model, work, ang, SWEEP_STEP_DEG, locked=True, inner_of=inner),
+    return (bd.sweep(desc, model, work, ang, STATICS_STEP_DEG, locked=True, inner_of=inner),
             bd.sweep(desc, model, work, ang, FREE_STEP_DEG, locked=False, inner_of=inner))
 
 

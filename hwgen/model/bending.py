@@ -16,7 +16,7 @@ import numpy as np
 
 from . import statics as st
 
-SWEEP_H_MAX = 3.0          # mm: the sweep's rod segments (tensions agree with 1.5 mm to 4 digits; 4× faster)
+SWEEP_H_MAX = 3.0          # mm: the sweep's rod segments (tensions agree with 1.5 mm to 4 digits, for far fewer coordinates)
 SWEEP_FIRST_DEG = 5.0      # the first haul-in aims at this angle; later ones a sweep step further
 SWEEP_MAX_SOLVES = 24      # per side: a drive that stops bending the robot is not chased further
 PROBE_N = 1e-3             # N at the tip: the push that tells which actuating tendon shortens which way

@@ -20,6 +20,7 @@ from .gearing import worm_pair
 from .holes import straight_hole
 from .materials import material_problem
 from .routing import sample_function
+from .specs import slot_size
 from .tensioner_layout import spool_wall_problem
 
 
@@ -126,7 +127,7 @@ def _slot_problems(d: Design) -> list[tuple[str, str]]:
     """The strip's slot (strip plus clearance) must leave a wall all round inside the disk: the one
     rule that the slot fits the disk."""
     dk, wall = d.disks, d.process.min_wall
-    w, h = d.backbone.height + 2 * dk.slot_clearance, d.backbone.thickness + 2 * dk.slot_clearance
+    w, h = slot_size(d.backbone.height, d.backbone.thickness, dk.slot_clearance)
     r = dk.outer_diameter / 2
     if math.hypot(w / 2, h / 2) + wall <= r:
         return []

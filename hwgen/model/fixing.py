@@ -143,10 +143,11 @@ def hub_lengths(design: Design) -> tuple[float, ...]:
                  for v in out)
 
 
-def hub_spec(design: Design, role: str, ext: float, thickness: float, slot_w: float, slot_h: float,
+def hub_spec(design: Design, role: str, ext: float, thickness: float, slot: tuple[float, float],
              holes: tuple[Hole, ...], points: dict[str, np.ndarray], sweep: dict[str, tuple]) -> HubSpec | None:
     """The hub of one disk, ``ext`` mm beyond its face (from :func:`hub_lengths`; None when 0):
-    its side and length, and a window wherever a tendon passes through it.
+    its side and length, and a window wherever a tendon passes through it. ``slot``: the disk's
+    slot for the strip, width and height (:func:`hwgen.model.specs.slot_size`).
 
     ``points``: each tendon's (x, z) at this disk; ``sweep``: each tendon's (into, out_of)
     directions in this disk's frame over the bending sweep, (K, 3) each.
@@ -154,6 +155,7 @@ def hub_spec(design: Design, role: str, ext: float, thickness: float, slot_w: fl
     if ext <= 0:
         return None
     side = hub_side(role)
+    slot_w, slot_h = slot
     wall = design.disks.hub.wall
     proc, td = design.process, design.tendon_material
     half_x, half_z = slot_w / 2 + wall, slot_h / 2 + wall

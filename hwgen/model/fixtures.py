@@ -52,7 +52,7 @@ STRIP_RECESS_CLEARANCE = 0.1  # per side, strip to recess, mm
 JAW_STANDOFF = 0.01         # each jaw stands this far off the strip until the jaw screws close them on it, mm
 JAW_SCREW_FROM_END = 7.0    # jaw screws this far from the jaws' front and back faces, mm
 NUT_AF, NUT_THICK = hardware.nut("M3")                       # ISO 4032 M3 nut (data/fasteners.csv)
-NUT_PLAY = hardware.size("nut trap", "any", "play")           # the room it slides in with
+NUT_PLAY = hardware.NUT_PLAY                                 # the room it slides in with
 JAW_NUT_WALL = 1.0          # resin between the two rows of jaw screws' nut traps, mm
 # the least strip the jaws clamp beyond the base disk: two rows of screws whose nut traps keep a wall between them, mm
 JAW_LEAST = math.ceil(2 * JAW_SCREW_FROM_END + NUT_AF + NUT_PLAY + JAW_NUT_WALL - JAW_BEYOND_STRIP)

@@ -45,6 +45,7 @@ DEDENDUM = 1.25           # dedendum / module: 0.25 m tip clearance
 CLEARANCE = DEDENDUM - ADDENDUM   # the hob's thread tip over the worm's = the wheel's root clearance, modules
 MAX_OUTSIDE_EXTRA = 1.0   # the wheel's outside radius is at most ra2 + this, modules
 RIM_CHAMFER = 0.3         # 45° chamfer on the outside rim at each face, modules
+MIN_TIP = 0.8             # mm: the thinnest wheel tooth tip unless the process says (its minimum wall)
 HOB_SECTION_SAMPLES = 600  # points per flank of the hob's section in one plane
 # Hertz allowable: under a line contact the first yield starts below the surface when the
 # peak pressure p0 reaches about 1.67 σ_y (Tresca; Johnson, Contact Mechanics §4.2: τ_max =
@@ -88,7 +89,7 @@ class WormPair:
     face_width: float
     worm_length: float
     center_offset: float
-    min_tip: float = 0.8
+    min_tip: float = MIN_TIP
 
     # ---- basic dimensions -------------------------------------------------------------
     @property
@@ -443,17 +444,17 @@ def meshing_length(pair: WormPair, planes: int = 41) -> float:
     return float(2 * np.sqrt(np.max(reach[inside] ** 2 - worm_tip[inside] ** 2)))
 
 
-def worm_pair(t, min_tip: float = 0.8) -> WormPair:
+def worm_pair(t, min_tip: float = MIN_TIP) -> WormPair:
     """The pair described by a :class:`hwgen.params.Tensioner` section; ``min_tip`` is the
     process's minimum wall (the thinnest tooth tip the wheel's outside radius may leave). The same
     object for the same numbers, so what it works out once (its outside radius) is kept."""
-    return _pair(t.module, t.worm_starts, t.wheel_teeth, t.worm_pitch_diameter, t.pressure_angle_deg, t.face_width,
-                 t.worm_length, t.center_offset, min_tip)
+    return _interned(WormPair(module=t.module, starts=t.worm_starts, teeth=t.wheel_teeth,
+                              worm_pitch_diameter=t.worm_pitch_diameter, pressure_angle_deg=t.pressure_angle_deg,
+                              face_width=t.face_width, worm_length=t.worm_length, center_offset=t.center_offset,
+                              min_tip=min_tip))
 
 
 @functools.lru_cache(maxsize=64)
-def _pair(module, starts, teeth, worm_pitch_diameter, pressure_angle_deg, face_width, worm_length, center_offset,
-          min_tip) -> WormPair:
-    return WormPair(module=module, starts=starts, teeth=teeth, worm_pitch_diameter=worm_pitch_diameter,
-                    pressure_angle_deg=pressure_angle_deg, face_width=face_width, worm_length=worm_length,
-                    center_offset=center_offset, min_tip=min_tip)
+def _interned(pair: WormPair) -> WormPair:
+    """The first pair made with these numbers (a frozen pair hashes and compares by its fields)."""
+    return pair

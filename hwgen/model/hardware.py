@@ -6,47 +6,10 @@ diameter (Ø3), or ``any`` when the figure does not depend on it; a ``lengths`` 
 lengths, shortest first."""
 from __future__ import annotations
 
-import csv
-from dataclasses import dataclass
-from functools import cache
-from importlib import resources
+from ..fasteners import Dimension, size, table    # noqa: F401  (the table's reader, as the model uses it)
 
 
-@dataclass(frozen=True, kw_only=True)
-class Dimension:
-    item: str
-    size: str
-    dimension: str
-    value: float | tuple[float, ...]     # mm; a list of stock lengths for ``lengths``
-    source: str
-
-
-def _number(text: str) -> float | int:
-    return int(text) if text.strip().lstrip("-").isdigit() else float(text)
-
-
-@cache
-def table() -> dict[tuple[str, str, str], Dimension]:
-    """Every row of data/fasteners.csv by (item, size, dimension)."""
-    text = resources.files("hwgen").joinpath("data/fasteners.csv").read_text(encoding="utf-8")
-    out = {}
-    for r in csv.DictReader(text.splitlines()):
-        words = r["value_mm"].split()
-        value = tuple(_number(w) for w in words) if r["dimension"] == "lengths" else float(r["value_mm"])
-        key = (r["item"], r["size"], r["dimension"])
-        if key in out:
-            raise ValueError(f"data/fasteners.csv gives {key} twice")
-        out[key] = Dimension(item=r["item"], size=r["size"], dimension=r["dimension"], value=value,
-                             source=r["source"])
-    return out
-
-
-def size(item: str, size: str, dimension: str) -> float:
-    """One dimension of a fastener, mm."""
-    value = table()[(item, size, dimension)].value
-    if isinstance(value, tuple):
-        raise TypeError(f"{item} {size}: {dimension} is a list of lengths")
-    return value
+NUT_PLAY = size("nut trap", "any", "play")     # added to a nut's width and height: the room its trap gives it
 
 
 def lengths(item: str, size: str) -> tuple[float, ...]:

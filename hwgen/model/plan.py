@@ -24,7 +24,7 @@ from .settings import (AnchorsSettings, BomSettings, CheckSettings, HubSettings,
                        RenderSettings, TendonMaterialSettings, TensionerSettings, anchors_settings, bom_settings,
                        check_settings, hub_settings, plates_settings, process_settings, render_settings,
                        tendon_material_settings, tensioner_settings)
-from .specs import BackboneHole, BackboneSpec, DiskSpec, Hole, Merge
+from .specs import BackboneHole, BackboneSpec, DiskSpec, Hole, Merge, slot_size
 from .tensioner_layout import TensionerLayout, layout
 
 SAME_POSITION_MM = 1e-6  # eyelets closer than this share one hole
@@ -127,8 +127,7 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
     """
     sweeps = sweeps if sweeps is not None else _sweeps(d, paths)
     dk = d.disks
-    slot_w = d.backbone.height + 2 * dk.slot_clearance
-    slot_h = d.backbone.thickness + 2 * dk.slot_clearance
+    slot_w, slot_h = slot_size(d.backbone.height, d.backbone.thickness, dk.slot_clearance)
     role, thick = disk_role(i, len(d.stations)), disk_thicknesses(d)[i]
     groups, holes = _eyelet_holes(d, i, paths, rest_axes, sweeps, exits)
     # a hole around tendons at one position is shared by design; one around several, an overlap
@@ -141,7 +140,7 @@ def _disk_spec(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[str, 
         seats = tuple(s for group, _ in found for s in group)
         chambers = tuple(c for _, c in found if c is not None)
     hubs = hubs if hubs is not None else hub_lengths(d)
-    hub = hub_spec(d, role, hubs[i], thick, slot_w, slot_h, tuple(holes), {p.name: p.points[i] for p in paths},
+    hub = hub_spec(d, role, hubs[i], thick, (slot_w, slot_h), tuple(holes), {p.name: p.points[i] for p in paths},
                    {p.name: (sweeps[p.name][0][:, i], sweeps[p.name][1][:, i]) for p in paths})
     mounts = _mount_holes(d, role, holes, seats, chambers, (slot_w, slot_h), hub)
     spec = DiskSpec(index=i, y=float(d.stations[i]), role=role, thickness=thick, outer_diameter=dk.outer_diameter,
@@ -157,8 +156,7 @@ def _eyelet_holes(d: Design, i: int, paths: list[TendonPath], rest_axes: dict[st
     """Disk i's eyelet holes and the tendons of each: one per position, sized for the worst angle
     over the sweep (and the exit, on the tip disk), holes that would run into each other merged."""
     proc = d.process
-    slot_w = d.backbone.height + 2 * d.disks.slot_clearance
-    slot_h = d.backbone.thickness + 2 * d.disks.slot_clearance
+    slot_w, slot_h = slot_size(d.backbone.height, d.backbone.thickness, d.disks.slot_clearance)
     thick = disk_thicknesses(d)[i]
     exits = exits or {}
     groups: list[list[TendonPath]] = []

@@ -26,7 +26,7 @@ is scanned over ψ_L in [-π, π] in one vectorised integration, each sign chang
 Brent's method; where a heavy load admits several equilibria (the others loop the strip over
 itself) the one with the least potential energy (bending + gravity) is kept, the stable state
 reached by loading the straight strip. At the 1 mm default step the error is about 1e-12 of the
-tip sag (it falls as h⁴), and one solve takes some 20-40 ms.
+tip sag (it falls as h⁴).
 
 The small-deflection (Euler-Bernoulli) estimate with the same loads and undeformed lever arms
 is computed too (unit-load method, 3-point Gauss per step): it is the upper bound of the base
@@ -59,6 +59,25 @@ class Span:
     start: float
     end: float
     ei: float
+
+
+@dataclass(frozen=True)
+class Strip:
+    """The clamped strip's section: E (MPa), I (mm⁴), thickness (mm, for the stress) and weight
+    per length (g/mm)."""
+
+    E: float
+    I: float
+    thickness: float
+    lin_density: float
+
+
+@dataclass(frozen=True)
+class Tip:
+    """The tip assembly's mass (g) and the offset (a, b) of its centre of mass in the tip frame, mm."""
+
+    mass: float = 0.0
+    offset: tuple[float, float] = (0.0, 0.0)
 
 
 @dataclass
@@ -138,14 +157,14 @@ def _mesh(L, stations, spans, h_max):
 class _Problem:
     """Loads made ready; :meth:`shoot` integrates tip -> base."""
 
-    def __init__(self, L, stations, masses, EI, spans, lam, tip_mass, tip_offset, g, h_max):
-        self.L, self.EI = float(L), float(EI)
+    def __init__(self, L, stations, masses, strip: Strip, tip: Tip, spans, g, h_max):
+        self.L, self.EI = float(L), float(strip.E * strip.I)
         kg = 1e-3 * g                                  # N per g
-        self.w = lam * kg
+        self.w = strip.lin_density * kg
         self.P = np.asarray(masses, float) * kg
         self.st = np.asarray(stations, float)
-        self.Pc = tip_mass * kg
-        self.a, self.b = float(tip_offset[0]), float(tip_offset[1])
+        self.Pc = tip.mass * kg
+        self.a, self.b = float(tip.offset[0]), float(tip.offset[1])
         self.segs = [(lo, hi, n, _ei_at(spans, self.EI, mid)) for lo, hi, n, mid in _mesh(L, stations, spans, h_max)]
         # the weight of the tip assembly and of every point load at or beyond each segment's end
         self.C = [self.Pc + float(self.P[self.st >= hi - 1e-12].sum()) for (_, hi, _, _) in self.segs]
@@ -310,16 +329,16 @@ def _potential_energy(prob: _Problem, path):
     return U + V
 
 
-def solve_sag(L: float, stations, point_masses, *, E: float, I: float, thickness: float,
-              strip_lin_density: float, tip_mass: float = 0.0, tip_offset=(0.0, 0.0), g: float = G_ACC,
+def solve_sag(L: float, stations, point_masses, strip: Strip, *, tip: Tip = Tip(), g: float = G_ACC,
               spans=(), h_max: float = 1.0) -> SagResult:
     """Own-weight deflection of the clamped strip (elastica) and its small-deflection estimate.
 
     L: clamp (s = 0) to the tip station; stations, point_masses: where the point loads are
-    (0 ≤ s_j ≤ L) and their masses in g; E (MPa) and I (mm⁴) of the strip, its thickness (for the
-    stress); strip_lin_density in g/mm; tip_mass (g) and tip_offset (a, b) of the tip assembly,
-    mm, in the tip frame; spans: :class:`Span` stretches with their own EI; h_max: largest step.
+    (0 ≤ s_j ≤ L) and their masses in g; ``strip``: its section and weight; ``tip``: the tip
+    assembly's mass and offset; spans: :class:`Span` stretches with their own EI; h_max: largest step.
     """
+    E, I, thickness, strip_lin_density = strip.E, strip.I, strip.thickness, strip.lin_density
+    tip_mass, tip_offset = tip.mass, tip.offset
     t0 = time.perf_counter()
     stations = np.atleast_1d(np.asarray(stations, float))
     point_masses = np.atleast_1d(np.asarray(point_masses, float))
@@ -331,7 +350,7 @@ def solve_sag(L: float, stations, point_masses, *, E: float, I: float, thickness
         raise ValueError("masses must be non-negative")
     spans = tuple(spans)
     EI = E * I
-    prob = _Problem(L, stations, point_masses, EI, spans, strip_lin_density, tip_mass, tip_offset, g, h_max)
+    prob = _Problem(L, stations, point_masses, strip, tip, spans, g, h_max)
     if prob.w == 0 and prob.Pc == 0 and not np.any(prob.P[stations > 0] > 0):
         roots = [0.0]
     else:

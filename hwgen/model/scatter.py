@@ -222,7 +222,7 @@ def quantile_interval(values: np.ndarray, q: float, confidence: float) -> tuple[
 
 def binomial_quantile(p: float, n: int, q: float) -> int:
     """The smallest k with P(count ≤ k) ≥ p for count ~ binomial(n, q): scipy.stats' binom.ppf, from
-    scipy.special's binomial CDF (importing scipy.stats costs a build 0.4 s; tests/test_taut.py
+    scipy.special's binomial CDF (scipy.stats is a costly import for a build; tests/test_taut.py
     holds the two equal)."""
     from scipy.special import bdtr
     cdf = bdtr(np.arange(n + 1), n, q)

@@ -122,3 +122,9 @@ class Merge:
     station: int
     tendons: tuple[str, ...]
     kind: str                # "shared": same position, one hole; "overlap": holes intersect
+
+
+def slot_size(strip_height: float, strip_thickness: float, clearance: float) -> tuple[float, float]:
+    """A disk's slot for the strip (its width along the strip's height, and across its thickness),
+    mm: the strip with ``clearance`` (``disks.slot_clearance``) on each side."""
+    return strip_height + 2 * clearance, strip_thickness + 2 * clearance

@@ -58,8 +58,7 @@ and H is (n, 6) twists times their suffix-summed images, O(n²), no loop over DO
 far eyelet b's joint moves and near one it does not adds one masked product per set of eyelet
 stations. It replaces the forward difference of the gradient (n perturbed gradients per
 Hessian, 85 % of a tension check's sweeps): exact, no step to choose, and what the stiffness
-reads; on the prototype's sweep (252 DOF) 16 ms became about 1 ms, the sweeps' CPU time 6.1 s
-became 0.63 s. :meth:`Model.difference_hessian` (central, relative error ~1e-9) stays as the reference
+reads, and far cheaper. :meth:`Model.difference_hessian` (central, relative error ~1e-9) stays as the reference
 it is tested against.
 
 A small load's response follows from the Hessian H at an equilibrium: the displacement of a
@@ -87,7 +86,7 @@ FD_STEP = 1e-6           # rad: central-difference step of the Hessian (relative
 GTOL = 1e-9              # N·mm: largest generalised force left at an equilibrium
 SMALL_ANGLE = 1e-8       # rad: below this the rotation's series are used
 SERIES_ANGLE = 0.1       # rad: below this dJ_r/dθ's coefficients are series (truncation ~1e-20)
-BLAS_THREADS = 1         # a 500 × 500 Cholesky: 3 ms on one thread, 15-370 ms on two of a shared 2-core machine
+BLAS_THREADS = 1         # the factorisations are small: a second thread on a shared machine waits more than it computes
 
 
 @dataclass(frozen=True)
@@ -191,8 +190,7 @@ def _blas() -> ThreadpoolController:
 
 def blas_threads():
     """Within: BLAS on BLAS_THREADS threads. threadpoolctl's threadpool_limits looks for the loaded
-    libraries anew on every entry (reading the process's maps: 1-5 ms, two per solve, 30 solves a
-    tension sweep); they are found once here, on first use (numpy's and scipy's BLAS are loaded
+    libraries anew on every entry (reading the process's maps, twice per solve); they are found once here, on first use (numpy's and scipy's BLAS are loaded
     with this module)."""
     return _blas().limit(limits=BLAS_THREADS, user_api="blas")
 

@@ -20,9 +20,8 @@ decrement (the predicted length decrease) under ``tol`` with no active-set chang
 Sweep: θ = 0 cold, to TOL_REST (L(0) enters every ΔL), then outward in θ, each angle started
 from the linear extrapolation of the two before; one Newton step per angle is then usual.
 Vectorised over samples (numba, parallel), every tendon and angle of a sample in one task.
-The compiled code is in :mod:`.taut_kernels` (numba, cached on disk: ~20 s to compile once per
-machine, ~1 s to load), imported when first needed: numba alone takes 0.4 s to import, which
-commands that check nothing do not pay.
+The compiled code is in :mod:`.taut_kernels` (numba, compiled once per machine and cached on
+disk), imported when first needed: commands that check nothing do not import numba.
 """
 from __future__ import annotations
 

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cad.manifest import ManifestPart, sha256
+from ..cad.manifest import Added, Manifest, ManifestPart, sha256
 from ..checks.meshes import stl_bounds
 from ..checks.report import REPORT
 from ..model import hardware
@@ -60,17 +60,17 @@ def thread_for_hole(diameter: float) -> str | None:
     return ISO273_NORMAL[best] if abs(best - diameter) <= CLEARANCE_MATCH_MM else None
 
 
-def rest_lengths(manifest: dict, report: dict | None) -> tuple[dict[str, float], str]:
+def rest_lengths(manifest: Manifest, report: dict | None) -> tuple[dict[str, float], str]:
     """Tendon rest lengths (mm) and where they came from: the checks' ``report`` (None: there is none)."""
     if report is not None:
         try:
             lengths = {t["name"]: float(t["rest_length_mm"]) for t in report.get("tendons", [])}
         except (ValueError, KeyError, TypeError, AttributeError):
             lengths = {}
-        names = {t["name"] for t in manifest["design_report"]["tendons"]}
+        names = {t["name"] for t in manifest.design_report["tendons"]}
         if lengths and names <= set(lengths):
             return lengths, f"{REPORT}: rest lengths measured from the part files by the validator"
-    dr = manifest["design_report"]
+    dr = manifest.design_report
     st = dr["stations_mm"]
     lengths = {t["name"]: float(kin.tendon_lengths(st, np.asarray(t["eyelets_xz_mm"]), 0.0)[0])
                for t in dr["tendons"]}
@@ -87,12 +87,12 @@ def _size(folder: Path, entry: dict) -> str:
     return " × ".join(f"{v:.4g}" for v in ext) + " mm"
 
 
-def _strip_holes(manifest: dict) -> int:
-    seen = {(round(h["x_mm"], 6), round(h["y_mm"], 6)) for h in manifest["design_report"]["backbone_holes"]}
+def _strip_holes(manifest: Manifest) -> int:
+    seen = {(round(h["x_mm"], 6), round(h["y_mm"], 6)) for h in manifest.design_report["backbone_holes"]}
     return len(seen)
 
 
-def bom_rows(folder: Path, manifest: dict, plan, report: dict | None) -> tuple[list[dict], str]:
+def bom_rows(folder: Path, manifest: Manifest, plan, report: dict | None) -> tuple[list[dict], str]:
     """Every row of the bill of materials (dicts keyed by COLUMNS) and the rest-length source; ``report``
     is the checks' (None: there is none, and the lengths and adhesive come from the design report)."""
     rows: list[dict] = []
@@ -102,7 +102,7 @@ def bom_rows(folder: Path, manifest: dict, plan, report: dict | None) -> tuple[l
         row["item"] = len(rows) + 1
         rows.append(row)
 
-    for e in manifest["parts"]:
+    for e in manifest.parts:
         if is_purchased(e):
             continue
         add(category="printed", part=e["name"], family=e["role"], qty=1,
@@ -110,8 +110,8 @@ def bom_rows(folder: Path, manifest: dict, plan, report: dict | None) -> tuple[l
             volume_mm3=f"{e['volume_mm3']:.1f}", mass_g=f"{e['mass_g']:.2f}", file=ManifestPart.of(e).stl,
             notes=_printed_note(e))
 
-    template = manifest.get("files", {}).get("backbone_template", {}).get("path", "backbone_template.dxf")
-    for e in manifest["parts"]:
+    template = manifest.files.get("backbone_template", {}).get("path", "backbone_template.dxf")
+    for e in manifest.parts:
         if not is_purchased(e):
             continue
         notes = e.get("notes", "")
@@ -130,7 +130,7 @@ def bom_rows(folder: Path, manifest: dict, plan, report: dict | None) -> tuple[l
     r = plan.bom
     allowance = r.tie_off_mm + r.spool_mm
     tm = plan.tendon_material
-    for t in manifest["design_report"]["tendons"]:
+    for t in manifest.design_report["tendons"]:
         rest = lengths[t["name"]]
         add(category="purchased", part=f"tendon {t['name']}", family="tendon", qty=1,
             material=tm.name, size=f"Ø{tm.diameter:g} mm", rest_length_mm=f"{rest:.2f}",
@@ -139,7 +139,7 @@ def bom_rows(folder: Path, manifest: dict, plan, report: dict | None) -> tuple[l
 
     crimps: dict[tuple[str, str], list[str]] = {}
     ends = {p.name: p.termination for p in plan.paths}
-    for t in manifest["design_report"]["tendons"]:
+    for t in manifest.design_report["tendons"]:
         term = ends[t["name"]]
         if term.kind == "crimp":
             key = (f"Ø{term.diameter:g} × {term.length:g} mm", term.name or "copper or aluminium")
@@ -156,7 +156,7 @@ def bom_rows(folder: Path, manifest: dict, plan, report: dict | None) -> tuple[l
     return rows, source
 
 
-def _adhesive_ml(manifest: dict, h: float, t: float, report: dict | None) -> tuple[float, str]:
+def _adhesive_ml(manifest: Manifest, h: float, t: float, report: dict | None) -> tuple[float, str]:
     """Adhesive for every disk: the slot's gap around the strip (``h`` × ``t``, mm) over the length
     the disk holds it."""
     try:
@@ -165,7 +165,7 @@ def _adhesive_ml(manifest: dict, h: float, t: float, report: dict | None) -> tup
         how = "fills each slot's gap over the length its hub holds the strip (report.json: as_built)"
     except (ValueError, KeyError, TypeError):
         gaps = [(d["slot_mm"][0] * d["slot_mm"][1] - h * t) * d.get("engagement_mm", d["thickness_mm"])
-                for d in manifest["design_report"]["disks"]]
+                for d in manifest.design_report["disks"]]
         how = "fills each slot's gap over the length its hub holds the strip (design report)"
     need = sum(gaps) / 1000
     return ADHESIVE_MARGIN * need, f"{how}: {need:.2f} ml, × {ADHESIVE_MARGIN:g}; through each disk's glue port"
@@ -187,10 +187,10 @@ def _printed_note(e: dict) -> str:
     return "; ".join(bits)
 
 
-def _fasteners(manifest: dict) -> list[tuple[str, int, str, str, str]]:
+def _fasteners(manifest: Manifest) -> list[tuple[str, int, str, str, str]]:
     """The hardware the parts list, summed by (item, size); and, when no part says what takes
     the tip disk's bolt pattern (``"tip_mount": true``), screws and nuts for it."""
-    listed: list[tuple[dict, str]] = [(h, e["name"]) for e in manifest["parts"] for h in e.get("hardware", []) or []]
+    listed: list[tuple[dict, str]] = [(h, e["name"]) for e in manifest.parts for h in e.get("hardware", []) or []]
     if not any(h.get("tip_mount") for h, _ in listed):
         listed = _tip_screws(manifest) + listed
     summed: dict[tuple[str, str], list] = {}
@@ -206,9 +206,9 @@ def _fasteners(manifest: dict) -> list[tuple[str, int, str, str, str]]:
             for (item, size), (qty, material, users, notes) in summed.items()]
 
 
-def _tip_screws(manifest: dict) -> list[tuple[dict, str]]:
+def _tip_screws(manifest: Manifest) -> list[tuple[dict, str]]:
     """Screws through the tip disk's bolt pattern and a nut for each, sized from its holes."""
-    tip = max(manifest["design_report"]["disks"], key=lambda d: d["index"], default=None)
+    tip = max(manifest.design_report["disks"], key=lambda d: d["index"], default=None)
     mounts = tip.get("mount_holes", []) if tip else []
     if not mounts:
         return []
@@ -225,11 +225,11 @@ def _names(names: list[str]) -> str:
     return ", ".join(names) if len(names) <= 4 else f"{', '.join(names[:3])} and {len(names) - 3} more"
 
 
-def family_table(manifest: dict, printed_in: str, rows: list[dict] | None = None) -> list[dict]:
+def family_table(manifest: Manifest, printed_in: str, rows: list[dict] | None = None) -> list[dict]:
     """One entry per part family of the robot (assembly aids such as the jig are not drawn with it),
     numbered in order of first appearance (the drawing's balloons); ``printed_in``: the process's name."""
     out: list[dict] = []
-    robot = [p for p in manifest["parts"] if not p.get("fixture")]
+    robot = [p for p in manifest.parts if not p.get("fixture")]
     for e in robot:
         if any(f["role"] == e["role"] for f in out):
             continue
@@ -254,16 +254,16 @@ def _md_cell(v) -> str:
     return str(v).replace("|", "\\|")
 
 
-def _markdown(manifest: dict, plan, rows: list[dict], source: str) -> str:
+def _markdown(manifest: Manifest, plan, rows: list[dict], source: str) -> str:
     printed = [r for r in rows if r["category"] == "printed"]
     fam: dict[str, list[dict]] = {}
     for r in printed:
         fam.setdefault(r["family"], []).append(r)
     total = sum(float(r["volume_mm3"]) for r in printed)
     mass = sum(float(r["mass_g"]) for r in printed)
-    L = [f"# Bill of materials: {manifest['design']}", "",
-         f"From `{manifest.get('params_file', '')}` (sha256 {manifest.get('params_sha256', '')[:12]}), "
-         f"hwgen {manifest.get('hwgen_version', '')}.", "",
+    L = [f"# Bill of materials: {manifest.name}", "",
+         f"From `{manifest.params_file}` (sha256 {manifest.params_sha256[:12]}), "
+         f"hwgen {manifest.hwgen_version}.", "",
          "## Printed parts", "",
          f"Material: {plan.process.name}. Total part volume {total / 1000:.1f} cm³ "
          f"(≈ {total / 1000:.0f} ml of material before supports and waste), {mass:.1f} g.", "",
@@ -306,17 +306,16 @@ def _markdown(manifest: dict, plan, rows: list[dict], source: str) -> str:
     return "\n".join(L)
 
 
-def write_bom(folder: Path, manifest: dict, plan, report: dict | None) -> list[dict]:
-    """bom.csv and bom.md into the folder; records them and the rest-length source in the manifest."""
+def write_bom(folder: Path, manifest: Manifest, plan, report: dict | None) -> Added:
+    """bom.csv and bom.md into the folder; what the manifest lists of them (the files, the
+    rest-length source, the counts)."""
     folder = Path(folder)
     rows, source = bom_rows(folder, manifest, plan, report)
     (folder / "bom.csv").write_text(_csv(rows), encoding="utf-8")
     (folder / "bom.md").write_text(_markdown(manifest, plan, rows, source), encoding="utf-8")
-    files = manifest.setdefault("files", {})
-    for key, name in (("bom_csv", "bom.csv"), ("bom_md", "bom.md")):
-        files[key] = {"path": name, "sha256": sha256(folder / name)}
-    manifest["bom"] = {"tendon_rest_length_source": source,
-                       "printed_parts": sum(r["qty"] for r in rows if r["category"] == "printed"),
-                       "tendon_cut_total_mm": round(sum(float(r["cut_length_mm"]) for r in rows
-                                                        if r["family"] == "tendon"), 1)}
-    return rows
+    files = {key: {"path": name, "sha256": sha256(folder / name)}
+             for key, name in (("bom_csv", "bom.csv"), ("bom_md", "bom.md"))}
+    return Added({"bom": {"tendon_rest_length_source": source,
+                          "printed_parts": sum(r["qty"] for r in rows if r["category"] == "printed"),
+                          "tendon_cut_total_mm": round(sum(float(r["cut_length_mm"]) for r in rows
+                                                           if r["family"] == "tendon"), 1)}}, files)

@@ -1,10 +1,10 @@
 """exploded.svg: a hidden-line drawing of the exploded assembly, balloons and a parts table.
 
 Hidden lines are removed against a depth buffer rather than by the CAD kernel (CadQuery's
-projection of a whole assembly with gears takes about 40 s): the exploded parts are drawn
+projection of a whole assembly with gears is far too slow for a build): the exploded parts are drawn
 once, flat, into an offscreen depth buffer; every sharp mesh edge and every silhouette edge
 of the same view is sampled about once per pixel and kept where nothing lies in front of it.
-The result is the line drawing of the PNG's view, to scale, in about a second.
+The result is the line drawing of the PNG's view, to scale.
 """
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from html import escape as _escape
 import numpy as np
 
 from .scene import Posed
-from .view import ISOMETRIC, Renderer
+from .view import ISOMETRIC, Look, Renderer
 
 
 def escape(text: str) -> str:
@@ -160,8 +160,9 @@ def write_exploded_svg(renderer: Renderer, posed: list[Posed], colours: dict, ta
     """Draw the exploded assembly as visible lines with one balloon per family and a parts table
     (``posed``: the parts rigidly posed as exploded.png shows them, seen along ISOMETRIC)."""
     view = ISOMETRIC
-    ren, W, H = renderer.draw(posed, colours, view, None, edges=False, shading=False, margin=0.02,
-                              aspect_range=(0.3, 2.0), width=DEPTH_WIDTH_PX)
+    ren, W, H = renderer.draw(posed, colours, view, None,
+                              look=Look(aspect_range=(0.3, 2.0), margin=0.02, edges=False, shading=False,
+                                        width=DEPTH_WIDTH_PX))
     zmax = _max3(renderer.depth(W, H, rows_up=True))     # bottom-up rows, as display coordinates
     project, tol = _projector(ren, W, H)
     renderer.release()                  # the scene is read: its memory goes before the lines are found

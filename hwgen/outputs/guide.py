@@ -26,7 +26,7 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..cad.manifest import sha256
+from ..cad.manifest import Added, Manifest, sha256
 
 FOLDER = "guide"
 MD, HTML = "assembly.md", "assembly.html"
@@ -80,12 +80,12 @@ def _hardware_for(bom: list[dict], names: set[str], only: bool = False) -> list[
 
 # --------------------------------------------------------------------------- the steps
 
-def take_up(manifest: dict) -> dict | None:
+def take_up(manifest: Manifest) -> dict | None:
     """Tendon wound in per worm turn, per channel, from the worm's starts and teeth and the drum's
     winding radius in the manifest."""
     out = {}
-    worms = {p["channel"]: p for p in manifest["parts"] if p["role"] == "tensioner_worm"}
-    for wheel in (p for p in manifest["parts"] if p["role"] == "tensioner_wheel"):
+    worms = {p["channel"]: p for p in manifest.parts if p["role"] == "tensioner_worm"}
+    for wheel in (p for p in manifest.parts if p["role"] == "tensioner_wheel"):
         worm = worms.get(wheel["channel"])
         if worm is None or "winding_radius_mm" not in wheel:
             continue
@@ -97,12 +97,12 @@ def take_up(manifest: dict) -> dict | None:
     return out or None
 
 
-def steps(folder: Path, manifest: dict, plan, bom: list[dict] | None = None) -> list[Step]:
+def steps(folder: Path, manifest: Manifest, plan, bom: list[dict] | None = None) -> list[Step]:
     """The assembly in order, each step's words (numbers from bom.csv, or the rows in ``bom``, and
     the plan's tendon material and actuating channel) and what its picture shows (from the manifest
     alone)."""
     bom = read_bom(folder) if bom is None else bom
-    parts = [p for p in manifest["parts"]]
+    parts = [p for p in manifest.parts]
     names = lambda pred: [p["name"] for p in parts if pred(p)]          # noqa: E731
     disks = names(lambda p: p["role"] == "disk")
     strip = names(lambda p: p["role"] == "backbone")
@@ -199,7 +199,7 @@ def steps(folder: Path, manifest: dict, plan, bom: list[dict] | None = None) -> 
     return out
 
 
-def picture_jobs(folder: Path, manifest: dict, plan) -> list[dict]:
+def picture_jobs(folder: Path, manifest: Manifest, plan) -> list[dict]:
     """What the pictures stage draws for the guide: per step its file, title, parts shown and highlighted.
     Those come from the manifest alone, not the bill of materials: the pictures stage runs beside
     the checks, before bom.csv is written."""
@@ -209,9 +209,9 @@ def picture_jobs(folder: Path, manifest: dict, plan) -> list[dict]:
 
 # --------------------------------------------------------------------------- the documents
 
-def _markdown(manifest: dict, ss: list[Step], pictures: bool) -> str:
-    L = [f"# Assembly guide: {manifest['design']}", "",
-         f"From `{manifest.get('params_file', '')}`, hwgen {manifest.get('hwgen_version', '')}. Counts, sizes and "
+def _markdown(manifest: Manifest, ss: list[Step], pictures: bool) -> str:
+    L = [f"# Assembly guide: {manifest.name}", "",
+         f"From `{manifest.params_file}`, hwgen {manifest.hwgen_version}. Counts, sizes and "
          f"lengths are rows of the bill of materials (`bom.md`, `bom.csv`), cited as [BOM #item]; the print plates "
          f"are in `plates/plates.md`.", ""]
     if not pictures:
@@ -235,8 +235,8 @@ def _inline(text: str) -> str:
     return _CODE.sub(r"<code>\1</code>", _BOLD.sub(r"<strong>\1</strong>", t))
 
 
-def _html(folder: Path, manifest: dict, ss: list[Step], pictures: bool) -> str:
-    title = html.escape(f"Assembly guide: {manifest['design']}")
+def _html(folder: Path, manifest: Manifest, ss: list[Step], pictures: bool) -> str:
+    title = html.escape(f"Assembly guide: {manifest.name}")
     H = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">', f"<title>{title}</title>",
          "<style>body{font-family:sans-serif;max-width:60em;margin:2em auto;line-height:1.45}"
          "img{max-width:100%;border:1px solid #ccc}li{margin:.3em 0}</style></head><body>", f"<h1>{title}</h1>",
@@ -251,23 +251,22 @@ def _html(folder: Path, manifest: dict, ss: list[Step], pictures: bool) -> str:
     return "\n".join(H) + "\n"
 
 
-def write_guide(folder: Path, manifest: dict, plan) -> dict:
+def write_guide(folder: Path, manifest: Manifest, plan) -> Added:
     """guide/assembly.md and guide/assembly.html (pictures embedded) into the folder, from
-    bom.csv, the manifest and the step pictures the pictures stage drew; recorded in the manifest."""
+    bom.csv, the manifest and the step pictures the pictures stage drew; what the manifest lists
+    of them (the files, the steps)."""
     folder = Path(folder)
     ss = steps(folder, manifest, plan)
     pictures = all((folder / s.picture).is_file() for s in ss)
     (folder / FOLDER).mkdir(exist_ok=True)
     (folder / FOLDER / MD).write_text(_markdown(manifest, ss, pictures), encoding="utf-8")
     (folder / FOLDER / HTML).write_text(_html(folder, manifest, ss, pictures), encoding="utf-8")
-    files = manifest.setdefault("files", {})
-    for key, name in (("guide_md", MD), ("guide_html", HTML)):
-        files[key] = {"path": f"{FOLDER}/{name}", "sha256": sha256(folder / FOLDER / name)}
+    files = {key: {"path": f"{FOLDER}/{name}", "sha256": sha256(folder / FOLDER / name)}
+             for key, name in (("guide_md", MD), ("guide_html", HTML))}
     entry = {"steps": [{"title": s.title, "picture": s.picture if pictures else None, "highlight": s.highlight}
                        for s in ss], "pictures": pictures}
     tension = next((s for s in ss if s.key == "tension"), None)
     if tension:
         entry["take_up_per_worm_turn"] = {ch: {k: v for k, v in u.items() if k != "tendons"}
                                           for ch, u in tension.extra["take_up"].items()}
-    manifest["guide"] = entry
-    return entry
+    return Added({"guide": entry}, files)

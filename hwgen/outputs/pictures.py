@@ -28,13 +28,13 @@ from pathlib import Path
 import numpy as np
 
 from .. import cache
-from ..cad.manifest import sha256
+from ..cad.manifest import Added, Manifest, sha256
 from ..model import kinematics as kin
 from .bom import family_label
 from .drawing import write_exploded_svg
 from .scene import (Posed, exploded_placements, family_colours, load_parts, pose_bent, pose_rigid,
                     tendon_colours, tendon_polylines)
-from .view import BACKEND_ENV, BENT, ISOMETRIC, TEXT_COLOUR, Renderer, RenderUnavailable, View
+from .view import BACKEND_ENV, BENT, ISOMETRIC, TEXT_COLOUR, Look, Renderer, RenderUnavailable, View
 
 CHILD_TIMEOUT_S = 300
 INSTALL_HINT = (
@@ -51,8 +51,8 @@ EXIT_NO_BACKEND = 3      # the child's exit code for RenderUnavailable
 # same bytes, and the checks drawn beside them keep the other core
 RASTER_THREADS_ENV = "LP_NUM_THREADS"
 # OpenBLAS likewise: its threads for the small products here (a part's face normals turned to the
-# view, (m, 3) @ (3, 3)) cost more than they do, about a second of the child's CPU on the prototype,
-# most of it waiting for the other core; one thread gives the same bytes
+# view, (m, 3) @ (3, 3)) cost more than they do, most of it waiting for the other core; one
+# thread gives the same bytes
 BLAS_THREADS_ENV = "OPENBLAS_NUM_THREADS"
 
 
@@ -154,7 +154,7 @@ def _warning_legend(parts: dict, tendons: dict) -> list[tuple[str, tuple]]:
     return [(f"failing check: {' and '.join(what)} (summary.md)", WARNING_COLOUR)] if what else []
 
 
-def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table: list[dict] | None = None,
+def render_pictures(folder: Path, manifest: Manifest, settings: Settings, svg_table: list[dict] | None = None,
                     renderer: Renderer | None = None, steps: list[dict] | None = None,
                     only: tuple[str, ...] | None = None) -> dict:
     """exploded.png, assembled.png, bent.png, jig.png when the design has an assembly jig (and
@@ -167,7 +167,7 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
     t0 = time.perf_counter()
     r = renderer or Renderer(settings.width_px)
     parts = load_parts(folder, manifest)
-    report = manifest["design_report"]
+    report = manifest.design_report
     st = np.asarray(report["stations_mm"], dtype=float)
     colours = family_colours(manifest)
     tcol = tendon_colours(report)
@@ -175,7 +175,7 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
     timings["load_s"] = time.perf_counter() - t0
     fam_legend = [(f"{family_label(role)} ({sum(p.role == role for p in parts)})", colours[role]) for role in colours]
     images = {}
-    marks = failing_marks(manifest.get("checks"))
+    marks = failing_marks(manifest.checks)
     warned = colours | {WARNING_ROLE: WARNING_COLOUR}
     wanted = set(only or (*OUTPUTS, "guide"))
 
@@ -188,7 +188,7 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
         labels = station_labels(exploded, ISOMETRIC) + _part_labels(exploded, ISOMETRIC, marks[0])
         _, W, H = r.draw(_marked(exploded, marks[0]), warned, ISOMETRIC, folder / "exploded.png", labels=labels,
                          texts=_legend(fam_legend + _warning_legend(marks[0], {}),
-                                       f"{manifest['design']}: exploded, {settings.explode_mm:g} mm between disks"))
+                                       f"{manifest.name}: exploded, {settings.explode_mm:g} mm between disks"))
         images["exploded.png"] = {"width": W, "height": H}
     timings["exploded_s"] = time.perf_counter() - t
 
@@ -199,7 +199,7 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
         posed = [placed[p.name] for p in parts]
         straight = {n: (pts, tcol[n]) for n, pts in tendon_polylines(report, 0.0).items()}
         _, W, H = r.draw(posed, colours, ISOMETRIC, folder / "assembled.png", tubes=straight,
-                         texts=_legend(fam_legend + [(n, tcol[n]) for n in straight], f"{manifest['design']}: assembled"))
+                         texts=_legend(fam_legend + [(n, tcol[n]) for n in straight], f"{manifest.name}: assembled"))
         images["assembled.png"] = {"width": W, "height": H}
     timings["assembled_s"] = time.perf_counter() - t
 
@@ -212,10 +212,10 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
         bent, tube_labels = _tendon_marks({n: (pts, tcol[n]) for n, pts in tendon_polylines(report, kappa).items()},
                                           marks[1], BENT)
         texts = _legend([(n, tcol[n]) for n in bent] + _warning_legend(*marks),
-                        f"{manifest['design']}: bent {settings.bend_deg:g}° (constant curvature, eq. 1)")
+                        f"{manifest.name}: bent {settings.bend_deg:g}° (constant curvature, eq. 1)")
         texts.append((reachable_note(manifest), TEXT_COLOUR, (0.015, 0.02), 22, None))
         _, W, H = r.draw(_marked(posed, marks[0]), warned, BENT, folder / "bent.png", tubes=bent,
-                         aspect_range=(0.6, 1.0), texts=texts,
+                         look=Look(aspect_range=(0.6, 1.0)), texts=texts,
                          labels=_part_labels(posed, BENT, marks[0]) + tube_labels)
         images["bent.png"] = {"width": W, "height": H}
     timings["bent_s"] = time.perf_counter() - t
@@ -229,7 +229,7 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
         roles = [role for role in jig_colours if any(p.role == role for p in shown)]
         legend = [(f"{family_label(role)} ({sum(p.role == role for p in shown)})", jig_colours[role]) for role in roles]
         _, W, H = r.draw(posed, jig_colours, ISOMETRIC, folder / "jig.png",
-                         texts=_legend(legend, f"{manifest['design']}: the disks and the strip in the assembly jig"))
+                         texts=_legend(legend, f"{manifest.name}: the disks and the strip in the assembly jig"))
         images["jig.png"] = {"width": W, "height": H}
         timings["jig_s"] = time.perf_counter() - t
 
@@ -248,7 +248,7 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
     if svg_table is not None and "exploded.svg" in wanted:
         t = time.perf_counter()
         result["svg"] = write_exploded_svg(r, exploded, colours, svg_table, folder / "exploded.svg",
-                                           title=f"{manifest['design']}: exploded assembly")
+                                           title=f"{manifest.name}: exploded assembly")
         timings["svg_s"] = time.perf_counter() - t
     return result
 
@@ -256,7 +256,7 @@ def render_pictures(folder: Path, manifest: dict, settings: Settings, svg_table:
 CONTEXT_ROLE, CONTEXT_GREY = "(context)", (0.86, 0.86, 0.86)   # a guide picture's parts not of its step
 
 
-def draw_step(r: Renderer, folder: Path, manifest: dict, job: dict, placed: dict[str, Posed], tcol: dict) -> dict:
+def draw_step(r: Renderer, folder: Path, manifest: Manifest, job: dict, placed: dict[str, Posed], tcol: dict) -> dict:
     """One step of the assembly guide: the parts it shows, assembled (``placed``: every part posed
     where the manifest places it, seen along the isometric view), those of the step in their
     family's colour and the others light grey, the tendons when it says so."""
@@ -266,21 +266,21 @@ def draw_step(r: Renderer, folder: Path, manifest: dict, job: dict, placed: dict
         ps = placed.get(name)
         if ps is not None:
             posed.append(ps if name in job["highlight"] else ps.as_role(CONTEXT_ROLE))
-    tubes = {n: (pts, tcol[n]) for n, pts in tendon_polylines(manifest["design_report"], 0.0).items()} \
+    tubes = {n: (pts, tcol[n]) for n, pts in tendon_polylines(manifest.design_report, 0.0).items()} \
         if job["tendons"] else None
     (Path(folder) / job["file"]).parent.mkdir(parents=True, exist_ok=True)
     _, W, H = r.draw(posed, colours, ISOMETRIC, Path(folder) / job["file"], tubes=tubes,
-                     texts=[(job["title"], TEXT_COLOUR, (0.015, 0.95), 40, None)], width=GUIDE_WIDTH_PX)
+                     texts=[(job["title"], TEXT_COLOUR, (0.015, 0.95), 40, None)], look=Look(width=GUIDE_WIDTH_PX))
     return {"width": W, "height": H}
 
 
 GUIDE_WIDTH_PX = 1000        # a guide step's picture: the parts tell apart on a page, the HTML stays small
 
 
-def reachable_note(manifest: dict) -> str:
+def reachable_note(manifest: Manifest) -> str:
     """Whether the hardware can hold the bent pose: only if some drum winds a pair of tendons in
     opposite senses, so that turning its worm hauls one in as it pays the other out."""
-    drums = [p for p in manifest["parts"] if p.get("role") == "tensioner_wheel" and len(p.get("tendons", [])) > 1]
+    drums = [p for p in manifest.parts if p.get("role") == "tensioner_wheel" and len(p.get("tendons", [])) > 1]
     bending = [p for p in drums if p.get("winding") == "opposite"]
     if bending:
         return (f"the worm of channel {bending[0]['channel']} bends the robot: its drum winds "
@@ -293,14 +293,14 @@ def reachable_note(manifest: dict) -> str:
 
 # --------------------------------------------------------------------------- in a child process
 
-def run_child(folder: Path, manifest: dict, settings: Settings, svg_table: list[dict] | None,
+def run_child(folder: Path, manifest: Manifest, settings: Settings, svg_table: list[dict] | None,
               steps: list[dict] | None = None, only: tuple[str, ...] | None = None) -> dict:
     """Draw the pictures (``only``: just these) in a fresh Python process; raise RenderUnavailable
     if it cannot."""
     if os.environ.get(BACKEND_ENV, "").lower() == "none":
         raise RenderUnavailable(f"{BACKEND_ENV}=none: offscreen rendering switched off")
     store = cache.active()
-    job = json.dumps({"folder": str(folder), "manifest": manifest, "settings": settings.__dict__,
+    job = json.dumps({"folder": str(folder), "manifest": manifest.to_json(), "settings": settings.__dict__,
                       "svg_table": svg_table, "steps": steps, "only": list(only) if only else None,
                       # where the child finds the meshes read before (checks.meshes: by their bytes)
                       "store": str(store.folder) if store is not None and store.enabled else None})
@@ -336,7 +336,7 @@ def _child_main() -> int:
     store = cache.Store(Path(job["store"])) if job.get("store") else None
     try:
         with cache.using(store) if store is not None else nullcontext():
-            result = render_pictures(Path(job["folder"]), job["manifest"], Settings(**job["settings"]),
+            result = render_pictures(Path(job["folder"]), Manifest.of(job["manifest"]), Settings(**job["settings"]),
                                      job.get("svg_table"), steps=job.get("steps"),
                                      only=tuple(job["only"]) if job.get("only") else None)
     except RenderUnavailable as e:
@@ -346,11 +346,11 @@ def _child_main() -> int:
     return 0
 
 
-def draw(folder: Path, manifest: dict, render, svg_table: list[dict], steps: list[dict] | None = None) -> None:
+def draw(folder: Path, manifest: Manifest, render, svg_table: list[dict], steps: list[dict] | None = None) -> Added:
     """The pictures and the drawing as the plan's ``render`` settings say (width, explode, bend;
     ``svg_table``: the parts table of the bill of materials),
-    and the assembly guide's step pictures (``steps``); a missing or crashing backend is
-    recorded in ``manifest["render"]``, never raised."""
+    and the assembly guide's step pictures (``steps``); the manifest's ``render`` section, which
+    records a missing or crashing backend (never raised)."""
     folder = Path(folder)
     settings = Settings(render.width_px, render.explode_mm, render.bend_deg)
     entry: dict = {"settings": settings.__dict__}
@@ -372,31 +372,33 @@ def draw(folder: Path, manifest: dict, render, svg_table: list[dict], steps: lis
             files["exploded.svg"] = {"path": "exploded.svg", "sha256": sha256(folder / "exploded.svg")}
         result.pop("timings_s", None)       # the manifest holds no times: rebuilds are byte-identical
         entry |= {"status": "ok", "files": files} | result
-    manifest["render"] = entry
+    return Added({"render": entry})
 
 
-def mark_failures(folder: Path, manifest: dict, render) -> None:
+def mark_failures(folder: Path, manifest: Manifest, render) -> Added:
     """exploded.png and bent.png drawn again with every part and tendon of a failing check in the
     warning colour, once the checks are in the manifest (a build draws its pictures beside the
-    checks, before their verdict). Nothing is drawn when no check fails, when they were drawn with
-    these marks already, or when the pictures could not be drawn; a renderer that fails now leaves
-    the unmarked pictures and says so in ``manifest["render"]["failing"]``."""
-    entry = manifest.get("render") or {}
-    parts, tendons = failing_marks(manifest.get("checks"))
+    checks, before their verdict); the manifest's ``render`` section as it then stands. Nothing is
+    drawn (and nothing added) when no check fails, when they were drawn with these marks already,
+    or when the pictures could not be drawn; a renderer that fails now leaves the unmarked
+    pictures and says so in the section's ``failing``."""
+    entry = json.loads(json.dumps(manifest.render or {}))
+    parts, tendons = failing_marks(manifest.checks)
     if entry.get("status") != "ok" or not (parts or tendons):
-        return
+        return Added()
     if (entry.get("failing") or {}).get("parts") == parts and entry["failing"].get("tendons") == tendons:
-        return
+        return Added()
     folder = Path(folder)
     settings = Settings(render.width_px, render.explode_mm, render.bend_deg)
     try:
         result = run_child(folder, manifest, settings, None, only=MARKED)
     except (RenderUnavailable, RenderFailed) as e:
         entry["failing"] = {"parts": parts, "tendons": tendons, "message": f"not marked in the pictures: {e}"}
-        return
+        return Added({"render": entry})
     for name, size in result["images"].items():
         entry["files"][name] = {"path": name, "sha256": sha256(folder / name)} | size
     entry["failing"] = result["failing"]
+    return Added({"render": entry})
 
 
 if __name__ == "__main__":

@@ -5,7 +5,7 @@ Everything starts from the files: each printed part's STL (the file is in print 
 its largest flat face on z = 0) and its manifest entry. Libraries:
 
 * rectpack (Apache-2.0) packs the parts' footprints, rotations by 90° allowed; the fewest
-  plates of a few of its packing and sorting heuristics is kept (it is a heuristic: 1-2 ms a try);
+  plates of a few of its packing and sorting heuristics is kept (it is a heuristic, and cheap);
 * lib3mf (BSD-3, the 3MF consortium's own library) writes the 3MF: strict to the standard,
   object names kept, and byte-identical from one build to the next once the UUIDs are fixed
   (uuid5 of the part's name); trimesh's writer draws random UUIDs and zip times.
@@ -22,17 +22,8 @@ Orientation, per part:
 A part larger than the plate in every orientation tried goes on no plate and is listed as such
 (the checks' ``part.build_volume`` fails it too).
 
-What is kept between builds (in the active store, :mod:`hwgen.cache`; without one, everything is
-made as it is needed):
-
-* a part's orientation decision (flat or tilted, about which side, and why), remembered by its
-  STL's sha256 and the settings :func:`decide` reads, so a file that kept its bytes is not
-  measured again, and parts of the same bytes in one build are measured once; the oriented
-  vertices are made from the mesh each time (cheap), by the same arithmetic;
-* a plate's 3MF bytes, under everything that makes them (:func:`plate_key`: per object its name,
-  its file's sha256, its orientation and its place, lib3mf's version and hwgen's code): a plate
-  whose parts all kept their files and places is copied from the store (its bytes checked against
-  their hash on the way, as every object of the store is), byte-identical to one written afresh.
+The plates stage is kept between builds as a whole, like every stage after the files
+(:mod:`hwgen.pipeline`); within one run, parts whose files have the same bytes are oriented once.
 """
 from __future__ import annotations
 
@@ -47,9 +38,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import cache
-from ..cad.manifest import ManifestPart, sha256
-from ..checks.meshes import measured_by_file, read_mesh, sharing_meshes
+from ..cache import as_json
+from ..cad.manifest import Added, Manifest, ManifestPart, sha256
+from ..checks.meshes import read_mesh, sharing_meshes
 from .bom import is_purchased
 
 FOLDER = "plates"
@@ -58,9 +49,6 @@ GRID = 100                    # rectpack works on integers: footprints in 1/100 
 FLAT_NORMAL_Z = 0.999         # a face this close to straight down belongs to the face on the plate
 ON_PLATE_MM = 1e-3            # ... when it lies this close to z = 0
 UUID_SPACE = uuid.UUID("6d1f0e6a-3c47-5a0b-9e1d-2b1f4f0c9a11")   # hwgen's namespace for the 3MF UUIDs
-ORIENTATION = "plates: a part's print orientation"      # the kind of the remembered decision (cache.remembered)
-PLATE_3MF = "plates: a plate's 3MF"                     # ... and of the record naming a kept plate's bytes
-PACKING = "plates: the footprints packed"               # ... and of the remembered packing (cache.remembered)
 
 
 @dataclass
@@ -132,13 +120,6 @@ def decide(vertices: np.ndarray, faces: np.ndarray, technology: str, settings, b
 
 def _tilted(v: np.ndarray, axis: str, settings) -> np.ndarray:
     return _to_corner(v @ _rotation(axis, settings.sla_tilt_deg).T)
-
-
-def decision_values(technology: str, settings, build_volume) -> dict:
-    """Everything :func:`decide` reads besides the mesh (the key of a remembered decision)."""
-    return {"technology": technology, "flat_contact_fraction": float(settings.flat_contact_fraction),
-            "sla_tilt_deg": float(settings.sla_tilt_deg), "edge_margin_mm": float(settings.edge_margin_mm),
-            "build_volume": [float(x) for x in build_volume]}
 
 
 def oriented(name: str, role: str, vertices: np.ndarray, faces: np.ndarray, volume: float, decision: dict,
@@ -232,17 +213,10 @@ def write_3mf(path: Path, objects: list[tuple[str, np.ndarray, np.ndarray]]) -> 
 
 @lru_cache(maxsize=1)
 def _wrapper():
-    """lib3mf's wrapper, loaded once (loading it looks up every function of the library: a tenth of a
-    second each time); every model made through it is its own."""
+    """lib3mf's wrapper, loaded once (loading it looks up every function of the library); every
+    model made through it is its own."""
     import lib3mf
     return lib3mf.get_wrapper()
-
-
-@lru_cache(maxsize=1)
-def lib3mf_version() -> tuple:
-    """The version of lib3mf that writes the plates (its Python package and its library)."""
-    from importlib.metadata import version
-    return version("lib3mf"), tuple(_wrapper().GetLibraryVersion())
 
 
 def _write_3mf(path: Path, objects) -> None:
@@ -298,74 +272,38 @@ def _read_3mf(path: Path) -> list[tuple[str, np.ndarray, np.ndarray]]:
 
 # --------------------------------------------------------------------------- the stage
 
-def printed_parts(manifest: dict) -> list[dict]:
-    return [e for e in manifest["parts"] if not is_purchased(e)]
+def printed_parts(manifest: Manifest) -> list[dict]:
+    return [e for e in manifest.parts if not is_purchased(e)]
 
 
-def layout(folder: Path, manifest: dict, proc, settings) -> tuple[list[Oriented], list[dict], list[str]]:
+def layout(folder: Path, manifest: Manifest, proc, settings) -> tuple[list[Oriented], list[dict], list[str]]:
     """Every printed part oriented, the plates (name -> corner x, y and turned) and the parts on none;
     ``proc``: the plan's process (technology, build volume), ``settings``: its plates settings.
-    A part's orientation is decided once per file content and remembered (:data:`ORIENTATION`)."""
-    values = decision_values(proc.technology, settings, proc.build_volume)
-    oriented_parts = []
+    Parts whose files have the same bytes are decided once."""
+    oriented_parts, decided = [], {}
     with sharing_meshes():            # files of the same bytes: one mesh, one decision
         for p in [ManifestPart.of(e) for e in printed_parts(manifest)]:
             sha, mesh = read_mesh(p.stl_in(folder))
             V, F = np.asarray(mesh.vertices), np.asarray(mesh.faces)
-            decision = measured_by_file(sha, ORIENTATION, values,
-                                        lambda: decide(V, F, proc.technology, settings, proc.build_volume))
-            oriented_parts.append(oriented(p.name, p.role, V, F, float(p.volume_mm3), decision, settings, sha))
+            if sha not in decided:
+                decided[sha] = as_json(decide(V, F, proc.technology, settings, proc.build_volume))
+            oriented_parts.append(oriented(p.name, p.role, V, F, float(p.volume_mm3), decided[sha], settings, sha))
     too_tall = {o.name for o in oriented_parts if o.size[2] > proc.build_volume[2]}
     sizes = {o.name: (float(o.size[0]), float(o.size[1])) for o in oriented_parts if o.name not in too_tall}
-    plates, nowhere = packed(sizes, proc.build_volume[:2], settings.gap_mm, settings.edge_margin_mm)
+    plates, nowhere = pack(sizes, proc.build_volume[:2], settings.gap_mm, settings.edge_margin_mm)
     return oriented_parts, plates, sorted(too_tall) + nowhere
 
 
-def packed(sizes: dict[str, tuple[float, float]], bed, gap: float, margin: float
-           ) -> tuple[list[dict[str, tuple[float, float, bool]]], list[str]]:
-    """:func:`pack`, remembered under its inputs (the footprints in their order: rectpack's ties go by
-    it) and rectpack's version: the same plates, fresh or read back."""
-    from importlib.metadata import version
-    inputs = ([[n, w, h] for n, (w, h) in sizes.items()], [float(b) for b in bed], float(gap), float(margin),
-              version("rectpack"))
-    plates, nowhere = cache.remembered(PACKING, inputs, lambda: pack(sizes, bed, gap, margin))
-    return [{n: tuple(at) for n, at in plate.items()} for plate in plates], nowhere
-
-
-def plate_key(file: str, plate: dict[str, tuple[float, float, bool]], by_name: dict[str, Oriented]) -> str:
-    """The store's key of a plate's 3MF: everything its bytes are made of. Per object its name, its
-    STL's sha256 (the mesh: vertices and triangles), its orientation and its place; the file's name
-    (the UUIDs are made from it); lib3mf's version and hwgen's code (the arithmetic that turns and
-    places the vertices, and how they are handed to lib3mf)."""
-    objects = [[n, by_name[n].sha256, by_name[n].how, by_name[n].tilt, float(x), float(y), bool(turned)]
-               for n, (x, y, turned) in sorted(plate.items())]
-    return cache.key(PLATE_3MF, file, objects, lib3mf_version(), cache.code())
-
-
 def write_plate(path: Path, plate: dict[str, tuple[float, float, bool]], by_name: dict[str, Oriented]) -> bytes:
-    """One plate's 3MF at ``path``, its bytes returned: copied from the active store when a plate of
-    the same key (:func:`plate_key`) was kept there and its bytes still match their hash, else
-    written (and kept). A part read from no file (no sha256) makes a plate that is not kept."""
-    store = cache.active()
-    kept = store is not None and store.enabled and all(by_name[n].sha256 for n in plate)
-    k = plate_key(path.name, plate, by_name) if kept else None
-    if kept:
-        rec = store.get_record(k)
-        data = store.get_bytes(str(rec.get("object", ""))) if isinstance(rec, dict) else None
-        if data is not None:
-            path.write_bytes(data)
-            return data
+    """One plate's 3MF at ``path``, its bytes returned."""
     write_3mf(path, [(n, placed_vertices(by_name[n], x, y, turned), by_name[n].faces)
                      for n, (x, y, turned) in sorted(plate.items())])
-    data = path.read_bytes()
-    if kept:
-        store.put_record(k, {"object": store.put_bytes(data), "file": path.name})
-    return data
+    return path.read_bytes()
 
 
-def write_plates(folder: Path, manifest: dict, proc, settings) -> dict:
+def write_plates(folder: Path, manifest: Manifest, proc, settings) -> Added:
     """plates/plate_NN.3mf and plates/plates.md into the folder (``proc``, ``settings``: as
-    :func:`layout` takes them); the summary goes into the manifest (``plates``) and is returned."""
+    :func:`layout` takes them); what the manifest lists of them (the summary, ``plates``, and the files)."""
     folder = Path(folder)
     oriented_parts, plates, nowhere = layout(folder, manifest, proc, settings)
     by_name = {o.name: o for o in oriented_parts}
@@ -379,26 +317,23 @@ def write_plates(folder: Path, manifest: dict, proc, settings) -> dict:
         data = write_plate(folder / FOLDER / name, plate, by_name)
         tallest = max(plate, key=lambda n: by_name[n].size[2])
         summary["plates"].append({
-            "file": f"{FOLDER}/{name}", "sha256": cache.sha256(data),
+            "file": f"{FOLDER}/{name}", "sha256": sha256(folder / FOLDER / name),
             "parts": sorted(plate),
             "volume_ml": round(sum(by_name[n].volume_mm3 for n in plate) / 1000, 2),
             "tallest": {"part": tallest, "height_mm": round(float(by_name[tallest].size[2]), 2)},
             "placed": {n: {"x_mm": round(x, 2), "y_mm": round(y, 2), "turned_90": t} for n, (x, y, t) in
                        sorted(plate.items())}})
     (folder / FOLDER / SUMMARY_MD).write_text(summary_markdown(manifest, summary), encoding="utf-8")
-    manifest["plates"] = summary
-    files = manifest.setdefault("files", {})
-    for p in summary["plates"]:
-        files[Path(p["file"]).stem] = {"path": p["file"], "sha256": p["sha256"]}
+    files = {Path(p["file"]).stem: {"path": p["file"], "sha256": p["sha256"]} for p in summary["plates"]}
     files["plates_md"] = {"path": f"{FOLDER}/{SUMMARY_MD}", "sha256": sha256(folder / FOLDER / SUMMARY_MD)}
-    return summary
+    return Added({"plates": summary}, files)
 
 
-def summary_markdown(manifest: dict, s: dict) -> str:
+def summary_markdown(manifest: Manifest, s: dict) -> str:
     what = "resin" if s["technology"] == "SLA" else "filament"
     bed = " × ".join(f"{v:g}" for v in s["bed_mm"])
     total = sum(p["volume_ml"] for p in s["plates"])
-    L = [f"# Print plates: {manifest['design']}", "",
+    L = [f"# Print plates: {manifest.name}", "",
          f"{s['printer']} ({s['technology']}), build volume {bed} mm; {len(s['plates'])} plate(s), "
          f"{s['gap_mm']:g} mm between parts, {s['edge_margin_mm']:g} mm from the edge. Parts' {what}: "
          f"{total:.1f} ml in all (before supports and waste).", ""]

@@ -20,8 +20,8 @@ def _pyplot():
 def _save(plt, fig, path: Path) -> None:
     """Write the figure as a PNG whole or not at all, and free it."""
     # the figures lay themselves out once (tight_layout), which leaves a placeholder layout engine
-    # behind; with one, savefig draws the whole figure an extra time first (a fifth of the plots'
-    # CPU). Without it the pixels are the same
+    # behind; with one, savefig draws the whole figure an extra time first. Without it the pixels
+    # are the same
     fig.set_layout_engine(None)
     try:
         with atomic_path(path) as tmp:

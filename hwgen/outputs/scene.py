@@ -18,7 +18,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..cad.manifest import manifest_parts
+from ..cad.manifest import Manifest, manifest_parts
 from ..checks.meshes import part_meshes
 from ..model import kinematics as kin
 
@@ -113,7 +113,7 @@ def is_fixture(entry: dict) -> bool:
     return bool(entry.get("fixture"))
 
 
-def load_parts(folder: Path, manifest: dict, fixtures: bool = False) -> list[ScenePart]:
+def load_parts(folder: Path, manifest: Manifest, fixtures: bool = False) -> list[ScenePart]:
     """The robot's parts (or, with ``fixtures``, only the assembly aids), read back from their STLs
     (vertices merged). Parts whose files hold the same bytes share one mesh's arrays and what the
     renderer makes of them in file coordinates (:attr:`ScenePart.drawn`: its surface, its edges)."""
@@ -128,11 +128,11 @@ def load_parts(folder: Path, manifest: dict, fixtures: bool = False) -> list[Sce
     return out
 
 
-def families(manifest: dict, fixtures: bool = False) -> list[str]:
+def families(manifest: Manifest, fixtures: bool = False) -> list[str]:
     """Part families (the manifest roles) in order of first appearance; the assembly aids' too
     with ``fixtures``."""
     seen: list[str] = []
-    for e in manifest["parts"]:
+    for e in manifest.parts:
         if is_fixture(e) and not fixtures:
             continue
         if e["role"] not in seen:
@@ -147,13 +147,13 @@ def confusable(a, b) -> bool:
     return bool(np.min(np.linalg.norm(A[:, None] - B[None], axis=2)) < SAME_COLOUR)
 
 
-def family_colours(manifest: dict, fixtures: bool = False) -> dict[str, tuple[float, float, float]]:
+def family_colours(manifest: Manifest, fixtures: bool = False) -> dict[str, tuple[float, float, float]]:
     """One colour per family: the family's own manifest colour unless it is confusable with one
     already used (or the background), then the next palette colour that is not."""
     out: dict[str, tuple[float, float, float]] = {}
     candidates = list(FAMILY_PALETTE) + [tuple(c) for c in np.random.default_rng(0).uniform(0.1, 0.9, (64, 3))]
     for role in families(manifest, fixtures):
-        first = next(e for e in manifest["parts"] if e["role"] == role)
+        first = next(e for e in manifest.parts if e["role"] == role)
         rgb = np.asarray((first.get("color") or (0.7, 0.7, 0.7))[:3], dtype=float)
         if rgb.max() < MIN_LIGHTNESS:
             rgb = rgb + (MIN_LIGHTNESS - rgb.max())

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -110,8 +111,7 @@ def _surface_actor(surface, rgb, shading: bool = True):
     prop = actor.GetProperty()
     # a part's faces turned away from the camera are never seen: its mesh is closed and wound
     # outward (checks/parts.py fails any part that is open or inside out), so its near side covers
-    # them. Not rasterising them saves about a twentieth of the renderer's CPU; the pixels and the
-    # SVG's depth buffer are the same
+    # them. They are not rasterised; the pixels and the SVG's depth buffer are the same
     prop.BackfaceCullingOn()
     prop.SetColor(*rgb)
     if shading:
@@ -191,6 +191,16 @@ ISOMETRIC = View((0.62, -0.58, 0.55), (0.0, 0.25, 1.0))
 BENT = View((1.0, -0.25, 0.35), (0.0, 0.0, 1.0))
 
 
+class Look(NamedTuple):
+    """How :meth:`Renderer.draw` frames and draws a picture."""
+
+    aspect_range: tuple[float, float] = (0.45, 1.3)   # height over width, clipped to this
+    margin: float = 0.04            # around the drawn points, of their extent
+    edges: bool = True              # the parts' sharp edges drawn as lines
+    shading: bool = True            # lit faces (else flat colour, no anti-aliasing)
+    width: int | None = None        # pixels (None: the renderer's)
+
+
 class Renderer:
     """One offscreen window reused for every picture of the process."""
 
@@ -228,13 +238,12 @@ class Renderer:
         return W, H
 
     def draw(self, posed: list[Posed], colours: dict[str, tuple], view: View, path: Path | None,
-             tubes: dict[str, tuple[np.ndarray, tuple]] | None = None, texts=(),
-             labels=(), aspect_range=(0.45, 1.3), margin=0.04, edges: bool = True, shading: bool = True,
-             width: int | None = None):
+             tubes: dict[str, tuple[np.ndarray, tuple]] | None = None, texts=(), labels=(), look: Look = Look()):
         """Draw posed parts (and tendon tubes), write a PNG when a path is given.
 
         Returns (renderer, width, height) so a caller can read the depth buffer.
         """
+        aspect_range, margin, edges, shading, width = look
         rc = self.rc
         self.release()                  # the last picture's scene goes before this one is built
         ren = rc.vtkRenderer()
@@ -279,7 +288,7 @@ class Renderer:
         self.window.SetSize(W, H)
         if labels:
             # the camera (set by _fit) and the window's size map world points to the screen: no
-            # render is needed before (one took 0.17 s for exploded.png; the labels land on the same pixels)
+            # render is needed before (the labels land on the same pixels)
             for text, point, *rgb in labels:
                 # (text, point): centred on it; (text, point, colour): a callout starting there, on white
                 ren.SetWorldPoint(*point, 1.0)
@@ -336,9 +345,8 @@ class Renderer:
 
 
 
-# zlib's level for the PNGs. Measured on the twelve pictures of each shipped design (1000-1800 px
-# wide): Pillow's optimize=True (level 9) took 1.45 s of CPU for 1.92 MB; level 6, 0.37 s for 1.86 MB
-# (level 9 alone 1.41 s, 1.83 MB; level 5, 0.34 s, 1.87 MB). The pixels are the same at any level.
+# zlib's level for the PNGs: on the shipped designs' pictures, level 9 (Pillow's optimize=True)
+# made files a few per cent smaller for about four times the CPU. The pixels are the same at any level.
 PNG_COMPRESS_LEVEL = 6
 
 

@@ -1,7 +1,7 @@
 """Imported first by the fork server (:data:`hwgen.processes.PRELOAD`), and only there: the server
 ends without the interpreter's teardown. It ends when the process that started it has ended, its
-forks gone before it, so tearing down what it imported (CadQuery, OCP, VTK) would only spend a
-second of CPU and hold the build's output pipe open that long."""
+forks gone before it, so tearing down what it imported (CadQuery, OCP, VTK) would only spend CPU
+and hold the build's output pipe open meanwhile (the bench's table says how long)."""
 from __future__ import annotations
 
 import atexit

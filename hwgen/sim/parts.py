@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cad.manifest import ManifestPart, manifest_parts
+from ..cad.manifest import Manifest, ManifestPart, manifest_parts
 from ..checks.meshes import part_meshes
 
 TIP_ROLES = ("tensioner_housing", "tensioner_worm", "tensioner_drive", "tensioner_wheel", "tensioner_clamp")
@@ -128,11 +128,11 @@ def _eyelets(report: dict, drep: dict, stations: dict) -> list[Eyelet]:
     return out
 
 
-def read_build(folder: Path, manifest: dict, report: dict) -> Printed:
+def read_build(folder: Path, manifest: Manifest, report: dict) -> Printed:
     """The printed robot of a build folder (its manifest and check report)."""
     parts = [p for p in manifest_parts(manifest) if not p.fixture]
     bodies = _bodies(folder, [p for p in parts if p.role != "backbone"])
-    drep = manifest["design_report"]
+    drep = manifest.design_report
     mids = {d["station"]: float(d["y_mid_mm"]) for d in report.get("as_built", {}).get("disks", [])
             if d.get("y_mid_mm") is not None}
     stations = {i: mids.get(i, float(y)) for i, y in enumerate(drep["stations_mm"])}

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..cad.manifest import Manifest
 from ..atomic import write_json
 from ..model import stiffness
 from . import chain, measure, mjcf, parts, reference
@@ -141,7 +142,7 @@ def _findings(states: list, written: mjcf.Written, printed: parts.Printed, bent_
     return out
 
 
-def simulate(plan, folder: Path, manifest: dict, report: dict, out: Path, solve) -> dict:
+def simulate(plan, folder: Path, manifest: Manifest, report: dict, out: Path, solve) -> dict:
     """Write ``out`` (robot.xml, meshes/, sim.json, sim.png) for the build in ``folder`` and return
     sim.json's content. ``solve()``: the statics of the plan's tendon states with the report's
     weights (:func:`hwgen.model.stiffness.study`), for when the build's stiffness.json cannot serve."""
@@ -163,7 +164,7 @@ def simulate(plan, folder: Path, manifest: dict, report: dict, out: Path, solve)
                           mjcf.reflected_inertia(printed, ratio), [p.name for p in plan.paths])
     states = [(s.name, s.channels) for s in stiffness.states(plan)]
     out.mkdir(parents=True, exist_ok=True)
-    written = mjcf.write_robot(manifest["design"], printed, hinges, drums, mjcf.Locks(states, hauled), springs,
+    written = mjcf.write_robot(manifest.name, printed, hinges, drums, mjcf.Locks(states, hauled), springs,
                                folder, out)
     secs["written"] = time.perf_counter() - t0
     sim = measure.Sim.load(out / ROBOT)
@@ -178,7 +179,7 @@ def simulate(plan, folder: Path, manifest: dict, report: dict, out: Path, solve)
     sag_model = g.get("cases", {}).get("-z" if facing["gravity"][2] < 0 else "+z", {})
     m = sim.model
     result = {
-        "design": manifest["design"],
+        "design": manifest.name,
         "model": "the strip a chain of rigid links on elastic hinges sprung as hwgen's statics springs it "
                  f"(a hinge about x at most every {chain.SIM_H_MAX:g} mm, one about y and one about z between each "
                  "pair of disks); disks, tensioner and base as measured from their STLs; tendons as one-way "

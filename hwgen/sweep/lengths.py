@@ -38,6 +38,7 @@ from ..model.fixing import disk_thicknesses
 from ..model.materials import printed_density
 from ..model.routing import TendonPath, tendon_paths
 from ..model.scatter import _basis
+from ..model.specs import slot_size
 from ..model.holes import hole_diameter
 from ..model.plan import SAME_POSITION_MM, SWEEP_STEP_DEG as SIZING_STEP_DEG, eyelet_holes
 from ..params import Design
@@ -193,8 +194,8 @@ def _clearances(d: Design, xz: np.ndarray, dia: np.ndarray, joined: np.ndarray,
     R = d.disks.outer_diameter / 2
     rim = R - (np.linalg.norm(pts, axis=-1) + rr)
     least = np.minimum(least, rim.reshape(V, -1).min(axis=1))
-    hw = d.backbone.height / 2 + d.disks.slot_clearance
-    ht = d.backbone.thickness / 2 + d.disks.slot_clearance
+    sw, st = slot_size(d.backbone.height, d.backbone.thickness, d.disks.slot_clearance)
+    hw, ht = sw / 2, st / 2
     ox = np.maximum(np.abs(pts[..., 0]) - hw, 0.0)
     oz = np.maximum(np.abs(pts[..., 1]) - ht, 0.0)
     inside = (ox == 0) & (oz == 0)
@@ -208,8 +209,7 @@ def _mass(d: Design, dia: np.ndarray, joined: np.ndarray, thick: np.ndarray) -> 
     rho, _ = printed_density(d.process)
     first = ~np.triu(joined, 1).any(axis=2)                  # (V, N, T): the first tendon of its hole
     holes = (np.pi * (np.moveaxis(dia, 1, 2) / 2) ** 2 * first).sum(axis=2)    # (V, N) mm²
-    sw = d.backbone.height + 2 * d.disks.slot_clearance
-    st = d.backbone.thickness + 2 * d.disks.slot_clearance
+    sw, st = slot_size(d.backbone.height, d.backbone.thickness, d.disks.slot_clearance)
     plate = np.pi * (d.disks.outer_diameter / 2) ** 2 - sw * st
     disks = ((plate - holes) * thick).sum(axis=1) * rho / 1000
     bb = d.backbone

@@ -37,7 +37,6 @@ from ..model.plan import Plan, make_plan
 from . import lengths
 from .spec import Resolved, Variant, resolve
 
-LEVELS = ("lengths", "robust", "coupling", "build")
 METRICS = ("centre_mm", "taut_mm", "robust_mm", "clearance_mm", "mass_g", "coupling", "least_tension_n")
 
 

@@ -60,7 +60,7 @@ def tune(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: 
         result = pipeline.build(best_loaded, folder / "build", cache_dir=cache, jobs=pipeline.default_jobs())
         checks = (result.report or {}).get("checks", [])
         failed = [c for c in checks if not c.get("passed", True) and c.get("severity") == "error"]
-        lines.append(f"Trial {best['trial']}: `hwgen build best.yaml`: {len(result.manifest['parts'])} parts in "
+        lines.append(f"Trial {best['trial']}: `hwgen build best.yaml`: {len(result.manifest.parts)} parts in "
                      f"`build/{best_loaded.name}/`; `hwgen check`: {len(checks)} checks, {len(failed)} failed"
                      + (": " + "; ".join(f"{c['id']}: {c['message']}" for c in failed[:5]) if failed else "") + ".")
         if not failed:

@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import math
 
+from ..hardware import NUT_PLAY
 from ..intervals import interval_difference
 from .placement import Frame
 from .result import Member, Unit
-from .sizes import (BOSS, DRIVE_FLANGE, GAP, INSERT, M3_CLEARANCE, MOUNT_BAR, NUT, NUT_PLAY, POST, SHELF, STRIP_CLAMP_Z,
+from .sizes import (BOSS, DRIVE_FLANGE, GAP, INSERT, M3_CLEARANCE, MOUNT_BAR, NUT, POST, SHELF, STRIP_CLAMP_Z,
                     STRIP_SLOT_CLEARANCE, TENDON_HOLE, Sizes, tip_joint)
 
 FRAME = 3.0              # material left around a window and beside every feature a plate carries

@@ -128,9 +128,6 @@ class TensionerLayout:
     windings: dict[str, str]                    # channel -> "same" or "opposite": how its tendons wind
     search: dict = field(default_factory=dict)  # what was tried and why this arrangement won
 
-    def unit(self, channel: str) -> Unit:
-        return next(u for u in self.units if u.channel == channel)
-
     @property
     def housing_volume_estimate(self) -> float:
         """Sum of the housing members' volumes, mm³ (overlaps counted twice, cuts ignored)."""

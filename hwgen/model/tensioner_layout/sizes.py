@@ -1,56 +1,75 @@
-"""Fixed sizes of the tensioner's parts (mm), the fasteners each process takes, and
-:class:`Sizes`: what one design's parameters make of them, shared by every unit."""
+"""Fixed sizes of the tensioner's parts (mm, from data/tensioner_parts.csv, each row with its
+reason), the fasteners each process takes (data/fasteners.csv), and :class:`Sizes`: what one
+design's parameters make of them, shared by every unit."""
 from __future__ import annotations
 
+import csv
 import math
 from dataclasses import dataclass
+from importlib import resources
 
 from ...params import Design, Tensioner
 from .. import hardware
+from ..hardware import NUT_PLAY
 from ..gearing import WormPair, worm_pair
 from ..specs import DiskSpec
 
-# Spool and wheel part (mm)
-WIND_WIDTH = 3.0         # axial length of one tendon's winding zone
-FLANGE_HEIGHT = 2.5      # flange radius above the drum core: holds a few turns of 0.15 mm line
-FLANGE = 1.2             # flange thickness (≥ 0.8 mm process wall)
-CLAMP_BAY = 3.5          # axial gap between the inner flange and the wheel face, room for the clamp
-WORM_CLEAR = 1.5         # least z distance from a worm to its own unit's tendon planes
-HUB_WALL = 2.0           # radial wall of the drum around the pin bore
-CLAMP_PLATE = (6.0, 5.0, 1.5)   # clamp plate x, y, thickness; an M2 button head screw pinches the tendon under it
-CLAMP_HEAD = hardware.size("button head screw", "M2", "head_height")   # its head's height above the plate
-ANCHOR_HOLE = 1.0        # axial hole through the inner flange the tendon leaves the drum by
-CAP = 5.0                # end cap at the far end of a two-zone drum, holds the second clamp
-# Housing (mm)
-GAP = 0.5                # axial gap between a turning part and a housing face
-SHELF = 3.0              # shelf and bar thickness
-WORM_END = 1.5           # plain core beyond the thread at each end of the worm (no knife edge at a face)
-DRIVE_SHAFT = 7.0        # drive shaft through the spine: Ø, holds the hex key's socket with walls
-DRIVE_HEX = 5.0          # its hex end, across flats, pressed into the worm's hex bore
-DRIVE_HEX_LENGTH = 7.5   # ... and how far it goes in
-DRIVE_FLANGE = (11.0, 2.0)   # its flange outside the spine: Ø, thickness (stops it going further in)
-AXIAL_PLAY = 0.25        # worm end play between the far post and the spine
-POST = 6.0               # far worm bearing post, square section
-BOSS = 3.5               # radius of the pin bosses and bars around a dowel
-UNIT_GAP = 2.0           # y gap between neighbouring units' parts
-PIN_ENGAGE = 5.0         # dowel length inside a turning part's bore
-PIN_LENGTHS = hardware.lengths("dowel pin", "Ø3")     # ISO 2338 stock lengths, mm
-STRIP_CLAMP_Z = (-1.5, 6.0)   # strip clamp block, z range (set screws from +z)
-STRIP_CLAMP_X = 2.0       # block beyond the strip's edges, x
-STRIP_SLOT_CLEARANCE = 0.05   # per side, strip in its slot
+
+def _table() -> dict[str, float | tuple[float, ...]]:
+    """Every row of data/tensioner_parts.csv, each with its reason there: name -> mm (a tuple
+    where the row gives several figures)."""
+    text = resources.files("hwgen").joinpath(f"data/{TABLE}").read_text(encoding="utf-8")
+    out: dict[str, float | tuple[float, ...]] = {}
+    for r in csv.DictReader(text.splitlines()):
+        words = r["value_mm"].split()
+        if r["name"] in out:
+            raise ValueError(f"data/{TABLE} gives {r['name']} twice")
+        out[r["name"]] = float(words[0]) if len(words) == 1 else tuple(float(w) for w in words)
+    return out
+
+
+TABLE = "tensioner_parts.csv"      # the tensioner's part sizes (mm), beside fasteners.csv
+_SIZE = _table()
+# Spool and wheel part
+WIND_WIDTH = _SIZE["wind_width"]
+FLANGE_HEIGHT = _SIZE["flange_height"]
+FLANGE = _SIZE["flange"]
+CLAMP_BAY = _SIZE["clamp_bay"]
+WORM_CLEAR = _SIZE["worm_clear"]
+HUB_WALL = _SIZE["hub_wall"]
+CLAMP_PLATE = _SIZE["clamp_plate"]           # x, y, thickness
+CLAMP_HEAD = hardware.size("button head screw", "M2", "head_height")   # the clamp screw's head above the plate
+ANCHOR_HOLE = _SIZE["anchor_hole"]
+CAP = _SIZE["cap"]
+# Housing
+GAP = _SIZE["gap"]
+SHELF = _SIZE["shelf"]
+WORM_END = _SIZE["worm_end"]
+DRIVE_SHAFT = _SIZE["drive_shaft"]
+DRIVE_HEX = _SIZE["drive_hex"]
+DRIVE_HEX_LENGTH = _SIZE["drive_hex_length"]
+DRIVE_FLANGE = _SIZE["drive_flange"]         # Ø, thickness
+AXIAL_PLAY = _SIZE["axial_play"]
+POST = _SIZE["post"]
+BOSS = _SIZE["boss"]
+UNIT_GAP = _SIZE["unit_gap"]
+PIN_ENGAGE = _SIZE["pin_engage"]
+PIN_LENGTHS = hardware.lengths("dowel pin", "Ø3")     # ISO 2338 stock lengths
+STRIP_CLAMP_Z = _SIZE["strip_clamp_z"]       # z range
+STRIP_CLAMP_X = _SIZE["strip_clamp_x"]
+STRIP_SLOT_CLEARANCE = _SIZE["strip_slot_clearance"]
 M3_CLEARANCE = hardware.clearance_hole("M3")        # ISO 273 normal
 M2_CLEARANCE = hardware.clearance_hole("M2")
-MOUNT_BAR = 9.0           # z height of the base bar through a row of tip-disk screws
-TENDON_HOLE = 3.0         # minimum hole through a base bar around a tendon
+MOUNT_BAR = _SIZE["mount_bar"]
+TENDON_HOLE = _SIZE["tendon_hole"]
 # Fasteners by process (data/fasteners.csv). Resin: hex nuts (ISO 4032) in traps, with play over
 # the nut; thermoplastic: heat-set inserts.
 NUT = {t: hardware.nut(t) for t in ("M2", "M3")}          # across flats, height
-NUT_PLAY = hardware.size("nut trap", "any", "play")
-NUT_BACKING = 0.6        # resin between a nut trap and the face its screw enters by (or the body's far face), mm
 INSERT = {t: hardware.insert(t) for t in ("M2", "M3")}    # bore, length
 SET_SCREW = hardware.size("set screw", "M3", "length")    # the strip clamp's M3 set screws
-SPINE = 4.0              # spine wall: the drive shaft's bearing and the worm's thrust face
-BASE = {"nut": 5.0, "insert": 7.0}    # base bars on the tip disk (y), or deeper: base_bars()
+SPINE = _SIZE["spine"]
+BASE = {"nut": _SIZE["base_nut"], "insert": _SIZE["base_insert"]}    # base bars on the tip disk (y), or deeper: base_bars()
+NUT_BACKING = _SIZE["nut_backing"]
 # stock lengths: the clamps' M2 button head screws, the tip disk's M3 socket head cap screws
 SCREW_LENGTHS = {"M2": hardware.lengths("button head screw", "M2"), "M3": hardware.lengths("socket head cap screw", "M3")}
 # Layout search
