@@ -4,6 +4,7 @@ Run: python -m hwgen.bench [PARAMS]          each command as a whole process: wa
      python -m hwgen.bench --steps [PARAMS]  where one process's build goes, step by step
      python -m hwgen.bench --sweep-build     the build level of hwgen sweep: 2 designs on 2 workers
                                              against the same 2 built one after the other (minutes)
+     python -m hwgen.bench --tune            hwgen tune's stiffness example on a small budget alone
 """
 from __future__ import annotations
 
@@ -186,6 +187,7 @@ def processes(params_path: Path) -> None:
         rows.append(_process("hwgen routing", ["routing", str(params)], env)[:5])
         rows += disk_rows(params, tmp, env)
         rows += sweep_rows(params, tmp)
+        rows += tune_rows(tmp)
     t = Table(title=f"hwgen benchmark: {params_path} (whole processes, {os.cpu_count()} cores, "
                     f"load {os.getloadavg()[0]:.1f})")
     for col, right in (("command", False), ("wall s", True), ("CPU s", True), ("peak MB", True), ("note", False)):
@@ -362,6 +364,30 @@ def sweep_rows(params_path: Path, tmp: Path, level: str = "lengths", axes: str =
     return rows
 
 
+TUNE_RATE = re.compile(r"(\d+) evaluated .* in ([\d.]+) s on (\d+) worker\(s\): ([\d.]+) trials/s, ([\d.]+) (m?s) CPU"
+                       r" a trial(?: \(([\d.]+) s each of the (\d+) through every level\))?")
+TUNE_BEST = re.compile(r"best: trial (\d+): (.*?)(?: \(found ([\d.]+) s into this run\))?$", re.M)
+
+
+def tune_rows(tmp: Path, budget: int = 60) -> list[tuple]:
+    """hwgen tune params/tune-stiffness.yaml on a small budget (the coupling level and the statics
+    a trial, no build of the best) on 2 workers: trials per second, CPU a trial, the time to the best."""
+    env = {k: v for k, v in os.environ.items() if k not in ("HWGEN_CHECK_SAMPLES", "HWGEN_CACHE_DIR")}
+    env["COLUMNS"] = "400"              # rich wraps a pipe's lines at 80 columns: the throughput line whole
+    r = _process(f"hwgen tune, stiffness, {budget} trials", ["tune", "params/tune-stiffness.yaml", "--out",
+                                                              str(tmp / "tune"), "--budget", str(budget),
+                                                              "--workers", "2", "--no-build", "-q"], env)
+    m, b = TUNE_RATE.search(r[5]), TUNE_BEST.search(r[5])
+    note = "no throughput line"
+    if m:
+        n, sec, workers, rate, cpu, unit, whole, k = m.groups()
+        note = (f"{rate} trials/s over {n} trials on {workers} workers ({sec} s, {cpu} {unit} CPU a trial"
+                + (f"; {whole} s each of the {k} through every level" if whole else "") + ")")
+    if b:
+        note += f"; best {b.group(2)} at trial {b.group(1)}" + (f", {b.group(3)} s in" if b.group(3) else "")
+    return [(*r[:4], "; ".join(x for x in (r[4], note) if x))]
+
+
 def sweep_build() -> None:
     """The build level: two designs (C1's amplitude 24 and 26 mm) on 2 workers, and inline one after
     the other, each run from an empty part cache of its own: the variants of one run share the
@@ -413,6 +439,16 @@ def _statics(plan) -> None:
 
 
 def main(argv: list[str]) -> None:
+    if "--tune" in argv:
+        with tempfile.TemporaryDirectory(prefix="hwgen-bench-") as tmp:
+            rows = tune_rows(Path(tmp))
+        t = Table(title=f"hwgen tune ({os.cpu_count()} cores, load {os.getloadavg()[0]:.1f})")
+        for col in ("command", "wall s", "CPU s", "peak MB", "note"):
+            t.add_column(col)
+        for label, wall, cpu, peak, note in rows:
+            t.add_row(label, f"{wall:.2f}", f"{cpu:.2f}", f"{peak:.0f}", note)
+        Console().print(t)
+        return
     if "--sweep-build" in argv:
         sweep_build()
         return

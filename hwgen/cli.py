@@ -1,4 +1,4 @@
-"""The `hwgen` command line: build, check, render, plates, coupon, routing, stiffness, sweep, schema.
+"""The `hwgen` command line: build, check, render, plates, coupon, routing, stiffness, sweep, tune, schema.
 
 Exit codes: 0 success, 1 design findings that fail, 2 bad input or usage, 3 a bug in hwgen.
 
@@ -600,6 +600,72 @@ def sweep(sweep_file: Path = typer.Argument(..., help="sweep YAML: a base design
     out.print(f"  {printable(o.folder)}/ (Parquet)")
     for f in files:
         out.print(f"  {printable(f)}")
+
+
+@_command
+def tune(tune_file: Path = typer.Argument(..., help="tune YAML: a base design, free parameters with bounds, a goal",
+                                          show_default=False),
+         out_dir: Path = typer.Option(Path("out"), "--out", help="output root; results go to OUT/tunes/<name>/"),
+         scheduler: str = typer.Option(None, "--scheduler", show_default=False,
+                                       help="tcp://HOST:PORT of a running Dask scheduler; 'inline' to run in this "
+                                            "process without Dask (default: a local Dask cluster, one worker "
+                                            "process per core)"),
+         workers: int = typer.Option(None, "--workers", min=1, show_default=False,
+                                     help="worker processes of the local cluster (default: the number of cores)"),
+         budget: int = typer.Option(None, "--budget", min=1, show_default=False,
+                                    help="trials in all, those of an earlier run included (default: the tune "
+                                         "file's budget)"),
+         no_build: bool = typer.Option(False, "--no-build", help="do not build the best design"),
+         quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+         cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
+    """Search a design's parameters for the best one (Optuna on the sweep's Dask workers): trials.parquet, best.yaml, summary.md, convergence.png, and the best built and checked.
+
+    Goals: maximize or minimize results of the statics or the checks subject to every check of the level passing (several: a Pareto front), or pass (the passing design nearest the base). A rerun goes on from the trials already told. Exit 1 when no trial passes or the best's build fails a check; exit 2 for a bad tune file.
+    """
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from .tune import best as tune_best
+    from .tune import run as tune_run
+    from .tune import spec as tune_spec
+
+    if scheduler is not None and scheduler != "inline" and not scheduler.startswith(("tcp://", "tls://")):
+        raise InputError(scheduler, "--scheduler", "give tcp://HOST:PORT of a Dask scheduler, or 'inline'")
+    loaded = tune_spec.load(tune_file)
+    with Progress(TextColumn("{task.description}", markup=False), BarColumn(), MofNCompleteColumn(),
+                  TimeElapsedColumn(), console=err, disable=quiet or not err.is_terminal, transient=True) as bar:
+        task = bar.add_task(f"tuning {loaded.spec.tune}", total=budget or loaded.spec.budget)
+        try:
+            t = tune_best.tune(loaded, out_dir, scheduler, workers, budget, _cache(cache_dir, no_cache),
+                               build=not no_build, on_trial=lambda done, total: bar.update(task, completed=done,
+                                                                                          total=total))
+        except KeyboardInterrupt:
+            say("interrupted:", "yellow", f"the trials told so far are kept in "
+                                          f"{tune_run.folder_of(loaded, out_dir)}; the same command goes on from them")
+            raise typer.Exit(130) from None
+    o = t.outcome
+    rate = f"{o.evaluated / o.seconds:.3g} trials/s" if o.seconds > 0 and o.evaluated else "nothing to evaluate"
+    per = o.cpu_s / o.evaluated if o.evaluated else 0.0
+    cpu = (f", {per:.2f} s CPU a trial" if per >= 0.1 else f", {1000 * per:.2f} ms CPU a trial") if o.evaluated else ""
+    if o.whole and o.whole < o.evaluated:
+        cpu += f" ({o.whole_cpu_s / o.whole:.2f} s each of the {o.whole} through every level)"
+    start = f"; local cluster started in {o.start_seconds:.1f} s" if o.start_seconds else ""
+    out.print(f"{loaded.spec.tune} ({loaded.spec.level}): {o.done_before} trials told before, {o.evaluated} evaluated "
+              f"and {o.repeated} told from an earlier trial of the same design in {o.seconds:.1f} s on {o.workers} "
+              f"worker(s): {rate}{cpu}{start}")
+    if t.best is None:
+        say("no trial passes;", "red", f"see {printable(o.folder / 'summary.md')}")
+    else:
+        objs = ", ".join(f"{n} {v:.4g}" for (n, _), v in zip(loaded.objectives, t.best["objectives"]))
+        found = f" (found {o.first_best_s:.1f} s into this run)" if o.first_best_s is not None else ""
+        out.print(f"best: trial {t.best['trial']}: {objs}{found}" + (f"; front of {len(t.front)}" if len(t.front) > 1
+                                                                     and len(loaded.objectives) > 1 else ""))
+    for f in t.files:
+        out.print(f"  {printable(f)}")
+    if t.build_folder is not None:
+        out.print(f"  {printable(t.build_folder)}/ (the best, built: "
+                  + ("every check passes)" if t.build_ok else f"{len(t.failed_checks)} check(s) fail)"))
+    if t.best is None or t.build_ok is False:
+        raise typer.Exit(EXIT_FINDINGS)
 
 
 @_command

@@ -11,7 +11,7 @@ import pytest
 PKG = Path(__file__).resolve().parents[1] / "hwgen"
 
 # The stages in the order data flows; a module may import its own stage and those before it.
-STAGES = ["errors", "atomic", "heap", "processes", "cache", "yamlfile", "designfile", "fasteners", "params", "model", "cad", "checks", "outputs", "sim", "engine", "pipeline", "sweep", "cli", "bench"]
+STAGES = ["errors", "atomic", "heap", "processes", "cache", "yamlfile", "designfile", "fasteners", "params", "model", "cad", "checks", "outputs", "sim", "engine", "pipeline", "sweep", "tune", "cli", "bench"]
 NO_CAD_KERNEL = ("yamlfile", "designfile", "params", "model")         # plain data and numpy: never CadQuery or OCP
 
 

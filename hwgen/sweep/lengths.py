@@ -296,15 +296,31 @@ def verdict(row: dict) -> tuple[str, str, dict]:
     """(verdict, message, summary figures) of a lengths row: a budgeted tendon over its budget by
     eq. (2) through the hole centres, or a wall thinner than the process's minimum, fails."""
     budgeted = [t for t in row["tendons"] if t["budget_mm"] is not None]
-    fails = [f"{t['name']} changes {t['centre_mm']:.3f} mm by eq. (2), budget {t['budget_mm']:g} mm"
-             for t in budgeted if t["centre_mm"] > t["budget_mm"]]
-    if row.get("overlapping_eyelets"):
-        fails.append(f"tendons routed into each other share one opening on {row['overlapping_eyelets']} disk(s)")
-    if row["clearance_mm"] < row["min_wall_mm"]:
-        fails.append(f"least wall {row['clearance_mm']:.2f} mm, under process.min_wall {row['min_wall_mm']:g} mm")
+    fails = [f["message"] for f in failures(row)]
     figures = {"centre_mm": max((t["centre_mm"] for t in budgeted), default=None),
                "taut_mm": max((t["taut_mm"] for t in budgeted), default=None),
                "decoupled": all(t["centre_mm"] <= t["budget_mm"] for t in budgeted),
                "clearance_mm": row["clearance_mm"], "mass_g": row["mass_g"],
                "per_tendon": json.dumps(row["tendons"])}
     return ("fail" if fails else "pass"), "; ".join(fails), figures
+
+
+def failures(row: dict) -> list[dict]:
+    """What fails in a lengths row, one record a rule (``id``, ``severity``, ``message``, ``measured``,
+    ``limit``): a budgeted tendon over its budget by eq. (2) through the hole centres
+    (``tendon.length``), tendons routed into one opening (``eyelet.overlap``), a wall under the
+    process's minimum (``eyelet.wall``)."""
+    out = [{"id": "tendon.length", "severity": "error", "where": t["name"], "measured": t["centre_mm"],
+            "limit": t["budget_mm"],
+            "message": f"{t['name']} changes {t['centre_mm']:.3f} mm by eq. (2), budget {t['budget_mm']:g} mm"}
+           for t in row["tendons"] if t["budget_mm"] is not None and t["centre_mm"] > t["budget_mm"]]
+    if row.get("overlapping_eyelets"):
+        out.append({"id": "eyelet.overlap", "severity": "error", "where": None, "measured": None, "limit": None,
+                    "message": f"tendons routed into each other share one opening on {row['overlapping_eyelets']} "
+                               f"disk(s)"})
+    if row["clearance_mm"] < row["min_wall_mm"]:
+        out.append({"id": "eyelet.wall", "severity": "error", "where": None, "measured": row["clearance_mm"],
+                    "limit": row["min_wall_mm"],
+                    "message": f"least wall {row['clearance_mm']:.2f} mm, under process.min_wall "
+                               f"{row['min_wall_mm']:g} mm"})
+    return out

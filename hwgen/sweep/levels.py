@@ -1,8 +1,9 @@
 """What each level of a sweep computes for a batch of variants, on a worker: one row per variant.
 
 ``lengths`` (:mod:`.lengths`): the plan's eyelets, eq. (2) and the nominal taut path, many
-variants at once. ``robust``: the full plan (:func:`hwgen.model.plan.make_plan`) and the as-built Monte
-Carlo of :mod:`hwgen.model.scatter` on the plan's holes, seats and tensioner runs, judged at
+variants at once. ``robust``: the full plan (:func:`hwgen.model.plan.make_plan`: its tip disk's
+eyelets turned toward the drums and the base disk's seats, which the lengths level cannot see;
+:func:`_plan_screens`) and the as-built Monte Carlo of :mod:`hwgen.model.scatter` on the plan's holes, seats and tensioner runs, judged at
 ``check.robust`` like ``hwgen check``'s ``tendon.robust``. ``coupling``: the tendon statics of
 :mod:`hwgen.checks.tension` on that plan (tautness, overload, the actuating tension's rise).
 ``build``: the whole pipeline (:mod:`.build`), with ``hwgen check``'s report. Each level includes
@@ -10,7 +11,17 @@ the ones before it.
 
 A variant that is bad input, or whose plan is refused, is a row with verdict ``bad input`` and
 the message ``hwgen build`` would print; one that makes hwgen fail is a row with verdict
-``error``; neither stops the batch.
+``error``; neither stops the batch. Each row's ``failures`` lists what fails (and what only warns)
+one record a rule: ``id``, ``severity``, ``message``, ``measured``, ``limit`` (for a tune's
+constraints; the sweep's Parquet keeps the message).
+
+``options["screen"]``: a variant that fails at the lengths level (eq. (2), the walls) goes no
+further (its row says ``screened``): a tune's trial that cannot be feasible costs no more;
+``options["stop"]``, called with the row once ``with_plan``'s figures are in, does the same for
+a trial those figures rule out (a tune's bound on the statics).
+``options["with_plan"]``, when given, is called with each valid variant's plan (made for it at the
+lengths level too) and returns more figures for its row: a tune's objectives
+(:mod:`hwgen.tune.results`).
 """
 from __future__ import annotations
 
@@ -46,25 +57,31 @@ def evaluate_batch(batch: list[tuple[int, tuple]], base: dict, names: tuple[str,
         row = rows[r.index]
         fig = figures[r.index]
         if isinstance(fig, str):
-            row.update(verdict="error", message=fig)
+            row.update(verdict="error", message=fig, failures=[_failure("error", fig)])
             continue
         row["verdict"], row["message"], f = lengths.verdict(fig)
         row.update(f)
+        row["failures"] = lengths.failures(fig)
     share = (time.process_time() - t0) / max(len(todo), 1)
     for r in todo:
         rows[r.index]["cpu_s"] = share
-    if level != "lengths":
+    if level != "lengths" or options.get("with_plan"):
         for r in good:
             row = rows[r.index]
             if row["verdict"] == "error":
+                continue
+            if options.get("screen") and any(f["severity"] == "error" for f in row["failures"]):
+                row["screened"] = True          # a tune's trial that fails already: the levels after it not run
                 continue
             t1 = time.process_time()
             try:
                 _deeper(r, row, level, options)
             except (InputError, DesignError) as e:
                 row.update(verdict="bad input", message=f"{e.path or '<document>'}: {e.message}")
+                row["failures"] = [_failure("input", row["message"])]
             except Exception as e:      # a variant that makes hwgen fail is a row, never the end of the sweep
                 row.update(verdict="error", message=f"internal error: {type(e).__name__}: {e}"[:400])
+                row["failures"] = [_failure("error", row["message"])]
             row["cpu_s"] += time.process_time() - t1
     return [rows[r.index] for r in todo]
 
@@ -77,7 +94,8 @@ def warm() -> None:
 def _row(r: Resolved, level: str) -> dict:
     row = {"variant": r.index, "hash": r.hash, "level": level, "values": r.values,
            "verdict": "bad input" if r.design is None else "pass", "message": r.message, "decoupled": None,
-           "checks_failed": None, "per_tendon": None, "kept": None, "cpu_s": 0.0}
+           "checks_failed": None, "per_tendon": None, "kept": None, "cpu_s": 0.0,
+           "failures": [_failure("input", r.message)] if r.design is None else []}
     row.update({m: None for m in METRICS})
     return row
 
@@ -99,20 +117,39 @@ def _lengths(good: list[Resolved]) -> dict[int, dict | str]:
 
 # ---------------------------------------------------------------- robust, coupling, build
 
+def _failure(cid: str, message: str, severity: str = "error", measured=None, limit=None, where=None) -> dict:
+    return {"id": cid, "severity": severity, "where": where, "measured": measured, "limit": limit,
+            "message": message}
+
+
 def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
     d = r.design
     plan = make_plan(d)
     feasibility.check_plan(plan, d)
+    if options.get("with_plan"):
+        row.update(options["with_plan"](plan))
+    if level == "lengths":
+        return
+    if options.get("stop") and options["stop"](row):
+        row["screened"] = True         # a tune's trial its figures already rule out: the checks after them not run
+        return
     centre = {t["name"]: t["centre_mm"] for t in json.loads(row["per_tendon"])}
     taut_rows = robust(plan, d.disks.slot_clearance, options.get("robust_samples", 200))
     fails = [row["message"]] if row["message"] else []
     warns = []
     budgeted = [t for t in taut_rows if t["budget_mm"] is not None]
+    failures = [f for f in row["failures"]]
+    for f in _plan_screens(plan, d.process.min_wall):
+        if not any(g["id"] == f["id"] for g in failures):
+            fails.append(f["message"])
+            failures.append(f)
     for t in budgeted:
         if t["robust_mm"] > t["budget_mm"]:
             text = (f"{t['name']} changes {t['robust_mm']:.3f} mm at {d.check.robust} as built, "
                     f"budget {t['budget_mm']:g} mm")
             (fails if d.check.robust_severity == "error" else warns).append(text)
+            failures.append(_failure("tendon.robust", text, d.check.robust_severity, t["robust_mm"], t["budget_mm"],
+                                     t["name"]))
     tendons = json.loads(row["per_tendon"])
     for t in tendons:
         t.update({k: v for k, v in next(x for x in taut_rows if x["name"] == t["name"]).items()
@@ -124,6 +161,8 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
             warns.append(f"statics skipped: {report['skipped']}")
         for c in report.get("failed", []):
             (fails if c["severity"] == "error" else warns).append(f"{c['id']}: {c['message']}")
+            failures.append(_failure(c["id"], c["message"], c["severity"], c.get("measured"), c.get("limit"),
+                                     (c.get("where") or {}).get("tendon")))
         row["coupling"] = report.get("coupling")
         row["least_tension_n"] = report.get("least_tension_n")
     if level == "build":
@@ -131,12 +170,49 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
         failed, kept = build_and_check(r, options)
         row["checks_failed"] = len(failed)
         row["kept"] = kept
-        fails = [f for f in fails if f] + [f"{c['id']}: {c['message']}" for c in failed[:3]]
+        # the build's verdict is hwgen check's, which runs every rule above on the built files (eq. (2)
+        # through the centres only as information): the screening figures stay on record as warnings
+        failures = [dict(f, severity="warning") for f in failures]
+        failures += [_failure(c["id"], c["message"], c["severity"], c.get("measured"), c.get("limit"))
+                     for c in failed]
+        warns = [f"screening: {f}" for f in fails if f] + warns
+        fails = [f"{c['id']}: {c['message']}" for c in failed[:3]]
         if len(failed) > 3:
             fails.append(f"and {len(failed) - 3} more failed checks")
     row["per_tendon"] = json.dumps(tendons)
+    row["failures"] = failures
     row["verdict"] = "fail" if any(fails) else "pass"
     row["message"] = "; ".join([f for f in fails if f] + [f"warning: {w}" for w in warns])[:2000]
+
+
+def _plan_screens(plan: Plan, min_wall: float) -> list[dict]:
+    """What the full plan says that the lengths level cannot (``hwgen check`` fails each): on the tip
+    disk, its eyelets turned toward the drums (sized there without the turn), tendons whose holes run
+    into one opening (the plan's "overlap" merges: ``eyelet.overlap``) or a wall between two holes
+    under ``process.min_wall`` (their circles on the mid-plane: ``eyelet.wall``); on the base disk, a
+    seat as wide as its knot or crimp (a steep tendon's slanted seat: ``tendon.seat``)."""
+    out = []
+    tip = plan.disks[-1]
+    hit = [m for m in plan.merges if m.kind == "overlap" and m.station == tip.index]
+    if hit:
+        out.append(_failure("eyelet.overlap", "tendons routed into each other share one opening on the tip disk "
+                                              "(its eyelets turned toward the drums): "
+                            + "; ".join(" and ".join(m.tendons) for m in hit)))
+    holes = tip.holes
+    walls = [(math.hypot(a.x - b.x, a.z - b.z) - (a.diameter + b.diameter) / 2, a, b)
+             for i, a in enumerate(holes) for b in holes[i + 1:]]
+    if walls:
+        w, a, b = min(walls, key=lambda t: t[0])
+        if w < min_wall:
+            out.append(_failure("eyelet.wall", f"wall {w:.2f} mm between the tip disk's eyelets for "
+                                               f"{'+'.join(a.tendons)} and {'+'.join(b.tendons)} (turned toward the "
+                                               f"drums), under process.min_wall {min_wall:g} mm", "error", w, min_wall))
+    for seat in plan.disks[0].seats:
+        if seat.termination and seat.diameter >= seat.termination:
+            out.append(_failure("tendon.seat", f"{seat.tendon}'s seat on the base disk opens to Ø{seat.diameter:.2f} "
+                                               f"mm: its Ø{seat.termination:g} mm termination pulls through", "error",
+                                seat.diameter, seat.termination, seat.tendon))
+    return out
 
 
 def robot(plan: Plan) -> mc.Robot:

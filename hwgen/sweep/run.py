@@ -113,6 +113,101 @@ def _worker_environment():
         yield
 
 
+class _Ready:
+    """A result worked out in this process, as a Dask future hands one over."""
+
+    def __init__(self, key: str, value):
+        self.key, self._value = key, value
+
+    def result(self):
+        return self._value
+
+    def release(self) -> None:
+        pass
+
+
+class _InOrder:
+    """``as_completed`` for results worked out in this process: in the order they were added, and
+    more may be added while it is read."""
+
+    def __init__(self):
+        self._queue: list = []
+
+    def add(self, future) -> None:
+        self._queue.append(future)
+
+    def count(self) -> int:
+        return len(self._queue)
+
+    def __iter__(self):
+        while self._queue:
+            yield self._queue.pop(0)
+
+
+@dataclass
+class Pool:
+    """Where batches run: a Dask client (a local cluster started for the run, or a running one), or
+    this process (``client`` None, ``scheduler="inline"``)."""
+
+    client: object | None
+    workers: int
+    start_seconds: float           # starting the local cluster (0 for an existing one or inline)
+
+    def submit(self, fn, *args, key: str):
+        """fn(*args) on a worker (a future), or here and now."""
+        if self.client is None:
+            return _Ready(key, fn(*args))
+        return self.client.submit(fn, *args, key=key, pure=False)
+
+    def scatter(self, value):
+        """A value every task takes, sent to each worker once."""
+        return value if self.client is None else self.client.scatter(value, broadcast=True)
+
+    def completed(self):
+        """An ``as_completed`` to add futures to as they are submitted."""
+        if self.client is None:
+            return _InOrder()
+        from distributed import as_completed
+        return as_completed()
+
+
+@contextmanager
+def pool(scheduler: str | None = None, workers: int | None = None):
+    """The :class:`Pool` of a run: ``None`` starts a local cluster (one single-threaded worker process
+    per core, or ``workers``) and stops it after; ``tcp://HOST:PORT`` uses a running scheduler;
+    ``"inline"`` runs everything in this process. The workers have imported what every batch needs
+    (:func:`hwgen.sweep.levels.warm`) before it is handed over."""
+    if scheduler == "inline":
+        yield Pool(None, 1, 0.0)
+        return
+    from distributed import Client, LocalCluster
+
+    t_start = time.perf_counter()
+    cluster = None
+    if scheduler is None:
+        n = workers or os.cpu_count() or 1
+        with _worker_environment():
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
+                                   silence_logs=40)
+        client = Client(cluster)
+    else:
+        try:
+            client = Client(scheduler, timeout=30)
+        except (OSError, TimeoutError, ValueError) as e:
+            raise InputError(scheduler, "--scheduler", f"cannot reach the Dask scheduler ({e})") from None
+    try:
+        n_workers = len(client.scheduler_info()["workers"])
+        if n_workers == 0:
+            client.wait_for_workers(1, timeout=60)
+            n_workers = len(client.scheduler_info()["workers"])
+        client.run(levels.warm)           # imports and the compiled taut kernel, before the clock starts
+        yield Pool(client, n_workers, time.perf_counter() - t_start)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
 def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: int | None = None,
         progress: bool = True, cache=True) -> Outcome:
     """Run the sweep (see the module's docstring); rows already in the results are not evaluated again."""
@@ -141,56 +236,30 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
             cpu += r["cpu_s"]
             verdicts[r["verdict"]] = verdicts.get(r["verdict"], 0) + 1
 
-    if scheduler == "inline":
+    with pool(scheduler, workers) as p:
         t0 = time.perf_counter()
-        for b in batches:
-            write(levels.evaluate_batch(b, *args, done, options))
-        return Outcome(folder, total, len(done), len(written) - len(done), time.perf_counter() - t0, 1, 0.0,
-                       cpu, verdicts)
-
-    from distributed import Client, LocalCluster, as_completed
-    from distributed import progress as dask_progress
-
-    t_start = time.perf_counter()
-    cluster = None
-    if scheduler is None:
-        n = workers or os.cpu_count() or 1
-        with _worker_environment():
-            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
-                                   silence_logs=40)
-        client = Client(cluster)
-    else:
-        try:
-            client = Client(scheduler, timeout=30)
-        except (OSError, TimeoutError, ValueError) as e:
-            raise InputError(scheduler, "--scheduler", f"cannot reach the Dask scheduler ({e})") from None
-    try:
-        n_workers = len(client.scheduler_info()["workers"])
-        if n_workers == 0:
-            client.wait_for_workers(1, timeout=60)
-            n_workers = len(client.scheduler_info()["workers"])
-        client.run(levels.warm)           # imports and the compiled taut kernel, before the clock starts
-        start = time.perf_counter() - t_start
-        t0 = time.perf_counter()
-        options = dict(options, numba_threads=1)
-        # the base design and the hashes already done go to every worker once, not with every task
-        base, seen = client.scatter([loaded.base, frozenset(done)], broadcast=True)
-        futures = [client.submit(levels.evaluate_batch, b, base, loaded.names, loaded.spec.level, seen, options,
-                                 key=f"sweep-{loaded.spec.sweep}-{b[0][0]}-{uuid.uuid4().hex[:6]}", pure=False)
-                   for b in batches]
-        bar = None
-        if progress and futures:
-            bar = threading.Thread(target=dask_progress, args=futures, kwargs={"notebook": False}, daemon=True)
-            bar.start()
-        for fut in as_completed(futures):
-            write(fut.result())
-            fut.release()
-        if bar is not None:
-            bar.join(timeout=5)
-            print()
+        if p.client is None:
+            for b in batches:
+                write(levels.evaluate_batch(b, *args, done, options))
+        else:
+            client = p.client
+            options = dict(options, numba_threads=1)
+            # the base design and the hashes already done go to every worker once, not with every task
+            base, seen = client.scatter([loaded.base, frozenset(done)], broadcast=True)
+            futures = [client.submit(levels.evaluate_batch, b, base, loaded.names, loaded.spec.level, seen, options,
+                                     key=f"sweep-{loaded.spec.sweep}-{b[0][0]}-{uuid.uuid4().hex[:6]}", pure=False)
+                       for b in batches]
+            bar = None
+            if progress and futures:
+                from distributed import progress as dask_progress
+                bar = threading.Thread(target=dask_progress, args=futures, kwargs={"notebook": False}, daemon=True)
+                bar.start()
+            from distributed import as_completed
+            for fut in as_completed(futures):
+                write(fut.result())
+                fut.release()
+            if bar is not None:
+                bar.join(timeout=5)
+                print()
         seconds = time.perf_counter() - t0
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
-    return Outcome(folder, total, len(done), len(written) - len(done), seconds, n_workers, start, cpu, verdicts)
+    return Outcome(folder, total, len(done), len(written) - len(done), seconds, p.workers, p.start_seconds, cpu, verdicts)

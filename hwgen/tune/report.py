@@ -1,0 +1,394 @@
+"""What a tune leaves in ``OUT/tunes/<name>/``: trials.parquet, best.yaml, summary.md, convergence.png.
+
+- ``trials.parquet``: every trial told, one row each: ``trial``, ``hash``, one column per free
+  parameter, ``verdict``, ``feasible``, ``violation`` (the sum of its constraint values), one
+  column per objective and per bound, ``distance`` (from the base), ``failed_checks`` (JSON: each
+  failing or warning check's id, severity, measured value and limit), ``same_as`` (the trial whose
+  evaluation of the same design it was told), ``message``, ``cpu_s``. Trial -1 is the base.
+- ``best.yaml``: the base design's file with only the tuned values (and the tune file's ``set``)
+  changed, its comments kept (ruamel.yaml's round trip), and its ``design`` named
+  ``<design>-<tune>`` so that its build does not replace the base's.
+- ``summary.md``: the best against the base, which parameters mattered (Optuna's PED-ANOVA
+  importance over the feasible trials), the front when there are several objectives, and, when
+  no trial passes, which constraints bind.
+- ``convergence.png``: each trial's objective and the best so far (one objective), or the first two
+  objectives with the front drawn (several).
+"""
+from __future__ import annotations
+
+import copy
+import io
+import json
+import math
+from pathlib import Path
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from .. import designfile
+from ..atomic import atomic_path, write_text
+from ..outputs.plots import _pyplot, _save
+from ..sweep import spec as sweep_spec
+from . import results
+from .spec import Loaded
+
+TOP_FAILURES = 8
+
+
+def trials(study) -> list[dict]:
+    """The told trials, in order, each as its row with the trial's number, values and verdicts."""
+    from optuna.trial import TrialState
+    out = []
+    for t in study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)):
+        row = dict(t.user_attrs.get("row") or {})
+        row.update(trial=t.number, objectives=list(t.values), constraints=t.user_attrs.get("constraints", []),
+                   feasible=bool(t.user_attrs.get("feasible")), same_as=t.user_attrs.get("same_as"))
+        out.append(row)
+    return out
+
+
+def base(loaded: Loaded, study) -> dict:
+    from .run import score
+    row = dict(study.user_attrs["base_row"])
+    values, cons, ok = score(loaded, row, row)
+    row.update(trial=-1, objectives=values, constraints=cons, feasible=ok, same_as=None)
+    return row
+
+
+def bounds(loaded: Loaded) -> list[str]:
+    g = loaded.spec.goal
+    return [f"{name} ≥ {b}" for name, b in g.at_least.items()] + [f"{name} ≤ {b}" for name, b in g.at_most.items()]
+
+
+def best(loaded: Loaded, rows: list[dict], rejected=()) -> tuple[dict | None, list[dict]]:
+    """(the best feasible trial, the front): one objective, the best value (ties: the earlier
+    trial); several, the feasible trials no other feasible trial dominates, and as the best the
+    front's best in the first objective. Designs whose hash is in ``rejected`` (their build failed
+    a check) are left out."""
+    signs = [1.0 if how == "maximize" else -1.0 for _, how in loaded.objectives]
+    ok = [r for r in rows if r["feasible"] and r.get("hash") not in rejected]
+    if not ok:
+        return None, []
+
+    def key(r):
+        return [s * v for s, v in zip(signs, r["objectives"])]
+    front = [r for r in ok if not any(all(a >= b for a, b in zip(key(o), key(r))) and key(o) != key(r) for o in ok)]
+    seen, uniq = set(), []
+    for r in sorted(front, key=lambda r: (-key(r)[0], r["trial"])):
+        if r["hash"] not in seen:
+            seen.add(r["hash"])
+            uniq.append(r)
+    return uniq[0], uniq
+
+
+# ---------------------------------------------------------------- trials.parquet
+
+def table(loaded: Loaded, rows: list[dict]) -> pa.Table:
+    state = loaded.spec.goal.state or (loaded.states[0] if loaded.states else "")
+    cols: dict[str, list] = {"trial": [], "hash": []}
+    for n in loaded.names:
+        cols[n] = []
+    objectives = [n for n, _ in loaded.objectives if n != "distance"]      # distance: its own column
+    extra = ["verdict", "feasible", "violation", *objectives, *bounds(loaded), "distance",
+             "failed_checks", "same_as", "message", "cpu_s"]
+    for c in extra:
+        cols[c] = []
+    g = loaded.spec.goal
+    bound_names = [*g.at_least, *g.at_most]
+    for r in rows:
+        cols["trial"].append(r["trial"])
+        cols["hash"].append(r.get("hash"))
+        for n, v in zip(loaded.names, r.get("values") or [None] * len(loaded.names)):
+            cols[n].append(v)
+        cols["verdict"].append(r.get("verdict"))
+        cols["feasible"].append(r["feasible"])
+        cols["violation"].append(float(sum(r["constraints"])))
+        for (n, _), v in zip(loaded.objectives, r["objectives"]):
+            if n != "distance":
+                cols[n].append(v if results.value(n, r, state) is not None else None)
+        for label, n in zip(bounds(loaded), bound_names):
+            cols[label].append(results.value(n, r, state))
+        cols["distance"].append(r.get("distance"))
+        cols["failed_checks"].append(json.dumps(r.get("failures") or []))
+        cols["same_as"].append(r.get("same_as"))
+        cols["message"].append(r.get("message"))
+        cols["cpu_s"].append(r.get("cpu_s"))
+    arrays = {}
+    for name, vals in cols.items():
+        if name in loaded.names and any(isinstance(v, str) or isinstance(v, bool) for v in vals if v is not None):
+            vals = [None if v is None else json.dumps(v) for v in vals]
+        arrays[name] = pa.array(vals, type=pa.float64() if name in _floats(loaded) else None)
+    return pa.table(arrays)
+
+
+def _floats(loaded: Loaded) -> set[str]:
+    return {*(n for n, _ in loaded.objectives), *bounds(loaded), "distance", "violation", "cpu_s"}
+
+
+def write_trials(loaded: Loaded, rows: list[dict], path: Path) -> None:
+    with atomic_path(path) as tmp:
+        pq.write_table(table(loaded, rows), tmp)
+
+
+# ---------------------------------------------------------------- best.yaml
+
+def best_yaml(loaded: Loaded, row: dict) -> str:
+    """The base file's text with the ``set`` and the trial's values put in, its comments kept, and
+    its design renamed ``<design>-<tune>``."""
+    from ruamel.yaml import YAML
+    y = YAML()                     # round trip: comments, order and quoting kept
+    y.preserve_quotes = True
+    y.width = 4096
+    y.indent(mapping=2, sequence=4, offset=2)     # hwgen's files: list items two in, their keys four
+    doc = y.load(loaded.base_path.read_text())
+    changes = dict(loaded.spec.set)
+    changes.update((n, v) for n, v, b in zip(loaded.names, row["values"], loaded.base_values) if v != b)
+    layered = "base" in doc
+    if layered:                    # best.yaml lives elsewhere: its base named where it is
+        doc["base"] = str(designfile.base_file(loaded.base_path, doc["base"]).resolve())
+    for path, value in changes.items():
+        _put(doc, sweep_spec.parse_path(path), value, loaded.base, layered)
+    name = f"{doc['design']}-{loaded.spec.tune}"
+    doc["design"] = name if params_safe(name) else f"tuned-{loaded.spec.tune}"
+    buf = io.StringIO()
+    y.dump(doc, buf)
+    head = (f"# hwgen tune {loaded.spec.tune}: {loaded.base_path.name} with the tuned values (trial "
+            f"{row['trial']}) and the tune file's 'set' changed; renamed so that its build does not replace the "
+            f"base's\n")
+    return head + buf.getvalue()
+
+
+def params_safe(name: str) -> bool:
+    from ..params import SAFE_NAME
+    return bool(SAFE_NAME.match(name))
+
+
+def _put(doc, keys: list, value, merged: dict, layered: bool) -> None:
+    """Set (or, for None, drop) the value at ``keys`` in a round-trip document, making the mappings
+    on the way (a mapping merges with its base's; a list the file leaves to its base is copied
+    whole from the merged design ``merged``); a float that is a whole number stays a float only where the optimiser gave one.
+    In a file with a base, None is written as null (it removes the base's value)."""
+    node = doc
+    for n, (k, nxt) in enumerate(zip(keys, keys[1:])):
+        if isinstance(k, int):
+            node = node[k]
+        else:
+            if k not in node or node[k] is None:
+                try:
+                    there = designfile.value_at(merged, keys[:n + 1])
+                except KeyError:
+                    there = None
+                node[k] = copy.deepcopy(there) if isinstance(there, list) else [] if isinstance(nxt, int) else {}
+            node = node[k]
+    last = keys[-1]
+    if value is None:
+        if layered:
+            node[last] = None
+        elif not isinstance(last, int) and last in node:
+            del node[last]
+        return
+    if isinstance(value, float):
+        value = round(value, 6)
+    node[last] = value
+
+
+# ---------------------------------------------------------------- summary.md
+
+def _fmt(v) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, bool):
+        return str(v).lower()
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v).replace("|", "\\|")
+
+
+def importances(loaded: Loaded, rows: list[dict]) -> dict[str, dict[str, float]] | str:
+    """Each objective's parameter importances (PED-ANOVA) over the feasible trials, or why there are none."""
+    import optuna
+    from optuna.importance import PedAnovaImportanceEvaluator
+    from .run import distributions
+    ok = [r for r in rows if r["feasible"] and r.get("same_as") is None]
+    if len(ok) < 4:
+        return f"{len(ok)} feasible trials of their own: too few to say which parameters mattered"
+    dists = distributions(loaded)
+    study = optuna.create_study(directions=[how for _, how in loaded.objectives])
+    study.add_trials([optuna.trial.create_trial(params=dict(zip(loaded.names, r["values"])), distributions=dists,
+                                                values=r["objectives"]) for r in ok])
+    out = {}
+    for i, (name, _) in enumerate(loaded.objectives):
+        try:
+            imp = optuna.importance.get_param_importances(
+                study, evaluator=PedAnovaImportanceEvaluator(), target=lambda t, i=i: t.values[i])
+        except (RuntimeError, ValueError) as e:
+            return f"not computed ({e})"
+        out[name] = dict(imp)
+    return out
+
+
+def markdown(loaded: Loaded, rows: list[dict], base_row: dict, outcome=None, built: dict | None = None,
+             stiffness: dict | None = None, rejected=None) -> str:
+    rejected = rejected or {}
+    best_row, front = best(loaded, rows, rejected)
+    g = loaded.spec.goal
+    goal = "pass every check, nearest the base" if g.pass_ else ", ".join(f"{how} {n}" for n, how in
+                                                                          loaded.objectives)
+    n_ok = sum(r["feasible"] for r in rows)
+    lines = [f"# Tune {loaded.spec.tune}", "",
+             f"Base design: `{loaded.base_path.name}`" + (f" with {', '.join(f'`{k}`' for k in loaded.spec.set)} set"
+                                                         if loaded.spec.set else "") + f"; level {loaded.spec.level}; "
+             f"goal: {goal}" + (f", subject to {', '.join(bounds(loaded))}" if bounds(loaded) else "")
+             + (f"; required even as warnings: {', '.join(g.require)}" if g.require else "") + ".", "",
+             *([f"Statics (the study `hwgen stiffness` runs, the plan's estimated masses): state "
+                f"{g.state or loaded.states[0]}, {g.orientation}, eyelets "
+                f"{'frictionless' if g.friction == 'none' else 'stuck (every segment held at its eyelets)'}; each "
+                f"tendon tensioned by the paper's protocol, or at its own `pretension_n` where the design gives one.",
+                ""] if loaded.states else []),
+             f"{len(rows)} trials told, {n_ok} feasible, "
+             f"{sum(1 for r in rows if r.get('same_as') is not None)} told from an earlier trial of the same design."]
+    if outcome is not None:
+        lines += ["", f"This run: {outcome.evaluated} trials evaluated in {outcome.seconds:.1f} s on "
+                      f"{outcome.workers} worker(s) ({outcome.cpu_s / max(outcome.evaluated, 1):.2f} s of CPU a "
+                      f"trial)" + (f"; the best found {outcome.first_best_s:.1f} s in" if outcome.first_best_s
+                                   else "") + "."]
+    lines += ["", "## The best against the base", ""]
+    if best_row is None:
+        lines += ["No trial passes. " + binding(loaded, rows)]
+    else:
+        state = g.state or (loaded.states[0] if loaded.states else "")
+        lines += [f"Trial {best_row['trial']} (`best.yaml`).", "", "| | base | best |", "|---|---:|---:|"]
+        for n, b, v in zip(loaded.names, loaded.base_values, best_row["values"]):
+            lines.append(f"| `{n}` | {_fmt(b)} | {_fmt(v)} |")
+        shown = [n for n, _ in loaded.objectives] + [*g.at_least, *g.at_most]
+        for n in dict.fromkeys(shown + ["coupling", "least_tension_n", "mass_g"]):
+            if results.check_name(n, loaded.spec.level, ("",))[0] and not results.is_statics(n):
+                continue
+            lines.append(f"| {n} | {_fmt(results.value(n, base_row, state))} | "
+                         f"{_fmt(results.value(n, best_row, state))} |")
+        lines.append(f"| verdict ({loaded.spec.level}) | {base_row['verdict']} | {best_row['verdict']} |")
+    fails = [f"{f['id']}" for f in base_row.get("failures") or [] if f["severity"] == "error"
+             or f["id"] in g.require]
+    if fails:
+        lines += ["", "The base fails: " + ", ".join(sorted(set(fails))) + "."]
+    if built:
+        lines += ["", "## The best, built", "", built["text"]]
+    if rejected:
+        lines += ["", f"Set aside after their build ({len(rejected)}; the tune's level does not screen for what "
+                      f"failed): " + "; ".join(f"`{h[:12]}` {', '.join(ids)}" for h, ids in rejected.items()) + "."]
+    if stiffness:
+        lines += ["", f"## Stiffness per tendon state (hwgen stiffness: the plan's masses; {g.orientation}, "
+                      f"friction {g.friction})", "",
+                  "| state | tip N/mm, base | tip N/mm, best | least N/mm, base | least N/mm, best | "
+                  "torsion N·mm/rad, base | torsion, best |", "|---|---:|---:|---:|---:|---:|---:|"]
+        for s in stiffness["base"]:
+            b = stiffness["best"].get(s)
+            a = stiffness["base"][s]
+            lines.append(f"| {s} | {a['tip_stiffness']:.4f} | {b['tip_stiffness']:.4f} | {a['least_stiffness']:.4f} |"
+                         f" {b['least_stiffness']:.4f} | {a['tip_torsion']:.0f} | {b['tip_torsion']:.0f} |")
+    lines += ["", "## Which parameters mattered", ""]
+    imp = importances(loaded, rows)
+    if isinstance(imp, str):
+        lines.append(imp + ".")
+    else:
+        lines += ["PED-ANOVA importance (Optuna's `PedAnovaImportanceEvaluator`: how much each parameter's distribution in the best 10 % differs from all) over the feasible trials, per objective:",
+                  "", "| parameter | " + " | ".join(imp) + " |", "|---|" + "---:|" * len(imp)]
+        for n in loaded.names:
+            lines.append(f"| `{n}` | " + " | ".join(f"{imp[o].get(n, 0.0):.2f}" for o in imp) + " |")
+    if len(loaded.objectives) > 1:
+        lines += ["", f"## The front ({len(front)} designs no feasible trial beats in every objective)", "",
+                  "| trial | " + " | ".join(loaded.names) + " | " + " | ".join(n for n, _ in loaded.objectives) + " |",
+                  "|---|" + "---:|" * (len(loaded.names) + len(loaded.objectives))]
+        for r in front[:50]:
+            lines.append(f"| {r['trial']} | " + " | ".join(_fmt(v) for v in r["values"]) + " | "
+                         + " | ".join(_fmt(v) for v in r["objectives"]) + " |")
+    if best_row is not None and n_ok < len(rows):
+        lines += ["", "## What kept the others out", "", binding(loaded, rows)]
+    return "\n".join(lines) + "\n"
+
+
+def binding(loaded: Loaded, rows: list[dict]) -> str:
+    """Which constraints the infeasible trials break, most often first."""
+    g = loaded.spec.goal
+    counts: dict[str, int] = {}
+    for r in rows:
+        if r["feasible"]:
+            continue
+        ids = {f["id"] for f in r.get("failures") or []
+               if (f["severity"] == "error" and g.checks == "all") or f["id"] in g.require}
+        for label, c in zip(bounds(loaded), r["constraints"][1:]):
+            if c > 0:
+                ids.add(label)
+        for i in ids:
+            counts[i] = counts.get(i, 0) + 1
+    bad = sum(1 for r in rows if not r["feasible"])
+    if not counts:
+        return f"{bad} trials infeasible."
+    top = sorted(counts.items(), key=lambda kv: -kv[1])[:TOP_FAILURES]
+    return (f"Of {bad} infeasible trials: " + ", ".join(f"{k} in {n}" for k, n in top)
+            + " (a trial may break several).")
+
+
+# ---------------------------------------------------------------- convergence.png
+
+def convergence(loaded: Loaded, rows: list[dict], path: Path) -> None:
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    rows = sorted(rows, key=lambda r: r["trial"])
+    names = [n for n, _ in loaded.objectives]
+    ok = [r for r in rows if r["feasible"]]
+    bad = [r for r in rows if not r["feasible"]]
+    if len(names) == 1:
+        sign = 1.0 if loaded.objectives[0][1] == "maximize" else -1.0
+        ax.scatter([r["trial"] for r in bad], [r["objectives"][0] for r in bad], marker="x", s=12, color="lightgrey",
+                   label="infeasible")
+        ax.scatter([r["trial"] for r in ok], [r["objectives"][0] for r in ok], s=12, color="tab:blue",
+                   label="feasible")
+        xs, ys, cur = [], [], None
+        for r in rows:
+            if r["feasible"] and (cur is None or sign * r["objectives"][0] > sign * cur):
+                cur = r["objectives"][0]
+            if cur is not None:
+                xs.append(r["trial"])
+                ys.append(cur)
+        if xs:
+            ax.step(xs, ys, where="post", color="tab:red", label="best so far")
+        ax.set_xlabel("trial")
+        ax.set_ylabel(names[0])
+    else:
+        _, front = best(loaded, rows)
+        ax.scatter([r["objectives"][0] for r in bad], [r["objectives"][1] for r in bad], marker="x", s=12,
+                   color="lightgrey", label="infeasible")
+        ax.scatter([r["objectives"][0] for r in ok], [r["objectives"][1] for r in ok], s=12, color="tab:blue",
+                   label="feasible")
+        f = sorted(front, key=lambda r: r["objectives"][0])
+        ax.plot([r["objectives"][0] for r in f], [r["objectives"][1] for r in f], "-o", color="tab:red", ms=4,
+                label="front")
+        ax.set_xlabel(names[0])
+        ax.set_ylabel(names[1])
+    ax.legend(fontsize="small")
+    ax.grid(True, alpha=0.3)
+    ax.set_title(f"tune {loaded.spec.tune}: {len(rows)} trials, {len(ok)} feasible")
+    _save(plt, fig, path)
+
+
+def write(loaded: Loaded, study, folder: Path, outcome=None, built=None, stiffness=None) -> dict:
+    """trials.parquet, summary.md, convergence.png and (when a trial passes) best.yaml; returns
+    the best row (or None) and the files written."""
+    rows = trials(study)
+    base_row = base(loaded, study)
+    write_trials(loaded, [base_row, *rows], folder / "trials.parquet")
+    files = [folder / "trials.parquet"]
+    rejected = study.user_attrs.get("rejected", {})
+    best_row, front = best(loaded, rows, rejected)
+    if best_row is not None:
+        write_text(folder / "best.yaml", best_yaml(loaded, best_row))
+        files.append(folder / "best.yaml")
+    write_text(folder / "summary.md", markdown(loaded, rows, base_row, outcome, built, stiffness, rejected))
+    convergence(loaded, rows, folder / "convergence.png")
+    files += [folder / "summary.md", folder / "convergence.png"]
+    return {"best": best_row, "front": front, "files": files, "rows": rows, "base": base_row}
+
+
+def finite(v):
+    return None if v is None or (isinstance(v, float) and not math.isfinite(v)) else v

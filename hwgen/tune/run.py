@@ -1,0 +1,376 @@
+"""Running a tune: Optuna asks for trials, the sweep's workers evaluate them, Optuna is told.
+
+The optimiser is Optuna's (:mod:`optuna`): TPE (``TPESampler``, multivariate, constant liar for
+the trials in flight) for one objective, NSGA-II (``NSGAIISampler``) for a Pareto front, both
+reading each trial's constraints (``Trial.set_constraint``, Optuna 5's successor of
+``constraints_func``: a trial is feasible when every constraint value is ≤ 0; an infeasible one
+ranks by the sum of its violations); ``random`` for a baseline. The constraints (:func:`score`):
+``checks``, the checks of the level that fail (and those under ``goal.require`` even where the
+design makes them warnings; each counts one plus how far past its limit it is, relative, at most
+10), and each ``at_least`` / ``at_most`` bound's relative shortfall, named after the bound.
+
+Trials run on the sweep's pool (:func:`hwgen.sweep.run.pool`: a local Dask cluster, a running
+one, or inline), as batches of :func:`hwgen.sweep.levels.evaluate_batch` with the statics as its
+``with_plan`` hook (:func:`hwgen.tune.results.statics`); a new trial is asked whenever one
+finishes, so the workers stay busy. Each trial's row is kept in the trial itself (its user
+attributes) in the study's journal (``JournalStorage(JournalFileBackend)``,
+``OUT/tunes/<name>/journal.log``), so an interrupted tune resumes from its trials: those told are
+never evaluated again, those in flight when it stopped are asked again first. A trial whose
+design (by the sweep's hash of the resolved design) was already evaluated is told that result
+without evaluating it again. A trial that cannot be feasible stops early on its worker (its row
+says ``screened``): one that fails at the lengths level (eq. (2), the walls), and one whose
+statics already miss a bound of the goal (:func:`short_of_bounds`); it is told what was found.
+"""
+from __future__ import annotations
+
+import json
+import math
+import time
+import uuid
+from dataclasses import dataclass, field
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..sweep import levels
+from ..sweep.run import pool
+from ..sweep.spec import Variant, resolve
+from . import results
+from .spec import Loaded, distance
+
+TRIALS_PER_TASK = {"lengths": 8, "robust": 1, "coupling": 1, "build": 1}
+BAD = 100.0                 # the constraint value of a trial that is bad input or an error: worse than any check
+EXCESS_CAP = 10.0
+JOURNAL = "journal.log"
+
+
+@dataclass
+class Outcome:
+    folder: Path
+    budget: int
+    done_before: int            # trials told before this run
+    evaluated: int              # trials this run evaluated
+    repeated: int               # trials this run told from an evaluated design of the same hash
+    seconds: float
+    workers: int
+    start_seconds: float
+    cpu_s: float
+    first_best_s: float | None = None     # wall time from the start to the best trial's result (this run)
+    whole: int = 0              # trials this run evaluated through every level (not screened out early)
+    whole_cpu_s: float = 0.0    # their CPU
+    verdicts: dict = field(default_factory=dict)
+
+
+def folder_of(loaded: Loaded, out_root: Path) -> Path:
+    return Path(out_root) / "tunes" / loaded.spec.tune
+
+
+def _optuna():
+    import optuna
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    return optuna
+
+
+def distributions(loaded: Loaded) -> dict:
+    optuna = _optuna()
+    out = {}
+    for fr in loaded.free:
+        if fr.choices is not None:
+            out[fr.path] = optuna.distributions.CategoricalDistribution(fr.choices)
+        elif fr.integer:
+            out[fr.path] = optuna.distributions.IntDistribution(int(fr.low), int(fr.high), log=fr.log,
+                                                                step=int(fr.step or 1))
+        else:
+            out[fr.path] = optuna.distributions.FloatDistribution(fr.low, fr.high, log=fr.log, step=fr.step)
+    return out
+
+
+def sampler(loaded: Loaded, told: int):
+    """The sampler for this tune (see the module's docstring); seeded with the tune's seed and the
+    number of trials already told, so a resumed tune does not draw its first trials again."""
+    optuna = _optuna()
+    kind = loaded.spec.sampler
+    seed = loaded.spec.seed + told
+    multi = len(loaded.objectives) > 1
+    if kind == "auto":
+        kind = "nsga2" if multi else "tpe"
+    budget = loaded.spec.budget
+    if kind == "random":
+        return optuna.samplers.RandomSampler(seed=seed)
+    if kind == "nsga2":
+        return optuna.samplers.NSGAIISampler(population_size=max(8, min(50, budget // 6)), seed=seed)
+    # a tenth of the budget drawn at random first (4 to 40): the first basins found are TPE's to refine,
+    # and with a dozen free parameters ten random trials leave most of them unseen
+    return optuna.samplers.TPESampler(n_startup_trials=max(4, min(40, budget // 10)), multivariate=True,
+                                      constant_liar=True, seed=seed)
+
+
+def open_study(loaded: Loaded, folder: Path):
+    """The tune's study from its journal (made when there is none). Trials left running by an
+    interrupted run are marked failed and asked again (queued with their parameters)."""
+    optuna = _optuna()
+    from optuna.storages import JournalStorage
+    from optuna.storages.journal import JournalFileBackend
+    from optuna.trial import TrialState
+
+    storage = JournalStorage(JournalFileBackend(str(folder / JOURNAL)))
+    name = loaded.spec.tune
+    directions = [how for _, how in loaded.objectives]
+    known = {s.study_name for s in storage.get_all_studies()}
+    if name in known:
+        study = optuna.load_study(study_name=name, storage=storage)
+        if study.user_attrs.get("digest") != loaded.digest:
+            raise InputError(loaded.source, "", f"{folder} holds the trials of another tune (its base, set, free, "
+                                                f"goal, level or robust_samples differ): move that folder away or "
+                                                f"give this tune another name")
+    else:
+        study = optuna.create_study(study_name=name, storage=storage, directions=directions)
+        study.set_user_attr("digest", loaded.digest)
+        start = {n: v for fr, n, v in zip(loaded.free, loaded.names, loaded.base_values) if _within(fr, v)}
+        if start:
+            # the base is the first trial (told the base's own evaluation): the search starts from what works;
+            # a value the base leaves unset (pretension_n: the protocol's) or outside the bounds is drawn
+            study.enqueue_trial(start)
+    told = len(study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)))
+    study.sampler = sampler(loaded, told)
+    for t in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
+        study.tell(t.number, state=TrialState.FAIL)
+        study.enqueue_trial(t.params, skip_if_exists=False)
+    return study
+
+
+def constraint_names(loaded: Loaded) -> list[str]:
+    g = loaded.spec.goal
+    return ["checks", *(f"{n} >= {b}" for n, b in g.at_least.items()), *(f"{n} <= {b}" for n, b in g.at_most.items())]
+
+
+def _within(fr, v) -> bool:
+    """Whether a value lies within a free parameter's bounds (a choice among the choices)."""
+    if fr.choices is not None:
+        return v in fr.choices
+    return v is not None and fr.low <= v <= fr.high and not (fr.integer and v != int(v))
+
+
+def score(loaded: Loaded, row: dict, base_row: dict | None) -> tuple[list[float], list[float], bool]:
+    """(objective values, constraint values, feasible) of an evaluated row (see the module's
+    docstring); an objective the row lacks takes the base's value (told as infeasible anyway)."""
+    g = loaded.spec.goal
+    state = g.state or (loaded.states[0] if loaded.states else "")
+    if row["verdict"] in ("bad input", "error"):
+        checks = BAD
+    else:
+        checks = 0.0
+        for f in row.get("failures") or []:
+            if (f["severity"] == "error" and g.checks == "all") or f["id"] in g.require:
+                checks += 1.0 + min(_excess(f), EXCESS_CAP)
+    bounds = []
+    for how, sign in (("at_least", 1.0), ("at_most", -1.0)):
+        for name, bound in getattr(g, how).items():
+            if bound == "base":
+                bound = results.value(name, base_row or {}, state)
+            v = results.value(name, row, state)
+            if bound is None or v is None:
+                bounds.append(0.0 if bound is None and v is not None else BAD)
+                continue
+            short = sign * (bound - v) / max(abs(bound), 1e-12)
+            bounds.append(max(0.0, short))
+    values = []
+    for name, _ in loaded.objectives:
+        v = results.value(name, row, state)
+        if v is None or not math.isfinite(v):
+            v = results.value(name, base_row or {}, state)
+        values.append(float(v) if v is not None and math.isfinite(v) else 0.0)
+    cons = [checks, *bounds]
+    return values, cons, all(c <= 0 for c in cons)
+
+
+def bound_limits(loaded: Loaded, base_row: dict) -> list[tuple[str, float, float]]:
+    """(result, +1 for at least / -1 for at most, the bound's value) of each statics bound of the goal
+    (``base``: the base's own figure), for :func:`short_of_bounds` on a worker."""
+    g = loaded.spec.goal
+    state = g.state or (loaded.states[0] if loaded.states else "")
+    out = []
+    for how, sign in (("at_least", 1.0), ("at_most", -1.0)):
+        for name, bound in getattr(g, how).items():
+            if not results.is_statics(name):
+                continue
+            if bound == "base":
+                bound = results.value(name, base_row, state)
+            if bound is not None:
+                key = name if "@" in name else f"{name}@{state}"
+                out.append((key, sign, float(bound)))
+    return out
+
+
+def short_of_bounds(limits: list[tuple[str, float, float]], row: dict) -> bool:
+    """Whether a row's statics already miss a bound of the goal (the worker's ``stop``: such a trial
+    is infeasible whatever its checks say, so the checks after the statics are not run)."""
+    got = row.get("statics") or {}
+    return any(key in got and sign * (bound - got[key]) > 0 for key, sign, bound in limits)
+
+
+def _excess(f: dict) -> float:
+    m, lim = f.get("measured"), f.get("limit")
+    if not isinstance(m, (int, float)) or not isinstance(lim, (int, float)) or not math.isfinite(m):
+        return 0.0
+    return abs(m - lim) / max(abs(lim), 1e-9)
+
+
+def _plain(v):
+    if isinstance(v, (np.floating, np.integer)):
+        return v.item()
+    if isinstance(v, (tuple, set)):
+        return list(v)
+    return str(v)
+
+
+def _options(loaded: Loaded, folder: Path, cache, p) -> dict:
+    opts = {"robust_samples": loaded.spec.robust_samples, "keep": [], "out": str(folder), "cache": cache,
+            # a trial that fails its level's screening stops there; not at the build level, whose verdict is
+            # hwgen check's (eq. (2) through the hole centres is information there, not a failure)
+            "screen": loaded.spec.goal.checks == "all" and loaded.spec.level in ("robust", "coupling")}
+    if loaded.states:
+        g = loaded.spec.goal
+        opts["with_plan"] = partial(results.statics, states=loaded.states, orientation=g.orientation,
+                                    friction=g.friction)
+    if p.client is not None:
+        opts["numba_threads"] = 1           # a worker has a core of its own
+    return opts
+
+
+def _finish(loaded: Loaded, row: dict, values: tuple) -> dict:
+    """A worker's row made plain (JSON), with the trial's distance from the base."""
+    row = json.loads(json.dumps(row, default=_plain))
+    row["distance"] = distance(loaded, values)
+    row["values"] = list(values)
+    return row
+
+
+def base_row(loaded: Loaded, study, p, options: dict) -> dict:
+    """The base design evaluated like a trial (kept in the study: a resumed tune reads it back)."""
+    if "base_row" in study.user_attrs:
+        return study.user_attrs["base_row"]
+    fut = p.submit(levels.evaluate_batch, [(-1, loaded.base_values)], loaded.base, loaded.names, loaded.spec.level,
+                   frozenset(), options, key=f"tune-{loaded.spec.tune}-base-{uuid.uuid4().hex[:6]}")
+    row = _finish(loaded, fut.result()[0], loaded.base_values)
+    row["trial"] = -1
+    study.set_user_attr("base_row", row)
+    return row
+
+
+def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: int | None = None,
+        budget: int | None = None, cache=True, on_trial=None) -> tuple[Outcome, object]:
+    """Run the tune up to ``budget`` trials told in all (default: the tune file's); returns the
+    outcome and the study. ``on_trial(done, budget)`` is called as each trial is told."""
+    from optuna.trial import TrialState
+
+    folder = folder_of(loaded, out_root)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise InputError(out_root, "--out", f"cannot write the results here ({e.strerror or e})") from None
+    budget = budget or loaded.spec.budget
+    study = open_study(loaded, folder)
+    dists = distributions(loaded)
+    complete = study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))
+    by_hash = {t.user_attrs["row"]["hash"]: t.user_attrs["row"] for t in complete if "row" in t.user_attrs}
+    out = Outcome(folder, budget, len(complete), 0, 0, 0.0, 1, 0.0, 0.0)
+    told = len(complete)
+    with pool(scheduler, workers) as p:
+        out.workers, out.start_seconds = p.workers, p.start_seconds
+        options = _options(loaded, folder, cache, p)
+        t0 = time.perf_counter()
+        base = base_row(loaded, study, p, options)
+        if options.get("screen") and loaded.spec.level != "lengths":
+            limits = bound_limits(loaded, base)
+            if limits:
+                options = dict(options, stop=partial(short_of_bounds, limits))
+        by_hash.setdefault(base["hash"], base)
+        doc = p.scatter(loaded.base)
+        per_task = TRIALS_PER_TASK[loaded.spec.level]
+        cap = loaded.spec.batch or 2 * p.workers
+        ac = p.completed()
+        flying: dict[str, list] = {}            # task key -> [(trial, values, hash)]
+        waiting: dict[str, list] = {}           # hash in flight -> trials of the same design asked meanwhile
+        best = None
+
+        def tell(trial, row: dict, same_as: int | None = None) -> None:
+            nonlocal told, best
+            values, cons, ok = score(loaded, row, base)
+            trial.set_user_attr("row", row)
+            trial.set_user_attr("constraints", cons)
+            for label, c in zip(constraint_names(loaded), cons):
+                trial.set_constraint(label, c)
+            trial.set_user_attr("feasible", ok)
+            if same_as is not None:
+                trial.set_user_attr("same_as", same_as)
+            study.tell(trial, values)
+            told += 1
+            out.verdicts[row["verdict"]] = out.verdicts.get(row["verdict"], 0) + 1
+            if ok and len(values) == 1:
+                sign = 1 if loaded.objectives[0][1] == "maximize" else -1
+                if best is None or sign * values[0] > sign * best:
+                    best = values[0]
+                    out.first_best_s = time.perf_counter() - t0
+            if on_trial:
+                on_trial(told, budget)
+
+        def launch() -> None:
+            batch = []
+            while len(batch) < per_task and told + _in_flight() + len(batch) < budget:
+                trial = study.ask(dists)
+                values = tuple(trial.params[n] for n in loaded.names)
+                h = resolve(loaded.base, loaded.names, Variant(trial.number, values)).hash
+                if h in by_hash:
+                    out.repeated += 1
+                    row = dict(by_hash[h], values=list(values), distance=distance(loaded, values))
+                    tell(trial, row, by_hash[h].get("trial"))
+                elif h in waiting:
+                    waiting[h].append((trial, values))
+                elif any(h == b[2] for b in batch):
+                    waiting.setdefault(h, []).append((trial, values))
+                else:
+                    batch.append((trial, values, h))
+            if not batch:
+                return
+            key = f"tune-{loaded.spec.tune}-{batch[0][0].number}-{uuid.uuid4().hex[:6]}"
+            for _, _, h in batch:
+                waiting.setdefault(h, [])
+            flying[key] = batch
+            ac.add(p.submit(levels.evaluate_batch, [(t.number, v) for t, v, _ in batch], doc, loaded.names,
+                            loaded.spec.level, frozenset(), options, key=key))
+
+        def _in_flight() -> int:
+            return sum(len(b) for b in flying.values()) + sum(len(w) for w in waiting.values())
+
+        while len(flying) < cap and told + _in_flight() < budget:
+            n = len(flying)
+            launch()
+            if len(flying) == n:
+                break
+        for fut in ac:
+            batch = flying.pop(fut.key)
+            rows = {r["variant"]: r for r in fut.result()}
+            fut.release()
+            for trial, values, h in batch:
+                row = _finish(loaded, rows[trial.number], values)
+                row["trial"] = trial.number
+                out.evaluated += 1
+                out.cpu_s += row.get("cpu_s") or 0.0
+                if row["verdict"] in ("pass", "fail") and not row.get("screened"):
+                    out.whole += 1
+                    out.whole_cpu_s += row.get("cpu_s") or 0.0
+                by_hash[h] = row
+                tell(trial, row)
+                for twin, v in waiting.pop(h, []):
+                    out.repeated += 1
+                    tell(twin, dict(row, values=list(v), distance=distance(loaded, v)), trial.number)
+            while len(flying) < cap and told + _in_flight() < budget:
+                n = len(flying)
+                launch()
+                if len(flying) == n:
+                    break
+        out.seconds = time.perf_counter() - t0
+    return out, study
