@@ -196,30 +196,36 @@ def set_path(doc: dict, keys, value) -> dict:
 
 # ---------------------------------------------------------------- loading
 
-def _error(e: ValidationError, path: Path) -> InputError:
-    return params.validation_error(e, path, Sweep)
-
-
-def load(path: str | Path) -> Loaded:
-    """Read and check a sweep file and its base design; raise InputError naming the file and field."""
-    path = Path(path)
+def read_with_base(path: Path, model: type[BaseModel], kind: str, schema: type[BaseModel] | None = None):
+    """A sweep or tune file (``kind``: the field naming it) read with the limits of a design file,
+    checked against ``model``, and the base design it names read and validated (a bad base is bad
+    input, named in its own file): (spec, the base's path, its layers). ``schema``: the model
+    whose keys an unknown key is matched against (None: no suggestion)."""
     try:
         raw = path.read_bytes()[: yamlfile.MAX_BYTES + 1]
     except OSError as e:
         raise InputError(path, "", f"cannot read the file ({e.strerror or e})") from None
     if len(raw) > yamlfile.MAX_BYTES:
-        raise InputError(path, "", f"larger than {yamlfile.MAX_BYTES >> 20} MiB; a sweep file is a few kB")
+        raise InputError(path, "", f"larger than {yamlfile.MAX_BYTES >> 20} MiB; a {kind} file is a few kB")
     data, _ = params.document(raw, path) if raw.strip() else ({}, [])
     try:
-        spec = Sweep.model_validate(data)
+        spec = model.model_validate(data)
     except ValidationError as e:
-        raise _error(e, path) from None
-    if not params.SAFE_NAME.match(spec.sweep):
-        raise InputError(path, "sweep", f"{echo(spec.sweep)} is not a safe file name (letters, digits, _ and -)")
+        raise params.validation_error(e, path, schema) from None
+    name = getattr(spec, kind)
+    if not params.SAFE_NAME.match(name):
+        raise InputError(path, kind, f"{echo(name)} is not a safe file name (letters, digits, _ and -)")
     base_path = designfile.base_file(path, spec.base)          # as a design file's base: one rule
     layers = designfile.read_layers(base_path)                 # which may build on a base of its own
+    params.validate(copy.deepcopy(layers.doc), base_path, layers)
+    return spec, base_path, layers
+
+
+def load(path: str | Path) -> Loaded:
+    """Read and check a sweep file and its base design; raise InputError naming the file and field."""
+    path = Path(path)
+    spec, base_path, layers = read_with_base(path, Sweep, "sweep", Sweep)
     base = layers.doc
-    params.validate(copy.deepcopy(base), base_path, layers)    # a bad base is bad input, named in its own file
     names, columns = [], {}
     for i, ax in enumerate(spec.axes):
         try:

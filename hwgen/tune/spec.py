@@ -23,15 +23,13 @@ sweep file is; the paths, resolving a trial over the base and its hash are the s
 """
 from __future__ import annotations
 
-import copy
 import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 
-from .. import designfile, params, yamlfile
 from ..errors import InputError, echo
 from ..sweep import spec as sweep_spec
 from . import results
@@ -166,23 +164,8 @@ class Loaded:
 def load(path: str | Path) -> Loaded:
     """Read and check a tune file and its base design; raise InputError naming the file and field."""
     path = Path(path)
-    try:
-        raw = path.read_bytes()[: yamlfile.MAX_BYTES + 1]
-    except OSError as e:
-        raise InputError(path, "", f"cannot read the file ({e.strerror or e})") from None
-    if len(raw) > yamlfile.MAX_BYTES:
-        raise InputError(path, "", f"larger than {yamlfile.MAX_BYTES >> 20} MiB; a tune file is a few kB")
-    data, _ = params.document(raw, path) if raw.strip() else ({}, [])
-    try:
-        spec = Tune.model_validate(data)
-    except ValidationError as e:
-        raise params.validation_error(e, path) from None
-    if not params.SAFE_NAME.match(spec.tune):
-        raise InputError(path, "tune", f"{echo(spec.tune)} is not a safe file name (letters, digits, _ and -)")
-    base_path = designfile.base_file(path, spec.base)          # as a design file's base: one rule
-    layers = designfile.read_layers(base_path)                 # which may build on a base of its own
+    spec, base_path, layers = sweep_spec.read_with_base(path, Tune, "tune")
     base = layers.doc
-    params.validate(copy.deepcopy(base), base_path, layers)    # a bad base is bad input, named in its own file
     for key, value in spec.set.items():
         keys = _keys(path, f"set.{key}", key, base)
         base = sweep_spec.set_path(base, keys, value) if value is not None else _drop(base, keys)
