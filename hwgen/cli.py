@@ -64,6 +64,11 @@ OUT = typer.Option(Path("out"), "--out", help="output root; the design goes to O
 CACHE_DIR = typer.Option(None, "--cache-dir", show_default=False,
                          help="the part cache (default $HWGEN_CACHE_DIR, else $XDG_CACHE_HOME/hwgen or ~/.cache/hwgen)")
 NO_CACHE = typer.Option(False, "--no-cache", help="build every part afresh; read and keep nothing in the part cache")
+SCHEDULER = typer.Option(None, "--scheduler", show_default=False,
+                         help="tcp://HOST:PORT of a running Dask scheduler; 'inline' to run in this process without "
+                              "Dask (default: a local Dask cluster, one worker process per core)")
+WORKERS = typer.Option(None, "--workers", min=1, show_default=False,
+                       help="worker processes of the local cluster (default: the number of cores)")
 CACHE_SIZE = typer.Option(None, "--cache-size", show_default=False,
                           help="the most the cache may hold (2G, 500M); the least recently used entries go first "
                                "(default $HWGEN_CACHE_SIZE, else 2G)")
@@ -542,16 +547,17 @@ def sim(params: Path = PARAMS, out_dir: Path = OUT,
         raise typer.Exit(EXIT_FINDINGS)
 
 
+def _check_scheduler(scheduler: str | None) -> None:
+    """--scheduler of sweep and tune: a Dask scheduler's address, 'inline', or none (a local cluster)."""
+    if scheduler is not None and scheduler != "inline" and not scheduler.startswith(("tcp://", "tls://")):
+        raise InputError(scheduler, "--scheduler", "give tcp://HOST:PORT of a Dask scheduler, or 'inline'")
+
+
 @_command
 def sweep(sweep_file: Path = typer.Argument(..., help="sweep YAML: a base design and axes over its parameters",
                                             show_default=False),
           out_dir: Path = typer.Option(Path("out"), "--out", help="output root; results go to OUT/sweeps/<name>/<level>/"),
-          scheduler: str = typer.Option(None, "--scheduler", show_default=False,
-                                        help="tcp://HOST:PORT of a running Dask scheduler; 'inline' to run in this "
-                                             "process without Dask (default: a local Dask cluster, one worker "
-                                             "process per core)"),
-          workers: int = typer.Option(None, "--workers", min=1, show_default=False,
-                                      help="worker processes of the local cluster (default: the number of cores)"),
+          scheduler: str = SCHEDULER, workers: int = WORKERS,
           quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
           cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
     """Evaluate every variant of a design sweep on Dask: Parquet results, a summary and plots.
@@ -561,8 +567,7 @@ def sweep(sweep_file: Path = typer.Argument(..., help="sweep YAML: a base design
     from .sweep import run as sweep_run
     from .sweep import spec, summary
 
-    if scheduler is not None and scheduler != "inline" and not scheduler.startswith(("tcp://", "tls://")):
-        raise InputError(scheduler, "--scheduler", "give tcp://HOST:PORT of a Dask scheduler, or 'inline'")
+    _check_scheduler(scheduler)
     loaded = spec.load(sweep_file)
     # Dask's progress bar redraws one line: on a terminal only (a log would get a line per redraw)
     try:
@@ -606,12 +611,7 @@ def sweep(sweep_file: Path = typer.Argument(..., help="sweep YAML: a base design
 def tune(tune_file: Path = typer.Argument(..., help="tune YAML: a base design, free parameters with bounds, a goal",
                                           show_default=False),
          out_dir: Path = typer.Option(Path("out"), "--out", help="output root; results go to OUT/tunes/<name>/"),
-         scheduler: str = typer.Option(None, "--scheduler", show_default=False,
-                                       help="tcp://HOST:PORT of a running Dask scheduler; 'inline' to run in this "
-                                            "process without Dask (default: a local Dask cluster, one worker "
-                                            "process per core)"),
-         workers: int = typer.Option(None, "--workers", min=1, show_default=False,
-                                     help="worker processes of the local cluster (default: the number of cores)"),
+         scheduler: str = SCHEDULER, workers: int = WORKERS,
          budget: int = typer.Option(None, "--budget", min=1, show_default=False,
                                     help="trials in all, those of an earlier run included (default: the tune "
                                          "file's budget)"),
@@ -628,8 +628,7 @@ def tune(tune_file: Path = typer.Argument(..., help="tune YAML: a base design, f
     from .tune import run as tune_run
     from .tune import spec as tune_spec
 
-    if scheduler is not None and scheduler != "inline" and not scheduler.startswith(("tcp://", "tls://")):
-        raise InputError(scheduler, "--scheduler", "give tcp://HOST:PORT of a Dask scheduler, or 'inline'")
+    _check_scheduler(scheduler)
     loaded = tune_spec.load(tune_file)
     with Progress(TextColumn("{task.description}", markup=False), BarColumn(), MofNCompleteColumn(),
                   TimeElapsedColumn(), console=err, disable=quiet or not err.is_terminal, transient=True) as bar:
