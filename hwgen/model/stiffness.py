@@ -454,6 +454,13 @@ def study(plan, which: list[str] | None = None, orientations: list[str] | None =
     return report
 
 
+def entries_by_state(report: dict, orientation: str, friction: str) -> dict[str, dict]:
+    """state -> its entry of a :func:`study` report (stiffness.json) in ``orientation`` with
+    ``friction``, without the capstan pushes' entries."""
+    return {e["state"]: e for e in report.get("states", [])
+            if e.get("orientation") == orientation and e.get("friction") == friction and "push" not in e}
+
+
 def _entry(entries, state, orientation, friction, push=None):
     return next((e for e in entries if e["state"] == state and e["orientation"] == orientation
                  and e["friction"] == friction and e.get("push") == push), None)

@@ -59,8 +59,7 @@ def _curve(eq: st.Equilibrium) -> dict:
 
 def _entries(study: dict) -> dict:
     """state -> the study's entry for it in :data:`ORIENTATION`, frictionless."""
-    return {e["state"]: e for e in study.get("states", [])
-            if e.get("orientation") == ORIENTATION and e.get("friction") == FRICTION and "push" not in e}
+    return stiffness.entries_by_state(study, ORIENTATION, FRICTION)
 
 
 def unusable(study, plan, desc: stiffness.Described) -> str | None:

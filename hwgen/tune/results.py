@@ -54,8 +54,7 @@ def state_figures(entry: dict) -> dict[str, float]:
 
 def by_state(report: dict, orientation: str = ORIENTATION, friction: str = FRICTION) -> dict[str, dict]:
     """state -> its figures in ``orientation`` with ``friction``, from a study's report (stiffness.json)."""
-    return {e["state"]: state_figures(e) for e in report["states"]
-            if e["orientation"] == orientation and e["friction"] == friction and "push" not in e}
+    return {state: state_figures(e) for state, e in sf.entries_by_state(report, orientation, friction).items()}
 
 
 def figures(plan, states: tuple[str, ...] | None = None, orientation: str = ORIENTATION,
