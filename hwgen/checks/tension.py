@@ -29,6 +29,10 @@ the sweep's end: a warning over the same allowable, an error at or above the bre
 """
 from __future__ import annotations
 
+import hashlib
+import pickle
+from dataclasses import replace
+
 import numpy as np
 
 from .. import cache
@@ -67,9 +71,31 @@ def working_tensions(desc: sf.Described, plan) -> dict:
 def _sweeps(desc: sf.Described, model: st.Model, work: dict, ang: float) -> tuple[dict, dict]:
     """The sweep with the stiffening tendons locked and with them slack; which tendon each side
     hauls in is the same for both (probed once)."""
-    inner = bd.inner_tendons(desc, model)
-    return (bd.sweep(desc, model, work, ang, STATICS_STEP_DEG, locked=True, inner_of=inner),
-            bd.sweep(desc, model, work, ang, FREE_STEP_DEG, locked=False, inner_of=inner))
+    inner, free = _slack_sweep(desc, model, work, ang)
+    return bd.sweep(desc, model, work, ang, STATICS_STEP_DEG, locked=True, inner_of=inner), free
+
+
+_SLACK: dict[bytes, tuple[dict, dict]] = {}    # a process's last slack sweeps (a tune's worker meets one robot's many times)
+_SLACK_KEEP = 8
+
+
+def _slack_sweep(desc: sf.Described, model: st.Model, work: dict, ang: float) -> tuple[dict, dict]:
+    """(which actuating tendon each side hauls in, the sweep with the stiffening tendons slack).
+    Neither depends on where the stiffening tendons run, only on the stations they pass (which set
+    the model's joints): a tune that varies their routing and tensions meets the same slack sweep
+    in every trial, and this process computes it once (the same values: the model is the robot's)."""
+    unloaded = tuple(t if t.name in desc.actuating else
+                     replace(t, points=np.zeros_like(np.asarray(t.points, float)), stiffness=0.0, compliances=(),
+                             exit=None) for t in desc.robot.tendons)
+    key = hashlib.sha256(pickle.dumps((replace(desc.robot, tendons=unloaded), desc.actuating,
+                                       {n: work[n] for n in desc.actuating}, ang, FREE_STEP_DEG,
+                                       bd.SWEEP_H_MAX, model.n_dof))).digest()
+    if key not in _SLACK:
+        inner = bd.inner_tendons(desc, model)
+        _SLACK[key] = inner, bd.sweep(desc, model, work, ang, FREE_STEP_DEG, locked=False, inner_of=inner)
+        while len(_SLACK) > _SLACK_KEEP:
+            _SLACK.pop(next(iter(_SLACK)))
+    return _SLACK[key]
 
 
 def tension_checks(plan, taut: dict, centre_mm: dict, swept=None) -> tuple[dict, list[Check]]:
