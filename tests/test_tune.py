@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import time
+from functools import partial
 from pathlib import Path
 
 import pyarrow.parquet as pq
@@ -15,6 +16,7 @@ import pytest
 import yaml
 
 from hwgen.errors import InputError
+from hwgen.sweep import levels
 from hwgen.tune import report, results, run as tune_run, spec
 
 from .conftest import PARAMS
@@ -234,10 +236,8 @@ def test_the_statics_a_tune_reads_are_hwgen_stiffness(tmp_path):
     """The tune's figures of a design are `hwgen stiffness`'s (its stiffness.json: the same study of
     the plan, no stand-in) in the orientation and friction the goal names, gravity -z frictionless
     by default; a worker's row carries the same."""
-    from functools import partial
     from hwgen import params, pipeline
     from hwgen.model.plan import make_plan
-    from hwgen.sweep import levels
     loaded = params.read(PROTOTYPE)
     rep, folder = pipeline.stiffness(loaded, tmp_path, ["AC1C2H"], cache_dir=False)
     written = json.loads((folder / "stiffness.json").read_text())
@@ -259,6 +259,18 @@ def test_the_statics_a_tune_reads_are_hwgen_stiffness(tmp_path):
     assert rows[0]["statics"]["tip_stiffness@AC1C2H"] == pytest.approx(default["tip_stiffness_n_per_mm"], rel=1e-9)
 
 
+def test_a_screened_trial_still_measures_its_bounds():
+    """A trial that fails eq. (2) stops before the checks after it, but its statics are measured: the
+    optimiser learns how far it is from each bound, not a stand-in worse than any trial."""
+    doc = yaml.safe_load(PROTOTYPE.read_text())
+    opts = {"screen": True, "with_plan": partial(results.statics, states=("AC1C2H",)), "robust_samples": 10}
+    off, whole = levels.evaluate_batch([(0, (2.5,)), (1, (1.0,))], doc, (K,), "coupling", options=opts)
+    assert off["screened"] and any(f["id"] == "tendon.length" for f in off["failures"])
+    assert off["coupling"] is None                                       # the tension checks were not run
+    assert off["statics"]["tip_stiffness@AC1C2H"] > 0 and off["statics"]["tip_torsion@AC1C2H"] > 0
+    assert not whole.get("screened") and whole["coupling"] is not None
+
+
 def test_constraints_count_failing_checks_and_bounds():
     loaded = spec.load(PARAMS / "tune-stiffness.yaml")
     base = {"verdict": "pass", "failures": [], "statics": {"tip_stiffness@AC1C2H": 0.1, "tip_torsion@AC1C2H": 700,
@@ -268,7 +280,10 @@ def test_constraints_count_failing_checks_and_bounds():
            "statics": {"tip_stiffness@AC1C2H": 0.2, "tip_torsion@AC1C2H": 350, "least_stiffness@AC1C2H": 0.12}}
     values, cons, ok = tune_run.score(loaded, row, base)
     assert values == [0.2] and not ok
-    assert cons == [pytest.approx(1.5), pytest.approx(0.5), 0.0]       # taut required: 1 + 50 % short; torsion half
+    assert cons == [pytest.approx(0.5), pytest.approx(0.5), 0.0]       # taut required: 50 % short; torsion half
+    row["failures"].append({"id": "eyelet.overlap", "severity": "error", "measured": None, "limit": None})
+    row["failures"].append({"id": "eyelet.wall", "severity": "error", "measured": 0.8, "limit": 0.8})
+    assert tune_run.score(loaded, row, base)[1][0] == pytest.approx(0.5 + 1.0 + 1e-3)   # unmeasured: one; at the limit: a little
     row["failures"] = [{"id": "actuation.tension", "severity": "warning", "measured": 20, "limit": 14.8}]
     row["statics"]["tip_torsion@AC1C2H"] = 800
     assert tune_run.score(loaded, row, base)[2]                          # a warning not required does not bind
@@ -337,7 +352,6 @@ def test_the_full_plan_screens_what_hwgen_check_fails():
     its 1.5 mm knot (hwgen check's tendon.seat); one ending on A2's eyelet at the tip (a 28 mm, 5
     half turns) shares its opening there (eyelet.overlap)."""
     from hwgen.model.plan import make_plan
-    from hwgen.sweep import levels
     from hwgen.sweep.spec import Variant, resolve
     loaded = spec.load(PARAMS / "tune-stiffness.yaml")
     tuned = dict(zip(loaded.names, (10.5, 31.6, 1, 0, -4.3, 8.2, 29.1, 1, 0, 9.3, 4.0, 26, 5, 0)))

@@ -16,7 +16,8 @@ one record a rule: ``id``, ``severity``, ``message``, ``measured``, ``limit`` (f
 constraints; the sweep's Parquet keeps the message).
 
 ``options["screen"]``: a variant that fails at the lengths level (eq. (2), the walls) goes no
-further (its row says ``screened``): a tune's trial that cannot be feasible costs no more;
+further than ``with_plan``'s figures (its row says ``screened``): a tune's trial that cannot be
+feasible costs no more than its statics;
 ``options["stop"]``, called with the row once ``with_plan``'s figures are in, does the same for
 a trial those figures rule out (a tune's bound on the statics).
 ``options["with_plan"]``, when given, is called with each valid variant's plan (made for it at the
@@ -70,12 +71,16 @@ def evaluate_batch(batch: list[tuple[int, tuple]], base: dict, names: tuple[str,
             row = rows[r.index]
             if row["verdict"] == "error":
                 continue
-            if options.get("screen") and any(f["severity"] == "error" for f in row["failures"]):
+            screened = bool(options.get("screen") and any(f["severity"] == "error" for f in row["failures"]))
+            if screened and not options.get("with_plan"):
                 row["screened"] = True          # a tune's trial that fails already: the levels after it not run
                 continue
             t1 = time.process_time()
             try:
-                _deeper(r, row, level, options)
+                if screened:
+                    _figures_only(r, row, options)
+                else:
+                    _deeper(r, row, level, options)
             except (InputError, DesignError) as e:
                 row.update(verdict="bad input", message=f"{e.path or '<document>'}: {e.message}")
                 row["failures"] = [_failure("input", row["message"])]
@@ -120,6 +125,18 @@ def _lengths(good: list[Resolved]) -> dict[int, dict | str]:
 def _failure(cid: str, message: str, severity: str = "error", measured=None, limit=None, where=None) -> dict:
     return {"id": cid, "severity": severity, "where": where, "measured": measured, "limit": limit,
             "message": message}
+
+
+def _figures_only(r: Resolved, row: dict, options: dict) -> None:
+    """A screened trial's ``with_plan`` figures (a tune's statics, a fraction of the checks after
+    them): every bound of its goal is then measured, so the optimiser learns how far the trial is
+    from each, not only that it failed eq. (2) or a wall. A plan that is refused leaves them out."""
+    row["screened"] = True
+    try:
+        plan = make_plan(r.design)
+    except (InputError, DesignError):
+        return
+    row.update(options["with_plan"](plan))
 
 
 def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
