@@ -551,3 +551,15 @@ def test_section_segments_chain_into_their_closed_loops():
         assert np.allclose(sorted(steps), sorted(np.linalg.norm(np.diff(np.vstack([ref, ref[:1]]), axis=0), axis=1)))
         assert abs(signed_area(lp)) == pytest.approx(abs(signed_area(ref)))
     assert chain_loops(segs[:0].reshape(0, 2, 2)) == []
+
+
+def test_a_tilt_a_hair_over_its_limit_is_printed_over_it():
+    """disk.tilt prints as many digits as show a failing pitch above the limit (a drawn robot's 0.5004°
+    read "±0.500°, more than the 0.5° allowed"); a passing one keeps three."""
+    from hwgen.checks.seating import SlotFit, tilt_checks
+    fit = SlotFit("disk_03", 3, 67.5, (-0.5004, 0.5004), (-0.1, 0.1), (-0.2, 0.2), 0.1, 0.1, 0.0, 0.0,
+                  (60.0, 75.0), (66.0, 69.0))
+    (over,) = tilt_checks([fit], 0.5, {3: 30.0})
+    assert not over.passed and "±0.5004°, more than the 0.5° allowed" in over.message
+    (ok,) = tilt_checks([dataclasses.replace(fit, tilt_x=(-0.4, 0.4))], 0.5, {3: 30.0})
+    assert ok.passed and "±0.400°" in ok.message

@@ -179,12 +179,15 @@ def tilt_checks(fits: list[SlotFit], max_tilt_deg: float, radius: dict[int, floa
         tilt = max(abs(v) for v in f.tilt_x)
         ok = tilt <= max_tilt_deg + ANGLE_TOL_DEG        # the limit, to what the measurement resolves
         r = radius.get(f.station, 0.0)
+        digits = 3                                       # as many as show a failing tilt above its limit
+        while not ok and round(tilt, digits) <= max_tilt_deg and digits < 6:
+            digits += 1
         over = "" if ok else (
             f", more than the {max_tilt_deg:g}° allowed: holding it needs "
             f"{f.play_z / math.tan(math.radians(max_tilt_deg)):.1f} mm of engagement (a hub stops {HUB_GAP_MM:g} mm "
             f"short of the next disk); change disks.spacing, disks.slot_clearance or disks.hub.max_tilt_deg")
         msg = (f"{f.part}: the slot holds the strip over {f.engagement:.2f} mm with {f.play_z:.3f} mm of play "
-               f"through its thickness: the disk can pitch ±{tilt:.3f}°{over} (an eyelet at r = {r:g} mm moves "
+               f"through its thickness: the disk can pitch ±{tilt:.{digits}f}°{over} (an eyelet at r = {r:g} mm moves "
                f"{r * math.tan(math.radians(tilt)):.3f} mm along the backbone), yaw ±"
                f"{max(abs(v) for v in f.tilt_z):.3f}°, roll ±{max(abs(v) for v in f.tilt_y):.3f}°, slide "
                f"{f.play_x:.3f} mm across the strip")
