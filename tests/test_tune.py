@@ -220,16 +220,20 @@ def test_best_yaml_of_a_design_with_a_base_keeps_its_chain(tmp_path):
     as the trial's design."""
     from hwgen import params
     loaded = spec.load(PARAMS / "tune-fix-twenty-disks.yaml")
-    values = (0.8, 52.0, 16, 2.5, 0.7)
+    values = (0.8, 52.0, 16, 2.5, 0.7, -2.5)
     text = report.best_yaml(loaded, {"trial": 3, "values": list(values)})
     doc = yaml.safe_load(text)
     assert Path(doc["base"]) == (PARAMS / "prototype.yaml").resolve()
     assert doc["disks"]["hub"] == {"max_tilt_deg": 0.7} and doc["disks"]["spacing"] is None
+    assert doc["check"] == {"robust_severity": "warning"}              # the tune's `set`, stated in the file
     (tmp_path / "best.yaml").write_text(text)
     d = params.read(tmp_path / "best.yaml").design
     assert (d.backbone.thickness, d.backbone.height, d.disks.count, d.disks.thickness,
-            d.disks.hub.max_tilt_deg, d.backbone.length) == (*values, 300)
-    assert d.tendons == params.read(PARAMS / "twenty-disks.yaml").design.tendons
+            d.disks.hub.max_tilt_deg, d.tendons[2].routing.function.x0, d.backbone.length) == (*values, 300)
+    assert d.check.robust_severity == "warning"
+    before = params.read(PARAMS / "twenty-disks.yaml").design.tendons
+    assert d.tendons[:2] == before[:2] and d.tendons[3:] == before[3:]
+    assert d.tendons[2].routing.function.model_copy(update={"x0": 0.0}) == before[2].routing.function
 
 
 def test_the_statics_a_tune_reads_are_hwgen_stiffness(tmp_path):
@@ -305,8 +309,8 @@ def test_the_shipped_stiffness_tune_builds_its_best(tmp_path):
     assert len(rows) == 17 and [t["trial"] for t in rows[:2]] == [-1, 0]
     base, first = rows[0], rows[1]
     loaded = spec.load(PARAMS / "tune-stiffness.yaml")
-    for name, value in zip(loaded.names, loaded.base_values):
-        if value is not None:
+    for fr, name, value in zip(loaded.free, loaded.names, loaded.base_values):
+        if tune_run._within(fr, value):     # C2's k 3 is not among the tune's choices: drawn
             assert first[name] == pytest.approx(value), name
     folder = tmp_path / "tunes" / "stiffness"
     summary = (folder / "summary.md").read_text()
@@ -350,18 +354,26 @@ def test_the_full_plan_screens_what_hwgen_check_fails():
     """The robust level and above screen the full plan for what the lengths level cannot see: the
     prototype passes; a helix steep at the base disk (a 26 mm, 5 half turns) has a seat wider than
     its 1.5 mm knot (hwgen check's tendon.seat); one ending on A2's eyelet at the tip (a 28 mm, 5
-    half turns) shares its opening there (eyelet.overlap)."""
+    half turns) shares its opening there (eyelet.overlap); one of 30 mm, 5 half turns, lies on the
+    strip's edge at the middle disk, where its hole would notch the strip (backbone.crossing)."""
     from hwgen.model.plan import make_plan
     from hwgen.sweep.spec import Variant, resolve
     loaded = spec.load(PARAMS / "tune-stiffness.yaml")
-    tuned = dict(zip(loaded.names, (10.5, 31.6, 1, 0, -4.3, 8.2, 29.1, 1, 0, 9.3, 4.0, 26, 5, 0)))
+    c1, c2, h = (f"tendons[{i}].routing.function." for i in (1, 2, 3))
+    tuned = {"tendons[1].pretension_n": 10.5, c1 + "a": 31.6, c1 + "k": 1, c1 + "x0": -4.3,
+             "tendons[2].pretension_n": 8.2, c2 + "a": 29.1, c2 + "k": 1, c2 + "x0": 9.3,
+             "tendons[3].pretension_n": 4.0, h + "a": 26, h + "k": 5, h + "phase_deg": 0}
+    assert set(tuned) == set(loaded.names)
 
     def screens(values: dict) -> dict:
         d = resolve(loaded.base, loaded.names, Variant(0, tuple(values[n] for n in loaded.names))).design
         return {f["id"]: f for f in levels._plan_screens(make_plan(d), d.process.min_wall)}
 
-    assert screens(dict(zip(loaded.names, (8.0, *loaded.base_values[1:5], 6.0, *loaded.base_values[6:10], 6.0,
-                                           *loaded.base_values[11:])))) == {}
+    prototype = dict(zip(loaded.names, loaded.base_values))
+    assert screens({**prototype, **{f"tendons[{i}].pretension_n": 6.0 for i in (1, 2, 3)}}) == {}
     seat = screens(tuned)
     assert set(seat) == {"tendon.seat"} and seat["tendon.seat"]["measured"] > 1.5 == seat["tendon.seat"]["limit"]
     assert "eyelet.overlap" in screens({**tuned, "tendons[3].routing.function.a": 28})
+    edge = screens({**tuned, "tendons[1].routing.function.x0": -7.0, "tendons[2].routing.function.x0": 14.0,
+                    "tendons[3].routing.function.a": 30})       # on the strip's edge (x = 30 mm) at the middle disk
+    assert edge["backbone.crossing"]["measured"] > 30 == edge["backbone.crossing"]["limit"]

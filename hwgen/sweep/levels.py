@@ -207,7 +207,9 @@ def _plan_screens(plan: Plan, min_wall: float) -> list[dict]:
     disk, its eyelets turned toward the drums (sized there without the turn), tendons whose holes run
     into one opening (the plan's "overlap" merges: ``eyelet.overlap``) or a wall between two holes
     under ``process.min_wall`` (their circles on the mid-plane: ``eyelet.wall``); on the base disk, a
-    seat as wide as its knot or crimp (a steep tendon's slanted seat: ``tendon.seat``)."""
+    seat as wide as its knot or crimp (a steep tendon's slanted seat: ``tendon.seat``); in the strip,
+    a hole for a crossing that breaks through its edge or end (``backbone.crossing``: the helix of 30
+    mm at 5 half turns lies on the 60 mm strip's edge at the middle disk)."""
     out = []
     tip = plan.disks[-1]
     hit = [m for m in plan.merges if m.kind == "overlap" and m.station == tip.index]
@@ -224,6 +226,16 @@ def _plan_screens(plan: Plan, min_wall: float) -> list[dict]:
             out.append(_failure("eyelet.wall", f"wall {w:.2f} mm between the tip disk's eyelets for "
                                                f"{'+'.join(a.tendons)} and {'+'.join(b.tendons)} (turned toward the "
                                                f"drums), under process.min_wall {min_wall:g} mm", "error", w, min_wall))
+    bb = plan.backbone
+    for h in bb.holes:
+        r = h.diameter / 2
+        over = max(abs(h.x) + r - bb.height / 2, bb.y_start - (h.y - r), h.y + r - bb.y_end)   # mm past the outline
+        if over >= 0:
+            out.append(_failure("backbone.crossing", f"{h.tendon} crosses the strip at x = {h.x:.2f}, y = {h.y:.2f} mm, "
+                                                     f"where its Ø{h.diameter:.2f} hole breaks through the strip's "
+                                                     f"outline (a notch, not a hole)", "error",
+                                bb.height / 2 + over, bb.height / 2, h.tendon))
+            break
     for seat in plan.disks[0].seats:
         if seat.termination and seat.diameter >= seat.termination:
             out.append(_failure("tendon.seat", f"{seat.tendon}'s seat on the base disk opens to Ø{seat.diameter:.2f} "
