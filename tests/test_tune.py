@@ -220,7 +220,7 @@ def test_best_yaml_of_a_design_with_a_base_keeps_its_chain(tmp_path):
     as the trial's design."""
     from hwgen import params
     loaded = spec.load(PARAMS / "tune-fix-twenty-disks.yaml")
-    values = (0.8, 52.0, 16, 2.5, 0.7, -2.5)
+    values = (0.8, 52.0, 16, 2.5, 0.7, 20.0, -2.5)
     text = report.best_yaml(loaded, {"trial": 3, "values": list(values)})
     doc = yaml.safe_load(text)
     assert Path(doc["base"]) == (PARAMS / "prototype.yaml").resolve()
@@ -229,11 +229,12 @@ def test_best_yaml_of_a_design_with_a_base_keeps_its_chain(tmp_path):
     (tmp_path / "best.yaml").write_text(text)
     d = params.read(tmp_path / "best.yaml").design
     assert (d.backbone.thickness, d.backbone.height, d.disks.count, d.disks.thickness,
-            d.disks.hub.max_tilt_deg, d.tendons[2].routing.function.x0, d.backbone.length) == (*values, 300)
+            d.disks.hub.max_tilt_deg, d.tendons[2].routing.function.a, d.tendons[2].routing.function.x0,
+            d.backbone.length) == (*values, 300)
     assert d.check.robust_severity == "warning"
     before = params.read(PARAMS / "twenty-disks.yaml").design.tendons
     assert d.tendons[:2] == before[:2] and d.tendons[3:] == before[3:]
-    assert d.tendons[2].routing.function.model_copy(update={"x0": 0.0}) == before[2].routing.function
+    assert d.tendons[2].routing.function.model_copy(update={"a": 25.0, "x0": 0.0}) == before[2].routing.function
 
 
 def test_the_statics_a_tune_reads_are_hwgen_stiffness(tmp_path):

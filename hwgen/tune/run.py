@@ -112,14 +112,15 @@ def sampler(loaded: Loaded, told: int):
         return optuna.samplers.RandomSampler(seed=seed)
     if kind == "nsga2":
         return optuna.samplers.NSGAIISampler(population_size=max(8, min(50, budget // 6)), seed=seed)
-    # a tenth of the budget drawn at random first (4 to 40): the first basins found are TPE's to refine,
-    # and with a dozen free parameters ten random trials leave most of them unseen. Each parameter
+    # a tenth of the budget drawn at random first (at least 4): the first basins found are TPE's to
+    # refine, and with a dozen free parameters ten random trials leave most of them unseen (tune-stiffness:
+    # where 40 drew no design of its one feasible island, TPE spent the rest short of it). Each parameter
     # modelled on its own (TPE's independent mode): modelled jointly, TPE settled within a hundred
     # trials on one set of whole numbers and choices (a helix's half turns, phases) and spent the
     # rest there, feasible or not (six runs of tune-stiffness.yaml: 85-95 % of the trials in one
     # such set); on its own, each parameter keeps the values that worked anywhere, and the trials
     # recombine them (tune-stiffness: 128 feasible trials in 600 against none)
-    return optuna.samplers.TPESampler(n_startup_trials=max(4, min(40, budget // 10)), multivariate=False,
+    return optuna.samplers.TPESampler(n_startup_trials=max(4, budget // 10), multivariate=False,
                                       constant_liar=True, seed=seed)
 
 
