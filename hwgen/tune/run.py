@@ -1,10 +1,11 @@
 """Running a tune: Optuna asks for trials, the sweep's workers evaluate them, Optuna is told.
 
-The optimiser is Optuna's (:mod:`optuna`): TPE (``TPESampler``, each parameter modelled on its own
-(:func:`sampler` says why), constant liar for the trials in flight) for one objective, NSGA-II (``NSGAIISampler``) for a Pareto front, both
-reading each trial's constraints (``Trial.set_constraint``, Optuna 5's successor of
-``constraints_func``: a trial is feasible when every constraint value is ≤ 0; an infeasible one
-ranks by the sum of its violations); ``random`` for a baseline. The constraints (:func:`score`):
+The optimiser is Optuna's (:mod:`optuna`): TPE (``TPESampler``, each parameter modelled on its
+own (:func:`sampler` says why), constant liar for the trials in flight) for one objective, NSGA-II
+(``NSGAIISampler``) for a Pareto front, both reading each trial's constraints
+(``Trial.set_constraint``, Optuna 5's successor of ``constraints_func``: a trial is feasible
+when every constraint value is ≤ 0; an infeasible one ranks by the sum of its violations);
+``random`` for a baseline. The constraints (:func:`score`):
 ``checks``, the checks of the level that fail (and those under ``goal.require`` even where the
 design makes them warnings; each counts how far past its limit it is, relative to the limit:
 :func:`_violation`), and each ``at_least`` / ``at_most`` bound's relative shortfall, named after
@@ -50,8 +51,8 @@ MIN_EXCESS = 1e-3
 # TPE ranks the trials it counts infeasible by their violation alone, and so closes on a binding
 # bound from the side it cannot pass (tune-stiffness: hundreds of trials 0.01-0.1 % short of the
 # prototype's torsion, none beyond it). It is told each bound of the goal this much further
-# (relative): the trials it closes on then meet the goal's own bound, by which feasibility and the
-# best are judged.
+# (relative), so that where it closes on a bound it does so on the goal's side of it; feasibility
+# and the best are judged by the goal's own bounds. (Not measured apart from the changes beside it.)
 SEARCH_MARGIN = 0.01
 UNMEASURED = 1.0
 JOURNAL = "journal.log"
