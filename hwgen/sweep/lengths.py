@@ -305,22 +305,24 @@ def verdict(row: dict) -> tuple[str, str, dict]:
     return ("fail" if fails else "pass"), "; ".join(fails), figures
 
 
+def failure(cid: str, message: str, severity: str = "error", measured=None, limit=None, where=None) -> dict:
+    """One record of a rule a sweep's row breaks (or only warns of): what a tune's constraints read."""
+    return {"id": cid, "severity": severity, "where": where, "measured": measured, "limit": limit,
+            "message": message}
+
+
 def failures(row: dict) -> list[dict]:
-    """What fails in a lengths row, one record a rule (``id``, ``severity``, ``message``, ``measured``,
-    ``limit``): a budgeted tendon over its budget by eq. (2) through the hole centres
-    (``tendon.length``), tendons routed into one opening (``eyelet.overlap``), a wall under the
-    process's minimum (``eyelet.wall``)."""
-    out = [{"id": "tendon.length", "severity": "error", "where": t["name"], "measured": t["centre_mm"],
-            "limit": t["budget_mm"],
-            "message": f"{t['name']} changes {t['centre_mm']:.3f} mm by eq. (2), budget {t['budget_mm']:g} mm"}
+    """What fails in a lengths row, one :func:`failure` record a rule: a budgeted tendon over its
+    budget by eq. (2) through the hole centres (``tendon.length``), tendons routed into one opening
+    (``eyelet.overlap``), a wall under the process's minimum (``eyelet.wall``)."""
+    out = [failure("tendon.length", f"{t['name']} changes {t['centre_mm']:.3f} mm by eq. (2), budget "
+                                    f"{t['budget_mm']:g} mm", "error", t["centre_mm"], t["budget_mm"], t["name"])
            for t in row["tendons"] if t["budget_mm"] is not None and t["centre_mm"] > t["budget_mm"]]
     if row.get("overlapping_eyelets"):
-        out.append({"id": "eyelet.overlap", "severity": "error", "where": None, "measured": None, "limit": None,
-                    "message": f"tendons routed into each other share one opening on {row['overlapping_eyelets']} "
-                               f"disk(s)"})
+        out.append(failure("eyelet.overlap", f"tendons routed into each other share one opening on "
+                                             f"{row['overlapping_eyelets']} disk(s)"))
     if row["clearance_mm"] < row["min_wall_mm"]:
-        out.append({"id": "eyelet.wall", "severity": "error", "where": None, "measured": row["clearance_mm"],
-                    "limit": row["min_wall_mm"],
-                    "message": f"least wall {row['clearance_mm']:.2f} mm, under process.min_wall "
-                               f"{row['min_wall_mm']:g} mm"})
+        out.append(failure("eyelet.wall", f"least wall {row['clearance_mm']:.2f} mm, under process.min_wall "
+                                          f"{row['min_wall_mm']:g} mm", "error", row["clearance_mm"],
+                           row["min_wall_mm"]))
     return out

@@ -36,6 +36,7 @@ from ..errors import DesignError, InputError
 from ..model import feasibility, scatter as mc
 from ..model.plan import Plan, make_plan
 from . import lengths
+from .lengths import failure
 from .spec import Resolved, Variant, resolve
 
 METRICS = ("centre_mm", "taut_mm", "robust_mm", "clearance_mm", "mass_g", "coupling", "least_tension_n")
@@ -58,7 +59,7 @@ def evaluate_batch(batch: list[tuple[int, tuple]], base: dict, names: tuple[str,
         row = rows[r.index]
         fig = figures[r.index]
         if isinstance(fig, str):
-            row.update(verdict="error", message=fig, failures=[_failure("error", fig)])
+            row.update(verdict="error", message=fig, failures=[failure("error", fig)])
             continue
         row["verdict"], row["message"], f = lengths.verdict(fig)
         row.update(f)
@@ -83,10 +84,10 @@ def evaluate_batch(batch: list[tuple[int, tuple]], base: dict, names: tuple[str,
                     _deeper(r, row, level, options)
             except (InputError, DesignError) as e:
                 row.update(verdict="bad input", message=f"{e.path or '<document>'}: {e.message}")
-                row["failures"] = [_failure("input", row["message"])]
+                row["failures"] = [failure("input", row["message"])]
             except Exception as e:      # a variant that makes hwgen fail is a row, never the end of the sweep
                 row.update(verdict="error", message=f"internal error: {type(e).__name__}: {e}"[:400])
-                row["failures"] = [_failure("error", row["message"])]
+                row["failures"] = [failure("error", row["message"])]
             row["cpu_s"] += time.process_time() - t1
     return [rows[r.index] for r in todo]
 
@@ -100,7 +101,7 @@ def _row(r: Resolved, level: str) -> dict:
     row = {"variant": r.index, "hash": r.hash, "level": level, "values": r.values,
            "verdict": "bad input" if r.design is None else "pass", "message": r.message, "decoupled": None,
            "checks_failed": None, "per_tendon": None, "kept": None, "cpu_s": 0.0,
-           "failures": [_failure("input", r.message)] if r.design is None else []}
+           "failures": [failure("input", r.message)] if r.design is None else []}
     row.update({m: None for m in METRICS})
     return row
 
@@ -121,11 +122,6 @@ def _lengths(good: list[Resolved]) -> dict[int, dict | str]:
 
 
 # ---------------------------------------------------------------- robust, coupling, build
-
-def _failure(cid: str, message: str, severity: str = "error", measured=None, limit=None, where=None) -> dict:
-    return {"id": cid, "severity": severity, "where": where, "measured": measured, "limit": limit,
-            "message": message}
-
 
 def _figures_only(r: Resolved, row: dict, options: dict) -> None:
     """A screened trial's ``with_plan`` figures (a tune's statics, a fraction of the checks after
@@ -155,7 +151,7 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
     fails = [row["message"]] if row["message"] else []
     warns = []
     budgeted = [t for t in taut_rows if t["budget_mm"] is not None]
-    failures = [f for f in row["failures"]]
+    failures = list(row["failures"])
     for f in _plan_screens(plan, d.process.min_wall):
         if not any(g["id"] == f["id"] for g in failures):
             fails.append(f["message"])
@@ -165,7 +161,7 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
             text = (f"{t['name']} changes {t['robust_mm']:.3f} mm at {d.check.robust} as built, "
                     f"budget {t['budget_mm']:g} mm")
             (fails if d.check.robust_severity == "error" else warns).append(text)
-            failures.append(_failure("tendon.robust", text, d.check.robust_severity, t["robust_mm"], t["budget_mm"],
+            failures.append(failure("tendon.robust", text, d.check.robust_severity, t["robust_mm"], t["budget_mm"],
                                      t["name"]))
     tendons = json.loads(row["per_tendon"])
     for t in tendons:
@@ -178,7 +174,7 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
             warns.append(f"statics skipped: {report['skipped']}")
         for c in report.get("failed", []):
             (fails if c["severity"] == "error" else warns).append(f"{c['id']}: {c['message']}")
-            failures.append(_failure(c["id"], c["message"], c["severity"], c.get("measured"), c.get("limit"),
+            failures.append(failure(c["id"], c["message"], c["severity"], c.get("measured"), c.get("limit"),
                                      (c.get("where") or {}).get("tendon")))
         row["coupling"] = report.get("coupling")
         row["least_tension_n"] = report.get("least_tension_n")
@@ -190,7 +186,7 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
         # the build's verdict is hwgen check's, which runs every rule above on the built files (eq. (2)
         # through the centres only as information): the screening figures stay on record as warnings
         failures = [dict(f, severity="warning") for f in failures]
-        failures += [_failure(c["id"], c["message"], c["severity"], c.get("measured"), c.get("limit"))
+        failures += [failure(c["id"], c["message"], c["severity"], c.get("measured"), c.get("limit"))
                      for c in failed]
         warns = [f"screening: {f}" for f in fails if f] + warns
         fails = [f"{c['id']}: {c['message']}" for c in failed[:3]]
@@ -214,7 +210,7 @@ def _plan_screens(plan: Plan, min_wall: float) -> list[dict]:
     tip = plan.disks[-1]
     hit = [m for m in plan.merges if m.kind == "overlap" and m.station == tip.index]
     if hit:
-        out.append(_failure("eyelet.overlap", "tendons routed into each other share one opening on the tip disk "
+        out.append(failure("eyelet.overlap", "tendons routed into each other share one opening on the tip disk "
                                               "(its eyelets turned toward the drums): "
                             + "; ".join(" and ".join(m.tendons) for m in hit)))
     holes = tip.holes
@@ -223,7 +219,7 @@ def _plan_screens(plan: Plan, min_wall: float) -> list[dict]:
     if walls:
         w, a, b = min(walls, key=lambda t: t[0])
         if w < min_wall:
-            out.append(_failure("eyelet.wall", f"wall {w:.2f} mm between the tip disk's eyelets for "
+            out.append(failure("eyelet.wall", f"wall {w:.2f} mm between the tip disk's eyelets for "
                                                f"{'+'.join(a.tendons)} and {'+'.join(b.tendons)} (turned toward the "
                                                f"drums), under process.min_wall {min_wall:g} mm", "error", w, min_wall))
     bb = plan.backbone
@@ -231,14 +227,14 @@ def _plan_screens(plan: Plan, min_wall: float) -> list[dict]:
         r = h.diameter / 2
         over = max(abs(h.x) + r - bb.height / 2, bb.y_start - (h.y - r), h.y + r - bb.y_end)   # mm past the outline
         if over >= 0:
-            out.append(_failure("backbone.crossing", f"{h.tendon} crosses the strip at x = {h.x:.2f}, y = {h.y:.2f} mm, "
+            out.append(failure("backbone.crossing", f"{h.tendon} crosses the strip at x = {h.x:.2f}, y = {h.y:.2f} mm, "
                                                      f"where its Ø{h.diameter:.2f} hole breaks through the strip's "
                                                      f"outline (a notch, not a hole)", "error",
                                 bb.height / 2 + over, bb.height / 2, h.tendon))
             break
     for seat in plan.disks[0].seats:
         if seat.termination and seat.diameter >= seat.termination:
-            out.append(_failure("tendon.seat", f"{seat.tendon}'s seat on the base disk opens to Ø{seat.diameter:.2f} "
+            out.append(failure("tendon.seat", f"{seat.tendon}'s seat on the base disk opens to Ø{seat.diameter:.2f} "
                                                f"mm: its Ø{seat.termination:g} mm termination pulls through", "error",
                                 seat.diameter, seat.termination, seat.tendon))
     return out

@@ -136,9 +136,6 @@ class _InOrder:
     def add(self, future) -> None:
         self._queue.append(future)
 
-    def count(self) -> int:
-        return len(self._queue)
-
     def __iter__(self):
         while self._queue:
             yield self._queue.pop(0)
