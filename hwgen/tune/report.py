@@ -19,7 +19,6 @@ from __future__ import annotations
 import copy
 import io
 import json
-import math
 from pathlib import Path
 
 import pyarrow as pa
@@ -28,6 +27,7 @@ import pyarrow.parquet as pq
 from .. import designfile
 from ..atomic import atomic_path, write_text
 from ..outputs.plots import _pyplot, _save
+from ..params import SAFE_NAME
 from ..sweep import spec as sweep_spec
 from . import results
 from .spec import Loaded
@@ -149,18 +149,13 @@ def best_yaml(loaded: Loaded, row: dict) -> str:
     for path, value in changes.items():
         _put(doc, sweep_spec.parse_path(path), value, loaded.base, layered)
     name = f"{doc['design']}-{loaded.spec.tune}"
-    doc["design"] = name if params_safe(name) else f"tuned-{loaded.spec.tune}"
+    doc["design"] = name if SAFE_NAME.match(name) else f"tuned-{loaded.spec.tune}"
     buf = io.StringIO()
     y.dump(doc, buf)
     head = (f"# hwgen tune {loaded.spec.tune}: {loaded.base_path.name} with the tuned values (trial "
             f"{row['trial']}) and the tune file's 'set' changed; renamed so that its build does not replace the "
             f"base's\n")
     return head + buf.getvalue()
-
-
-def params_safe(name: str) -> bool:
-    from ..params import SAFE_NAME
-    return bool(SAFE_NAME.match(name))
 
 
 def _put(doc, keys: list, value, merged: dict, layered: bool) -> None:
@@ -314,8 +309,7 @@ def binding(loaded: Loaded, rows: list[dict]) -> str:
     for r in rows:
         if r["feasible"]:
             continue
-        ids = {f["id"] for f in r.get("failures") or []
-               if (f["severity"] == "error" and g.checks == "all") or f["id"] in g.require}
+        ids = {f["id"] for f in r.get("failures") or [] if g.binds(f)}
         for label, c in zip(bounds(loaded), r["constraints"][1:]):
             if c > 0:
                 ids.add(label)
@@ -389,6 +383,3 @@ def write(loaded: Loaded, study, folder: Path, outcome=None, built=None, stiffne
     files += [folder / "summary.md", folder / "convergence.png"]
     return {"best": best_row, "front": front, "files": files, "rows": rows, "base": base_row}
 
-
-def finite(v):
-    return None if v is None or (isinstance(v, float) and not math.isfinite(v)) else v

@@ -184,7 +184,7 @@ def score(loaded: Loaded, row: dict, base_row: dict | None,
     else:
         checks = 0.0
         for f in row.get("failures") or []:
-            if (f["severity"] == "error" and g.checks == "all") or f["id"] in g.require:
+            if g.binds(f):
                 checks += _violation(f)
     bounds = []
     for how, sign in (("at_least", 1.0), ("at_most", -1.0)):

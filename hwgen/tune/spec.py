@@ -30,6 +30,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 
+from .. import designfile
 from ..errors import InputError, echo
 from ..sweep import spec as sweep_spec
 from . import results
@@ -116,6 +117,11 @@ class Goal(_Model):
             raise ValueError("give 'maximize', 'minimize' (a result or a list) or 'pass: true'")
         return self
 
+    def binds(self, f: dict) -> bool:
+        """Whether a failure record (:func:`hwgen.sweep.lengths.failure`) counts against this goal: an
+        error when every check must pass, or a check under ``require`` whatever its severity."""
+        return (f["severity"] == "error" and self.checks == "all") or f["id"] in self.require
+
     def objectives(self) -> list[tuple[str, str]]:
         """(name, "maximize" or "minimize") of each objective, in order; ``pass``: the distance."""
         if self.pass_:
@@ -179,7 +185,7 @@ def load(path: str | Path) -> Loaded:
             raise InputError(path, f"free[{i}].path", f"{echo(fr.path)} is already free")
         names.append(fr.path)
     dump = fixed.design.model_dump(mode="json")
-    values = tuple(_value_at(dump, sweep_spec.parse_path(n)) for n in names)
+    values = tuple(designfile.value_at(dump, sweep_spec.parse_path(n)) for n in names)
     for i, (fr, v) in enumerate(zip(spec.free, values)):
         if fr.choices is None and v is not None and (not isinstance(v, (int, float)) or isinstance(v, bool)):
             raise InputError(path, f"free[{i}].path", f"the base's value there is {echo(v)}, not a number: give "
@@ -215,13 +221,6 @@ def _drop(doc: dict, keys: list) -> dict:
     for k in parent:
         node = node[k] if isinstance(k, int) else node.get(k, {})
     return sweep_spec.set_path(doc, parent, {k: v for k, v in node.items() if k != keys[-1]})
-
-
-def _value_at(dump: dict, keys: list):
-    node: Any = dump
-    for k in keys:
-        node = node[k]
-    return node
 
 
 def _check_goal(path: Path, spec: Tune, known: tuple[str, ...]) -> tuple[str, ...]:
