@@ -376,8 +376,7 @@ def tune_rows(tmp: Path, budget: int = 60) -> list[tuple]:
     r = _process(f"hwgen tune, stiffness, {budget} trials", ["tune", "params/tune-stiffness.yaml", "--out",
                                                               str(tmp / "tune"), "--budget", str(budget),
                                                               "--workers", "2", "--no-build", "-q"], env)
-    out = re.sub(r"[ \t]*\n[ \t]*(?=\S)(?!best:|/|  )", " ", r[5])   # the CLI wraps a pipe's lines at 160 columns
-    m, b = TUNE_RATE.search(out), TUNE_BEST.search(out)
+    m, b = TUNE_RATE.search(r[5]), TUNE_BEST.search(r[5])
     note = "no throughput line"
     if m:
         n, sec, workers, rate, cpu, unit, whole, k = m.groups()

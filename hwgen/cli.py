@@ -650,14 +650,15 @@ def tune(tune_file: Path = typer.Argument(..., help="tune YAML: a base design, f
     start = f"; local cluster started in {o.start_seconds:.1f} s" if o.start_seconds else ""
     out.print(f"{loaded.spec.tune} ({loaded.spec.level}): {o.done_before} trials told before, {o.evaluated} evaluated "
               f"and {o.repeated} told from an earlier trial of the same design in {o.seconds:.1f} s on {o.workers} "
-              f"worker(s): {rate}{cpu}{start}")
+              f"worker(s): {rate}{cpu}{start}", soft_wrap=True)     # one line on a pipe too: the bench reads it
     if t.best is None:
         say("no trial passes;", "red", f"see {printable(o.folder / 'summary.md')}")
     else:
         objs = ", ".join(f"{n} {v:.4g}" for (n, _), v in zip(loaded.objectives, t.best["objectives"]))
         found = f" (found {o.first_best_s:.1f} s into this run)" if o.first_best_s is not None else ""
         out.print(f"best: trial {t.best['trial']}: {objs}{found}" + (f"; front of {len(t.front)}" if len(t.front) > 1
-                                                                     and len(loaded.objectives) > 1 else ""))
+                                                                     and len(loaded.objectives) > 1 else ""),
+                  soft_wrap=True)
     for f in t.files:
         out.print(f"  {printable(f)}")
     if t.build_folder is not None:
