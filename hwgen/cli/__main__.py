@@ -1,0 +1,4 @@
+"""`python -m hwgen.cli`: the program."""
+from . import main
+
+main()

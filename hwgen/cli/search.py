@@ -1,0 +1,129 @@
+"""The commands over many designs: sweep and tune, on Dask."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import typer
+from rich.table import Table
+
+from ..errors import printable
+from .common import (CACHE_DIR, EXIT_FINDINGS, NO_CACHE, SCHEDULER, WORKERS, _cache, _check_scheduler, _command,
+                     err, out, say)
+
+
+@_command
+def sweep(sweep_file: Path = typer.Argument(..., help="sweep YAML: a base design and axes over its parameters",
+                                            show_default=False),
+          out_dir: Path = typer.Option(Path("out"), "--out", help="output root; results go to OUT/sweeps/<name>/<level>/"),
+          scheduler: str = SCHEDULER, workers: int = WORKERS,
+          quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+          cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
+    """Evaluate every variant of a design sweep on Dask: Parquet results, a summary and plots.
+
+    Levels: lengths (the plan, eq. (2) and the taut path; no CAD), robust (the as-built Monte Carlo), coupling (tendon tensions and the actuating tension's rise), build (every file and hwgen check). A rerun skips the variants already in the results. Bad or failing variants are rows with their message; exit 2 only for a bad sweep file.
+    """
+    from ..sweep import run as sweep_run
+    from ..sweep import spec, summary
+
+    _check_scheduler(scheduler)
+    loaded = spec.load(sweep_file)
+    # Dask's progress bar redraws one line: on a terminal only (a log would get a line per redraw)
+    try:
+        o = sweep_run.run(loaded, out_dir, scheduler, workers, progress=not quiet and sys.stdout.isatty(),
+                          cache=_cache(cache_dir, no_cache))
+    except KeyboardInterrupt:
+        say("interrupted:", "yellow", f"the batches finished so far are kept in "
+                                      f"{sweep_run.results_folder(loaded, out_dir)}; the same command goes on from them")
+        raise typer.Exit(130) from None
+    table = sweep_run.read(o.folder)
+    files = summary.write(loaded, table, o.folder.parent / loaded.spec.level) if table is not None else []
+    if o.seconds > 0 and o.evaluated:
+        per_s = o.evaluated / o.seconds
+        rate = f"{per_s:,.1f} variants/s" if per_s >= 10 else f"{per_s:.3g} variants/s ({1 / per_s:.1f} s a variant)"
+    else:
+        rate = "nothing to evaluate"
+    cpu = f", {1000 * o.cpu_s / o.evaluated:.2f} ms CPU per variant" if o.evaluated else ""
+    start = f"; local cluster started in {o.start_seconds:.1f} s" if o.start_seconds else ""
+    out.print(f"{loaded.spec.sweep} ({loaded.spec.level}): {o.total} variants, {o.done_before} already in the results, "
+              f"{o.evaluated} evaluated in {o.seconds:.2f} s on {o.workers} worker(s): {rate}{cpu}{start}")
+    if table is not None:
+        counts = {}
+        for v in table.column("verdict").to_pylist():
+            counts[v] = counts.get(v, 0) + 1
+        out.print("verdicts: " + ", ".join(f"{k} {n}" for k, n in sorted(counts.items())))
+        col, label = summary.figure_column(table)
+        figs = [col] + [c for c in ("robust_mm", "centre_mm") if c != col] + ["clearance_mm", "mass_g"]
+        t = Table(title=f"best variants (by {label})")
+        for c in ("variant", *loaded.names, "verdict", *figs):
+            t.add_column(c, justify="left" if c == "verdict" else "right")
+        for r in summary.best(loaded, table, min(loaded.spec.summary.best, 10)):
+            t.add_row(str(r["variant"]), *(printable(str(r[n])) for n in loaded.names), r["verdict"],
+                      *("-" if r.get(c) is None else f"{r[c]:.4g}" for c in figs))
+        out.print(t)
+    out.print(f"  {printable(o.folder)}/ (Parquet)")
+    for f in files:
+        out.print(f"  {printable(f)}")
+
+
+@_command
+def tune(tune_file: Path = typer.Argument(..., help="tune YAML: a base design, free parameters with bounds, a goal",
+                                          show_default=False),
+         out_dir: Path = typer.Option(Path("out"), "--out", help="output root; results go to OUT/tunes/<name>/"),
+         scheduler: str = SCHEDULER, workers: int = WORKERS,
+         budget: int = typer.Option(None, "--budget", min=1, show_default=False,
+                                    help="trials in all, those of an earlier run included (default: the tune "
+                                         "file's budget)"),
+         no_build: bool = typer.Option(False, "--no-build", help="do not build the best design"),
+         quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+         cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
+    """Search a design's parameters for the best one (Optuna on the sweep's Dask workers): trials.parquet, best.yaml, summary.md, convergence.png, and the best built and checked.
+
+    Goals: maximize or minimize results of the statics or the checks subject to every check of the level passing (several: a Pareto front), or pass (the passing design nearest the base). A rerun goes on from the trials already told. Exit 1 when no trial passes or the best's build fails a check; exit 2 for a bad tune file.
+    """
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from ..tune import best as tune_best
+    from ..tune import run as tune_run
+    from ..tune import spec as tune_spec
+
+    _check_scheduler(scheduler)
+    loaded = tune_spec.load(tune_file)
+    with Progress(TextColumn("{task.description}", markup=False), BarColumn(), MofNCompleteColumn(),
+                  TimeElapsedColumn(), console=err, disable=quiet or not err.is_terminal, transient=True) as bar:
+        task = bar.add_task(f"tuning {loaded.spec.tune}", total=budget or loaded.spec.budget)
+        try:
+            t = tune_best.tune(loaded, out_dir, scheduler, workers, budget, _cache(cache_dir, no_cache),
+                               build=not no_build, on_trial=lambda done, total: bar.update(task, completed=done,
+                                                                                          total=total))
+        except KeyboardInterrupt:
+            say("interrupted:", "yellow", f"the trials told so far are kept in "
+                                          f"{tune_run.folder_of(loaded, out_dir)}; the same command goes on from them")
+            raise typer.Exit(130) from None
+    o = t.outcome
+    rate = f"{o.evaluated / o.seconds:.3g} trials/s" if o.seconds > 0 and o.evaluated else "nothing to evaluate"
+    per = o.cpu_s / o.evaluated if o.evaluated else 0.0
+    cpu = (f", {per:.2f} s CPU a trial" if per >= 0.1 else f", {1000 * per:.2f} ms CPU a trial") if o.evaluated else ""
+    if o.whole and o.whole < o.evaluated:
+        cpu += f" ({o.whole_cpu_s / o.whole:.2f} s each of the {o.whole} through every level)"
+    start = f"; local cluster started in {o.start_seconds:.1f} s" if o.start_seconds else ""
+    out.print(f"{loaded.spec.tune} ({loaded.spec.level}): {o.done_before} trials told before, {o.evaluated} evaluated "
+              f"and {o.repeated} told from an earlier trial of the same design in {o.seconds:.1f} s on {o.workers} "
+              f"worker(s): {rate}{cpu}{start}", soft_wrap=True)     # one line on a pipe too: the bench reads it
+    if t.best is None:
+        say("no trial passes;", "red", f"see {printable(o.folder / 'summary.md')}")
+    else:
+        objs = ", ".join(f"{n} {v:.4g}" for (n, _), v in zip(loaded.objectives, t.best["objectives"]))
+        found = f" (found {o.first_best_s:.1f} s into this run)" if o.first_best_s is not None else ""
+        out.print(f"best: trial {t.best['trial']}: {objs}{found}" + (f"; front of {len(t.front)}" if len(t.front) > 1
+                                                                     and len(loaded.objectives) > 1 else ""),
+                  soft_wrap=True)
+    for f in t.files:
+        out.print(f"  {printable(f)}")
+    if t.build_folder is not None:
+        out.print(f"  {printable(t.build_folder)}/ (the best, built: "
+                  + ("every check passes)" if t.build_ok else f"{len(t.failed_checks)} check(s) fail)"))
+    if t.best is None or t.build_ok is False:
+        raise typer.Exit(EXIT_FINDINGS)
+
+
