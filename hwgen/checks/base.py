@@ -8,6 +8,19 @@ Severity = Literal["error", "warning", "info"]
 
 
 @dataclass(frozen=True)
+class Fix:
+    """One change to the design that fixes a failing check, tried: applied to the design and the
+    check evaluated again by the model that failed it (issue 43). Printed as a fix only where
+    ``then["passed"]``; otherwise it records what the best change within the schema's bounds reaches."""
+
+    set: dict[str, Any]           # dotted paths of the user's file ("tendons[2].pretension_n") -> new value
+    then: dict[str, Any]          # the re-evaluation: "measured", "passed", and what it does to the stiffening
+    breaks: tuple[str, ...] = ()  # ids of checks that passed before and fail with this change
+    note: str = ""                # why, in words; names the user's key that drives a derived value
+    relax: bool = False           # passes by relaxing a requirement (a severity, a budget, a limit), not the design
+
+
+@dataclass(frozen=True)
 class Check:
     """One finding. ``passed`` False with severity "error" fails the design (exit code 1)."""
 
@@ -24,9 +37,14 @@ class Check:
     # the design setting that states this failure as a warning rather than an error
     # ("check.robust_severity"); empty when the severity is the check's own
     lowered_by: str = ""
+    # the tried fixes, best first (design changes before relaxations); ``fix`` is written from them
+    fixes: tuple[Fix, ...] = ()
 
     def to_json(self) -> dict:
-        return asdict(self)
+        out = asdict(self)
+        if not self.fixes:
+            del out["fixes"]          # until a check tries its fixes, its record is as it was
+        return out
 
 
 # the fix of a check that finds hwgen's own files wrong (a part that is not where the design puts
