@@ -227,9 +227,31 @@ def stiffness_table(study: dict | None) -> dict:
     return {"orientation": ref, "rows": rows, "headline": (study.get("stiffening") or {}).get("headline", "")}
 
 
-def page_data(folder: Path, manifest: Manifest, report: dict | None, study: dict | None, explode_mm: float,
-              sweep_deg: float) -> tuple[dict, bytes | None]:
-    """What the page shows (JSON) and the assembly's GLB (None when no part could be placed)."""
+def listed(manifest: Manifest, report: dict | None, study: dict | None) -> dict:
+    """What the page lists, with or without its 3D view: every part (its group, family, colour, the
+    checks that name it and those that fail), every tendon, every check, the stiffness table."""
+    checks = (report or {}).get("checks") or manifest.checks or []
+    failing_parts, failing_tendons = failing_marks(checks)
+    by_part, by_tendon = check_index(checks, manifest)
+    colours = tendon_colours(manifest.design_report)
+    return {
+        "design": manifest.name, "hwgen": __version__,
+        "parts": [{"name": p.name, "role": p.role, "family": family_label(p.role), "group": group_of(p.role),
+                   "colour": _hex(p.entry.get("color") or (0.7, 0.7, 0.7)), "station": p.station,
+                   "fixture": p.fixture, "box": False, "failing": failing_parts.get(p.name, []),
+                   "checks": by_part.get(p.name, [])} for p in manifest_parts(manifest)],
+        "tendons": [{"name": n, "colour": _hex(rgb), "failing": failing_tendons.get(n, []),
+                     "checks": by_tendon.get(n, [])} for n, rgb in colours.items()],
+        "checks": [{"id": c["id"], "status": status(c), "where": place(c), "message": c.get("message", ""),
+                    "fix": c.get("fix", "") if not c.get("passed", True) else ""} for c in checks],
+        "stiffness": stiffness_table(study),
+        "messages": [] if checks else ["no checks in this build (report.json is missing): nothing is marked"],
+    }
+
+
+def drawn(folder: Path, manifest: Manifest, data: dict, explode_mm: float, sweep_deg: float) -> bytes:
+    """The assembly's GLB, and into ``data`` what the viewer needs to pose it: each part's exploded
+    offset, the bent poses, each tendon's eyelet points in every pose, what was drawn as a box."""
     pairs, notes, boxed = read_meshes(folder, manifest, MAX_TRIANGLES)
     parts = scene_parts(pairs)
     planned = manifest.design_report
@@ -237,35 +259,21 @@ def page_data(folder: Path, manifest: Manifest, report: dict | None, study: dict
     robot = [p for p in parts if not p.meta.get("fixture")]
     ex = exploded_placements(robot, st, explode_mm, ISOMETRIC.toward_camera)
     shift = {p.name: (ex[p.name][:3, 3] - p.placement[:3, 3]) if p.name in ex else np.zeros(3) for p in parts}
-    checks = (report or {}).get("checks") or manifest.checks or []
-    if not checks:
-        notes.append("no checks in this build (report.json is missing): nothing is marked")
-    failing_parts, failing_tendons = failing_marks(checks)
-    by_part, by_tendon = check_index(checks, manifest)
+    for entry in data["parts"]:
+        entry["shift"] = np.round(shift[entry["name"]], 4).tolist()
+        entry["box"] = entry["name"] in boxed
     disk_shift = {p.station: shift[p.name] for p in robot if p.station is not None}
-    colours = tendon_colours(planned)
     poses, bending = _bent_poses(robot, st, sweep_deg)
-    bent_lines = {pose["key"]: tendon_polylines(planned, pose["kappa"]) for pose in poses}
-    tendons = [{"name": n, "colour": _hex(colours[n]), "failing": failing_tendons.get(n, []),
-                "checks": by_tendon.get(n, []), "straight": np.round(pts, 4).tolist(),
-                "shift": [np.round(disk_shift.get(i, np.zeros(3)), 4).tolist() for i in range(len(pts))],
-                **{k: np.round(v[n], 4).tolist() for k, v in bent_lines.items()}}
-               for n, pts in tendon_polylines(planned, 0.0).items()]
-    data = {
-        "design": manifest.name, "hwgen": __version__, "explode_mm": explode_mm, "sweep_deg": sweep_deg,
-        "view": {"toward_camera": list(ISOMETRIC.toward_camera), "up": [0.0, 0.0, 1.0]},
-        "warning_colour": _hex(WARNING_COLOUR), "tendon_radius_mm": TENDON_TUBE_MM,
-        "parts": [{"name": p.name, "role": p.role, "family": family_label(p.role), "group": group_of(p.role),
-                   "colour": _hex(p.meta.get("color") or (0.7, 0.7, 0.7)), "station": p.station,
-                   "fixture": bool(p.meta.get("fixture")), "box": p.name in boxed,
-                   "failing": failing_parts.get(p.name, []), "checks": by_part.get(p.name, []),
-                   "shift": np.round(shift[p.name], 4).tolist()} for p in parts],
-        "tendons": tendons, "poses": poses, "bending": bending,
-        "checks": [{"id": c["id"], "status": status(c), "where": place(c), "message": c.get("message", ""),
-                    "fix": c.get("fix", "") if not c.get("passed", True) else ""} for c in checks],
-        "stiffness": stiffness_table(study), "messages": notes,
-    }
-    return data, glb(parts) if parts else None
+    lines = {"straight": tendon_polylines(planned, 0.0)} | {
+        pose["key"]: tendon_polylines(planned, pose["kappa"]) for pose in poses}
+    for t in data["tendons"]:
+        t.update({k: np.round(v[t["name"]], 4).tolist() for k, v in lines.items()})
+        t["shift"] = [np.round(disk_shift.get(i, np.zeros(3)), 4).tolist() for i in range(len(t["straight"]))]
+    data.update({"explode_mm": explode_mm, "sweep_deg": sweep_deg, "poses": poses, "bending": bending,
+                 "view": {"toward_camera": list(ISOMETRIC.toward_camera), "up": [0.0, 0.0, 1.0]},
+                 "warning_colour": _hex(WARNING_COLOUR), "tendon_radius_mm": TENDON_TUBE_MM})
+    data["messages"] += notes
+    return glb(parts)
 
 
 # --------------------------------------------------------------------------- the page
@@ -348,26 +356,21 @@ def _verdict(data: dict, ok: bool | None) -> str:
     return (f'<span class="verdict {word.lower()}">{word}: {n} checks, {fails} failed, {warns} warning(s)</span>')
 
 
-def render_page(data: dict, glb_bytes: bytes | None, ok: bool | None, bundle: Path | None) -> str:
+def render_page(data: dict, ok: bool | None, glb_bytes: bytes | None = None, bundle: Path | None = None) -> str:
     """The page: the static HTML (the tree, the failing checks, the stiffness: all there without the
-    viewer), and, when there is a viewer and something to draw, the GLB and the viewer inlined."""
+    viewer), and, given the GLB and the viewer's bundle, the 3D view with both inlined."""
     js, viewer = "", ""
     if bundle is not None and glb_bytes is not None:
         js = bundle.read_text(encoding="utf-8")
         m = BANNER.search(js[:300])
         viewer = m.group(1) if m else "unknown version"
-    elif bundle is None:
-        where = "" if os.environ.get(VIEWER_ENV, "").lower() == "none" else f" ({BUNDLE} is missing)"
-        data["messages"].insert(0, NO_VIEWER.format(where=where))
-    else:
-        data["messages"].insert(0, "The 3D view is empty: no part of the manifest could be placed.")
     messages = "".join(f"<li>{_e(m)}</li>" for m in data["messages"])
     head = (f'<header><h1>{_e(data["design"])}</h1>{_verdict(data, ok)}'
             f'<span class=files><a href="summary.md">summary.md</a><a href="report.json">report.json</a>'
             f'<a href="stiffness.json">stiffness.json</a><a href="exploded.png">exploded.png</a></span>'
             f'<ul id=messages>{messages}</ul></header>')
-    poses = "".join(f'<option value="{p["key"]}">{_e(p["label"])}</option>' for p in data["poses"])
-    view = (f'<section id=view><div id=controls><label>exploded <input id=explode type=range min=0 max=1 step=0.01 '
+    poses = "".join(f'<option value="{p["key"]}">{_e(p["label"])}</option>' for p in data.get("poses", []))
+    view = "<section id=view></section>" if not js else (f'<section id=view><div id=controls><label>exploded <input id=explode type=range min=0 max=1 step=0.01 '
             f'value=0> <output id=explode-mm>0 mm</output></label><label>pose <select id=pose><option value=straight>'
             f'straight</option>{poses}</select></label><label><input id=marks type=checkbox checked> failing checks in '
             f'magenta</label><button id=fit type=button>fit view</button></div><div id=canvas></div>'
@@ -390,13 +393,20 @@ def render_page(data: dict, glb_bytes: bytes | None, ok: bool | None, bundle: Pa
 def write_view(folder: Path, manifest: Manifest, report: dict | None, study: dict | None, explode_mm: float,
                sweep_deg: float) -> Added:
     """view.html into the folder; the manifest's ``view`` section (what the page holds, what it
-    could not draw) and the file's entry."""
+    could not draw) and the file's entry. Without the viewer, no mesh is read: the page lists."""
     folder = Path(folder)
-    data, glb_bytes = page_data(folder, manifest, report, study, explode_mm, sweep_deg)
-    bundle = viewer_bundle()
-    text = render_page(data, glb_bytes, (report or {}).get("ok", manifest.checks_ok), bundle)
+    data = listed(manifest, report, study)
+    bundle, glb_bytes = viewer_bundle(), None
+    if bundle is None:
+        where = "" if os.environ.get(VIEWER_ENV, "").lower() == "none" else f" ({BUNDLE} is missing)"
+        data["messages"].insert(0, NO_VIEWER.format(where=where))
+    elif not manifest.parts:
+        data["messages"].insert(0, "The 3D view is empty: the manifest lists no part.")
+    else:
+        glb_bytes = drawn(folder, manifest, data, explode_mm, sweep_deg)
+    text = render_page(data, (report or {}).get("ok", manifest.checks_ok), glb_bytes, bundle)
     (folder / PAGE).write_text(text, encoding="utf-8")
-    entry = {"status": "ok" if bundle is not None and glb_bytes is not None else "no viewer",
-             "parts": len(data["parts"]), "glb_bytes": len(glb_bytes or b""),
-             "boxes": [p["name"] for p in data["parts"] if p["box"]], "messages": data["messages"]}
+    entry = {"status": "ok" if glb_bytes is not None else "no viewer", "parts": len(data["parts"]),
+             "glb_bytes": len(glb_bytes or b""), "boxes": [p["name"] for p in data["parts"] if p["box"]],
+             "messages": data["messages"]}
     return Added({"view": entry}, {PAGE: {"path": PAGE, "sha256": sha256(folder / PAGE)}})
