@@ -31,7 +31,7 @@ def _share_near(px: np.ndarray, rgb) -> float:
     return float((np.linalg.norm(px - s[:, None] * c, axis=1) < NEAR).mean())
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture
 def chromium():
     return need_browser()
 
