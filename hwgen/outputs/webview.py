@@ -52,7 +52,7 @@ VIEWER_ENV = "HWGEN_VIEWER_JS"      # the viewer's bundle, if not where `make vi
 BUNDLE = Path(sys.prefix) / "share" / "hwgen" / "webview.js"     # `make viewer` writes it here
 STYLE = Path(__file__).with_name("webview.css")
 BANNER = re.compile(r"/\* hwgen viewer: ([^*]*) \*/")            # the bundle's first line: what it holds
-# The page's budget of triangles (each distinct mesh once): the prototype has about 420 000 (a 4 MB
+# The page's budget of triangles (each distinct mesh once): the prototype has about 234 000 (a 4.2 MB
 # GLB); past this the largest meshes are drawn as their boxes, so the page stays one a browser opens
 MAX_TRIANGLES = 2_000_000
 # The strip is cut across every this many mm to be bent: at the prototype's 90° over 270 mm a 10 mm
