@@ -8,7 +8,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: build test test-fast bench stability docs docs-images clean venv clients slicer-check bytecode
+.PHONY: build test test-fast bench stability docs docs-images clean venv clients slicer-check bytecode viewer
 
 venv: $(STAMP)
 
@@ -25,25 +25,42 @@ $(STAMP): pyproject.toml
 bytecode: $(STAMP)
 	@$(BIN)/python -m compileall -q hwgen
 
-build: $(STAMP) bytecode
+build: $(STAMP) bytecode viewer
 	$(BIN)/hwgen build params/prototype.yaml --out out
 
+# The viewer inlined in view.html: three.js from npm (the versions package-lock.json pins) and
+# hwgen/outputs/webview.js, bundled by esbuild into the environment, never into the repository
+# (node_modules/ and the bundle are not committed). Without npm, or if the install fails, view.html
+# is written without its 3D view (it lists the parts, checks and stiffness and says so); the
+# browser tests then skip, except under CI=true.
+VIEWER := $(VENV)/share/hwgen/webview.js
+viewer: $(VIEWER)
+
+$(VIEWER): $(STAMP) package.json package-lock.json hwgen/outputs/webview.js
+	@if command -v npm >/dev/null; then \
+	  { npm ci --no-audit --no-fund --loglevel=error && mkdir -p $(@D) && \
+	    node_modules/.bin/esbuild hwgen/outputs/webview.js --bundle --minify --format=iife --log-level=warning \
+	      --banner:js="/* hwgen viewer: three $$(node -p 'require("./node_modules/three/package.json").version') (npm), bundled by esbuild $$(node_modules/.bin/esbuild --version) */" \
+	      --outfile=$@; } || echo "warning: the viewer was not built: view.html is written without its 3D view"; \
+	else echo "npm not found: view.html is written without its 3D view (install Node.js and npm, then make viewer)"; fi
+
 # The programs the tests open the files in (PrusaSlicer: the plates; FreeCAD: assembly.step's
-# names). Installed from Debian's packages where they are missing and apt-get can (as root);
-# elsewhere install prusa-slicer and freecad yourself, or their tests skip (never with CI=true).
-CLIENTS := prusa-slicer freecadcmd
+# names; Chromium: view.html). Installed from Debian's packages where they are missing and apt-get
+# can (as root); elsewhere install prusa-slicer, freecad and chromium yourself, or their tests skip
+# (never with CI=true).
+CLIENTS := prusa-slicer freecadcmd chromium
 clients:
 	@missing=""; for c in $(CLIENTS); do command -v $$c >/dev/null || missing="$$missing $$c"; done; \
 	if [ -n "$$missing" ]; then \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
-	    echo "installing prusa-slicer and freecad (missing:$$missing)"; \
+	    echo "installing prusa-slicer, freecad and chromium (missing:$$missing)"; \
 	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
-	      prusa-slicer freecad >/dev/null; \
-	  else echo "not installed:$$missing (apt-get install prusa-slicer freecad); their tests will skip"; fi; fi
+	      prusa-slicer freecad chromium >/dev/null; \
+	  else echo "not installed:$$missing (apt-get install prusa-slicer freecad chromium); their tests will skip"; fi; fi
 
 # one pytest worker per core (pytest-xdist); the tests that share a module's build run in one
 # worker, and the workers share one part cache (tests/conftest.py)
-test: $(STAMP) clients bytecode
+test: $(STAMP) clients bytecode viewer
 	$(BIN)/python -m pytest -q -n auto --dist loadgroup
 
 # every print plate sliced in PrusaSlicer as the process prints it (SLA: minutes per plate); not in make test
@@ -56,7 +73,7 @@ test-fast: $(STAMP) bytecode
 	$(BIN)/python -m pytest -q -m "not slow" -n auto --dist loadgroup
 
 # the benchmark times the disks against OpenSCAD (Debian's openscad, installed here when missing and apt-get can)
-bench: $(STAMP) bytecode
+bench: $(STAMP) bytecode viewer
 	@command -v openscad >/dev/null || { [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null && \
 	  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends openscad >/dev/null; } || \
 	  echo "openscad not installed: the benchmark's OpenSCAD row says so"
@@ -68,12 +85,14 @@ stability: $(STAMP) bytecode
 
 # the pictures of the README and the site (docs/images/), from fresh builds of the prototype (with
 # its MuJoCo model) and of the twenty-disk robot, which fails checks (exit 1) and marks them in its
-# pictures; docs/pictures.py names them and keeps each small
-docs-images: $(STAMP)
+# pictures, and the prototype's view.html in headless Chromium with a disk clicked (tests/browser.py);
+# docs/pictures.py names them and keeps each small
+docs-images: $(STAMP) viewer
 	rm -rf .docs-build
 	$(BIN)/hwgen build params/prototype.yaml --out .docs-build -q
 	$(BIN)/hwgen sim params/prototype.yaml --out .docs-build -q
 	$(BIN)/hwgen build params/twenty-disks.yaml --out .docs-build -q || [ $$? -eq 1 ]
+	$(BIN)/python -m tests.browser .docs-build/prototype/view.html .docs-build/prototype/view.png disk_06
 	$(BIN)/python docs/pictures.py .docs-build docs/images
 	rm -rf .docs-build
 

@@ -27,6 +27,7 @@ PICTURES = {
     "prototype-sim.png": "prototype/sim/sim.png",
     "prototype-guide-step.png": "prototype/guide/step_03.png",
     "twenty-disks-bent.png": "twenty-disks/bent.png",
+    "prototype-view.png": "prototype/view.png",       # view.html in headless Chromium (python -m tests.browser)
 }
 LARGE = 1 << 20
 TOO_LARGE = 5 << 20

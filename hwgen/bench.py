@@ -5,6 +5,7 @@ Run: python -m hwgen.bench [PARAMS]          each command as a whole process: wa
      python -m hwgen.bench --sweep-build     the build level of hwgen sweep: 2 designs on 2 workers
                                              against the same 2 built one after the other (minutes)
      python -m hwgen.bench --tune            hwgen tune's stiffness example on a small budget alone
+     python -m hwgen.bench --view [PARAMS]   view.html's stage on a fresh build, step by step
 """
 from __future__ import annotations
 
@@ -437,6 +438,40 @@ def _statics(plan) -> None:
         sweeps(plan)
 
 
+def view_rows(folder: Path, plan) -> None:
+    """view.html's stage on a built design as a build runs it (the meshes' arrays from the store the
+    build keeps them in: here the first run's), then its steps: the meshes read, the poses (the
+    exploded offsets, the bent placements, the strip cut and bent), the GLB export, the page."""
+    import json
+
+    import numpy as np
+
+    from hwgen import cache
+    from hwgen.cad.manifest import read_manifest
+    from hwgen.checks.report import read_report
+    from hwgen.outputs import scene, webview
+    manifest, report = read_manifest(folder), read_report(folder)
+    study = json.loads((folder / "stiffness.json").read_text())
+    args = (report, study, plan.render.explode_mm, plan.check.max_angle_deg)
+    with tempfile.TemporaryDirectory() as tmp, cache.using(cache.Store(Path(tmp))):
+        webview.write_view(folder, manifest, *args)             # the meshes' arrays kept, as the checks keep them
+        cpu = time.process_time()
+        with timed("view.html: the stage", f"{(folder / webview.PAGE).stat().st_size / 1e6:.1f} MB page"):
+            webview.write_view(folder, manifest, *args)
+        ROWS[-1] = (*ROWS[-1][:2], ROWS[-1][2] + f"; {time.process_time() - cpu:.2f} s CPU, load {os.getloadavg()[0]:.1f}")
+        with timed("view.html: the meshes read"):
+            pairs, _, _ = webview.read_meshes(folder, manifest)
+        parts = scene.scene_parts(pairs)
+        st = np.asarray(manifest.design_report["stations_mm"], float)
+        with timed("view.html: the poses", "exploded offsets, bent placements, the strip cut and bent twice"):
+            scene.exploded_placements(parts, st, plan.render.explode_mm, webview.ISOMETRIC.toward_camera)
+            webview._bent_poses(parts, st, plan.check.max_angle_deg)
+        triangles = sum(len(f) for f in {id(p.drawn): p.faces for p in parts}.values())
+        with timed("view.html: GLB export", f"trimesh, {len(parts)} nodes, {triangles:,} distinct triangles"):
+            data = webview.glb(parts)
+        ROWS[-1] = (*ROWS[-1][:2], ROWS[-1][2] + f", {len(data) / 1e6:.1f} MB")
+
+
 def main(argv: list[str]) -> None:
     if "--tune" in argv:
         with tempfile.TemporaryDirectory(prefix="hwgen-bench-") as tmp:
@@ -450,6 +485,15 @@ def main(argv: list[str]) -> None:
         return
     if "--sweep-build" in argv:
         sweep_build()
+        return
+    if "--view" in argv:
+        from hwgen import pipeline
+        argv = [a for a in argv if a != "--view"]
+        loaded = pipeline.load(Path(argv[0]) if argv else Path("params/prototype.yaml"))
+        with tempfile.TemporaryDirectory(prefix="hwgen-bench-") as tmp:
+            res = pipeline.build(loaded, Path(tmp))
+            view_rows(res.folder, res.plan)
+        _print_steps(f"view.html of {loaded.name} (load {os.getloadavg()[0]:.1f})")
         return
     if "--steps" not in argv:
         processes(Path(argv[0]) if argv else Path("params/prototype.yaml"))
@@ -500,8 +544,13 @@ def main(argv: list[str]) -> None:
             gear_checks(res.folder, read_manifest(res.folder).parts, plan)
         if res.report is not None:
             _monte_carlo(res.report)
+            view_rows(res.folder, res.plan)
+    _print_steps(f"hwgen benchmark: {params_path}")
 
-    t = Table(title=f"hwgen benchmark: {params_path}")
+
+def _print_steps(title: str) -> None:
+    """The rows :func:`timed` took, as one table."""
+    t = Table(title=title)
     t.add_column("step")
     t.add_column("seconds", justify="right")
     t.add_column("note")

@@ -3,7 +3,7 @@
     read (params) → feasibility (model) → plan (model) → parts (cad) → files and manifest (cad)
     → checks (report.json, summary.md; the tendon states' statics: stiffness.json, stiffness.png,
     gravity.png) → plots (lengths.png, tolerance.png, sag.png) → bill of materials
-    → print plates (plates/) → pictures → assembly guide (guide/)
+    → print plates (plates/) → pictures → assembly guide (guide/) → the build in the browser (view.html)
 
 Every build writes into a fresh staging folder beside the target; only when every file is
 complete is it swapped in for ``out/<design>/`` in one step (:func:`hwgen.atomic.new_folder`).
@@ -53,7 +53,7 @@ from .engine.units import PartFiles
 from .errors import InputError, clip
 from .model import feasibility
 from .model.plan import Plan, make_plan
-from .outputs import bom, guide, pictures, plates as print_plates
+from .outputs import bom, guide, pictures, plates as print_plates, webview
 from .outputs.plots import plot_lengths, plot_sag, plot_tolerance
 from .outputs.stiffness import plot_gravity, plot_stiffness
 
@@ -190,13 +190,24 @@ def guide_stage(s: StageInput) -> StageResult:
     return StageResult(guide.write_guide(s.folder, s.manifest, s.plan))
 
 
+def view_stage(s: StageInput) -> StageResult:
+    """view.html: the assembly in the browser with the checks on it and the tendon states'
+    stiffness (stiffness.json, when the checks wrote it), the viewer inlined."""
+    try:
+        study = json.loads((s.folder / STIFFNESS).read_text())
+    except (OSError, ValueError):
+        study = None
+    return StageResult(webview.write_view(s.folder, s.manifest, s.report, study, s.plan.render.explode_mm,
+                                          s.plan.check.max_angle_deg))
+
+
 # (name, stage) in the order a build runs them on its fresh files; each is given the files so far,
 # the manifest with what the stages before it added, and the checks' report (None for the checks
 # themselves, and for a stage that runs beside them)
 AFTER_FILES: list[tuple[str, Callable[[StageInput], StageResult]]] = [
     ("checks", checks_stage), ("bom", bom_stage), ("plates", plates_stage), ("pictures", pictures_stage),
-    ("marks", marks_stage), ("guide", guide_stage)]
-DRAWING_STAGES = ("bom", "pictures", "guide")     # what `hwgen render` runs on existing outputs
+    ("marks", marks_stage), ("guide", guide_stage), ("view", view_stage)]
+DRAWING_STAGES = ("bom", "pictures", "guide", "view")     # what `hwgen render` runs on existing outputs
 BESIDE = ("plates", "pictures")     # stages that read only the parts' files and the manifest's parts and design
 #                                     report: run in threads beside the others (the renderer is a child process)
 AFTER_MEASURED = ("plates",)        # ... once the checks' measurement is over: its meshes and theirs, read from

@@ -276,7 +276,7 @@ def test_the_stages_after_the_files_are_reused_with_the_same_bytes(built, tmp_pa
     first = _tree(built("prototype"))
     loaded = load(PARAMS / "prototype.yaml")
     again = build(loaded, tmp_path / "again")
-    assert again.built == [] and again.reused == ["checks", "bom", "plates", "pictures", "marks", "guide"]
+    assert again.built == [] and again.reused == ["checks", "bom", "plates", "pictures", "marks", "guide", "view"]
     assert _tree(again.folder) == first
     assert again.report == json.loads((again.folder / "report.json").read_text())
 

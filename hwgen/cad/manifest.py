@@ -31,7 +31,7 @@ MANIFEST = "manifest.json"
 @dataclass(frozen=True)
 class Added:
     """What one stage after the files adds to the manifest: its own sections (``checks``,
-    ``bom``, ``plates``, ``render``, ``guide``) and the files it wrote that the manifest lists
+    ``bom``, ``plates``, ``render``, ``guide``, ``view``) and the files it wrote that the manifest lists
     (key -> {"path", "sha256", ...})."""
 
     sections: dict = field(default_factory=dict)
@@ -67,6 +67,7 @@ class Manifest:
     plates: dict | None = None
     render: dict | None = None
     guide: dict | None = None
+    view: dict | None = None            # view.html: what the page holds and what it could not draw
 
     def to_json(self) -> dict:
         return {_JSON_KEY.get(f.name, f.name): getattr(self, f.name) for f in dataclasses.fields(self)

@@ -122,6 +122,19 @@ def place(check: dict) -> str:
     return " ".join(bits)
 
 
+def named(check: dict) -> tuple[list[str], list[str]]:
+    """The parts and the tendons a check names where it looked, each once ("A1+A2", the tendons of
+    one eyelet, names both)."""
+    w = check.get("where") or {}
+    parts: list[str] = []
+    tendons: list[str] = []
+    for key, into in (("part", parts), ("parts", parts), ("tendon", tendons), ("tendons", tendons)):
+        v = w.get(key)
+        for name in ([v] if isinstance(v, str) else v if isinstance(v, list) else []):
+            into.extend(one for one in str(name).split("+") if one not in into)
+    return parts, tendons
+
+
 def status(check: dict) -> str:
     if check["passed"]:
         return "pass"

@@ -62,10 +62,17 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
         say("finding:", "yellow", f)
     if (result.manifest.render or {}).get("status") in ("unavailable", "failed"):
         say("warning:", "yellow", result.manifest.render["message"])
+    _view_notes(result.manifest.view)
     if result.report is not None:
         _verdict(result.report, result.folder, loaded)
     if failed:
         raise typer.Exit(EXIT_FINDINGS)
+
+
+def _view_notes(view: dict | None) -> None:
+    """What view.html could not show (no viewer, a part drawn as its box), as warnings."""
+    for message in (view or {}).get("messages", []):
+        say("warning:", "yellow", f"view.html: {message}")
 
 
 def _built_before(params: Path, out_dir: Path) -> bool:
@@ -188,7 +195,7 @@ def check(params: Path = PARAMS, out_dir: Path = OUT,
 def render(params: Path = PARAMS, out_dir: Path = OUT,
            quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner"),
            cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE, cache_size: str = CACHE_SIZE) -> None:
-    """Pictures (exploded, assembled, bent PNG), the exploded SVG drawing and the bill of materials.
+    """Pictures (exploded, assembled, bent PNG), the exploded SVG drawing, the bill of materials and view.html.
 
     Builds first only when the outputs are missing or made from other parameters. Needs no display or GPU; exit 1 when no offscreen OpenGL backend works (the message says what to install).
     """
@@ -204,6 +211,7 @@ def render(params: Path = PARAMS, out_dir: Path = OUT,
     for name, f in entry["files"].items():
         size = f" ({f['width']} × {f['height']} px)" if "width" in f else ""
         out.print(f"  {printable(folder / name)}{size}")
+    out.print(f"  {printable(folder / 'view.html')} (open it in a browser)")
 
 
 @_command

@@ -17,7 +17,8 @@ from ..model.plan import Plan
 # the stages after the files the cache keeps, and the environment variables each reads besides
 # the folder, the manifest and the plan
 STAGE_ENV = {"checks": ("HWGEN_CHECK_SAMPLES",), "bom": (), "plates": (), "guide": (),
-             "pictures": ("HWGEN_RENDER_BACKEND", "DISPLAY"), "marks": ("HWGEN_RENDER_BACKEND", "DISPLAY")}
+             "pictures": ("HWGEN_RENDER_BACKEND", "DISPLAY"), "marks": ("HWGEN_RENDER_BACKEND", "DISPLAY"),
+             "view": ("HWGEN_VIEWER_JS",)}
 
 
 class WorkAhead(Protocol):

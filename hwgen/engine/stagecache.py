@@ -8,20 +8,24 @@ from collections.abc import Callable
 from .. import cache
 from ..cad.manifest import Added
 from ..checks.report import REPORT, read_report
+from ..outputs import webview
 from ..outputs.pictures import MARKED
 from .context import STAGE_ENV, Hashes, StageInput, StageResult
 
 STAGE_REWRITES = {"marks": MARKED}   # files a stage draws again over an earlier stage's (kept in the cache)
 STAGE_RESULT = {"checks": REPORT}    # a stage whose report is this file of its outputs (read back by read_report)
 RENDERING = ("pictures", "marks")    # stages whose outputs are not kept when no renderer drew them
+STAGE_ASSETS = {"view": webview.assets}     # what a stage reads besides the folder, the plan and hwgen's .py code
 
 
 def stage_key(hashes: Hashes, name: str, given: StageInput) -> str:
     """What a stage after the files is kept under: every file in the folder, the manifest, the plan
-    (the design's values as the stages read them), the environment it reads and hwgen's code."""
-    return cache.entry_key("stage " + name, (hashes.files(given.folder), given.manifest, given.plan,
-                                            {e: os.environ.get(e) for e in STAGE_ENV[name]}),
-                           libraries=cache.LIBRARIES)
+    (the design's values as the stages read them), the environment it reads, the files besides
+    hwgen's code it reads (:data:`STAGE_ASSETS`) and hwgen's code."""
+    inputs = (hashes.files(given.folder), given.manifest, given.plan, {e: os.environ.get(e) for e in STAGE_ENV[name]})
+    if name in STAGE_ASSETS:
+        inputs += (STAGE_ASSETS[name](),)
+    return cache.entry_key("stage " + name, inputs, libraries=cache.LIBRARIES)
 
 
 def cached_stage(store: cache.Store, hashes: Hashes, name: str, stage: Callable[[StageInput], StageResult],

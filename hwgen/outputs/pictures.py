@@ -29,6 +29,7 @@ import numpy as np
 
 from .. import cache
 from ..cad.manifest import Added, Manifest, sha256
+from ..checks.report import named
 from ..model import kinematics as kin
 from .bom import family_label
 from .drawing import write_exploded_svg
@@ -99,14 +100,11 @@ def failing_marks(checks) -> tuple[dict[str, list[str]], dict[str, list[str]]]:
     for c in checks or []:
         if c.get("passed", True) or c.get("severity") != "error":
             continue
-        w = c.get("where") or {}
-        for key, into in (("part", parts), ("parts", parts), ("tendon", tendons), ("tendons", tendons)):
-            v = w.get(key)
-            for name in ([v] if isinstance(v, str) else v if isinstance(v, list) else []):
-                for one in str(name).split("+"):          # "A1+A2": the tendons of one eyelet
-                    ids = into.setdefault(one, [])
-                    if c["id"] not in ids:
-                        ids.append(c["id"])
+        for names, into in zip(named(c), (parts, tendons)):
+            for one in names:
+                ids = into.setdefault(one, [])
+                if c["id"] not in ids:
+                    ids.append(c["id"])
     return parts, tendons
 
 

@@ -18,7 +18,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..cad.manifest import Manifest, manifest_parts
+from ..cad.manifest import Manifest, ManifestPart, manifest_parts
 from ..checks.meshes import part_meshes
 from ..model import kinematics as kin
 
@@ -51,6 +51,9 @@ class ScenePart:
     station: int | None = None
     meta: dict = field(default_factory=dict)
     _edges: "EdgeData | None" = None
+    # centre() and world_bounds(), worked out once (the exploded view asks for them part by part, many times)
+    _centre: np.ndarray | None = field(default=None, repr=False, compare=False)
+    _bounds: np.ndarray | None = field(default=None, repr=False, compare=False)
     # what the renderer made of the part in its file's coordinates (its surface with normals): every
     # rigid pose of it is drawn from that, moved, not worked out again
     drawn: dict = field(default_factory=dict, repr=False, compare=False)
@@ -88,12 +91,17 @@ class ScenePart:
 
     def centre(self) -> np.ndarray:
         """Bounding-box centre in robot coordinates (straight, assembled)."""
-        c = (self.vertices.min(axis=0) + self.vertices.max(axis=0)) / 2
-        return self.placement[:3, :3] @ c + self.placement[:3, 3]
+        if self._centre is None:
+            c = (self.vertices.min(axis=0) + self.vertices.max(axis=0)) / 2
+            self._centre = self.placement[:3, :3] @ c + self.placement[:3, 3]
+        return self._centre
 
     def world_bounds(self) -> np.ndarray:
-        w = transform(self.vertices, self.placement)
-        return np.array([w.min(axis=0), w.max(axis=0)])
+        """The box of the part in robot coordinates (straight, assembled): [lowest, highest] corner."""
+        if self._bounds is None:
+            w = transform(self.vertices, self.placement)
+            self._bounds = np.array([w.min(axis=0), w.max(axis=0)])
+        return self._bounds
 
 
 class EdgeData(NamedTuple):
@@ -115,12 +123,18 @@ def is_fixture(entry: dict) -> bool:
 
 def load_parts(folder: Path, manifest: Manifest, fixtures: bool = False) -> list[ScenePart]:
     """The robot's parts (or, with ``fixtures``, only the assembly aids), read back from their STLs
-    (vertices merged). Parts whose files hold the same bytes share one mesh's arrays and what the
-    renderer makes of them in file coordinates (:attr:`ScenePart.drawn`: its surface, its edges)."""
+    (vertices merged): :func:`scene_parts` of their meshes."""
+    return scene_parts(part_meshes(folder, [p for p in manifest_parts(manifest) if p.fixture == fixtures]))
+
+
+def scene_parts(meshes: list[tuple[ManifestPart, object]]) -> list[ScenePart]:
+    """Each part with its mesh (file coordinates) as a :class:`ScenePart`. Parts given one mesh
+    (their files hold the same bytes) share its arrays and what the renderer makes of them in file
+    coordinates (:attr:`ScenePart.drawn`: its surface, its edges)."""
     out = []
     keep = {"name", "role", "station", "files", "placement", "color", "volume_mm3", "bbox_mm"}
     drawn: dict[int, dict] = {}         # per mesh (one per file content), what is drawn of it
-    for p, mesh in part_meshes(folder, [p for p in manifest_parts(manifest) if p.fixture == fixtures]):
+    for p, mesh in meshes:
         e = p.entry
         out.append(ScenePart(p.name, p.role, np.asarray(mesh.vertices), np.asarray(mesh.faces), p.placement, p.station,
                              {k: v for k, v in e.items() if k not in keep} | {"color": e.get("color")},
@@ -319,16 +333,33 @@ def pose_rigid(p: ScenePart, matrix: np.ndarray, view_dir: np.ndarray) -> Posed:
     return Posed(p, V, p.faces, V[pairs], silhouette, np.asarray(matrix, dtype=float))
 
 
+def bent_placement(p: ScenePart, stations, kappa: float) -> np.ndarray | None:
+    """4x4 file -> bent robot coordinates of a part that moves rigidly on the bent robot (a disk with
+    its frame, a part off the backbone with the frame nearest along y); None for a part that runs
+    along the backbone (the strip), which bends with it (:func:`pose_bent`)."""
+    st = np.asarray(stations, dtype=float)
+    if _runs_along_backbone(p, st):
+        return None
+    s = st[p.station] if p.station is not None else float(np.clip(p.centre()[1], st[0], st[-1]))
+    return rigid_bend(st, kappa, s) @ p.placement
+
+
+def sliced(p: ScenePart, pitch: float) -> tuple[np.ndarray, np.ndarray]:
+    """A part that bends with the robot (the strip) in straight robot coordinates, cut across y every
+    ``pitch`` mm so that :func:`bend_points` can bend it (vertices, faces)."""
+    W = transform(p.vertices, p.placement)
+    lo, hi = W[:, 1].min(), W[:, 1].max()
+    return slice_along_y(W, p.faces, np.arange(lo + pitch, hi, pitch))
+
+
 def pose_bent(p: ScenePart, stations, kappa: float, view_dir: np.ndarray) -> Posed:
     """A part placed on the bent robot: rigid for disks and parts off the backbone, bent for the strip."""
     st = np.asarray(stations, dtype=float)
-    if not _runs_along_backbone(p, st):
-        s = st[p.station] if p.station is not None else float(np.clip(p.centre()[1], st[0], st[-1]))
-        return pose_rigid(p, rigid_bend(st, kappa, s) @ p.placement, view_dir)
+    rigid = bent_placement(p, st, kappa)
+    if rigid is not None:
+        return pose_rigid(p, rigid, view_dir)
+    V, F = sliced(p, BEND_PITCH_MM)
     W = transform(p.vertices, p.placement)
-    lo, hi = W[:, 1].min(), W[:, 1].max()
-    cuts = np.arange(lo + BEND_PITCH_MM, hi, BEND_PITCH_MM)
-    V, F = slice_along_y(W, p.faces, cuts)
     # edges: feature edges only (a flat strip's silhouette is its rim), split along the bend
     pairs = p.feature_edges()
     a, b = subdivide_segments(W[pairs[:, 0]], W[pairs[:, 1]], BEND_PITCH_MM)

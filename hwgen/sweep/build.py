@@ -14,6 +14,7 @@ from pathlib import Path
 
 from .. import pipeline
 from ..outputs.view import BACKEND_ENV
+from ..outputs.webview import VIEWER_ENV
 from ..params import LoadedDesign
 from .spec import Resolved
 
@@ -28,17 +29,19 @@ def build_and_check(r: Resolved, options: dict) -> tuple[list[dict], str | None]
         result = pipeline.build(loaded, root, cache_dir=cache)
         kept = str(result.folder)
     else:
-        saved = os.environ.get(BACKEND_ENV)
-        os.environ[BACKEND_ENV] = "none"          # pictures of files about to be removed would be wasted
+        # pictures and view.html's 3D view of files about to be removed would be wasted
+        saved = {name: os.environ.get(name) for name in (BACKEND_ENV, VIEWER_ENV)}
+        os.environ.update({name: "none" for name in saved})
         tmp = tempfile.mkdtemp(prefix="hwgen-sweep-")
         try:
             result = pipeline.build(loaded, Path(tmp), cache_dir=cache)
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
-            if saved is None:
-                os.environ.pop(BACKEND_ENV, None)
-            else:
-                os.environ[BACKEND_ENV] = saved
+            for name, value in saved.items():
+                if value is None:
+                    os.environ.pop(name, None)
+                else:
+                    os.environ[name] = value
         kept = None
     checks = (result.report or {}).get("checks", [])
     failed = [c for c in checks if not c.get("passed", True) and c.get("severity") == "error"]
