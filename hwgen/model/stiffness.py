@@ -67,7 +67,7 @@ REFERENCE = "gravity -z"          # the orientation the headline ratio and the b
 PUSH = (0.0, 0.0, 1.0)            # the push: along z, the flexible direction
 PUSH_WORDS = ("a small push at each disk along the robot's z (the flexible direction of the straight robot, fixed "
               "in space as the paper's pusher moved): not normal to a sagged strip's face, which is softer where "
-              "the robot sags (state N's tip: about a third)")
+              "the robot sags (at state N's tip about a third softer)")
 PAPER_ENDPOINT_RATIO = 4.85       # abstract and Sect. VI: AC1C2H over A at the endpoint
 MAX_COMBINED = 4                  # more stiffening channels than this: each alone and all together only
 CURVE_POINTS = 120
