@@ -44,13 +44,12 @@ from ..model.sag import G_ACC
 from ..model.statics import blas_threads
 from .cosserat_kernel import rk4
 
-H_MAX = 1.0                      # mm: RK4 step (the tip moves by under 1e-6 mm from 0.5 mm's)
+H_MAX = 1.0                      # mm: RK4 step (the prototype's tip moves by under 1e-7 mm at 0.5 or 0.25 mm)
 LOAD_STEPS = (0.25, 0.5, 0.75, 1.0)
 NEWTON_ITER = 40
 TOL_N = 1e-9                     # N: the free end's force left (and N·mm / mm of its moment)
 TOL_MM = 1e-7                    # mm: an eyelet's assumed position against the shot's
 FD = {"n": 1e-6, "m": 1e-4, "e": 1e-6}    # forward-difference steps: N, N·mm, mm
-E_Y = np.array([0.0, 1.0, 0.0])
 
 
 @dataclass(frozen=True)

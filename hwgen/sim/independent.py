@@ -36,7 +36,7 @@ import time
 import numpy as np
 
 from . import cosserat as co
-from .limits import REFERENCE as AGREEMENT
+from . import limits
 from .parts import Printed, tip_masses
 
 SHEAR_COEFFICIENT = 5.0 / 6.0     # Timoshenko's κ of a rectangle
@@ -114,13 +114,13 @@ def reference(printed: Printed, gravity_report: dict, shear_modulus_mpa: float, 
     out = {"model": "Cosserat rod (Rucker & Webster 2011) with shear and extension, tendons as the forces their "
                     "tension puts on the measured eyelets, solved as a boundary-value problem by shooting "
                     "(hwgen.sim.cosserat); built from the files (hwgen.sim.independent)",
-           "length_mm": L, "limit_share_of_length": AGREEMENT}
+           "length_mm": L, "limit_share_of_length": limits.REFERENCE}
     for key, loads in cases.items():
         got = _case(rod, (k, local), loads)
         mj = mujoco[key]
         dist = float(np.linalg.norm(np.subtract(mj, got["tip_mm"])))
         out[key] = {"mujoco_tip_mm": list(mj), "cosserat_tip_mm": got["tip_mm"], "distance_mm": dist,
-                    "share_of_length": dist / L, "within": dist <= AGREEMENT * L,
+                    "share_of_length": dist / L, "within": dist <= limits.REFERENCE * L,
                     "solver": {k_: got[k_] for k_ in ("iterations", "residual", "seconds")}, "curve": got["curve"]}
         if key != "N":
             out[key].update(tendon=pulled[0], tension_n=pulled[1])

@@ -443,24 +443,15 @@ def _keyframes(root, rig: Rig, locks: Locks, baked: dict) -> tuple[dict, dict]:
     n_hinges = sum((h.flex is not None) + (h.twist is not None) + (h.side is not None) for h in rig.hinges)
     frames = ET.SubElement(root, "keyframe")
     for s, ch in locks.states:
-        ctrl, qpos, miss[s] = [], [], {}
+        ctrl, qpos, keys[s], miss[s] = [], [], {}, {}
         for d in rig.drums:
             u, m = _state_setting(d, [t for t in d.tendons if d.channel in ch], locks.hauled.get(s, {}), baked)
-            ctrl += [u * MM, 0.0] if d.drive else [u * MM]
+            ctrl += [u * MM, 0.0] if d.drive else [u * MM]          # a drive at 0
             qpos += [u * MM] * (len(d.tendons) if d.drive else 1)
+            keys[s][d.channel] = u * MM
             miss[s].update(m)
-        keys[s] = dict(zip([d.channel for d in rig.drums], _drum_ctrls(rig.drums, ctrl)))
         ET.SubElement(frames, "key", name=s, qpos=_v([0.0] * n_hinges + qpos), **({"ctrl": _v(ctrl)} if ctrl else {}))
     return keys, miss
-
-
-def _drum_ctrls(drums: list, ctrl: list) -> list:
-    """Each drum's own servo's ctrl out of a keyframe's ctrl vector (a drive's follows its drum's)."""
-    out, i = [], 0
-    for d in drums:
-        out.append(ctrl[i])
-        i += 2 if d.drive else 1
-    return out
 
 
 def write_robot(name: str, printed: Printed, rig: Rig, locks: Locks, springs: dict, folder: Path,

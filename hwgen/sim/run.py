@@ -333,7 +333,12 @@ def simulate(plan, folder: Path, manifest: Manifest, report: dict, out: Path, so
             "j K⁻¹ jᵀ at the tip site, as the statics takes it from its Hessian",
             "states compared with each tendon locked where the statics locks it; the keyframes' own figures beside",
             "strip: the report's measured height, thickness and grams per millimetre; E, G and the hubs' sections "
-            "the statics'"],
+            "the statics'",
+            "damping: the strip's hinges only, β = η/ω₁ (backbone.loss_factor at state N's first bending mode); "
+            "tendons, servos' positions and gravity undamped",
+            "the tensioner's bought metal (dowels, screws, nuts) from the model (hwgen.model.steel: design data, the "
+            "files hold no steel), each piece where the layout puts it",
+            "the table where the mount's foot stands, its edge at the foot's front (the robot overhanging it)"],
         "orientation": facing, "push": {"direction": list(stiffness.PUSH), "words": stiffness.PUSH_WORDS},
         "friction": reference.FRICTION, "statics_from": ref.source,
         "agreement_limit": AGREEMENT,
