@@ -29,13 +29,27 @@ def _tip_load(newtons: float) -> co.Rod:
     return co.Rod((_strip(), co.Rigid(L, L, ((newtons / (co.G_ACC * 1e-3), (0.0, 0.0, 0.0)),))))
 
 
+def _straight_tendon(tau: float, d: float = 30.0, step: float = 5.0) -> co.Solution:
+    """The bare, weightless strip with a tendon ``d`` off its axis on weightless eyelets every
+    ``step`` mm, pulled with ``tau``."""
+    bending, shear, _ = independent._sections(SECTION, G)
+    pieces, at = [], 0.0
+    for s in np.arange(step, L + 1e-9, step):
+        pieces += [co.Flexible(at, float(s), bending, shear, 0.0), co.Rigid(float(s), float(s), (), {"T": (0.0, 0.0, d)})]
+        at = float(s)
+    return co.solve(co.Rod(tuple(pieces), {"T": [(0.0, 0.0, d)]}), co.Loads(tensions={"T": tau}))
+
+
 def test_the_textbook_limits_of_the_rod_hold():
-    """independent.textbook: tip stiffness within 0.01 % of 3EI/L³ (shear adds 1.5e-5), a straight
-    tendon's tip angle within 0.05 % of τdL/EI (its chords cut the corners between eyelets)."""
-    limits = independent.textbook(SECTION, G)
-    assert limits["cantilever_ratio"] == pytest.approx(1.0, abs=1e-4)
-    assert limits["cantilever_ratio"] < 1.0                     # shear only softens it
-    assert limits["tendon_angle_ratio"] == pytest.approx(1.0, abs=5e-4)
+    """A 1 mN tip load: tip stiffness within 0.01 % of 3EI/L³ (shear adds 1.5e-5); a straight
+    tendon pulled with 1 N: the tip's angle within 0.05 % of τdL/EI (its chords cut the corners
+    between eyelets)."""
+    P = 1e-3
+    tip = co.solve(_tip_load(P), co.Loads(gravity=(0.0, 0.0, -1.0)), steps=(1.0,)).point(1, (0.0, 0.0, 0.0))
+    ratio = P / -tip[2] / (3 * EI / L ** 3)
+    assert ratio == pytest.approx(1.0, abs=1e-4) and ratio < 1.0          # shear only softens it
+    R = _straight_tendon(1.0).starts[-1][1]
+    assert math.atan2(R[2, 1], R[1, 1]) / (1.0 * 30.0 * L / EI) == pytest.approx(1.0, abs=5e-4)
 
 
 @pytest.mark.parametrize("alpha", sorted(BISSHOPP_DRUCKER))
@@ -51,12 +65,8 @@ def test_a_straight_tendon_bends_the_strip_to_a_circle():
     """A tendon 30 mm off the axis on weightless eyelets every 5 mm, pulled with 5 N: the centre line
     lies on a circle of radius EI/(τd) about (0, 0, EI/(τd)) to 1e-4 of its radius (the chords cut the
     corners between eyelets, 0.009 mm deep: the moment arm falls short by about that)."""
-    d, tau, pieces, at = 30.0, 5.0, [], 0.0
-    bending, shear, _ = independent._sections(SECTION, G)
-    for s in np.arange(5.0, L + 1e-9, 5.0):
-        pieces += [co.Flexible(at, float(s), bending, shear, 0.0), co.Rigid(float(s), float(s), (), {"T": (0.0, 0.0, d)})]
-        at = float(s)
-    sol = co.solve(co.Rod(tuple(pieces), {"T": [(0.0, 0.0, d)]}), co.Loads(tensions={"T": tau}))
+    d, tau = 30.0, 5.0
+    sol = _straight_tendon(tau, d)
     rho = EI / (tau * d)
     r = np.hypot(sol.p[:, 1], sol.p[:, 2] - rho)
     assert np.abs(r - rho).max() < 1e-4 * rho

@@ -30,7 +30,6 @@ disk's plate, the tensioner's parts, their bought metal and the strip they clamp
 """
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
@@ -126,23 +125,3 @@ def reference(printed: Printed, gravity_report: dict, shear_modulus_mpa: float, 
             out[key].update(tendon=pulled[0], tension_n=pulled[1])
     out["within"] = all(v["within"] for v in out.values() if isinstance(v, dict) and "within" in v)
     return out
-
-
-def textbook(section_report: dict, shear_modulus_mpa: float) -> dict:
-    """The rod of the report's bare strip against two closed forms: its tip stiffness against
-    3EI/L³ (a 1 mN tip load), and a straight tendon 30 mm off its axis on weightless eyelets every
-    5 mm pulled with 1 N against the constant curvature τd/EI (the tip's angle τdL/EI)."""
-    bending, shear, _ = _sections(section_report, shear_modulus_mpa)
-    L = float(section_report["length_mm"])
-    P = 1e-3
-    rod = co.Rod((co.Flexible(0.0, L, bending, shear, 0.0), co.Rigid(L, L, ((P / (co.G_ACC * 1e-3), (0, 0, 0)),))))
-    tip = co.solve(rod, co.Loads(gravity=GRAVITY), steps=(1.0,)).point(1, (0.0, 0.0, 0.0))
-    d, tau, step = 30.0, 1.0, 5.0
-    pieces, at = [], 0.0
-    for s in np.arange(step, L + 1e-9, step):
-        pieces += [co.Flexible(at, float(s), bending, shear, 0.0), co.Rigid(float(s), float(s), (), {"T": (0.0, 0.0, d)})]
-        at = float(s)
-    sol = co.solve(co.Rod(tuple(pieces), {"T": [(0.0, 0.0, d)]}), co.Loads(tensions={"T": tau}))
-    R = sol.starts[-1][1]
-    return {"cantilever_ratio": P / -tip[2] / (3 * bending[0] / L ** 3),
-            "tendon_angle_ratio": math.atan2(R[2, 1], R[1, 1]) / (tau * d * L / bending[0])}
