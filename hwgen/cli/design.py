@@ -378,8 +378,13 @@ def _print_twin(res: dict) -> None:
                       f"(limit {ref['limit_share_of_length']:.0%})")
     for state, m in res.get("modes", {}).items():
         ring = m["ring_down"]
+        if ring["frequency_hz"] is None:
+            check = "the ring-down found no decaying cosine"
+        else:
+            check = f"ring-down {ring['frequency_hz']:.3f} Hz, {ring['damping_ratio']:.2%}" + (
+                "" if m["agree"] else f": more than {limits.words()['ring_down']} off")
         out.print(f"state {state}: first bending mode {m['frequency_hz']:.3f} Hz, {m['damping_ratio']:.2%} of "
-                  f"critical (ring-down {ring['frequency_hz']:.3f} Hz, {ring['damping_ratio']:.2%})")
+                  f"critical ({check})")
     d = res.get("driven") or {}
     if d:
         change = ", ".join(f"{t} {v:+.2f} N" for t, v in d["locked_tension_change_n"].items())

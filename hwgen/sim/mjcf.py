@@ -18,8 +18,8 @@ Joint damping is the strip's: stiffness-proportional, each hinge damped β times
 β = η / ω₁ with η the laminate's loss factor (``backbone.loss_factor``) and ω₁ the first bending
 mode of state N as this model has it (:mod:`hwgen.sim.modes`): a viscous hinge dissipates per
 cycle at ω₁ what a material of loss factor η does. Tendons and gravity carry no damping, so a
-mode's damping ratio is η/2 times the share of its stiffness the strip holds (less in the
-tensioned states); sim.json's ``modes`` give each. MuJoCo's Euler step takes joint damping
+mode's damping ratio is βω/2 times the share of its stiffness the strip holds (η/2 times it at
+ω₁); sim.json's ``modes`` give each. MuJoCo's Euler step takes joint damping
 implicitly, and a stiffness-proportional β of at least half the step keeps every hinge stable
 however stiff (the stiff directions are 10⁴ times the flexible one): the step is
 :data:`TIMESTEP`, or 2β where β is smaller.

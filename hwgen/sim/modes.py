@@ -78,7 +78,8 @@ def _first(sim: measure.Sim, q: np.ndarray, K: np.ndarray, M: np.ndarray) -> tup
     most along z."""
     w2, phi = eigh(K, M)
     tip = _tip_rows(sim, q) @ phi
-    k = next(i for i in range(len(w2)) if w2[i] > 0 and abs(tip[2, i]) >= max(abs(tip[0, i]), abs(tip[1, i])))
+    up = [i for i in range(len(w2)) if w2[i] > 0]
+    k = next((i for i in up if abs(tip[2, i]) >= max(abs(tip[0, i]), abs(tip[1, i]))), up[0])
     return float(w2[k]), phi[:, k], float(tip[2, k])
 
 
@@ -134,4 +135,8 @@ def ring_down(sim: measure.Sim, q: np.ndarray, mode: dict) -> dict:
         mj.mj_step(m, d)
         z[i] = d.site_xpos[sim.tip][2]
     t = np.arange(1, steps + 1) * m.opt.timestep
-    return {**fit_ring(t, z / measure.MM, mode["frequency_hz"]), "seconds": steps * m.opt.timestep}
+    try:
+        fitted = fit_ring(t, z / measure.MM, mode["frequency_hz"])
+    except RuntimeError as e:                       # curve_fit found no decaying cosine
+        fitted = {"frequency_hz": None, "damping_ratio": None, "failed": str(e)}
+    return {**fitted, "seconds": steps * m.opt.timestep}

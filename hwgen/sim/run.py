@@ -213,8 +213,8 @@ def _write_damped(name: str, printed: parts.Printed, made: tuple, loss_factor: f
                "beta_s": rig.beta_s, "timestep_s": rig.timestep_s,
                "words": "each strip hinge damped β = η/ω₁ times its stiffness: at state N's first bending mode a "
                         "viscous hinge dissipates per cycle what the laminate's loss factor η says; tendons and "
-                        "gravity undamped, so a mode's damping ratio is η/2 times the share of its stiffness the "
-                        "strip holds"}
+                        "gravity undamped, so a mode's damping ratio is βω/2 times the share of its stiffness the "
+                        "strip holds (η/2 times it at ω₁)"}
     return measure.Sim.load(out / ROBOT), written, rig, damping, q
 
 
@@ -227,7 +227,8 @@ def state_modes(sim: measure.Sim, compared: list) -> dict:
         q = s["keyframe"]["q"]
         mode = modes.first_bending(sim, q)
         ring = modes.ring_down(sim, q, mode)
-        agree = all(abs(ring[k] / mode[k] - 1) <= limits.RING_DOWN for k in ("frequency_hz", "damping_ratio"))
+        agree = all(ring[k] is not None and abs(ring[k] / mode[k] - 1) <= limits.RING_DOWN
+                    for k in ("frequency_hz", "damping_ratio"))
         out[s["state"]] = {"frequency_hz": mode["frequency_hz"], "damping_ratio": mode["damping_ratio"],
                            "undamped_hz": mode["undamped_hz"], "ring_down": ring, "agree": agree}
         sim.keyframe(s["state"])
