@@ -82,6 +82,7 @@ class Backbone(_Model):
     shear_modulus_gpa: Finite = Field(4.0, gt=0.1, le=200,
                                       description="G: the laminate's in-plane shear modulus, for the strip's "
                                                   "torsion (G·h·t³/3), GPa")
+    loss_factor: Finite = Field(0.01, gt=0, lt=1, description="η: the laminate's loss factor in bending, for the sim's damping")
 
 
 class Eyelets(_Model):

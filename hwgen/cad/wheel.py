@@ -28,9 +28,10 @@ from OCP.TopTools import TopTools_ListOfShape
 from OCP.TopoDS import TopoDS
 
 from ..model.gearing import GearDesignError, WormPair
-from ..model.tensioner_layout import Fastening, TensionerLayout, Unit, joint
+from ..model.tensioner_layout import Fastening, TensionerLayout, Unit
 from ..model.hardware import NUT_PLAY
-from ..model.tensioner_layout.sizes import ANCHOR_HOLE, CAP, CLAMP_PLATE, M2_CLEARANCE, NUT, PIN_ENGAGE
+from ..model.tensioner_layout import sizes
+from ..model.tensioner_layout.sizes import ANCHOR_HOLE, CLAMP_PLATE, M2_CLEARANCE, NUT, PIN_ENGAGE
 from . import location
 from .bspline import interpolating_surface
 from .primitives import TOOL, cylinder, hex_prism, one
@@ -283,12 +284,7 @@ def _clamp_radius(flange_radius: float, rf2: float) -> float:
 
 def clamp_joint(lay: TensionerLayout, unit: Unit, zc: float) -> Fastening:
     """The clamp's M2 screw: through the plate into the gear, or into the end cap it sits on."""
-    on_cap = any(c[0] - 1e-9 <= zc <= c[1] + 1e-9 for c in unit.caps)
-    return _clamp_joint(lay.fastening, on_cap, lay.pair.face_width)
-
-
-def _clamp_joint(fastening: str, on_cap: bool, face_width: float) -> Fastening:
-    return joint(fastening, "M2", CLAMP_PLATE[2], CAP if on_cap else face_width)
+    return sizes.clamp_joint(lay.fastening, sizes.clamp_on_cap(unit.caps, zc), lay.pair.face_width)
 
 
 @dataclass(frozen=True)
@@ -364,7 +360,7 @@ def wheel_solid(spec: WheelSpec, gear: cq.Solid) -> cq.Solid:
     ang = math.radians(CLAMP_ANGLE)
     at = np.array([rc * math.cos(ang), rc * math.sin(ang)])
     for zf, s, on_cap, _ in spec.clamps:
-        j = _clamp_joint(spec.fastening, on_cap, pair.face_width)
+        j = sizes.clamp_joint(spec.fastening, on_cap, pair.face_width)
         if j.kind == "nut":
             # through the body, and a trap from its far face (where the nut goes in) to the nut's near face
             tools.append(cylinder(j.hole / 2, (*at, zf + s * TOOL), (*at, zf - s * (j.body + TOOL))))

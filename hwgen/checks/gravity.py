@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from ..cad.manifest import Manifest
-from ..model import sag
+from ..model import sag, steel
 from .base import REBUILD, Check
 from .polygons import section_moments
 from .sections import chain_loops, section_robot
@@ -56,9 +56,10 @@ def _spans(fits: list[SlotFit], length: float, ei_strip: float, e_print: float) 
     return spans
 
 
-def loads(parts, manifest: Manifest, length: float):
+def loads(parts, manifest: Manifest, length: float, bought=()):
     """(strip mass per mm in g/mm and its record, [(part, s, mass)], tip assembly record) from the
-    STLs (volume, centroid) and the manifest's densities."""
+    STLs (volume, centroid) and the manifest's densities, and the tip assembly's bought metal
+    ``bought`` (:func:`hwgen.model.steel.tip_pieces`: design data, the files hold no steel)."""
     entries = {p["name"]: p for p in manifest.parts}
     strip, points, tip = None, [], []
     for p in parts:
@@ -82,10 +83,16 @@ def loads(parts, manifest: Manifest, length: float):
         beyond = strip["y_mm"][1] - length
         tip.append((f"{strip['part']} beyond the tip", strip["lambda_g_mm"] * beyond,
                     np.array([0.0, length + beyond / 2, 0.0])))
+    printed = [n for n, _, _ in tip]
+    metal = steel.total(bought)
+    if metal[0] > 0:
+        tip.append(("bought metal", metal[0], metal[1]))
     mt = sum(m for _, m, _ in tip)
     c = sum(m * c for _, m, c in tip) / mt if mt else np.array([0.0, length, 0.0])
-    return strip, points, {"parts": [n for n, _, _ in tip], "mass_g": mt, "center_of_mass_mm": c.tolist(),
-                           "a_mm": float(c[1] - length), "z_mm": float(c[2])}
+    return strip, points, {"parts": printed, "mass_g": mt, "center_of_mass_mm": c.tolist(),
+                           "a_mm": float(c[1] - length), "z_mm": float(c[2]),
+                           "bought_metal": {"mass_g": metal[0], "center_of_mass_mm": metal[1].tolist(),
+                                            "pieces": len(bought)}}
 
 
 def _case(r: sag.SagResult) -> dict:
@@ -106,7 +113,7 @@ def gravity_checks(parts, manifest: Manifest, plan, fits: list[SlotFit], strip_h
     I = sag.second_moment(h, t)
     e_print, e_why = plan.process.modulus_gpa, plan.process.modulus_reason
     e_print *= 1000.0
-    strip, points, tip = loads(parts, manifest, length)
+    strip, points, tip = loads(parts, manifest, length, steel.tip_pieces(plan))
     if strip is None:
         return {}, [Check("gravity.strip_stress", "error", False, "no strip to load: the backbone STL is missing",
                           fix=REBUILD)]
@@ -129,6 +136,8 @@ def gravity_checks(parts, manifest: Manifest, plan, fits: list[SlotFit], strip_h
                  "gravity, no tendon tensioned (state N); solved by shooting (hwgen.model.sag)",
         "assumptions": [
             "masses: STL volumes × the manifest's densities (design data); centres of mass from the STLs",
+            "the tip assembly carries the bought metal the bill of materials lists for it (dowels, screws, nuts, set "
+            "screws: hwgen.model.steel, design data), each piece where the layout puts it",
             "the base disk and the base mount are the clamp's; other disks are point weights at their centres of mass",
             "everything beyond the tip station (tensioner, clamped strip) is rigid on the tip frame",
             "disk plates hold the strip straight; glued hubs add E_print·I_hub (E_print: " + e_why + ")",
@@ -157,8 +166,9 @@ def gravity_checks(parts, manifest: Manifest, plan, fits: list[SlotFit], strip_h
             f"tip {-r.tip_angle_deg:.1f}° below horizontal; the strip's largest bending stress "
             f"{r.max_stress:.1f} MPa at s = {r.s_max_stress:.1f} mm "
             f"({'under' if ok else 'over'} the allowable {allow:g} MPa), base moment {abs(r.base_moment):.0f} N·mm; "
-            f"carries {tip['mass_g']:.1f} g at {tip['a_mm']:.1f} mm beyond the tip, "
-            f"{sum(ms):.1f} g of disks and {strip['mass_g']:.1f} g of strip (masses from the STLs and the "
+            f"carries {tip['mass_g']:.1f} g at {tip['a_mm']:.1f} mm beyond the tip "
+            f"({tip['bought_metal']['mass_g']:.1f} g of it bought metal: pins, screws, nuts), "
+            f"{sum(ms):.1f} g of disks and {strip['mass_g']:.1f} g of strip (printed masses from the STLs and the "
             f"manifest's densities; E = {E / 1000:g} GPa); as a bare strip without hubs "
             f"{bare.tip_sag:.1f} mm and {bare.max_stress:.1f} MPa")
     checks.append(Check("gravity.strip_stress", sev if not ok else "error", ok, text, r.max_stress, allow,

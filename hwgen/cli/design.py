@@ -11,6 +11,7 @@ from rich.table import Table
 from rich.text import Text
 
 from ..errors import InputError, printable
+from ..sim import limits
 from .common import (CACHE_DIR, CACHE_SIZE, EXIT_FINDINGS, NO_CACHE, OUT, PARAMS, _cache, _command, _load,
                      _mm, _on_outputs, _write_side_file, err, out, say)
 
@@ -335,9 +336,9 @@ def _stiffness_tables(design: str, rep: dict) -> list:
 def sim(params: Path = PARAMS, out_dir: Path = OUT,
         quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner"),
         cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
-    """A MuJoCo model of the robot as printed, checked against hwgen's own statics.
+    """A MuJoCo model of the robot as printed, checked against hwgen's own statics and an independent Cosserat rod.
 
-    Reads the built files (builds first when the outputs are missing or made from other parameters) and writes OUT/<design>/sim/: robot.xml with its meshes (a keyframe per tendon state), sim.json and sim.png. Open it with `python -m mujoco.viewer --mjcf OUT/<design>/sim/robot.xml`. Exit 1 when MuJoCo's tip stiffness and the statics' differ by more than 25 %, the model does not stay finite, or an eyelet site is off its measured eyelet.
+    Reads the built files (builds first when the outputs are missing or made from other parameters) and writes OUT/<design>/sim/: robot.xml with its meshes (a keyframe per tendon state, a table, the actuating pair's drive), sim.json and sim.png. Open it with `python -m mujoco.viewer --mjcf OUT/<design>/sim/robot.xml`. Exit 1 when MuJoCo's tip stiffness and the statics' differ by more than {statics}, MuJoCo's tip and the Cosserat rod's by more than {reference} of the robot's length, a ring-down misses a mode's frequency or damping by more than {ring_down}, the model does not stay finite, or an eyelet site is off its measured eyelet.
     """
     loaded = _load(params)
     from ..pipeline import sim as run_sim
@@ -358,6 +359,7 @@ def sim(params: Path = PARAMS, out_dir: Path = OUT,
     if b:
         out.print(f"{b['tendon']} pulled with {b['tension_n']:.1f} N: tip at ({', '.join(_mm(v) for v in b['mujoco_tip_mm'])}) "
                   f"mm in MuJoCo, ({', '.join(_mm(v) for v in b['statics_tip_mm'])}) by the statics")
+    _print_twin(res)
     for d in res["dynamics"]:
         rtf = f"{d['real_time_factor']:.0f}× real time on one core" if d["real_time_factor"] else ""
         out.print(f"keyframe {d['state']}: {d['seconds']:g} s under gravity, "
@@ -368,6 +370,35 @@ def sim(params: Path = PARAMS, out_dir: Path = OUT,
         out.print(f"  {printable(folder / 'sim' / name)}")
     if not res["ok"]:
         raise typer.Exit(EXIT_FINDINGS)
+
+
+sim.__doc__ = sim.__doc__.format(**limits.words())
+
+
+def _print_twin(res: dict) -> None:
+    """`hwgen sim`'s lines on what the statics cannot say: the independent rod, the modes, the drive."""
+    ref = res.get("reference") or {}
+    for key, r in ref.items():
+        if isinstance(r, dict) and "cosserat_tip_mm" in r:
+            out.print(f"{key}: tip at ({', '.join(_mm(v) for v in r['mujoco_tip_mm'])}) mm in MuJoCo, "
+                      f"({', '.join(_mm(v) for v in r['cosserat_tip_mm'])}) by the Cosserat rod: "
+                      f"{r['distance_mm']:.2f} mm apart, {r['share_of_length']:.2%} of the length "
+                      f"(limit {ref['limit_share_of_length']:.0%})")
+    for state, m in res.get("modes", {}).items():
+        ring = m["ring_down"]
+        if ring["frequency_hz"] is None:
+            check = "the ring-down found no decaying cosine"
+        else:
+            check = f"ring-down {ring['frequency_hz']:.3f} Hz, {ring['damping_ratio']:.2%}" + (
+                "" if m["agree"] else f": more than {limits.words()['ring_down']} off")
+        out.print(f"state {state}: first bending mode {m['frequency_hz']:.3f} Hz, {m['damping_ratio']:.2%} of "
+                  f"critical ({check})")
+    d = res.get("driven") or {}
+    if d:
+        change = ", ".join(f"{t} {v:+.2f} N" for t, v in d["locked_tension_change_n"].items())
+        out.print(f"{d['tendon']} driven {d['haul_mm']:.1f} mm ({d['target_deg']:g}° by eq. (2)): the tip turns to "
+                  f"{d['locked_angle_deg']:.1f}° with the stiffening tendons locked, {d['unlocked_angle_deg']:.1f}° "
+                  f"with them slack; the locked tendons change by {change}")
 
 
 @_command

@@ -265,7 +265,8 @@ def make_plan(design: Design, tensioner_record: dict | None = None) -> Plan:
     backbone = BackboneSpec(height=bb.height, thickness=bb.thickness, y_start=-base_length(d),
                             y_end=bb.length + bb.extra_tip, holes=tuple(bb_holes), density_g_cm3=bb.density_g_cm3,
                             length=bb.length, extra_tip=bb.extra_tip, modulus_gpa=bb.modulus_gpa,
-                            shear_modulus_gpa=bb.shear_modulus_gpa, allowable_stress_mpa=bb.allowable_stress_mpa)
+                            shear_modulus_gpa=bb.shear_modulus_gpa, allowable_stress_mpa=bb.allowable_stress_mpa,
+                            loss_factor=bb.loss_factor)
     first = Plan(stations=tuple(d.stations), paths=paths, disks=tuple(disks), backbone=backbone,
                  merges=tuple(merges), findings=tuple(findings),
                  mount=mount_layout(d, [(x, z) for x, z, _ in disks[0].mount_holes]), jig=jig_layout(d),

@@ -101,6 +101,7 @@ class BackboneSpec:
     modulus_gpa: float       # backbone.modulus_gpa: the laminate's E in bending
     shear_modulus_gpa: float
     allowable_stress_mpa: float
+    loss_factor: float = 0.01  # backbone.loss_factor: the laminate's in bending (the sim's damping)
     name: str = "backbone"
 
     def merged_holes(self) -> list[tuple[float, float, float, tuple[str, ...]]]:

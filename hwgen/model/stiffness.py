@@ -10,8 +10,9 @@ tendon window is an open section in torsion, an uncut one a closed tube). Masses
 from the plan's numbers, not measured: each disk's plate and hub volumes (holes, slot and windows
 taken out) × the printed density, at their centre of mass on the centre line; the tip assembly
 is the tip disk's tensioner as the layout sizes it (housing members, each wheel part as its
-flange's cylinder, each worm as its pitch cylinder) plus the strip beyond the tip, at its centre
-of mass; the base disk is the clamp's. Tendons are the plan's eyelets (eq. (2)); each one's
+flange's cylinder, each worm as its pitch cylinder) plus the strip beyond the tip and the bought
+metal the tensioner carries (dowels, screws, nuts: :mod:`hwgen.model.steel`, about 17 g on the
+prototype), at its centre of mass; the base disk is the clamp's. Tendons are the plan's eyelets (eq. (2)); each one's
 spring is its free length (path plus run to the drum) over ``tendon_material.axial_stiffness_n``
 in series with ``tendon_material.tie_off_compliance_mm_per_n`` (half at the knot, half at the
 drum, for the friction bounds: :mod:`hwgen.model.friction`).
@@ -55,6 +56,7 @@ import numpy as np
 from . import friction as fr
 from . import protocol
 from . import statics as st
+from . import steel
 from .intervals import interval_difference
 from .sag import Span
 
@@ -63,6 +65,9 @@ ORIENTATIONS = {"gravity -z": (0.0, 0.0, -1.0),     # horizontal, flexible direc
                 "weightless": None}
 REFERENCE = "gravity -z"          # the orientation the headline ratio and the bending sweep's locks are of
 PUSH = (0.0, 0.0, 1.0)            # the push: along z, the flexible direction
+PUSH_WORDS = ("a small push at each disk along the robot's z (the flexible direction of the straight robot, fixed "
+              "in space as the paper's pusher moved): not normal to a sagged strip's face, which is softer where "
+              "the robot sags (at state N's tip about a third softer)")
 PAPER_ENDPOINT_RATIO = 4.85       # abstract and Sect. VI: AC1C2H over A at the endpoint
 MAX_COMBINED = 4                  # more stiffening channels than this: each alone and all together only
 CURVE_POINTS = 120
@@ -226,11 +231,12 @@ def _tip_assembly(plan, rho: float, lam: float) -> dict:
     z_t = zsign * sum(v * z for _, v, _, z in parts) / vol if vol else 0.0
     m_s = lam * plan.backbone.extra_tip
     y_s = L + plan.backbone.extra_tip / 2
-    m = m_t + m_s
+    m_b, c_b, _ = steel.total(steel.tip_pieces(plan))
+    m = m_t + m_s + m_b
     if m <= 0:
-        return {"mass_g": 0.0, "a_mm": 0.0, "b_mm": 0.0, "tensioner_g": 0.0, "strip_g": 0.0}
-    return {"mass_g": m, "a_mm": (m_t * y_t + m_s * y_s) / m - L, "b_mm": m_t * z_t / m,
-            "tensioner_g": m_t, "strip_g": m_s}
+        return {"mass_g": 0.0, "a_mm": 0.0, "b_mm": 0.0, "tensioner_g": 0.0, "strip_g": 0.0, "bought_metal_g": 0.0}
+    return {"mass_g": m, "a_mm": (m_t * y_t + m_s * y_s + m_b * c_b[1]) / m - L, "b_mm": (m_t * z_t + m_b * c_b[2]) / m,
+            "tensioner_g": m_t, "strip_g": m_s, "bought_metal_g": m_b}
 
 
 # ------------------------------------------------------------------ the robot
@@ -251,14 +257,16 @@ def describe(plan, measured: dict | None = None) -> Described:
     disks = _disk_masses(plan, rho)
     tip = _tip_assembly(plan, rho, lam)
     how = ("estimated from the plan (plate and hub volumes, the tensioner layout's members, wheels as flange "
-           "cylinders, worms as pitch cylinders) × densities: not measured from the files")
+           "cylinders, worms as pitch cylinders) × densities, and the bought metal at the tip (hwgen.model.steel): "
+           "not measured from the files")
     if measured and measured.get("tip_assembly") and measured.get("strip"):
         disks = [(r["part"], min(float(r["s_mm"]), bb.length), float(r["mass_g"])) for r in measured["disks"]]
         mt = measured["tip_assembly"]
         tip = {"mass_g": float(mt["mass_g"]), "a_mm": float(mt["a_mm"]), "b_mm": float(mt["z_mm"])}
         lam = float(measured["strip"]["lambda_g_mm"])
         section = dataclasses.replace(section, lin_density=lam)
-        how = "measured from the built files' STLs (the check report's gravity section)"
+        how = ("measured from the built files' STLs (the check report's gravity section), with the bought metal at "
+               "the tip (hwgen.model.steel)")
     runs = {r.tendon: r for r in plan.tensioner_layout.runs} if plan.tensioner_layout else {}
     tm = plan.tendon_material
     stations = tuple(float(s) for s in plan.stations)
@@ -421,6 +429,7 @@ def study(plan, which: list[str] | None = None, orientations: list[str] | None =
                  "(hwgen.model.friction)" % h_max,
         "protocol": protocol.SUMMARY,
         "orientations": {o: ORIENTATIONS[o] and list(ORIENTATIONS[o]) for o in names},
+        "push": {"direction": list(PUSH), "words": PUSH_WORDS},
         "frictions": {"none": "frictionless eyelets: each tendon one spring over its whole length",
                       "stuck": "every segment held at its eyelets: each its own spring (the small-push limit of "
                                "static friction)",

@@ -127,6 +127,12 @@ def _newton(sim: Sim, q: np.ndarray, extra: Extra) -> tuple[np.ndarray, int, flo
     return q, NEWTON_ITER, float(np.max(np.abs(f)))
 
 
+def settle(sim: Sim, q0: np.ndarray, extra: Extra = NONE) -> tuple[np.ndarray, int, float]:
+    """The robot at rest from ``q0`` under its loads as they are now (gravity, ctrl, ``extra``), by
+    Newton's method: (coordinates, iterations, the largest generalised force left)."""
+    return _newton(sim, q0, extra)
+
+
 def equilibrium(sim: Sim, q0: np.ndarray, extra: Extra = NONE) -> dict:
     """The robot at rest under gravity and ``extra`` from ``q0`` (the keyframe's pose), gravity
     brought in over :data:`GRAVITY_STEPS` from the weightless robot: its coordinates, iterations,
@@ -147,12 +153,20 @@ def equilibrium(sim: Sim, q0: np.ndarray, extra: Extra = NONE) -> dict:
 def tip_stiffness(sim: Sim, q: np.ndarray, direction, extra: Extra = NONE) -> float:
     """Force over displacement of a small push at the tip site along ``direction``, N/mm (the
     tangent: j K⁻¹ jᵀ)."""
+    return tip_stiffnesses(sim, q, [direction], extra)[0]
+
+
+def tip_stiffnesses(sim: Sim, q: np.ndarray, directions, extra: Extra = NONE) -> list[float]:
+    """:func:`tip_stiffness` along each of ``directions`` (world), from one stiffness matrix."""
     mj, m, d = _mujoco(), sim.model, sim.data
     K = stiffness_matrix(sim, q, extra)
     jacp = np.zeros((3, m.nv))
     mj.mj_jacSite(m, d, jacp, None, sim.tip)
-    j = np.asarray(direction, float) @ jacp
-    return float(1.0 / (j @ np.linalg.solve(K, j)) * MM)
+    out = []
+    for u in directions:
+        j = np.asarray(u, float) @ jacp
+        out.append(float(1.0 / (j @ np.linalg.solve(K, j)) * MM))
+    return out
 
 
 def tip_mm(sim: Sim) -> list[float]:

@@ -7,14 +7,22 @@ sprung as the statics springs it); each link carries its piece of strip (a box, 
 the strip's measured grams per millimetre). Each disk is a body fixed to the link that holds its
 station, with its STL's mass, centre of mass and inertia, its mesh for looks, a cylinder to
 collide with, and a site at each printed eyelet (centre and axis as measured). The tensioner's
-parts are one body fixed to the tip, their masses and inertias summed.
+parts are one body fixed to the tip, their masses and inertias summed with the bought metal
+they carry (dowels, screws, nuts: :mod:`hwgen.model.steel`, each piece a small steel cylinder
+where the layout puts it). The table is a box whose top is the mount's foot, ending at the
+foot's front edge (the mount bolted at the table's edge, the robot overhanging it, as the
+assembly guide says); the disks and the tensioner collide with it (contype 1 against its
+conaffinity 1), the robot's own parts never with each other.
 
-Joint damping is stiffness-proportional (Rayleigh), β = :data:`RAYLEIGH_S`: the first bending
-mode (1.4 Hz in the prototype's state N, 3.4 Hz with every tendon locked) gets 0.9-2.1 % of
-critical damping, in the range of woven carbon/epoxy (0.5-2 %), and every mode above
-1/(πβ) ≈ 160 Hz is overdamped; MuJoCo's Euler step takes joint
-damping implicitly, so the stiff directions (10⁴ times the flexible one) stay stable at a 2 ms
-step.
+Joint damping is the strip's: stiffness-proportional, each hinge damped β times its stiffness,
+β = η / ω₁ with η the laminate's loss factor (``backbone.loss_factor``) and ω₁ the first bending
+mode of state N as this model has it (:mod:`hwgen.sim.modes`): a viscous hinge dissipates per
+cycle at ω₁ what a material of loss factor η does. Tendons and gravity carry no damping, so a
+mode's damping ratio is βω/2 times the share of its stiffness the strip holds (η/2 times it at
+ω₁); sim.json's ``modes`` give each. MuJoCo's Euler step takes joint damping
+implicitly, and a stiffness-proportional β of at least half the step keeps every hinge stable
+however stiff (the stiff directions are 10⁴ times the flexible one): the step is
+:data:`TIMESTEP`, or 2β where β is smaller.
 
 Tendons. Each YAML tendon is a spatial tendon of its name through its sites: its seat (the knot
 on the base disk's outer face), every eyelet in order, its exit on the tip face, the point where
@@ -28,9 +36,19 @@ slide, on the side its sense of winding says (the drum's far side pays out as th
 hauls in), so a drum that winds its tendons the same way tensions them together and one that
 winds them oppositely drives them antagonistically, as printed (``tensioner.winding``).
 
+The drive. The paper's robot has no drive: its actuating channel is a worm that tensions A1 and
+A2 together, and its bending range is a kinematic simulation (Fig. 6). To bend this model, the
+actuating channel's drum, where it winds a pair the same way, gets a drive in series: each of
+the pair on a take-up of its own, held by two servos on fixed tendons of the take-ups, the
+tensioner's (``haul_<channel>``: the pair's mean haul-in, actuator <channel>) and the drive's
+(``drive_<channel>``: half the difference, actuator <channel>_drive): a drum that winds the pair
+oppositely, hauling the first in as it pays the second out, as a motor's capstan would. At ctrl
+0 the drive holds the pair together and the model is the printed one.
+
 States. A keyframe per tendon state (N, A, ... as ``hwgen stiffness`` names them): the robot
 straight, each drum where the statics locks its tendons in that state (the mean over a drum's
-tendons; sim.json gives what each tendon is left off by) or paid out as far as it goes (slack).
+tendons; sim.json gives what each tendon is left off by) or paid out as far as it goes (slack),
+every drive at 0.
 Units: m, kg, s, N.
 """
 from __future__ import annotations
@@ -46,11 +64,11 @@ from scipy.spatial.transform import Rotation
 
 from ..model.sag import G_ACC
 from .chain import Hinge
-from .parts import Body, Printed
+from .parts import Body, Printed, tip_masses
 
 MM, KG, KGM2, NM = 1e-3, 1e-3, 1e-9, 1e-3       # per mm, g, g·mm², N·mm
 TIMESTEP = 0.002            # s: MuJoCo's default step
-RAYLEIGH_S = TIMESTEP       # s: joint damping over joint stiffness (see the module's docstring)
+TABLE_MM = (20.0, 400.0)    # the table's thickness and its reach behind its edge and to either side
 SERVO_RATIO = 1000.0        # the drum servo's stiffness over its tendons' springs
 CHORD_MARGIN_MM = 5.0       # the take-up's chord at full pay-out: it never shrinks to a point
 TAKE_UP_MASS_KG = 1e-6      # the take-up body itself: the line; its inertia is the drum's (armature)
@@ -69,6 +87,22 @@ class Drum:
     travel_mm: float              # how far the take-up goes either way
     kp_n_per_m: float
     armature_kg: float
+    drive: bool = False           # a take-up per tendon, with the drive in series (see the module's docstring)
+
+
+@dataclass(frozen=True)
+class Rig:
+    """What robot.xml is made of besides the printed parts: the strip's hinges, the drums, the
+    hinges' damping over stiffness β (s) and the step (s)."""
+
+    hinges: list
+    drums: list
+    beta_s: float
+    timestep_s: float = TIMESTEP
+
+    def settled(self, beta_s: float) -> "Rig":
+        """The rig damped at ``beta_s``, its step :data:`TIMESTEP` or 2β where that is smaller."""
+        return Rig(self.hinges, self.drums, beta_s, min(TIMESTEP, 2.0 * beta_s))
 
 
 @dataclass(frozen=True)
@@ -155,12 +189,12 @@ def _strip_piece(parent, name: str, a: float, b: float, strip: dict, origin_s: f
         _inertial(parent, m, [0.0, (a + b) / 2, 0.0], inertia, np.array([0.0, origin_s, 0.0]))
 
 
-def _hinge_joints(el, k: int, hinge: Hinge) -> None:
+def _hinge_joints(el, k: int, hinge: Hinge, beta: float) -> None:
     for axis, name, stiff in (("1 0 0", "flex", hinge.flex), ("0 1 0", "twist", hinge.twist),
                               ("0 0 1", "side", hinge.side)):
         if stiff is not None:
             ET.SubElement(el, "joint", name=f"{name}_{k:02d}", type="hinge", axis=axis, stiffness=_f(stiff * NM),
-                          damping=_f(RAYLEIGH_S * stiff * NM))
+                          damping=_f(beta * stiff * NM))
 
 
 def _disk(parent, printed: Printed, station: int, assets: dict, link_s: float) -> None:
@@ -223,32 +257,40 @@ def _drum_axis(printed: Printed, d: Drum) -> tuple[np.ndarray, np.ndarray]:
     return v / np.linalg.norm(v), np.mean([r.end_mm for r in runs], axis=0)
 
 
-def _tensioner(parent, printed: Printed, drums: list, assets: dict, link_s: float, tip_y: float) -> None:
+def _tensioner(parent, printed: Printed, rig: Rig, assets: dict, link_s: float, tip_y: float) -> None:
     origin = np.array([0.0, tip_y, 0.0])
     el = ET.SubElement(parent, "body", name="tensioner", pos=_v((origin - [0.0, link_s, 0.0]) * MM))
-    m, c, inertia = combine([(b.mass_g, b.com_mm, b.inertia_g_mm2) for b in printed.tip])
+    m, c, inertia = combine(tip_masses(printed))
     _inertial(el, m, c, inertia, origin)
     for b in printed.tip:
         _mesh_geom(el, b, assets, origin)
     housing = [b for b in printed.tip if b.role == "tensioner_housing"]
     if housing:
         _box_geom(el, "tensioner_collision", housing[0].box_min, housing[0].box_max, origin)
-    pos = site_positions(printed, drums)
-    for d in drums:
+    pos = site_positions(printed, rig.drums)
+    for d in rig.drums:
         for t in d.tendons:
             for k in ("exit", "run"):
                 ET.SubElement(el, "site", name=f"{t}_{k}", pos=_v((pos[f"{t}_{k}"] - origin) * MM),
                               size=_v((0.75 * MM,)), **{"class": "route"})
         axis, centre = _drum_axis(printed, d)
-        de = ET.SubElement(el, "body", name=f"drum_{d.channel}", pos=_v((centre - origin) * MM))
-        ET.SubElement(de, "inertial", pos="0 0 0", mass=_f(TAKE_UP_MASS_KG), diaginertia="1e-12 1e-12 1e-12")
-        ET.SubElement(de, "joint", name=f"drum_{d.channel}", type="slide", axis=_v(axis),
-                      range=_v((-(d.travel_mm + CHORD_MARGIN_MM / 2) * MM, (d.travel_mm + CHORD_MARGIN_MM / 2) * MM)),
-                      armature=_f(d.armature_kg),
-                      damping=_f(d.kp_n_per_m * TIMESTEP))
-        for t in d.tendons:
-            ET.SubElement(de, "site", name=f"{t}_drum", pos=_v((pos[f"{t}_drum"] - centre) * MM),
-                          size=_v((0.75 * MM,)), **{"class": "route"})
+        groups = [(t,) for t in d.tendons] if d.drive else [d.tendons]
+        for ts in groups:
+            name = take_up(d, ts[0])
+            de = ET.SubElement(el, "body", name=name, pos=_v((centre - origin) * MM))
+            ET.SubElement(de, "inertial", pos="0 0 0", mass=_f(TAKE_UP_MASS_KG), diaginertia="1e-12 1e-12 1e-12")
+            ET.SubElement(de, "joint", name=name, type="slide", axis=_v(axis),
+                          range=_v((-(d.travel_mm + CHORD_MARGIN_MM / 2) * MM, (d.travel_mm + CHORD_MARGIN_MM / 2) * MM)),
+                          armature=_f(d.armature_kg / len(groups)),
+                          damping=_f(d.kp_n_per_m / len(groups) * rig.timestep_s))
+            for t in ts:
+                ET.SubElement(de, "site", name=f"{t}_drum", pos=_v((pos[f"{t}_drum"] - centre) * MM),
+                              size=_v((0.75 * MM,)), **{"class": "route"})
+
+
+def take_up(d: Drum, tendon: str) -> str:
+    """The name of the take-up body and slide joint that carries ``tendon`` of drum ``d``."""
+    return f"drum_{d.channel}_{tendon}" if d.drive else f"drum_{d.channel}"
 
 
 def _assets(root, printed: Printed, folder: Path, out: Path) -> dict:
@@ -279,10 +321,23 @@ def _defaults(root) -> None:
     ET.SubElement(e, "site", type="cylinder", group="2", rgba="0.9 0.8 0.1 1")
     r = ET.SubElement(d, "default", **{"class": "route"})
     ET.SubElement(r, "site", type="sphere", group="4", rgba="0.9 0.8 0.1 1")
+    t = ET.SubElement(d, "default", **{"class": "table"})
+    ET.SubElement(t, "geom", contype="0", conaffinity="1", group="0", rgba="0.55 0.45 0.35 1")
 
 
-def _links(world, printed: Printed, hinges: list, assets: dict) -> ET.Element:
+def _table(world, printed: Printed) -> None:
+    """The table the mount stands on (see the module's docstring)."""
+    if printed.table is None:
+        return
+    z, x0, x1, _, y1 = printed.table
+    thick, reach = TABLE_MM
+    lo, hi = np.array([min(x0, 0.0) - reach, y1 - reach, z - thick]), np.array([max(x1, 0.0) + reach, y1, z])
+    _box_geom(world, "table", lo, hi, np.zeros(3), cls="table")
+
+
+def _links(world, printed: Printed, rig: Rig, assets: dict) -> ET.Element:
     """The strip's chain with its disks; returns the last link (the tip's)."""
+    hinges = rig.hinges
     strip = printed.strip
     y0, y1 = strip["y_mm"]
     origins = [0.0] + [h.s for h in hinges]
@@ -293,7 +348,7 @@ def _links(world, printed: Printed, hinges: list, assets: dict) -> ET.Element:
         el = ET.SubElement(parent, "body", name=f"strip_{i:02d}",
                            pos=_v((0.0, (o - (origins[i - 1] if i else 0.0)) * MM, 0.0)))
         if i:
-            _hinge_joints(el, i, hinges[i - 1])
+            _hinge_joints(el, i, hinges[i - 1], rig.beta_s)
         _strip_piece(el, f"strip_{i:02d}_box", y0 if i == 0 else o, b, strip, o, mass=i > 0)
         for s in stations:
             y = printed.stations_mm[s]
@@ -303,11 +358,12 @@ def _links(world, printed: Printed, hinges: list, assets: dict) -> ET.Element:
     return parent
 
 
-def build_xml(name: str, printed: Printed, hinges: list, drums: list, folder: Path, out: Path) -> ET.Element:
+def build_xml(name: str, printed: Printed, rig: Rig, folder: Path, out: Path) -> ET.Element:
     """The MJCF tree (tendons, actuators and keyframes added by :func:`write_robot`)."""
+    hinges = rig.hinges
     root = ET.Element("mujoco", model=name)
     ET.SubElement(root, "compiler", angle="radian", inertiafromgeom="false", autolimits="true")
-    ET.SubElement(root, "option", timestep=_f(TIMESTEP), integrator="Euler", gravity=_v((0.0, 0.0, -G_ACC)))
+    ET.SubElement(root, "option", timestep=_f(rig.timestep_s), integrator="Euler", gravity=_v((0.0, 0.0, -G_ACC)))
     L = printed.strip["y_mm"][1]
     ET.SubElement(root, "statistic", center=_v((0.0, L / 2 * MM, 0.0)), extent=_f(L * 1.4 * MM))
     _defaults(root)
@@ -317,9 +373,10 @@ def build_xml(name: str, printed: Printed, hinges: list, drums: list, folder: Pa
     for b in printed.base:
         el = _part_body(world, b, assets, np.zeros(3))
         _box_geom(el, f"{b.name}_collision", b.box_min, b.box_max, np.zeros(3))
-    last = _links(world, printed, hinges, assets)
+    _table(world, printed)
+    last = _links(world, printed, rig, assets)
     if printed.tip:                   # a design whose tensioner could not be laid out has none
-        _tensioner(last, printed, drums, assets, hinges[-1].s if hinges else 0.0,
+        _tensioner(last, printed, rig, assets, hinges[-1].s if hinges else 0.0,
                    printed.stations_mm[max(printed.disks)])
     return root
 
@@ -329,11 +386,12 @@ def path_length(points: list) -> float:
 
 
 def drums_of(printed: Printed, channels: list, springs: dict, reach: dict, break_load: float,
-             armature: dict, order: list) -> list[Drum]:
+             armature: dict, order: list, driven: str | None = None) -> list[Drum]:
     """Each channel's drum: its tendons in order, their senses, how far it travels (the most any
     of its tendons' length changes, ``reach`` (over the check's sweep, or hauled in to a state's
     lock), plus its stretch at the line's break load), the servo's stiffness and the drum's
-    inertia seen along the line. ``order``: the tendons in the YAML's order."""
+    inertia seen along the line. ``order``: the tendons in the YAML's order; ``driven``: the
+    channel that gets a drive where it winds a pair the same way (see the module's docstring)."""
     out = []
     for c in channels:
         ts = tuple(t for t in order if t in printed.runs and printed.runs[t].channel == c)
@@ -341,8 +399,31 @@ def drums_of(printed: Printed, channels: list, springs: dict, reach: dict, break
             continue
         travel = max(reach.get(t, 0.0) + break_load / springs[t] for t in ts)
         kp = SERVO_RATIO * sum(springs[t] for t in ts) / MM
-        out.append(Drum(c, ts, tuple(printed.runs[t].sense for t in ts), travel, kp, armature.get(c, 0.0)))
+        senses = tuple(printed.runs[t].sense for t in ts)
+        drive = c == driven and len(ts) == 2 and len(set(senses)) == 1
+        out.append(Drum(c, ts, senses, travel, kp, armature.get(c, 0.0), drive))
     return out
+
+
+def _servos(root, tendon, drums: list) -> None:
+    """The drums' servos: on the take-up's slide, or for a drum with a drive on the fixed tendons
+    (into ``tendon``) that haul its pair together and drive it apart (see the module's docstring)."""
+    act = ET.SubElement(root, "actuator")
+    for d in drums:
+        span = _v((-d.travel_mm * MM, d.travel_mm * MM))
+        if not d.drive:
+            ET.SubElement(act, "position", name=d.channel, joint=take_up(d, d.tendons[0]), kp=_f(d.kp_n_per_m),
+                          ctrlrange=span)
+            continue
+        (a, b), (sa, sb) = d.tendons, d.senses
+        for name, coefs in ((f"haul_{d.channel}", (0.5, 0.5)), (f"drive_{d.channel}", (0.5 * sa, -0.5 * sb))):
+            f = ET.SubElement(tendon, "fixed", name=name)
+            for t, c in zip((a, b), coefs):
+                ET.SubElement(f, "joint", joint=take_up(d, t), coef=_f(c))
+        ET.SubElement(act, "position", name=d.channel, tendon=f"haul_{d.channel}", kp=_f(d.kp_n_per_m),
+                      ctrlrange=span)
+        ET.SubElement(act, "position", name=f"{d.channel}_drive", tendon=f"drive_{d.channel}", kp=_f(d.kp_n_per_m),
+                      ctrlrange=span)
 
 
 def _state_setting(d: Drum, locked: dict, hauled: dict, baked: dict) -> tuple[float, dict]:
@@ -355,11 +436,29 @@ def _state_setting(d: Drum, locked: dict, hauled: dict, baked: dict) -> tuple[fl
     return 0.0, {}
 
 
-def write_robot(name: str, printed: Printed, hinges: list, drums: list, locks: Locks, springs: dict,
-                folder: Path, out: Path) -> Written:
+def _keyframes(root, rig: Rig, locks: Locks, baked: dict) -> tuple[dict, dict]:
+    """A keyframe per state (see the module's docstring): (state -> {channel: ctrl m}, state ->
+    {tendon: what its drum's setting misses its lock by, mm})."""
+    keys, miss = {}, {}
+    n_hinges = sum((h.flex is not None) + (h.twist is not None) + (h.side is not None) for h in rig.hinges)
+    frames = ET.SubElement(root, "keyframe")
+    for s, ch in locks.states:
+        ctrl, qpos, keys[s], miss[s] = [], [], {}, {}
+        for d in rig.drums:
+            u, m = _state_setting(d, [t for t in d.tendons if d.channel in ch], locks.hauled.get(s, {}), baked)
+            ctrl += [u * MM, 0.0] if d.drive else [u * MM]          # a drive at 0
+            qpos += [u * MM] * (len(d.tendons) if d.drive else 1)
+            keys[s][d.channel] = u * MM
+            miss[s].update(m)
+        ET.SubElement(frames, "key", name=s, qpos=_v([0.0] * n_hinges + qpos), **({"ctrl": _v(ctrl)} if ctrl else {}))
+    return keys, miss
+
+
+def write_robot(name: str, printed: Printed, rig: Rig, locks: Locks, springs: dict, folder: Path,
+                out: Path) -> Written:
     """robot.xml and its meshes into ``out`` (see the module's docstring); ``springs``: tendon -> N/mm."""
-    states, hauled = locks.states, locks.hauled
-    root = build_xml(name, printed, hinges, drums, folder, out)
+    states, hauled, drums = locks.states, locks.hauled, rig.drums
+    root = build_xml(name, printed, rig, folder, out)
     notes, baked = [], {}
     for d in drums:
         first = next((hauled[s] for s, ch in states if d.channel in ch), {})
@@ -384,21 +483,8 @@ def write_robot(name: str, printed: Printed, hinges: list, drums: list, locks: L
     if not drums:
         notes.append("no drums (the tensioner has no layout): every tendon stays just taut at the straight robot, "
                      "and the keyframes cannot lock or slacken them")
-    act = ET.SubElement(root, "actuator")
-    for d in drums:
-        ET.SubElement(act, "position", name=d.channel, joint=f"drum_{d.channel}", kp=_f(d.kp_n_per_m),
-                      ctrlrange=_v((-d.travel_mm * MM, d.travel_mm * MM)))
-    keys, miss = {}, {}
-    n_hinges = sum((h.flex is not None) + (h.twist is not None) + (h.side is not None) for h in hinges)
-    frames = ET.SubElement(root, "keyframe")
-    for s, ch in states:
-        ctrl, miss[s] = [], {}
-        for d in drums:
-            u, m = _state_setting(d, [t for t in d.tendons if d.channel in ch], hauled.get(s, {}), baked)
-            ctrl.append(u * MM)
-            miss[s].update(m)
-        keys[s] = dict(zip([d.channel for d in drums], ctrl))
-        ET.SubElement(frames, "key", name=s, qpos=_v([0.0] * n_hinges + ctrl), **({"ctrl": _v(ctrl)} if ctrl else {}))
+    _servos(root, tendon, drums)
+    keys, miss = _keyframes(root, rig, locks, baked)
     ET.indent(root)
     ET.ElementTree(root).write(out / "robot.xml", encoding="unicode", xml_declaration=False)
     return Written(drums, keys, miss, rest, baked, notes)

@@ -8,7 +8,10 @@ Eyelets are the check report's measured ones (centre where the hole's axis cross
 mid-plane, and the axis); a disk's mid-plane is where the checks found it (``as_built``).
 Seats (where each tendon is knotted on the base disk) come from the manifest's design report;
 each tendon's run to its drum, and the drum's winding radius and sense, from the drum's
-manifest entry. Lengths mm, masses g, inertia g·mm², robot coordinates.
+manifest entry. The table the base mount stands on: its foot's underside and front edge, from
+the mount's STL (the vertices within :data:`FOOT_MM` of its lowest). The bought metal the
+tip carries (dowels, screws, nuts) is not in the files: the sim adds it from the model
+(:mod:`hwgen.model.steel`). Lengths mm, masses g, inertia g·mm², robot coordinates.
 """
 from __future__ import annotations
 
@@ -19,7 +22,9 @@ import numpy as np
 
 from ..cad.manifest import Manifest, ManifestPart, manifest_parts
 from ..checks.meshes import part_meshes
+from ..model import steel
 
+FOOT_MM = 0.5                 # a mount vertex this close above its lowest is on the table
 TIP_ROLES = ("tensioner_housing", "tensioner_worm", "tensioner_drive", "tensioner_wheel", "tensioner_clamp")
 BASE_ROLES = ("base_mount", "base_clamp")
 
@@ -82,6 +87,8 @@ class Printed:
     seats: dict                   # tendon -> (x, z) on the base disk, and the plate face's y
     runs: dict                    # tendon -> Run
     winding_radius_mm: dict       # drum part -> radius
+    table: tuple | None = None    # the mount's foot on the table: (z of the table, x min, x max, y min, y max)
+    bought: tuple = ()            # the tip's bought metal (hwgen.model.steel.Piece), added by the sim
 
 
 def _inertia(mesh, placement: np.ndarray, density_g_mm3: float) -> np.ndarray:
@@ -98,16 +105,27 @@ def _box(part: ManifestPart) -> tuple[np.ndarray, np.ndarray]:
     return placed.min(axis=0), placed.max(axis=0)
 
 
-def _bodies(folder: Path, parts: list[ManifestPart]) -> dict[str, Body]:
-    out = {}
+def _foot(mesh, placement: np.ndarray) -> tuple:
+    """(z, x min, x max, y min, y max) of a part's lowest vertices (within FOOT_MM), robot frame."""
+    v = np.asarray(mesh.vertices, float) @ placement[:3, :3].T + placement[:3, 3]
+    low = v[v[:, 2] <= v[:, 2].min() + FOOT_MM]
+    return (float(v[:, 2].min()), float(low[:, 0].min()), float(low[:, 0].max()), float(low[:, 1].min()),
+            float(low[:, 1].max()))
+
+
+def _bodies(folder: Path, parts: list[ManifestPart]) -> tuple[dict[str, Body], tuple | None]:
+    """Each part's Body, and the base mount's foot (:func:`_foot`; None without a mount)."""
+    out, foot = {}, None
     for part, mesh in part_meshes(folder, parts):
+        if part.role == "base_mount":
+            foot = _foot(mesh, part.placement)
         e = part.entry
         lo, hi = _box(part)
         out[part.name] = Body(part.name, part.role, part.stl, part.files["stl"].sha256, part.placement,
                               tuple(e.get("color", (0.7, 0.7, 0.7, 1.0))), float(e["mass_g"]),
                               np.asarray(e["center_of_mass_mm"], float),
                               _inertia(mesh, part.placement, float(e["density_g_cm3"]) * 1e-3), lo, hi, dict(e))
-    return out
+    return out, foot
 
 
 def _eyelets(report: dict, drep: dict, stations: dict) -> list[Eyelet]:
@@ -131,7 +149,7 @@ def _eyelets(report: dict, drep: dict, stations: dict) -> list[Eyelet]:
 def read_build(folder: Path, manifest: Manifest, report: dict) -> Printed:
     """The printed robot of a build folder (its manifest and check report)."""
     parts = [p for p in manifest_parts(manifest) if not p.fixture]
-    bodies = _bodies(folder, [p for p in parts if p.role != "backbone"])
+    bodies, foot = _bodies(folder, [p for p in parts if p.role != "backbone"])
     drep = manifest.design_report
     mids = {d["station"]: float(d["y_mid_mm"]) for d in report.get("as_built", {}).get("disks", [])
             if d.get("y_mid_mm") is not None}
@@ -156,4 +174,11 @@ def read_build(folder: Path, manifest: Manifest, report: dict) -> Printed:
                                     p.entry.get("winding", "same"))
     return Printed(disks, [b for b in bodies.values() if b.role in TIP_ROLES],
                    [b for b in bodies.values() if b.role in BASE_ROLES], strip, stations, thick,
-                   _eyelets(report, drep, stations), seats, runs, radius)
+                   _eyelets(report, drep, stations), seats, runs, radius, foot)
+
+
+def tip_masses(printed: Printed) -> list:
+    """(mass g, centre mm, inertia g·mm²) of each printed part of the tip assembly and of each piece
+    of bought metal it carries."""
+    return ([(b.mass_g, b.com_mm, b.inertia_g_mm2) for b in printed.tip]
+            + [(p.mass_g, np.asarray(p.centre_mm), steel.inertia(p)) for p in printed.bought])

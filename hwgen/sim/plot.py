@@ -1,5 +1,6 @@
 """sim.png: MuJoCo against the statics, from sim.json: the strip's centre line in each compared state
-and bent (side view), and the tip stiffness of each state, both models side by side."""
+and bent (side view), with the independent Cosserat rod's in state N and bent, and the tip
+stiffness of each state, both models side by side."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -22,8 +23,14 @@ def sim_figure(result: dict):
         c = cmap(j / max(len(cases) - 1, 1))
         ax.plot(st["y_mm"], st["z_mm"], color=c, lw=3, alpha=0.35)
         ax.plot(mj["y_mm"], mj["z_mm"], color=c, lw=1.2, ls="--", label=label)
+    ref = result.get("reference") or {}
+    rods = [r["curve"] for r in ref.values() if isinstance(r, dict) and "curve" in r]
+    for curve in rods:
+        ax.plot(curve["y_mm"], curve["z_mm"], color="tab:red", lw=0.8, ls=":")
     ax.plot([], [], color="k", lw=3, alpha=0.35, label="statics (hwgen stiffness)")
     ax.plot([], [], color="k", lw=1.2, ls="--", label="MuJoCo (robot.xml)")
+    if rods:
+        ax.plot([], [], color="tab:red", lw=0.8, ls=":", label="Cosserat rod (independent)")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("y along the robot (mm)")
     ax.set_ylabel("z, gravity along -z (mm)")

@@ -213,6 +213,16 @@ def base_bars(fast: str, tip_thickness: float) -> float:
     return max(base, screw - tip_thickness + NUT_PLAY / 2 + NUT_BACKING)
 
 
+def clamp_joint(fast: str, on_cap: bool, face_width: float) -> Fastening:
+    """A clamp plate's M2 screw: through the plate into the gear, or into the end cap it sits on."""
+    return joint(fast, "M2", CLAMP_PLATE[2], CAP if on_cap else face_width)
+
+
+def clamp_on_cap(caps, zc: float) -> bool:
+    """Whether a clamp at the wheel face ``zc`` sits on one of the end caps (z ranges) ``caps``."""
+    return any(c[0] - 1e-9 <= zc <= c[1] + 1e-9 for c in caps)
+
+
 def tip_joint(fast: str, tip_thickness: float, base_t: float) -> Fastening:
     """The screws that hold the housing to the tip disk, through the disk into the base bars."""
     return joint(fast, "M3", tip_thickness, base_t)
