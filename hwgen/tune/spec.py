@@ -170,7 +170,7 @@ class Loaded:
 def load(path: str | Path) -> Loaded:
     """Read and check a tune file and its base design; raise InputError naming the file and field."""
     path = Path(path)
-    spec, base_path, layers = sweep_spec.read_with_base(path, Tune, "tune")
+    spec, base_path, layers = sweep_spec.read_with_base(path, Tune, "tune", Tune)
     base = layers.doc
     for key, value in spec.set.items():
         keys = _keys(path, f"set.{key}", key, base)
