@@ -174,3 +174,10 @@ def test_sweep_and_tune_files_say_the_key_they_mean(tmp_path, kind, body, field,
     lines = refused(kind, str(f), "--out", str(tmp_path / "out"), "--scheduler", "inline")
     assert any(ln.startswith((f"error: {f}: {field}: ", f"  - {field}: ")) and words in ln for ln in lines), lines
     assert not (tmp_path / "out").exists()
+
+
+def test_every_unknown_state_is_named_at_once(tmp_path):
+    lines = refused("stiffness", str(PROTO), "--states", "AX,A,BY", "--out", str(tmp_path / "out"))
+    assert len(lines) == 1 and lines[0].startswith(f"error: {PROTO}: --states: unknown states 'AX', 'BY'; this "
+                                                   f"design's are N, A, "), lines
+    assert not (tmp_path / "out").exists()
