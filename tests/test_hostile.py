@@ -593,6 +593,34 @@ def test_a_base_without_permission_is_bad_input(tmp_path, monkeypatch):
     assert stderr.strip() == f"error: {lab}: <document>: cannot read the file (Permission denied)"
 
 
+def _tune_file(tmp_path: Path, **body) -> Path:
+    doc = {"tune": "t", "base": str(PARAMS / "prototype.yaml"), "level": "lengths",
+           "free": [{"path": "backbone.length", "low": 200, "high": 300}], "goal": {"minimize": "mass_g"}, **body}
+    f = tmp_path / "t.yaml"
+    f.write_text(yaml.safe_dump(doc))
+    return f
+
+
+def test_a_tune_that_removes_a_list_item_is_bad_input(tmp_path):
+    """``set: {tendons[0]: null}``: null gives a field its default, and a list's item has none
+    (it was an AttributeError, exit 3)."""
+    f = _tune_file(tmp_path, set={"tendons[0]": None})
+    code, _, stderr, escaped = run_cli("tune", str(f), "--out", str(tmp_path / "out"), "--scheduler", "inline")
+    assert escaped is None and code == 2
+    assert stderr.strip() == (f"error: {f}: set.tendons[0]: null gives a field its default, and a list's item has "
+                              f"none: set the list whole, without the item")
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_tune_may_free_a_key_its_base_leaves_to_the_default(tmp_path):
+    """A channel's winding the base does not write, freed as a choice: the base's value is unset
+    (it was a KeyError, exit 3, before any trial)."""
+    from hwgen.tune import spec
+    f = _tune_file(tmp_path, free=[{"path": "tensioner.winding.A", "choices": ["same", "opposite"]}])
+    loaded = spec.load(f)
+    assert loaded.names == ("tensioner.winding.A",) and loaded.base_values == (None,)
+
+
 def test_a_manifest_edited_into_nonsense_is_rebuilt_not_a_crash(built, tmp_path, monkeypatch):
     """`hwgen check` trusts the files; a manifest that is not one hwgen wrote means the outputs
     are stale (they are rebuilt), never a traceback."""
