@@ -22,8 +22,11 @@ Reading a file is bounded (:mod:`hwgen.yamlfile`); keys that moved to another se
 from __future__ import annotations
 
 import copy
+import errno
 import hashlib
+import os
 import re
+import stat
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -88,17 +91,46 @@ def value_at(doc, keys):
 
 # ---------------------------------------------------------------- one file
 
-def read_bytes(path: Path) -> bytes:
+def read_bytes(path: Path, kind: str = "design") -> bytes:
     """The file's bytes, at most :data:`hwgen.yamlfile.MAX_BYTES` of them (a device such as
-    /dev/zero, or a 50 MB file, is refused after reading that much, not read to the end)."""
+    /dev/zero, or a 50 MB file, is refused after reading that much, not read to the end).
+    ``kind``: what the file is, for the message on one too large."""
     try:
         with open(path, "rb") as f:
             raw = f.read(yamlfile.MAX_BYTES + 1)
     except OSError as e:
-        raise InputError(path, "", f"cannot read the file ({e.strerror or e})") from None
+        raise InputError(path, "", f"cannot read the file ({_os_reason(e)})") from None
     if len(raw) > yamlfile.MAX_BYTES:
-        raise InputError(path, "", f"larger than {yamlfile.MAX_BYTES >> 20} MiB; a design file is a few kB")
+        raise InputError(path, "", f"larger than {yamlfile.MAX_BYTES >> 20} MiB; a {kind} file is a few kB")
     return raw
+
+
+def _os_reason(e: OSError) -> str:
+    """Why the system would not open a file, in words (a symbolic link loop said as one)."""
+    if e.errno == errno.ELOOP:
+        return "a symbolic link that leads back to itself: a loop"
+    if e.errno == errno.EISDIR:
+        return "a folder, not a file"
+    return e.strerror or str(e)
+
+
+def _not_a_file(p: Path) -> str | None:
+    """Why ``p`` is no file a design can be read from (None: it is one)."""
+    try:
+        mode = p.stat().st_mode
+    except ValueError:                          # a NUL, or a lone surrogate, in the name
+        return "not a name a file can have"
+    except OSError as e:
+        if e.errno == errno.ENOENT:
+            return "a symbolic link to nothing" if p.is_symlink() else "no such file"
+        return _os_reason(e)
+    if stat.S_ISDIR(mode):
+        return "a folder, not a file"
+    if not stat.S_ISREG(mode):
+        return "not a regular file"
+    if not os.access(p, os.R_OK):
+        return "cannot be read (no permission)"
+    return None
 
 
 def document(raw: bytes, path: str | Path) -> tuple[dict, list[str]]:
@@ -145,13 +177,15 @@ def _move_deprecated(data: dict, path: Path) -> list[str]:
 
 def base_file(file: Path, value, key: str = BASE_KEY) -> Path:
     """Where ``base: value`` written in ``file`` points: relative to the file's folder, or absolute;
-    raise :class:`InputError` (naming ``file`` and ``key``) when it is no readable file."""
+    raise :class:`InputError` (naming ``file``, ``key``, and the path it was looked for at) when
+    it is no readable file."""
     if not isinstance(value, str) or not value.strip():
         raise InputError(file, key, "the path of a design file (relative to this file), e.g. base: prototype.yaml")
     p = Path(value)
     p = p if p.is_absolute() else Path(file).parent / p
-    if not p.is_file():
-        raise InputError(file, key, f"{clip(str(p), 120)} is not a file")
+    why = _not_a_file(p)
+    if why:
+        raise InputError(file, key, f"{clip(value, 120)}: {why} (looked for at {clip(os.path.abspath(p), 200)})")
     return p
 
 
@@ -251,7 +285,8 @@ def read_layers(path: str | Path) -> Layers:
     seen: dict[Path, int] = {}
     here, named = Path(path), None
     while True:
-        real = here.resolve()
+        raw = read_bytes(here)
+        real = _real(here)
         if real in seen:
             loop = " → ".join(str(f) for f in files[seen[real]:]) + f" → {here}"
             raise InputError(files[-1], BASE_KEY, f"{clip(str(named), 120)} leads back to a file of this chain of "
@@ -259,7 +294,6 @@ def read_layers(path: str | Path) -> Layers:
         if len(files) >= MAX_CHAIN:
             raise InputError(files[0], BASE_KEY, f"more than {MAX_CHAIN} files in this chain of bases")
         seen[real] = len(files)
-        raw = read_bytes(here)
         doc, moved = document(raw, here)
         files.append(here)
         raws.append(raw)
@@ -277,6 +311,14 @@ def read_layers(path: str | Path) -> Layers:
     if len(files) > 1:
         _drop_lowered(layers)
     return layers
+
+
+def _real(path: Path) -> Path:
+    """The file's path with every symbolic link followed: the same file twice in a chain is a cycle."""
+    try:
+        return path.resolve()
+    except (OSError, RuntimeError):            # a link loop on the way (RuntimeError before Python 3.13)
+        raise InputError(path, "", "a symbolic link that leads back to itself: a loop") from None
 
 
 def _drop_lowered(layers: Layers) -> None:

@@ -5,10 +5,24 @@ escaped, and cut to a few dozen characters, so a 50 MB value makes a one-line me
 """
 from __future__ import annotations
 
+import difflib
 import reprlib
 from pathlib import Path
+from typing import NamedTuple
 
 ECHO_CHARS = 40          # the most of one user-given value a message quotes
+
+
+class Problem(NamedTuple):
+    """A rule a design breaks: the field path (or the paths of the fields the rule involves, the
+    one to change first) and what is wrong. ``cause`` names what the problem is about when others
+    may follow from it (``the slot``); ``follows``, the cause this one follows from: found with
+    it, it is reported under it, as a consequence that may go once the cause is fixed."""
+
+    paths: str | tuple[str, ...]
+    message: str
+    cause: str = ""
+    follows: str = ""
 
 
 class InputError(Exception):
@@ -16,10 +30,12 @@ class InputError(Exception):
 
     One error may carry others found in the same reading (``more``: every problem of a file is
     reported at once) and ``notes`` (hints on values that are not errors themselves, such as a
-    length that looks like metres); :attr:`problems` is the error and the others, in order."""
+    length that looks like metres); :attr:`problems` is the error and the others, in order: the
+    order a user fixes them in (:meth:`of`). ``cause`` and ``follows``: as a :class:`Problem`'s."""
 
-    def __init__(self, file: str | Path, path: str, message: str):
+    def __init__(self, file: str | Path, path: str, message: str, cause: str = "", follows: str = ""):
         self.file, self.path, self.message = str(file), path, message
+        self.cause, self.follows = cause, follows
         self.more: list[InputError] = []
         self.notes: list[str] = []
         super().__init__(f"{file}: {path or '<document>'}: {message}")
@@ -30,11 +46,39 @@ class InputError(Exception):
 
     @classmethod
     def of(cls, problems: list[InputError], notes: list[str] = ()) -> InputError:
-        """One error carrying all of ``problems`` (at least one) and the ``notes``."""
-        first = problems[0]
-        first.more = list(problems[1:])
+        """One error carrying all of ``problems`` (at least one) and the ``notes``, in the order a
+        user fixes them: each root, then the problems that follow from it (``follows`` names the
+        ``cause`` of one found among them, which is a root itself: one level). A problem whose
+        cause is not found is a root of its own."""
+        causes: dict[str, InputError] = {}
+        for p in problems:
+            if p.cause:
+                causes.setdefault(p.cause, p)
+        following: dict[str, list[InputError]] = {}
+        for p in problems:
+            if p.follows in causes and not p.cause:
+                following.setdefault(p.follows, []).append(p)
+        ordered = []
+        for p in problems:
+            if p.follows in causes and not p.cause:
+                continue                                    # listed under its cause
+            p.follows = ""
+            ordered += [p, *(following.pop(p.cause, []) if p.cause and causes[p.cause] is p else [])]
+        first = ordered[0]
+        first.more = ordered[1:]
         first.notes = list(notes)
         return first
+
+    @property
+    def roots(self) -> list[tuple[InputError, list[InputError]]]:
+        """Each problem that follows from no other, with the problems that follow from it."""
+        out: list[tuple[InputError, list[InputError]]] = []
+        for p in self.problems:
+            if p.follows and out:
+                out[-1][1].append(p)
+            else:
+                out.append((p, []))
+        return out
 
     def __str__(self) -> str:
         text = super().__str__()
@@ -67,6 +111,14 @@ def clip(text: str, limit: int = ECHO_CHARS) -> str:
     """``text`` made printable and cut to ``limit`` characters (an ellipsis marks the cut)."""
     text = printable(text[: limit + 1] if len(text) > 4 * limit else text)
     return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def nearest(word: str, choices, cutoff: float = 0.6) -> str | None:
+    """The choice ``word`` is most likely a slip of (difflib's ratio, case aside), or None: what a
+    message offers as "did you mean"."""
+    folded = {str(c).lower(): c for c in choices}
+    close = difflib.get_close_matches(str(word).lower(), list(folded), n=1, cutoff=cutoff)
+    return folded[close[0]] if close else None
 
 
 def echo(value, limit: int = ECHO_CHARS) -> str:

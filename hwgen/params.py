@@ -15,7 +15,7 @@ disk, gears that can be made) is checked next, by :mod:`hwgen.model.feasibility`
 """
 from __future__ import annotations
 
-import difflib
+import functools
 import re
 import types
 import typing
@@ -25,7 +25,7 @@ from typing import Annotated, Literal, get_args
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 
 from . import designfile, yamlfile
-from .errors import InputError, clip, echo
+from .errors import InputError, Problem, clip, echo, nearest
 from .fasteners import size as _fastener
 
 M3_CLEARANCE = _fastener("clearance hole", "M3", "normal")     # ISO 273 normal series (data/fasteners.csv)
@@ -34,6 +34,8 @@ SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_-]{0,63}$")
 MAX_MM = 10_000.0        # no length or coordinate of a design is beyond 10 m
 MAX_TENDONS = 64
 MAX_CHANNELS = 16
+SUGGESTED = 25           # unknown keys of one file matched against the whole schema (of 2 000: the first 25)
+UNKNOWN_CHANNEL = "the unknown channel"       # a channel left with no tendon may follow from a misspelt one
 
 Length = Annotated[float, Field(gt=0, le=MAX_MM, allow_inf_nan=False)]
 NonNegLength = Annotated[float, Field(ge=0, le=MAX_MM, allow_inf_nan=False)]
@@ -544,10 +546,12 @@ def _field_at(model: type[BaseModel], loc) -> tuple[type[BaseModel] | None, obje
     return parent, info
 
 
+@functools.cache
 def _fields_everywhere(model: type[BaseModel], prefix: str = "") -> dict[str, list[str]]:
     """key -> every dotted path of the schema that ends in it (a list's items marked ``[]``)."""
     out: dict[str, list[str]] = {}
     for name, info in model.model_fields.items():
+        name = info.alias or name                 # as a file writes it (a tune's goal: pass)
         path = f"{prefix}.{name}" if prefix else name
         out.setdefault(name, []).append(path)
         kind, inner = unwrap(info.annotation)
@@ -560,24 +564,29 @@ def _fields_everywhere(model: type[BaseModel], prefix: str = "") -> dict[str, li
     return out
 
 
-def _unknown_key(model: type[BaseModel], loc, missing: set[str]) -> tuple[str, str | None]:
-    """What to say of an unknown key: the nearest key of its mapping (difflib), or the section it
-    belongs in; (message, the suggested key when it is a required one that is missing)."""
+def _unknown_key(model: type[BaseModel], loc, missing: set[str], far: bool = True) -> tuple[str, str | None]:
+    """What to say of an unknown key: a key of its mapping it is a slip of (difflib), the full path
+    of a field of that name in another section, or of one it is a slip of (``far``); else the keys
+    its mapping takes. (The message, the suggested key when it is a required one that is missing.)"""
     key = loc[-1] if loc else ""
     parent, _ = _field_at(model, loc)
     where = _path(loc[:-1]) or "the design"
     if parent is None or not isinstance(key, str):
         return "unknown key", None
-    names = list(parent.model_fields)
-    close = difflib.get_close_matches(key, names, n=1, cutoff=0.6)
-    if close:
-        sibling = _path([*loc[:-1], close[0]])
-        if sibling in missing:
-            return f"unknown key; did you mean {close[0]} (required, and missing)?", sibling
-        return f"unknown key; did you mean {close[0]}?", None
-    elsewhere = [p for p in _fields_everywhere(model).get(key, []) if p.rsplit(".", 1)[0] != where]
+    names = [info.alias or name for name, info in parent.model_fields.items()]
+    close = nearest(key, names)
+    sibling = _path([*loc[:-1], close]) if close else None
+    if sibling in missing:
+        return f"unknown key; did you mean {close} (required, and missing)?", sibling
+    everywhere = _fields_everywhere(model)
+    elsewhere = everywhere.get(key, [])
     if elsewhere:
-        return f"unknown key here; {key} belongs in {' or '.join(elsewhere[:3])}", None
+        return f"unknown key here; did you mean {' or '.join(elsewhere[:3])}?", None
+    if close:
+        return f"unknown key; did you mean {close}?", None
+    near = nearest(key, everywhere, cutoff=0.75) if far else None
+    if near:
+        return f"unknown key here; did you mean {' or '.join(everywhere[near][:3])}?", None
     return f"unknown key; {where} takes {clip(', '.join(names), 300)}", None
 
 
@@ -590,22 +599,24 @@ def schema_problems(e: ValidationError, model: type[BaseModel] = None) -> list[t
         loc = tuple(p for p in err["loc"] if not (isinstance(p, str) and p.startswith("function-")))
         errs.append((loc, err))
     missing = {_path(loc) for loc, err in errs if err["type"] == "missing"}
-    unknown = {i: _unknown_key(model, loc, missing) for i, (loc, err) in enumerate(errs)
-               if err["type"] == "extra_forbidden"}
+    extra = [i for i, (_, err) in enumerate(errs) if err["type"] == "extra_forbidden"]
+    unknown = {i: _unknown_key(model, errs[i][0], missing, n < SUGGESTED) for n, i in enumerate(extra)}
     covered = {meant for _, meant in unknown.values() if meant}       # a misspelt key says its missing one
+    itemised = {loc[:k] for loc, _ in errs for k in range(len(loc)) if isinstance(loc[k], int)}  # lists with bad items
     out = []
     for i, (loc, err) in enumerate(errs):
         typ, path = err["type"], _path(loc)
         msg = err["msg"].removeprefix("Value error, ")
         if i in unknown:
             msg = unknown[i][0]
-        elif path in covered:
+        elif path in covered or (typ == "too_short" and loc in itemised):    # short: its bad items dropped
             continue
         elif typ == "missing":
             _, info = _field_at(model, loc)
             what = getattr(info, "description", None)
             msg = f"missing (required): {what}" if what else "missing (required)"
         elif "input" in err and typ != "value_error":
+            msg = "Input should be a list (items written - ..., or [a, b])" if typ == "tuple_type" else msg
             msg += f" (got {echo(err['input'])})"
         out.append((path, msg))
     return list(dict.fromkeys(out))
@@ -617,18 +628,19 @@ def validation_error(e: ValidationError, path: str | Path, model: type[BaseModel
 
 
 def refuse(problems: list, layers: designfile.Layers) -> InputError:
-    """``problems`` ((field path, message); a rule over several fields gives their paths, the one
-    to change first; or an :class:`InputError` named already) as one :class:`InputError`, each named in the file that wrote the field it
-    blames: of a rule's fields, one the design's own file wrote, else one whose value is far off
-    its usual range, else one a base wrote, else the first. A field far off its usual range says
-    so in the message of its problem, or as a note."""
+    """``problems`` ((field path, message), or a :class:`hwgen.errors.Problem`; a rule over several
+    fields gives their paths, the one to change first; or an :class:`InputError` named already) as
+    one :class:`InputError`, each named in the file that wrote the field it blames: of a rule's
+    fields, one the design's own file wrote, else one whose value is far off its usual range, else
+    one a base wrote, else the first. A field far off its usual range says so in the message of its
+    problem, or as a note."""
     hinted = designfile.hints(layers.doc)
     used, out = set(), []
     for problem in problems:
         if isinstance(problem, InputError):           # named already
             out.append(problem)
             continue
-        paths, message = problem
+        paths, message, *why = problem               # why: a Problem's cause and what it follows
         paths = (paths,) if isinstance(paths, str) else tuple(paths)
 
         def rank(p):
@@ -638,7 +650,7 @@ def refuse(problems: list, layers: designfile.Layers) -> InputError:
         if best in hinted and best not in used:
             message = f"{message}; {hinted[best]}"
             used.add(best)
-        out.append(InputError(layers.file_of(best), best, message))
+        out.append(InputError(layers.file_of(best), best, message, *why))
     errored = {e.path for e in out}
     notes = [f"{layers.file_of(p)}: {p}: {h}" for p, h in hinted.items() if p not in used and p not in errored]
     return InputError.of(out, notes)
@@ -723,6 +735,10 @@ def _channel_problems(d: Design) -> list:
         if c not in channels:
             out.append(((f"tensioner.winding.{clip(c)}", "tensioner.channels"),
                         f"{echo(c)} is not one of the channels {echo(list(channels), 80)}"))
+    used = {t.channel for t in d.tendons}
+    out += [Problem(f"tensioner.channels[{i}]", f"channel {echo(c)} has no tendon: give it one (tendons[].channel) "
+                                                f"or drop it from tensioner.channels", follows=UNKNOWN_CHANNEL)
+            for i, c in enumerate(channels[:MAX_CHANNELS]) if c not in used and c not in channels[:i]]
     return out
 
 
@@ -741,11 +757,14 @@ def _tendon_problems(d: Design) -> list:
             else:
                 names[name] = p
         if t.channel not in channels:
-            out.append(((f"{where}.channel", "tensioner.channels"),
-                        f"unknown channel {echo(t.channel)}; tensioner.channels are {echo(list(channels), 80)}"))
+            close = nearest(t.channel, channels)
+            meant = f"; did you mean {close}?" if close else ""
+            out.append(Problem((f"{where}.channel", "tensioner.channels"), f"{t.name}: unknown channel "
+                               f"{echo(t.channel)}{meant}; tensioner.channels are {echo(list(channels), 80)}",
+                               UNKNOWN_CHANNEL))
         if t.routing.table is not None and len(t.routing.table) != n:
             out.append(((f"{where}.routing.table", "disks.count"),
-                        f"has {len(t.routing.table)} rows, there are {n} stations (disks.count)"))
+                        f"{t.name}'s table has {len(t.routing.table)} rows, there are {n} stations (disks.count)"))
     return out
 
 

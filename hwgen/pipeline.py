@@ -532,10 +532,11 @@ def stiffness(loaded: params.LoadedDesign, out_root: Path, which: list[str] | No
     plan = design_plan(loaded, record)
     if which:
         known = [s.name for s in statics_study.states(plan)]
-        for name in which:
-            if name not in known:
-                raise InputError(loaded.source, "--states", f"unknown state {clip(name)!r}; this design's are "
-                                                            f"{', '.join(known)}")
+        unknown = [clip(name) for name in which if name not in known]
+        if unknown:
+            raise InputError(loaded.source, "--states", f"unknown state{'s' if len(unknown) > 1 else ''} "
+                                                        f"{', '.join(map(repr, unknown))}; this design's are "
+                                                        f"{', '.join(known)}")
     with cache.using(_store(cache_dir)):
         report = statics(plan, measured, which)
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:

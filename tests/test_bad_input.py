@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from .clirunner import hwgen
 from .conftest import PARAMS
 
 PROTO = (PARAMS / "prototype.yaml").read_text()
@@ -85,8 +86,7 @@ def test_bad_input_exits_2_names_field_and_writes_nothing(case, tmp_path, previo
 
 def test_missing_file_and_usage_errors_exit_2(tmp_path):
     for args in (["build", str(tmp_path / "nope.yaml")], ["build"], ["frobnicate"]):
-        r = subprocess.run([sys.executable, "-m", "hwgen.cli", *args, "--out", str(tmp_path / "o")],
-                           capture_output=True, text=True, timeout=120)
+        r = hwgen(*args, "--out", str(tmp_path / "o"))
         assert r.returncode == 2, (args, r.stderr)
         assert "Traceback" not in r.stderr
     assert not (tmp_path / "o").exists()

@@ -1,18 +1,15 @@
-"""The command line: routing tables, deviations, schema, and a build through the console script."""
+"""The command line: routing tables, deviations, schema, deprecated keys."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import yaml
 
+from .clirunner import hwgen
 from .conftest import PARAMS
 
 
-def _run(*args, timeout=300):
-    return subprocess.run([sys.executable, "-m", "hwgen.cli", *args], capture_output=True, text=True,
-                          timeout=timeout)
+_run = hwgen            # in this process (tests/test_hostile.py runs the console script itself)
 
 
 def test_routing_reports_table_deviation_station_by_station():

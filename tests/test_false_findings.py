@@ -17,6 +17,7 @@ def _load(tmp_path, text):
     return load(f)
 
 
+@pytest.mark.slow                   # builds the base disk with the CAD kernel
 @pytest.mark.parametrize("end", [3, 5])
 def test_base_disk_axes_are_measured_clear_of_the_seat_plate(tmp_path, end):
     """end_thickness 4 with 1.5 mm knot pockets put the lower axis cut on the pocket floor: the base

@@ -13,8 +13,6 @@ import numpy as np
 import pytest
 
 from hwgen.cad.manifest import Manifest, ManifestPart
-from hwgen.cad.disk import build_disk
-from hwgen.cad.export import write_stl
 from hwgen.checks.meshes import load_mesh, to_manifold
 from hwgen.checks.polygons import inside_many, section_moments
 from hwgen.checks.sections import chain_loops, section_robot
@@ -44,8 +42,16 @@ def _failed(rep, cid):
     return [c for c in rep["checks"] if c["id"] == cid and not c["passed"]]
 
 
+def _disk_file(spec, path) -> None:
+    """A disk built from ``spec`` and written to ``path`` (CadQuery imported here: the fast tier, which
+    collects this module and runs none of its tests, never imports it)."""
+    from hwgen.cad.disk import build_disk
+    from hwgen.cad.export import write_stl
+    write_stl(build_disk(spec).solid, path)
+
+
 def _with_disk(folder, spec):
-    write_stl(build_disk(spec).solid, folder / "stl" / f"{spec.name}.stl")
+    _disk_file(spec, folder / "stl" / f"{spec.name}.stl")
 
 
 @pytest.fixture(scope="module")
@@ -188,8 +194,8 @@ def test_every_tendon_has_a_seat_that_holds_its_termination(built, tmp_path):
     # walls are too thin; measured from the file
     spec = make_plan(d).disks[0]
     stl = tmp_path / "disk_00.stl"
-    write_stl(build_disk(dataclasses.replace(spec, seats=tuple(
-        dataclasses.replace(s, diameter=1.6) if s.tendon == "H" else s for s in spec.seats))).solid, stl)
+    _disk_file(dataclasses.replace(spec, seats=tuple(
+        dataclasses.replace(s, diameter=1.6) if s.tendon == "H" else s for s in spec.seats)), stl)
     checks, _ = _seat_rows(built("prototype"), d, stl)
     bad = {c.where["tendon"]: c.message for c in checks if not c.passed}
     assert sorted(bad) == ["C1", "C2", "H"]

@@ -4,6 +4,7 @@ reach no schema, and the plan the model hands on holds none."""
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -15,6 +16,13 @@ STAGES = ["errors", "atomic", "heap", "processes", "cache", "yamlfile", "designf
 NO_CAD_KERNEL = ("yamlfile", "designfile", "params", "model")         # plain data and numpy: never CadQuery or OCP
 
 
+@functools.cache
+def _tree(f: Path) -> ast.Module:
+    """A module's syntax tree, parsed once a session (every test here walks the whole package)."""
+    return ast.parse(f.read_text())
+
+
+@functools.cache
 def _modules() -> dict[str, Path]:
     mods = {}
     for f in PKG.rglob("*.py"):
@@ -29,7 +37,7 @@ def _imports(mods: dict[str, Path]) -> dict[str, set[str]]:
     graph: dict[str, set[str]] = {m: set() for m in mods}
     for m, f in mods.items():
         pkg = m if f.name == "__init__.py" else m.rpartition(".")[0]
-        for node in ast.walk(ast.parse(f.read_text())):
+        for node in ast.walk(_tree(f)):
             if isinstance(node, ast.ImportFrom):
                 if node.level:
                     base = pkg.split(".")[: len(pkg.split(".")) - (node.level - 1)]
@@ -49,9 +57,15 @@ def _imports(mods: dict[str, Path]) -> dict[str, set[str]]:
     return graph
 
 
+@functools.cache
+def _graph() -> dict[str, set[str]]:
+    """The package's import graph (:func:`_imports`), walked once a session."""
+    return _imports(_modules())
+
+
 def _external(f: Path) -> set[str]:
     out = set()
-    for node in ast.walk(ast.parse(f.read_text())):
+    for node in ast.walk(_tree(f)):
         if isinstance(node, ast.ImportFrom) and not node.level and node.module:
             out.add(node.module.split(".")[0])
         elif isinstance(node, ast.Import):
@@ -96,7 +110,7 @@ def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
 
 
 def test_no_import_cycles():
-    assert _cycles(_imports(_modules())) == []
+    assert _cycles(_graph()) == []
 
 
 def test_cycle_finder_finds_a_cycle():
@@ -109,7 +123,7 @@ def test_every_module_belongs_to_a_stage():
 
 
 def test_stages_import_only_earlier_stages():
-    graph = _imports(_modules())
+    graph = _graph()
     wrong = sorted(f"{m} imports {t}" for m, ts in graph.items() for t in ts
                    if m != "hwgen" and STAGES.index(_stage(t)) > STAGES.index(_stage(m)))
     assert wrong == []
@@ -129,7 +143,7 @@ AFTER_MODEL = ("cad", "checks", "outputs", "sim")     # they see the design only
 @pytest.mark.parametrize("stage", AFTER_MODEL)
 def test_later_stages_import_no_schema(stage):
     """The model is the one adapter from the YAML's schema: the stages after it never import it."""
-    graph = _imports(_modules())
+    graph = _graph()
     wrong = sorted(m for m, ts in graph.items() if _stage(m) == stage and "hwgen.params" in ts)
     assert wrong == []
 

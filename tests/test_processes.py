@@ -6,6 +6,8 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 from hwgen import processes
 from hwgen.engine import WORKER_PRELOAD
 
@@ -14,6 +16,7 @@ def _state(name: str) -> tuple[bool, str | None, int]:
     return "cadquery" in sys.modules, os.environ.get(name), os.getppid()
 
 
+@pytest.mark.slow         # three servers, each importing the CAD kernel (about 2 s of CPU apiece, in children)
 def test_a_worker_starts_with_the_kernel_imported_and_the_callers_environment(monkeypatch):
     monkeypatch.setenv("HWGEN_TEST_PROCESSES", "before")
     with processes.pool(1, WORKER_PRELOAD) as pool:

@@ -13,8 +13,6 @@ import hashlib
 import json
 import math
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +25,8 @@ from hwgen.model import statics as st
 from hwgen.model import stiffness
 from hwgen.model.plan import make_plan
 from hwgen.sim import chain, limits, measure, reference
+
+from .clirunner import hwgen
 
 ROOT = Path(__file__).resolve().parents[1]
 DESIGNS = ["prototype", "paper-table2"]
@@ -115,12 +115,18 @@ def test_a_chain_held_by_plates_every_disk_gap_bends_both_ways_as_the_statics():
             eq.point_stiffness(270.0, u), rel=0.01)
 
 
-def test_the_reference_is_hwgen_stiffness():
+@pytest.fixture(scope="module")
+def prototype_study():
+    """The prototype's plan and its statics in the sim's orientation (every state), solved once."""
+    plan = _plan("prototype")
+    return plan, stiffness.study(plan, orientations=[reference.ORIENTATION])
+
+
+def test_the_reference_is_hwgen_stiffness(prototype_study):
     """What the sim is checked against is what `hwgen stiffness` reports in the orientation the
     sim's world has (gravity −z), frictionless: the same tip stiffness, sag and tensions per
     state, every state's locks; the bent case pulls the actuating tendon that lifts the robot."""
-    plan = _plan("prototype")
-    study = stiffness.study(plan, orientations=[reference.ORIENTATION])
+    plan, study = prototype_study
     ref = reference.statics_reference(plan, None, study, bend_tension_n=10.0)
     names = [s["state"] for s in ref.states]
     full = max(stiffness.states(plan), key=lambda s: len(s.channels)).name
@@ -142,12 +148,11 @@ def test_the_reference_is_hwgen_stiffness():
         stiffness.REFERENCE]                           # robot.xml's gravity, and the statics' headline orientation
 
 
-def test_the_builds_statics_serve_only_when_they_hold_every_state_from_the_same_weights(tmp_path):
+def test_the_builds_statics_serve_only_when_they_hold_every_state_from_the_same_weights(tmp_path, prototype_study):
     """study_of reads stiffness.json when it has every state in the sim's orientation from the
     same weights, and solves the statics again when it has a state fewer, the other orientations
     only, other weights, a skipped statics or no file."""
-    plan = _plan("prototype")
-    full = stiffness.study(plan, orientations=[reference.ORIENTATION])
+    plan, full = prototype_study
     solved = []
 
     def solve():
@@ -180,8 +185,7 @@ def test_the_builds_statics_serve_only_when_they_hold_every_state_from_the_same_
 
 
 def test_hwgen_sim_refuses_a_missing_file_in_one_line(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "hwgen.cli", "sim", str(tmp_path / "nope.yaml"), "--out",
-                        str(tmp_path / "out")], capture_output=True, text=True)
+    r = hwgen("sim", str(tmp_path / "nope.yaml"), "--out", str(tmp_path / "out"))
     assert r.returncode == 2, r.stderr
     assert "Traceback" not in r.stderr and "nope.yaml" in r.stderr
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())

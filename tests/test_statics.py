@@ -461,10 +461,11 @@ def test_a_stiffening_tendon_locked_too_loose_goes_slack_and_fails():
 
 def test_hwgen_stiffness_writes_its_files_and_refuses_an_unknown_state(tmp_path):
     import json
-    import subprocess
-    import sys
-    run = [sys.executable, "-m", "hwgen.cli", "stiffness", "params/prototype.yaml", "--out", str(tmp_path), "-q"]
-    r = subprocess.run(run + ["--states", "A,AC1"], capture_output=True, text=True, timeout=300)
+
+    from .clirunner import hwgen
+    from .conftest import PARAMS
+    run = ["stiffness", str(PARAMS / "prototype.yaml"), "--out", str(tmp_path), "-q"]
+    r = hwgen(*run, "--states", "A,AC1")
     assert r.returncode == 0, r.stderr
     folder = tmp_path / "prototype"
     rep = json.loads((folder / "stiffness.json").read_text())
@@ -474,7 +475,7 @@ def test_hwgen_stiffness_writes_its_files_and_refuses_an_unknown_state(tmp_path)
         assert (folder / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     _assert_stiffness_figures(rep)
     assert "AC1/A (gravity -z)" in r.stdout and "weightless" in r.stdout
-    bad = subprocess.run(run + ["--states", "AX"], capture_output=True, text=True, timeout=300)
+    bad = hwgen(*run, "--states", "AX")
     assert bad.returncode == 2 and "--states: unknown state 'AX'" in bad.stderr
     assert "prototype.yaml" in bad.stderr and "Traceback" not in bad.stderr
 

@@ -17,6 +17,7 @@ import yaml
 
 from hwgen.sweep import levels, lengths, run, spec
 
+from .clirunner import hwgen, hwgen_process
 from .conftest import PARAMS
 from .robots import random_robot
 
@@ -26,9 +27,7 @@ K_AXIS = "tendons[1].routing.function.k"
 BY_HAND = {0.5: 25.0, 1.0: 0.18, 1.5: 8.2, 2.0: 0.18, 2.5: 4.6, 3.0: 0.19, 4.0: 0.20}
 
 
-def _cli(*args, timeout=300, **kw):
-    return subprocess.run([sys.executable, "-m", "hwgen.cli", *args], capture_output=True, text=True,
-                          timeout=timeout, **kw)
+_cli = hwgen            # in this process: `--scheduler inline` runs the sweep here
 
 
 def _sweep_file(tmp_path: Path, body: dict, name: str = "s.yaml") -> Path:
@@ -75,7 +74,7 @@ def test_bad_sweep_file_exits_2_and_writes_nothing(tmp_path):
     r = _cli("sweep", str(f), "--out", str(tmp_path / "out"), "--scheduler", "inline")
     assert r.returncode == 2, r.stdout + r.stderr
     assert r.stderr.strip() == (f"error: {f}: axes[0].path: tendons[1].routing.function.kk: not a field of the "
-                                f"design (see `hwgen schema`)")
+                                f"design; did you mean tendons[1].routing.function.k? (see `hwgen schema`)")
     assert not (tmp_path / "out").exists()
     r = _cli("sweep", str(f), "--scheduler", "udp://nowhere")
     assert r.returncode == 2 and "--scheduler" in r.stderr
@@ -381,7 +380,8 @@ def test_sweep_on_a_real_dask_cluster_matches_the_local_run(tmp_path):
         from distributed import Client
         with Client(f"tcp://127.0.0.1:{port}", timeout=60) as c:
             c.wait_for_workers(2, timeout=120)
-        r = _cli("sweep", str(f), "--out", str(tmp_path / "tcp"), "--scheduler", f"tcp://127.0.0.1:{port}", "-q")
+        r = hwgen_process("sweep", str(f), "--out", str(tmp_path / "tcp"), "--scheduler", f"tcp://127.0.0.1:{port}",
+                          "-q")
         assert r.returncode == 0, r.stderr
         assert "on 2 worker(s)" in r.stdout
     finally:
@@ -393,7 +393,7 @@ def test_sweep_on_a_real_dask_cluster_matches_the_local_run(tmp_path):
             except subprocess.TimeoutExpired:
                 os.killpg(p.pid, signal.SIGKILL)
                 p.wait()
-    r = _cli("sweep", str(f), "--out", str(tmp_path / "local"), "--workers", "2", "-q")
+    r = hwgen_process("sweep", str(f), "--out", str(tmp_path / "local"), "--workers", "2", "-q")
     assert r.returncode == 0, r.stderr
     _same(tmp_path / "tcp" / "sweeps" / "t" / "lengths", tmp_path / "local" / "sweeps" / "t" / "lengths")
     assert len(_rows(tmp_path / "local" / "sweeps" / "t" / "lengths")) == 15 * 3 * 2
@@ -414,8 +414,8 @@ def test_build_level_keeps_the_files_asked_for_and_records_refusals(built, tmp_p
         {"path": "disks.count", "values": [5, 5]}, {"path": "disks.spacing", "values": [67.5, 67.5]},
         {"path": "tendons[1].routing.function.a", "values": [25, 80]}]})
     # no pictures in the kept build: nothing here reads one
-    r = _cli("sweep", str(f), "--out", str(tmp_path / "out"), "--scheduler", "inline", "-q", timeout=900,
-             env={**os.environ, "HWGEN_RENDER_BACKEND": "none"})
+    r = hwgen_process("sweep", str(f), "--out", str(tmp_path / "out"), "--scheduler", "inline", "-q", timeout=900,
+                      env={**os.environ, "HWGEN_RENDER_BACKEND": "none"})
     assert r.returncode == 0, r.stderr
     rows = {row["variant"]: row for row in _rows(tmp_path / "out" / "sweeps" / "t" / "build")}
     ok, bad = rows[0], rows[1]

@@ -19,15 +19,14 @@ from hwgen.errors import InputError
 from hwgen.sweep import levels
 from hwgen.tune import report, results, run as tune_run, spec
 
+from .clirunner import hwgen, hwgen_process
 from .conftest import PARAMS
 
 PROTOTYPE = PARAMS / "prototype.yaml"
 K = "tendons[1].routing.function.k"
 
 
-def _cli(*args, timeout=600, **kw):
-    return subprocess.run([sys.executable, "-m", "hwgen.cli", *args], capture_output=True, text=True,
-                          timeout=timeout, **kw)
+_cli = hwgen            # in this process: `--scheduler inline` runs the tune here
 
 
 def _tune_file(tmp_path: Path, body: dict, name: str = "t.yaml") -> Path:
@@ -63,7 +62,7 @@ def _trials(out: Path, name: str = "t") -> list[dict]:
     ({"goal": {"pass": True, "maximize": "tip_stiffness"}}, "goal", "not both"),
     ({"goal": {"maximize": "tip_stiffness", "orientation": "upside down"}}, "goal.orientation", "gravity -z"),
     ({"goal": {"maximize": "tip_stiffness", "friction": "capstan"}}, "goal.friction", "stuck"),
-    ({"base": "nowhere.yaml"}, "base", "is not a file"),
+    ({"base": "nowhere.yaml"}, "base", "nowhere.yaml: no such file (looked for at "),
     ({"goal": {}}, "goal", "give 'maximize'"),
     ({"set": {"disks.cont": 20}}, "set.disks.cont", "not a field"),
     ({"set": {"disks.count": 1}}, "set", "not a design"),
@@ -82,7 +81,7 @@ def test_bad_tune_file_exits_2_and_writes_nothing(tmp_path):
     r = _cli("tune", str(f), "--out", str(tmp_path / "out"), "--scheduler", "inline")
     assert r.returncode == 2, r.stdout + r.stderr
     assert r.stderr.strip() == (f"error: {f}: free[0].path: tendons[1].routing.function.kk: not a field of the "
-                                f"design (see `hwgen schema`)")
+                                f"design; did you mean tendons[1].routing.function.k? (see `hwgen schema`)")
     assert not (tmp_path / "out").exists()
 
 
@@ -303,8 +302,8 @@ def test_the_shipped_stiffness_tune_builds_its_best(tmp_path):
     drawn); the best feasible trial keeps the tip's torsion and the least disk stiffness, the actuating
     pair is as it was, and it builds and passes `hwgen check`; with none feasible, the summary names
     what binds. (The done-when, 1.5× on the full budget, is measured by running the tune, not here.)"""
-    r = _cli("tune", str(PARAMS / "tune-stiffness.yaml"), "--out", str(tmp_path), "--budget", "16",
-             "--scheduler", "inline", "-q")
+    r = hwgen_process("tune", str(PARAMS / "tune-stiffness.yaml"), "--out", str(tmp_path), "--budget", "16",
+                      "--scheduler", "inline", "-q")
     assert r.returncode in (0, 1), r.stdout + r.stderr
     rows = _trials(tmp_path, "stiffness")
     assert len(rows) == 17 and [t["trial"] for t in rows[:2]] == [-1, 0]
@@ -337,8 +336,8 @@ def test_the_shipped_twenty_disk_tune_builds_every_trial(tmp_path):
     """params/tune-fix-twenty-disks.yaml on 3 trials: each built and checked whole (the build level:
     hwgen check's verdict), the base (params/twenty-disks.yaml) first; what fails is named in the
     summary."""
-    r = _cli("tune", str(PARAMS / "tune-fix-twenty-disks.yaml"), "--out", str(tmp_path), "--budget", "3",
-             "--scheduler", "inline", "-q", "--no-build")
+    r = hwgen_process("tune", str(PARAMS / "tune-fix-twenty-disks.yaml"), "--out", str(tmp_path), "--budget", "3",
+                      "--scheduler", "inline", "-q", "--no-build")
     assert r.returncode in (0, 1), r.stdout + r.stderr
     rows = _trials(tmp_path, "fix-twenty-disks")
     assert [t["trial"] for t in rows] == [-1, 0, 1, 2]

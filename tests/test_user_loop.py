@@ -62,7 +62,7 @@ def test_a_misspelled_key_names_itself_and_the_right_one(tmp_path):
 
 def test_a_key_in_the_wrong_section_says_where_it_belongs(tmp_path):
     code, _, err = run_cli("routing", str(based(tmp_path, "design: mine\ndisks:\n  extra_tip: 3\n")))
-    assert code == 2 and problems(err) == {"disks.extra_tip": "unknown key here; extra_tip belongs in backbone.extra_tip"}
+    assert code == 2 and problems(err) == {"disks.extra_tip": "unknown key here; did you mean backbone.extra_tip?"}
 
 
 def test_a_file_with_two_errors_names_both(tmp_path):
@@ -139,7 +139,7 @@ def test_a_base_may_have_a_base_and_a_cycle_is_refused(tmp_path):
     code, _, err = run_cli("routing", str(one))
     assert code == 2 and "two.yaml: base:" in err and "a cycle" in err, err
     code, _, err = run_cli("routing", str(based(tmp_path, "design: x\n", name="x.yaml", base="nowhere.yaml")))
-    assert code == 2 and "x.yaml: base:" in err and "is not a file" in err
+    assert code == 2 and f"x.yaml: base: nowhere.yaml: no such file (looked for at {tmp_path / 'nowhere.yaml'})" in err
 
 
 def test_a_bad_value_is_named_in_the_file_that_wrote_it(tmp_path):

@@ -86,24 +86,46 @@ def _bad_input(file, path: str, message: str) -> typer.Exit:
 
 
 def _refused(e: InputError, params) -> typer.Exit:
-    """Every problem of bad input in one block: one line when there is one (``error: FILE: FIELD:
-    what``), else a line naming the file and how many, then one line per problem (its file when it
-    is another, such as a base), at most :data:`MAX_LISTED`; then the hints."""
-    found = e.problems
-    if len(found) == 1:
+    """Every problem of bad input in one block, in the order a user fixes them: one line when there
+    is one (``error: FILE: FIELD: what``), else a line naming the file and how many, then one line
+    per problem (its file when it is another, such as a base), at most :data:`MAX_LISTED`; under a
+    problem others follow from, one line naming them (they may go once it is fixed); then the hints."""
+    roots = e.roots
+    top = str(params) if params is not None else e.file
+    if len(roots) == 1:
         _bad_input(e.file, e.path, e.message)
+        _followers(roots[0], "  ")
     else:
-        top = str(params) if params is not None else found[0].file
-        say("error:", "bold red", f"{_file_label(top)}: {len(found)} problems:")
-        for p in found[:MAX_LISTED]:
+        after = sum(len(f) for _, f in roots)
+        say("error:", "bold red", f"{_file_label(top)}: {len(roots)} problems"
+                                  + (f" (and {after} that follow from them)" if after else "") + ":")
+        for root in roots[:MAX_LISTED]:
+            p = root[0]
             field = clip(p.path, FIELD_CHARS) if p.path else "<document>"
             where = "" if p.file == top else f"{_file_label(p.file)}: "
             err.print(Text(f"  - {printable(where)}{field}: {clip(p.message, MESSAGE_CHARS)}"), soft_wrap=True)
-        if len(found) > MAX_LISTED:
-            err.print(Text(f"  ... and {len(found) - MAX_LISTED} more (fix these and run again)"), soft_wrap=True)
+            _followers(root, "    ")
+        if len(roots) > MAX_LISTED:
+            err.print(Text(f"  ... and {len(roots) - MAX_LISTED} more (fix these and run again)"), soft_wrap=True)
     for note in e.notes:
         say("  hint:", "yellow", clip(note, MESSAGE_CHARS))
     return typer.Exit(EXIT_BAD_INPUT)
+
+
+def _followers(root: tuple[InputError, list[InputError]], indent: str) -> None:
+    """The line under a problem naming those that follow from it: how many, and their fields."""
+    cause, followers = root
+    if not followers:
+        return
+    n = len(followers)
+    count: dict[str, int] = {}
+    for p in followers:
+        count[p.path or "<document>"] = count.get(p.path or "<document>", 0) + 1
+    fields = ", ".join(f"{f} ×{k}" if k > 1 else f for f, k in count.items())
+    many = n > 1
+    err.print(Text(f"{indent}and {n} problem{'s' if many else ''} that follow{'' if many else 's'} from "
+                   f"{cause.cause} (fix it first: {'they' if many else 'it'} may go with it): "
+                   f"{clip(fields, MESSAGE_CHARS)}"), soft_wrap=True)
 
 
 @contextmanager
@@ -112,7 +134,8 @@ def _errors(params: Path | None):
     try:
         try:
             with warnings.catch_warnings():
-                warnings.simplefilter("ignore")       # numpy and library warnings are not for the user
+                if not sys.warnoptions:               # numpy and library warnings are not for the user,
+                    warnings.simplefilter("ignore")   # unless Python is told to show them (-W, PYTHONWARNINGS)
                 yield
         except (typer.Exit, typer.Abort):
             raise

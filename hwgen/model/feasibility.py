@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import DesignError, InputError
+from ..errors import DesignError, InputError, Problem
 from ..params import Design
 from .fixing import disk_gaps, disk_thicknesses, seat_diameter
 from .fixtures import mount_problems
@@ -24,9 +24,14 @@ from .specs import slot_size
 from .tensioner_layout import spool_wall_problem
 
 
-def problems(d: Design) -> list[tuple[str | tuple[str, ...], str]]:
+SLOT = "the slot"       # the cause the problems of what stands in or around the strip's slot follow from
+
+
+def problems(d: Design) -> list[tuple[str | tuple[str, ...], str] | Problem]:
     """(field path, what is wrong) for every reason this design cannot be built, in YAML order; a
-    rule over several fields gives their paths, the one to change first."""
+    rule over several fields gives their paths, the one to change first. A slot that does not fit
+    its disk is a :class:`Problem` whose ``cause`` the problems of what it leaves no room for
+    (the eyelets between it and the rim, seats, screws) follow from."""
     out = []
     material = material_problem(d.process)
     if material:
@@ -45,7 +50,7 @@ def problems(d: Design) -> list[tuple[str | tuple[str, ...], str]]:
     out += _eyelets_outside(d)
     out += _spacing_problems(d)
     out += _anchor_problems(d)
-    out += mount_problems(d)
+    out += [Problem(p, m, follows=SLOT) for p, m in mount_problems(d)]    # its jaws hold the strip
     return out
 
 
@@ -75,22 +80,23 @@ def _anchor_problems(d: Design) -> list[tuple[str, str]]:
     chambers over it are laid out short of the mid-plane: :func:`hwgen.model.fixing.chamber_height`.)"""
     out = []
     seat = seat_diameter(d)
-    terms = [("tendon_material.termination", d.tendon_material.termination)]
-    terms += [(f"tendons[{i}].termination", t.termination) for i, t in enumerate(d.tendons) if t.termination]
-    for path, t in terms:
+    terms = [("tendon_material.termination", "", d.tendon_material.termination)]
+    terms += [(f"tendons[{i}].termination", f"{t.name}: ", t.termination) for i, t in enumerate(d.tendons)
+              if t.termination]
+    for path, whose, t in terms:
         if t.diameter <= seat:
-            out.append((f"{path}.diameter", f"a {t.diameter:g} mm {t.kind} pulls through the smallest seat the process "
-                                            f"makes, Ø{seat:g} mm (process.min_hole, tendon and hole clearance)"))
+            out.append((f"{path}.diameter", f"{whose}a {t.diameter:g} mm {t.kind} pulls through the smallest seat the "
+                                            f"process makes, Ø{seat:g} mm (process.min_hole, tendon and hole clearance)"))
     half_w = d.backbone.height / 2 + d.disks.slot_clearance
     half_t = d.backbone.thickness / 2 + d.disks.slot_clearance
     for i, t in enumerate(d.tendons):
         table = t.routing.table
         x, z = (table[0] if table is not None else sample_function(t.routing.function, d.stations,
                                                                    d.backbone.length)[0])
-        for zz in {z, -z} if t.routing.mirror else {z}:
+        for name, zz in zip(t.names, (z, -z)):
             if abs(x) <= half_w and abs(zz) <= half_t:
-                out.append((f"tendons[{i}].routing", f"starts inside the strip's slot at the base disk "
-                                                     f"(x={x:g}, z={zz:g}): it has no seat there"))
+                out.append(Problem(f"tendons[{i}].routing", f"{name} starts inside the strip's slot at the base disk "
+                                                            f"(x={x:g}, z={zz:g}): it has no seat there", follows=SLOT))
     return out
 
 
@@ -111,10 +117,11 @@ def _eyelets_outside(d: Design) -> list[tuple[str, str]]:
         x, z = (float(v) for v in pts[j])
         p = f"tendons[{i}].routing.table[{j}]" if table is not None else f"tendons[{i}].routing.function"
         p = (p, "disks.outer_diameter")
+        eyelet = f"{t.name}'s eyelet at station {j} (x={x:g}, z={z:g})"
         if r[j] >= r_out:
-            out.append((p, f"eyelet at station {j} (x={x:g}, z={z:g}) lies outside the disk (radius {r_out:g} mm)"))
+            out.append((p, f"{eyelet} lies outside the disk (radius {r_out:g} mm)"))
         else:
-            out.append((p, f"eyelet at station {j} (x={x:g}, z={z:g}) needs a hole of at least Ø{hole:g} mm "
+            out.append((p, f"{eyelet} needs a hole of at least Ø{hole:g} mm "
                            f"for the Ø{d.tendon_material.diameter:g} mm tendon, which breaks through the rim "
                            f"(radius {r_out:g} mm)"))
     return out
@@ -132,11 +139,13 @@ def _slot_problems(d: Design) -> list[tuple[str, str]]:
     if math.hypot(w / 2, h / 2) + wall <= r:
         return []
     if w / 2 >= r:
-        return [(("disks.outer_diameter", "backbone.height"), f"{dk.outer_diameter} mm does not enclose the backbone slot ({w:g} mm)")]
+        return [Problem(("disks.outer_diameter", "backbone.height"),
+                        f"{dk.outer_diameter} mm does not enclose the backbone slot ({w:g} mm)", cause=SLOT)]
     field = "backbone.thickness" if w / 2 + wall < r else "disks.outer_diameter"
-    return [((field, "disks.outer_diameter", "backbone.height", "disks.slot_clearance"), f"the backbone slot ({w:g} × {h:g} mm: the strip and disks.slot_clearance) reaches past "
+    return [Problem((field, "disks.outer_diameter", "backbone.height", "disks.slot_clearance"),
+                    f"the backbone slot ({w:g} × {h:g} mm: the strip and disks.slot_clearance) reaches past "
                     f"the rim of the Ø{dk.outer_diameter:g} mm disk, or leaves less than "
-                    f"process.min_wall = {wall:g} mm of it")]
+                    f"process.min_wall = {wall:g} mm of it", cause=SLOT)]
 
 
 def _tendon_size_problems(d: Design) -> list[tuple[str, str]]:
@@ -146,10 +155,10 @@ def _tendon_size_problems(d: Design) -> list[tuple[str, str]]:
     hole = straight_hole(d.tendon_material.diameter, d.process.hole_clearance, d.process.min_hole)
     if hole + 2 * d.process.min_wall <= room:
         return []
-    return [(("tendon_material.diameter", "disks.outer_diameter", "process.hole_clearance"),
-             f"a Ø{d.tendon_material.diameter:g} mm tendon needs eyelets of at least Ø{hole:g} mm "
-             f"(with process.hole_clearance); with {d.process.min_wall:g} mm walls they do not fit between the "
-             f"backbone slot and the rim of a Ø{dk.outer_diameter:g} mm disk")]
+    return [Problem(("tendon_material.diameter", "disks.outer_diameter", "process.hole_clearance"),
+                    f"a Ø{d.tendon_material.diameter:g} mm tendon needs eyelets of at least Ø{hole:g} mm "
+                    f"(with process.hole_clearance); with {d.process.min_wall:g} mm walls they do not fit between "
+                    f"the backbone slot and the rim of a Ø{dk.outer_diameter:g} mm disk", follows=SLOT)]
 
 
 def _mount_problems(d: Design) -> list[tuple[str, str]]:
@@ -169,7 +178,8 @@ def _mount_problems(d: Design) -> list[tuple[str, str]]:
             return [(where, f"a Ø{tm.hole_diameter:g} mm hole at (x={x:g}, z={z:g}) breaks through the rim of "
                             f"the Ø{dk.outer_diameter:g} mm tip disk")]
         if math.hypot(max(abs(x) - half_w, 0.0), max(abs(z) - half_h, 0.0)) < r:
-            return [(where, f"a Ø{tm.hole_diameter:g} mm hole at (x={x:g}, z={z:g}) cuts into the backbone slot")]
+            return [Problem(where, f"a Ø{tm.hole_diameter:g} mm hole at (x={x:g}, z={z:g}) cuts into the backbone "
+                                   f"slot", follows=SLOT)]
     return []
 
 
@@ -223,4 +233,6 @@ def check(d: Design, file: str | Path) -> None:
     rule over several fields named by the first of them)."""
     found = problems(d)
     if found:
-        raise InputError.of([InputError(file, p if isinstance(p, str) else p[0], m) for p, m in found])
+        found = [Problem(*p) for p in found]
+        raise InputError.of([InputError(file, p.paths if isinstance(p.paths, str) else p.paths[0], p.message,
+                                        p.cause, p.follows) for p in found])

@@ -23,9 +23,10 @@ def frames(stations, kappa) -> tuple[np.ndarray, np.ndarray]:
     R[..., 2, 1], R[..., 2, 2] = sn, c
     small = np.abs(k) < 1e-12
     ks = np.where(small, 1.0, k)
+    k0 = np.where(small, k, 0.0)        # the series' curvature (k² of a huge k, unused, would overflow)
     # sin(ks)/k and (1-cos(ks))/k, with their limits s and 0 at k -> 0 (series to 3rd order)
-    y = np.where(small, s - k**2 * s**3 / 6, sn / ks)
-    z = np.where(small, k * s**2 / 2, (1 - c) / ks)
+    y = np.where(small, s - k0**2 * s**3 / 6, sn / ks)
+    z = np.where(small, k0 * s**2 / 2, (1 - c) / ks)
     p = np.stack([np.zeros_like(y), y, z], axis=-1)
     return R, p
 
@@ -54,12 +55,14 @@ def segment_directions_local(stations, xz: np.ndarray, kappa) -> tuple[np.ndarra
 
     Returns (into, out_of), each (K, N, 3): ``into[k, i]`` is the direction of the segment
     arriving at disk i (from i-1) in frame i, ``out_of[k, i]`` that of the segment leaving
-    disk i (toward i+1) in frame i. Missing segments at the ends are NaN.
+    disk i (toward i+1) in frame i. Missing segments at the ends, and segments of no length (two
+    eyelets at one point: the centre of the bend, or a gap too small for a double's square), are NaN.
     """
     R, _ = frames(stations, kappa)
     P = points_in_space(stations, xz, kappa)
     seg = np.diff(P, axis=1)
-    seg /= np.linalg.norm(seg, axis=2, keepdims=True)
+    length = np.linalg.norm(seg, axis=2, keepdims=True)
+    seg = np.divide(seg, length, out=np.full_like(seg, np.nan), where=length > 0)
     K, N = P.shape[:2]
     into = np.full((K, N, 3), np.nan)
     out = np.full((K, N, 3), np.nan)

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from functools import cache
 from importlib import resources
 
+from ..errors import nearest
 from ..params import Process
 
 
@@ -37,7 +38,9 @@ def material_problem(process: Process) -> str | None:
     known = table()
     m = known.get(process.material)
     if m is None:
-        return f"unknown material {process.material!r}; hwgen knows {', '.join(sorted(known))}"
+        close = nearest(process.material, known)
+        meant = f"did you mean {close}? " if close else ""
+        return f"unknown material {process.material!r}; {meant}hwgen knows {', '.join(sorted(known))}"
     if m.technology != process.technology:
         return f"{m.name} is a {m.technology} material, process.technology is {process.technology}"
     return None

@@ -92,7 +92,8 @@ def _rest_axes(design: Design, path: TendonPath) -> np.ndarray:
         return np.tile([0.0, 1.0, 0.0], (n, 1))
     into, out = kin.segment_directions_local(design.stations, path.points, 0.0)
     s = np.nan_to_num(into[0]) + np.nan_to_num(out[0])
-    return s / np.linalg.norm(s, axis=1, keepdims=True)
+    size = np.linalg.norm(s, axis=1, keepdims=True)         # no segment of any length at a disk: its normal
+    return np.divide(s, size, out=np.tile([0.0, 1.0, 0.0], (n, 1)), where=size > 0)
 
 
 Sweep = tuple[np.ndarray, np.ndarray]   # a tendon's (into, out_of) directions per disk over the sweep

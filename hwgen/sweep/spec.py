@@ -28,8 +28,8 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from .. import designfile, params, yamlfile
-from ..errors import DesignError, InputError, echo
+from .. import designfile, params
+from ..errors import DesignError, InputError, echo, nearest
 from ..model import feasibility
 
 LEVELS = ("lengths", "robust", "coupling", "build")
@@ -159,7 +159,9 @@ def check_path(keys: list[str | int], base: dict) -> str | None:
         where = "".join(f"[{k}]" if isinstance(k, int) else ("." if n else "") + k for n, k in enumerate(keys[:n + 1]))
         if kind == "model":
             if not isinstance(key, str) or key not in cur.model_fields:
-                return f"{where}: not a field of the design (see `hwgen schema`)"
+                close = nearest(key, cur.model_fields)
+                meant = f"; did you mean {designfile.dotted([*keys[:n], close])}?" if close else ""
+                return f"{where}: not a field of the design{meant} (see `hwgen schema`)"
             kind, cur = params.unwrap(cur.model_fields[key].annotation)
             node = node.get(key) if isinstance(node, dict) else None
         elif kind == "seq":
@@ -201,12 +203,7 @@ def read_with_base(path: Path, model: type[BaseModel], kind: str, schema: type[B
     checked against ``model``, and the base design it names read and validated (a bad base is bad
     input, named in its own file): (spec, the base's path, its layers). ``schema``: the model
     whose keys an unknown key is matched against (None: no suggestion)."""
-    try:
-        raw = path.read_bytes()[: yamlfile.MAX_BYTES + 1]
-    except OSError as e:
-        raise InputError(path, "", f"cannot read the file ({e.strerror or e})") from None
-    if len(raw) > yamlfile.MAX_BYTES:
-        raise InputError(path, "", f"larger than {yamlfile.MAX_BYTES >> 20} MiB; a {kind} file is a few kB")
+    raw = designfile.read_bytes(path, kind)
     data, _ = params.document(raw, path) if raw.strip() else ({}, [])
     try:
         spec = model.model_validate(data)

@@ -27,6 +27,7 @@ from __future__ import annotations
 import json
 import re
 
+from ..errors import nearest
 from ..model import stiffness as sf
 
 STATICS = {"tip_stiffness": "N/mm", "least_stiffness": "N/mm", "tip_torsion": "N·mm/rad", "tip_sag": "mm"}
@@ -93,13 +94,17 @@ def check_name(name: str, level: str, states: tuple[str, ...]) -> tuple[str | No
     stem, dot, tendon = name.partition(".")
     if dot:
         if stem not in PER_TENDON:
-            return f"a tendon's figure is one of {', '.join(PER_TENDON)} then .NAME", None
+            close = nearest(stem, PER_TENDON)
+            meant = f"; did you mean {close}.{tendon}?" if close else ""
+            return f"a tendon's figure is one of {', '.join(PER_TENDON)} then .NAME{meant}", None
         need = PER_TENDON[stem]
     elif name in ROW:
         need = ROW[name][1]
     else:
         known = [*STATICS, *ROW, *(f"{k}.TENDON" for k in PER_TENDON), "distance"]
-        return f"{name!r} is not a result a tune knows: {', '.join(known)}", None
+        close = nearest(name, [*STATICS, *ROW, "distance"])
+        meant = f"; did you mean {close}?" if close else ""
+        return f"{name!r} is not a result a tune knows{meant} (they are {', '.join(known)})", None
     if LEVELS.index(need) > LEVELS.index(level):
         return f"{name!r} is computed from the {need} level on; this tune's level is {level}", None
     return None, None

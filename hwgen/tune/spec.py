@@ -170,10 +170,13 @@ class Loaded:
 def load(path: str | Path) -> Loaded:
     """Read and check a tune file and its base design; raise InputError naming the file and field."""
     path = Path(path)
-    spec, base_path, layers = sweep_spec.read_with_base(path, Tune, "tune")
+    spec, base_path, layers = sweep_spec.read_with_base(path, Tune, "tune", Tune)
     base = layers.doc
     for key, value in spec.set.items():
         keys = _keys(path, f"set.{key}", key, base)
+        if value is None and isinstance(keys[-1], int):
+            raise InputError(path, f"set.{key}", "null gives a field its default, and a list's item has none: set "
+                                                 "the list whole, without the item")
         base = sweep_spec.set_path(base, keys, value) if value is not None else _drop(base, keys)
     fixed = sweep_spec.resolve_doc(base, -1, (), f"{path}: the base with 'set'")
     if fixed.design is None:
@@ -185,7 +188,7 @@ def load(path: str | Path) -> Loaded:
             raise InputError(path, f"free[{i}].path", f"{echo(fr.path)} is already free")
         names.append(fr.path)
     dump = fixed.design.model_dump(mode="json")
-    values = tuple(designfile.value_at(dump, sweep_spec.parse_path(n)) for n in names)
+    values = tuple(_base_value(dump, n) for n in names)
     for i, (fr, v) in enumerate(zip(spec.free, values)):
         if fr.choices is None and v is not None and (not isinstance(v, (int, float)) or isinstance(v, bool)):
             raise InputError(path, f"free[{i}].path", f"the base's value there is {echo(v)}, not a number: give "
@@ -199,6 +202,15 @@ def load(path: str | Path) -> Loaded:
                                 "goal": spec.goal.model_dump(by_alias=True), "level": spec.level,
                                 "robust_samples": spec.robust_samples})
     return Loaded(spec, path, base_path, base, tuple(names), values, objectives, states, digest)
+
+
+def _base_value(dump: dict, name: str):
+    """The base's value at a free parameter's path; None where the base writes none (a channel's
+    winding, a key of a mapping of names: its default applies)."""
+    try:
+        return designfile.value_at(dump, sweep_spec.parse_path(name))
+    except KeyError:
+        return None
 
 
 def _keys(path: Path, field: str, text: str, base: dict) -> list:
