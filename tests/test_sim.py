@@ -195,8 +195,7 @@ def test_the_sims_help_names_its_gates():
     """`hwgen sim --help` states the gates hwgen.sim.limits holds, as the docs do."""
     import os
 
-    r = subprocess.run([sys.executable, "-m", "hwgen.cli", "sim", "--help"], capture_output=True, text=True,
-                       env={**os.environ, "COLUMNS": "400"})
+    r = hwgen("sim", "--help", env={**os.environ, "COLUMNS": "400"})
     assert r.returncode == 0, r.stderr
     for gate in limits.words().values():
         assert gate in r.stdout
