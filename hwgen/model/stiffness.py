@@ -310,7 +310,7 @@ def _curve(eq: st.Equilibrium) -> dict:
             "x_mm": eq.p[idx, 0].tolist()}
 
 
-def _push_rows(model: st.Model, eq: st.Equilibrium, stations) -> np.ndarray:
+def push_rows(model: st.Model, eq: st.Equilibrium, stations) -> np.ndarray:
     """(K, n_dof): the displacement along :data:`PUSH` of the centre of each disk at ``stations``."""
     kin = tuple(x[0] for x in model.forward(eq.q[None, :]))
     nodes = protocol.station_nodes(model, stations)
@@ -345,7 +345,7 @@ def evaluate(desc: Described, model: st.Model, state: State, orientation: str, m
     done = protocol.tension_state(model, state.channels, gravity, desc.pretension, desc.rules, desc.stations, memo)
     eq = done.equilibrium
     b = fr.bounds(eq)
-    rows = _push_rows(model, eq, desc.stations[1:])
+    rows = push_rows(model, eq, desc.stations[1:])
     twist = model.rotation_jacobian(eq.q, desc.robot.length, (0.0, 1.0, 0.0))
     locked = [t.name for t in desc.robot.tendons if t.channel in state.channels]
     tip = eq.at(desc.robot.length)
