@@ -1,6 +1,7 @@
 """The bench's push (the paper's Sect. III-C) on a tensioned state: displacement-controlled, out and
 back, with Coulomb friction at every eyelet by the angle the line turns there, and tendons going
-slack and taut again as they do (numpy and scipy only, on :mod:`hwgen.model.friction`'s segments).
+slack and taut again as they do (numpy, scipy and the compiled event loop of :mod:`.push_kernels`,
+on :mod:`hwgen.model.friction`'s segments).
 
 The robot. The state's equilibrium (:mod:`hwgen.model.protocol`) and its Hessian with every locked
 tendon cut at its eyelets, each segment its own spring (friction's ``stuck`` Hessian, H): the
@@ -8,8 +9,8 @@ response to the push is linear in H about that equilibrium, the tendons' segment
 are followed exactly. Every locked tendon is a chain of segments (its chords between eyelets, then
 its run to the drum); each segment j has a spring k_j and a tension τ_j; line may slide through an
 eyelet from one segment into the next, which moves free length between them (x, one coordinate per
-eyelet, + toward the tip), and a slack tendon's line is let out or taken in as a whole (one more
-coordinate per tendon, on its last segment). With D the map from those coordinates to each
+eyelet, + toward the tip), and a slack tendon's free length follows its path, keeping it at no
+tension (one more coordinate per tendon, on its last segment: the line it has to spare, negative). With D the map from those coordinates to each
 segment's change of free length, G the segments' rows dℓ_j/dq, j the push point's row and
 u its displacement along the push (displacement control: the arm sets u, the load cell reads F):
 
@@ -23,7 +24,7 @@ Friction (the capstan, Euler–Eytelwein). An eyelet where the line turns by θ 
 tension on either side is within e^(μθ) of the other's; it slips once the higher reaches that
 ratio, line sliding into the higher side and the ratio held, until the motion would reverse, when
 it holds again. Under that rule a tendon goes slack as a whole (no tension can be held against a
-slack neighbour), and is taut again once its path has taken up the line it let out; it comes
+slack neighbour), and is taut again once its path has grown back to the line it has; it comes
 back with no tension and every eyelet held. The push is followed from event to event (an eyelet
 slips or holds, a tendon slackens or tautens, the contact opens, the stroke ends): between them
 every rate is constant.
@@ -56,8 +57,8 @@ SAME_MM = 1e-9             # a push that leaves every slip within this of where 
 @dataclass(frozen=True)
 class Lines:
     """A tensioned state's locked, taut tendons cut at their eyelets (see the module's docstring):
-    per segment its spring, tension and tendon; per eyelet its two segments (base side, tip side)
-    and capstan ratio; D, P and the Cholesky factor of H; the push points' c and p."""
+    per segment its spring, tension and tendon; per eyelet its two segments (base side, tip side),
+    its turn and capstan ratio; D and P; the push points' c and p."""
 
     springs: np.ndarray          # (m,) N/mm
     tension: np.ndarray          # (m,) N
@@ -66,7 +67,7 @@ class Lines:
     eyelets: np.ndarray          # (e, 2) segment indices, base side then tip side
     turns: np.ndarray            # (e,) θ, rad
     ratio: np.ndarray            # (e,) e^(μθ)
-    D: np.ndarray                # (m, e + T): free-length change per slip and per let-out
+    D: np.ndarray                # (m, e + T): free-length change per slip and per slack tendon's spare line
     P: np.ndarray                # (m, m)
     c: np.ndarray                # (k,) per push point
     p: np.ndarray                # (k, m) per push point
@@ -92,7 +93,7 @@ def lines(b: fr.Bounds, mu: float, jacs: np.ndarray) -> Lines:
     D[eyelets[:, 0], np.arange(e)] = -1.0                    # line slid tipward leaves the base side
     D[eyelets[:, 1], np.arange(e)] = 1.0
     for t in range(T):
-        D[np.flatnonzero(tendon == t)[-1], e + t] = 1.0      # a slack tendon's line, let out at its last segment
+        D[np.flatnonzero(tendon == t)[-1], e + t] = 1.0      # a slack tendon's free length, on its last segment
     factor = b.factors["stuck"]
     jacs = np.atleast_2d(jacs)
     with st.blas_threads():
@@ -110,8 +111,9 @@ def with_friction(ln: Lines, mu: float) -> Lines:
 
 @dataclass
 class Rest:
-    """Where a push leaves the lines: the slip and let-out coordinates x, and which tendons are slack
-    (every eyelet holds between pushes)."""
+    """Where a push leaves the lines: the coordinates x (each eyelet's slip, each slack tendon's free
+    length), and which tendons are slack (every eyelet holds between pushes). Locked tendons slack
+    in the tensioned state are not among the lines: the protocol leaves none."""
 
     x: np.ndarray
     slack: np.ndarray

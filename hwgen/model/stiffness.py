@@ -487,10 +487,16 @@ def _ratios(entries, pair) -> list[dict]:
     return out
 
 
+BOUNDS_NOTE = ("Each is a ratio of tangents for a small push; the friction bounds (frictionless, every eyelet stuck) "
+               "bound each state's stiffness, not the ratio of two: one state's eyelets can slip while another's "
+               "hold, and a bench's push of newtons slackens tendons the tangent keeps taut.")
+
+
 def _endpoint(ratios, pair, orientations) -> dict:
     """The headline: the first state of ``pair`` over the second at the tip in the reference
-    orientation (or the first studied), frictionless (``ratio``), its band over the frictions, and
-    the paper's 4.85× placed against it."""
+    orientation (or the first studied), frictionless (``ratio``) and at each friction's tangent
+    (``by_friction``; ``band``, their least and most, is no band of the ratio: :data:`BOUNDS_NOTE`),
+    and the paper's 4.85× placed against them (`hwgen experiment` predicts what a bench measures)."""
     o = REFERENCE if REFERENCE in orientations else orientations[0]
     rows = [r for r in ratios if r["orientation"] == o]
     if not pair or not rows:
@@ -500,7 +506,7 @@ def _endpoint(ratios, pair, orientations) -> dict:
     return {"states": pair, "orientation": o, "ratio": next(r["tip"] for r in rows if r["friction"] == "none"),
             "by_friction": {r["friction"] + (" " + r["push"] if "push" in r else ""): r["tip"] for r in rows},
             "band": band, "paper": PAPER_ENDPOINT_RATIO,
-            "paper_inside": band[0] <= PAPER_ENDPOINT_RATIO <= band[1]}
+            "paper_inside": band[0] <= PAPER_ENDPOINT_RATIO <= band[1], "note": BOUNDS_NOTE}
 
 
 def _softer(entries, todo, actuating) -> list[str]:
