@@ -73,6 +73,7 @@ docs-images: $(STAMP)
 	rm -rf .docs-build
 	$(BIN)/hwgen build params/prototype.yaml --out .docs-build -q
 	$(BIN)/hwgen sim params/prototype.yaml --out .docs-build -q
+	$(BIN)/hwgen experiment params/prototype.yaml --out .docs-build -q
 	$(BIN)/hwgen build params/twenty-disks.yaml --out .docs-build -q || [ $$? -eq 1 ]
 	$(BIN)/python docs/pictures.py .docs-build docs/images
 	rm -rf .docs-build
