@@ -276,7 +276,7 @@ def stiffness(params: Path = PARAMS, out_dir: Path = OUT,
     r = rep["endpoint_ratio"]
     if r.get("ratio") is not None:
         each = ", ".join(f"{v:.2f}× {k}" for k, v in r["by_friction"].items())
-        out.print(Text(f"endpoint stiffness {r['states'][0]}/{r['states'][1]} at the tip ({r['orientation']}): {each}. "
+        out.print(Text(f"endpoint stiffness {r['states'][0]}/{r['states'][1]} ({r['orientation']}) at the tip: {each}. "
                        f"{r['note']} The paper measured {r['paper']:g}× on its prototype: `hwgen experiment` predicts "
                        "what its bench would, with a band."))
     out.print(Text(f"tensions: {rep['protocol']}; * a tendon's own pretension_n"))

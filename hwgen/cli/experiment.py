@@ -13,6 +13,7 @@ from ..errors import printable
 from .common import CACHE_DIR, NO_CACHE, OUT, PARAMS, _cache, _command, _load, err, out
 
 QUIET = typer.Option(False, "--quiet", "-q", help="no spinner")
+CORRELATED = 0.9           # fitted values this correlated are said to be told apart poorly
 
 
 def _ratio_line(ep: dict | None) -> str | None:
@@ -89,6 +90,12 @@ def compare(params: Path = PARAMS,
         f.add_row(name, f"{v['design']:.4g}", f"{v['value']:.4g}", f"{v['low']:.4g}–{v['high']:.4g}")
     if res["fitted"]:
         out.print(f)
+        corr = res["calibration"]["correlation"]
+        pairs = sorted({tuple(sorted((a, b))) for a, row in corr.items() for b, v in row.items()
+                        if abs(v) >= CORRELATED})
+        for a, b in pairs:
+            out.print(Text(f"note: {a} and {b} are correlated {corr[a][b]:+.2f} in the fit: the pushes tell what "
+                           "they do together better than either alone; measure one of them to pin the other"))
     else:
         out.print(Text(res["calibration"].get("note", "nothing fitted")))
     for name in ("compare.json", "compare.png", "calibrated.yaml"):

@@ -49,6 +49,8 @@ DIFF_STEP = 0.02                  # the least-squares Jacobian's step, in prior 
 XTOL = 1e-3                       # ... and its steps' end: a thousandth of a prior σ, far inside any fitted interval
 FTOL = 1e-4                       # ... or a step that changes the misfit by under this share
 Z95 = stats.norm.ppf(0.975)
+SCHEMA = {"tendon_material.axial_stiffness_n": (1.001, 1e7), "tendon_material.tie_off_compliance_mm_per_n": (0.0, 10.0),
+          "tendon_material.eyelet_friction": (0.0, 2.0), "backbone.modulus_gpa": (1.001, 400.0)}   # what the schema takes
 
 
 # ------------------------------------------------------------------ the measured samples
@@ -246,7 +248,8 @@ def calibrate(plan, measured: list[dict], weights: dict | None = None) -> dict:
     fields = [f for f, _, _ in rng]
     scale = np.array([(hi - lo) / (2 * PRIOR_SIGMAS) or max(abs(base[f]), 1e-3) for f, lo, hi in rng])
     centre = np.array([base[f] for f in fields])
-    floor = np.array([1e-9 if ex.STIFFENS[f] > 0 and f != ex.FIELDS[2] else 0.0 for f in fields])
+    floor = np.array([SCHEMA[f][0] for f in fields])
+    ceiling = np.array([SCHEMA[f][1] for f in fields])
     states = list(dict.fromkeys(m["state"] for m in measured))
     beta = np.array([m["measured_n_per_mm"] for m in measured])
     sigma = np.array([max((m["interval"][1] - m["interval"][0]) / (2 * Z95), RELATIVE_FLOOR * abs(m["measured_n_per_mm"]))
@@ -257,15 +260,14 @@ def calibrate(plan, measured: list[dict], weights: dict | None = None) -> dict:
     bench = ex.Bench(plan, weights)
 
     def values(z):
-        return {**base, **dict(zip(fields, np.maximum(centre + scale * z, floor)))}
+        return {**base, **dict(zip(fields, np.clip(centre + scale * z, floor, ceiling)))}
 
     def residuals(z):
         p = ex.predict_nominal(plan, values(z), strokes, states, bench)
         return np.r_[(np.array([p[k] for k in keys]) - beta) / sigma, z / PRIOR_SIGMAS]
 
-    lower = (floor - centre) / scale
-    sol = least_squares(residuals, np.zeros(len(fields)), bounds=(lower, np.inf), diff_step=DIFF_STEP,
-                        x_scale=1.0, method="trf", xtol=XTOL, ftol=FTOL)
+    sol = least_squares(residuals, np.zeros(len(fields)), bounds=((floor - centre) / scale, (ceiling - centre) / scale),
+                        diff_step=DIFF_STEP, x_scale=1.0, method="trf", xtol=XTOL, ftol=FTOL)
     J = sol.jac
     dof = max(1, len(beta) - len(fields))
     chi2 = float(np.sum(sol.fun[: len(beta)] ** 2))

@@ -90,9 +90,9 @@ def corners(plan) -> list[dict[str, float]]:
 # ------------------------------------------------------------------ one robot, tensioned
 
 @dataclass
-class Tensioned:
-    """One state of one robot, tensioned in the experiment's orientation: the protocol's result
-    and its lines for the push at every disk pushed (friction given later)."""
+class Prepared:
+    """One state of one robot, tensioned in the experiment's orientation and ready to push: the
+    protocol's result and its lines for the push at every disk (friction given later)."""
 
     state: sf.State
     done: protocol.Tensioned
@@ -107,7 +107,7 @@ class Robot:
 
     desc: sf.Described
     model: st.Model
-    states: dict                    # state name -> Tensioned
+    states: dict                    # state name -> Prepared
 
 
 def disks_pushed(plan) -> list[int]:
@@ -168,10 +168,10 @@ class Bench:
             eq = done.equilibrium
             jacs = sign * sf.push_rows(r.model, eq, stations)
             b = fr.bounds(eq)
-            r.states[s.name] = Tensioned(s, done, pu.lines(b, 0.0, jacs) if b.tendons else None,
+            r.states[s.name] = Prepared(s, done, pu.lines(b, 0.0, jacs) if b.tendons else None,
                                          eq.compliance(jacs))
 
-    def tensioned(self, values: dict, state: str) -> Tensioned:
+    def tensioned(self, values: dict, state: str) -> Prepared:
         """A state of the robot of ``values``, its lines with the set's eyelet friction."""
         t = self.robot(values, [state]).states[state]
         if t.lines is None:
@@ -239,14 +239,14 @@ def _strip_alone(c: float, stroke: float, x) -> list[pu.Stroke]:
     return [pu.Stroke(xs, f, xs[::-1], f[::-1], ())] * x.repetitions
 
 
-def _repetitions(t: Tensioned, disk: int, stroke: float, x, rest: pu.Rest | None
+def _repetitions(t: Prepared, disk: int, stroke: float, x, rest: pu.Rest | None
                  ) -> tuple[list[pu.Stroke], pu.Rest | None]:
     if t.lines is None:
         return _strip_alone(float(t.compliance[disk - 2]), stroke, x), None
     return pu.repeat(t.lines, disk - 2, stroke, x.repetitions, rest or pu.at_rest(t.lines))
 
 
-def push_one(t: Tensioned, disk: int, stroke: float, x, rest: pu.Rest | None) -> tuple[Pushed, pu.Rest | None]:
+def push_one(t: Prepared, disk: int, stroke: float, x, rest: pu.Rest | None) -> tuple[Pushed, pu.Rest | None]:
     """The repetitions at one disk of a tensioned state from ``rest``: eq. (4)'s β, and where they
     leave the robot."""
     strokes, rest = _repetitions(t, disk, stroke, x, rest)
@@ -255,7 +255,7 @@ def push_one(t: Tensioned, disk: int, stroke: float, x, rest: pu.Rest | None) ->
                   tuple(sorted({n for s in strokes for n in s.slackened}))), rest
 
 
-def push_state(t: Tensioned, sequence: list[tuple[int, float]], x) -> list[Pushed]:
+def push_state(t: Prepared, sequence: list[tuple[int, float]], x) -> list[Pushed]:
     """The pushes of a tensioned state at each (disk, mm) of ``sequence`` in turn, each from where the
     last left the robot: eq. (4)'s β of each."""
     rest, out = None, []
@@ -265,7 +265,7 @@ def push_state(t: Tensioned, sequence: list[tuple[int, float]], x) -> list[Pushe
     return out
 
 
-def _reach(t: Tensioned, disk: int, target: float, x, rest: pu.Rest | None) -> float:
+def _reach(t: Prepared, disk: int, target: float, x, rest: pu.Rest | None) -> float:
     if t.lines is None:
         return min(x.max_push_mm, target * float(t.compliance[disk - 2]))
     return pu.force_reached(t.lines, disk - 2, target, x.max_push_mm, rest)
@@ -434,7 +434,7 @@ def settings_steps(plan, bench: Bench, order: list[str]) -> list[dict]:
     return out
 
 
-def _before(r: Robot, t: Tensioned, channel: str, gravity) -> dict[str, float]:
+def _before(r: Robot, t: Prepared, channel: str, gravity) -> dict[str, float]:
     """Each tendon's path length just before ``channel`` is pulled: the actuating pair with the
     robot straight (it is locked on edge), a further channel with the channels before it locked, in
     the experiment's orientation."""
@@ -474,9 +474,12 @@ def experiment(plan, measured: dict | None = None) -> dict:
     x = plan.experiment
     step = x.displacement_rate_mm_s / x.sample_rate_hz
     base = nominal(plan)
+    unknown = [] if plan.tendon_material.eyelet_friction is not None else [
+        "the design gives no tendon_material.eyelet_friction: its robot's eyelets are frictionless (a range in "
+        "experiment.ranges.eyelet_friction still spans the band)"]
     return {
         "model": MODEL,
-        "assumptions": list(ASSUMPTIONS),
+        "assumptions": [*ASSUMPTIONS, *unknown],
         "settings": {**dataclasses.asdict(x), "ranges": None, "sample_step_mm": step,
                      "window_mm": x.fit_window_samples * step, "disks": disks_pushed(plan)},
         "ranges": [{"field": f, "nominal": base[f], "low": lo, "high": hi} for f, lo, hi in x.ranges],

@@ -165,10 +165,11 @@ class _Point:
         ln = self.ln
         out_u = np.empty(pk.MAX_EVENTS + 2)
         out_f = np.empty(pk.MAX_EVENTS + 2)
-        n, u, why = pk.follow(self.M, self.v, self.a, self.c, ln.tension, ln.eyelets[:, 0].copy(),
-                              ln.eyelets[:, 1].copy(), ln.ratio, self.free, self.eye_tendon, ln.tendon, self.x,
-                              self.mode, self.slack, self.slackened, float(u), math.nan if u_to is None else u_to,
-                              float(s), math.nan if target_n is None else target_n, until_open, out_u, out_f)
+        system = (self.M, self.v, self.a, self.c, ln.tension, ln.tendon)
+        eyes = (ln.eyelets[:, 0].copy(), ln.eyelets[:, 1].copy(), ln.ratio, self.free, self.eye_tendon)
+        motion = (float(u), math.nan if u_to is None else float(u_to), float(s),
+                  math.nan if target_n is None else float(target_n), until_open)
+        n, u, why = pk.follow(system, eyes, (self.x, self.mode, self.slack, self.slackened), motion, out_u, out_f)
         return Branch(out_u[:n].tolist(), out_f[:n].tolist(), why == pk.OPEN), float(u)
 
 

@@ -23,9 +23,12 @@ END, SLIP, SLACK, TAUT, OPEN, TARGET = 0, 1, 2, 3, 4, 5
 
 
 @numba.njit(**JIT)
-def _solve(M, v, s, eye_a, eye_b, ratio, free, eye_tendon, seg_tendon, mode, slack, xdot, tdot):
+def _solve(system, eyes, state, s, xdot, tdot):
     """The rates per unit of u moved in direction s with the modes as they stand: each slipping
     eyelet holds its ratio, each slack tendon's segments keep their tension. Fills xdot and tdot."""
+    M, v, _, _, _, seg_tendon = system
+    eye_a, eye_b, ratio, free, eye_tendon = eyes
+    _, mode, slack, _ = state
     m, nx = M.shape
     e = len(eye_a)
     idx = np.empty(nx, np.int64)
@@ -77,11 +80,13 @@ def _solve(M, v, s, eye_a, eye_b, ratio, free, eye_tendon, seg_tendon, mode, sla
 
 
 @numba.njit(**JIT)
-def _rates(M, v, s, tau, eye_a, eye_b, ratio, free, eye_tendon, seg_tendon, mode, slack, xdot, tdot):
+def _rates(system, eyes, state, s, tau, xdot, tdot):
     """:func:`_solve` with the modes that agree with the rates (the eyelets' linear complementarity
     problem: an eyelet at its ratio slips if holding would take it past the ratio, and holds if
     slipping would slide the line back), every disagreeing eyelet turned at once while that
     converges, then by Murty's least-index pivoting."""
+    eye_a, eye_b, ratio, free, eye_tendon = eyes
+    _, mode, slack, _ = state
     e = len(eye_a)
     big = 0.0
     for j in range(len(tau)):
@@ -89,7 +94,7 @@ def _rates(M, v, s, tau, eye_a, eye_b, ratio, free, eye_tendon, seg_tendon, mode
     scale = RATIO_TOL * (1.0 + big)
     turn = np.zeros(e, np.int64)
     for n in range(MAX_PIVOTS):
-        _solve(M, v, s, eye_a, eye_b, ratio, free, eye_tendon, seg_tendon, mode, slack, xdot, tdot)
+        _solve(system, eyes, state, s, xdot, tdot)
         bad = 0
         for i in range(e):
             turn[i] = 0
@@ -115,12 +120,17 @@ def _rates(M, v, s, tau, eye_a, eye_b, ratio, free, eye_tendon, seg_tendon, mode
 
 
 @numba.njit(**JIT)
-def follow(M, v, a, c, tau0, eye_a, eye_b, ratio, free, eye_tendon, seg_tendon, x, mode, slack, slackened,
-           u, u_to, s, target, until_open, out_u, out_f):
-    """Move the push point from ``u`` in direction ``s`` (±1) to ``u_to`` (nan: no end), writing each
-    event's (u, F) into ``out_u``, ``out_f``; ``target`` (nan: none): stop once F reaches it;
-    ``until_open``: stop once F falls to zero. Updates x, mode, slack and slackened in place.
-    Returns (events written, where it stopped, why: END, OPEN or TARGET)."""
+def follow(system, eyes, state, motion, out_u, out_f):
+    """Move the push point as ``motion`` = (u, u_to, s, target, until_open) says: from u in direction
+    s (±1) to u_to (nan: no end); target (nan: none): stop once F reaches it; until_open: stop once
+    F falls to zero. ``system`` = (M, v, a, c, τ₀, each segment's tendon), ``eyes`` = (base-side
+    segment, tip-side segment, ratio, free, tendon) per eyelet, ``state`` = (x, mode, slack,
+    slackened), updated in place. Writes each event's (u, F) into ``out_u``, ``out_f``. Returns
+    (events written, where it stopped, why: END, OPEN or TARGET)."""
+    M, v, a, c, tau0, seg_tendon = system
+    eye_a, eye_b, ratio, free, eye_tendon = eyes
+    x, mode, slack, slackened = state
+    u, u_to, s, target, until_open = motion
     m, nx = M.shape
     e = len(eye_a)
     xdot = np.zeros(nx)
@@ -142,7 +152,7 @@ def follow(M, v, a, c, tau0, eye_a, eye_b, ratio, free, eye_tendon, seg_tendon, 
             out_u[count] = u
             out_f[count] = F
             count += 1
-        _rates(M, v, s, tau, eye_a, eye_b, ratio, free, eye_tendon, seg_tendon, mode, slack, xdot, tdot)
+        _rates(system, eyes, state, s, tau, xdot, tdot)
         Fdot = s
         for k in range(nx):
             Fdot -= a[k] * xdot[k]
