@@ -596,7 +596,8 @@ def experiment(loaded: params.LoadedDesign, out_root: Path, cache_dir: Path | No
     folder = Path(out_root) / loaded.name
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
         where = tmp / EXPERIMENT
-        where.mkdir(exist_ok=True)
+        shutil.rmtree(where, ignore_errors=True)         # a comparison with an earlier prediction goes with it
+        where.mkdir()
         write_json(where / "experiment.json", result)
         ox.write_predicted(result, where / "predicted.csv")
         ox.write_template(result, where / "template.csv")
@@ -612,15 +613,17 @@ def compare(loaded: params.LoadedDesign, measured_csv: Path, out_root: Path) -> 
     values) into ``out_root/<design>/``. Returns (compare.json's content, the folder)."""
     from .designfile import rewritten
     from .model import calibration as cal
+    from .model.experiment import Bench
     from .outputs import experiment as ox
     weights, record = _current_weights(loaded, out_root)
     plan = design_plan(loaded, record)
     raw = cal.read_bytes(measured_csv)
     pushes = cal.read_measured(measured_csv, raw, plan)
     measured = cal.fit_measured(pushes, plan.experiment.fit_window_samples)
+    bench = Bench(plan, weights)
     result = {"design": loaded.name, "params_sha256": loaded.sha256, "measurement": str(measured_csv),
-              "measurement_sha256": hashlib.sha256(raw).hexdigest(), **cal.compared(plan, measured, weights)}
-    result["calibration"] = cal.calibrate(plan, measured, weights)
+              "measurement_sha256": hashlib.sha256(raw).hexdigest(), **cal.compared(plan, measured, bench)}
+    result["calibration"] = cal.calibrate(plan, measured, bench)
     result["fitted"] = result["calibration"].pop("fitted")
     name = f"{loaded.name}-calibrated" if params.SAFE_NAME.match(f"{loaded.name}-calibrated") else "calibrated"
     head = (f"hwgen compare: {loaded.name} with {', '.join(result['fitted']) or 'nothing'} fitted by least squares to "

@@ -216,11 +216,11 @@ def _strokes(measured: list[dict]) -> dict:
     return {(m["state"], m["disk"]): m["travel_mm"] for m in measured}
 
 
-def compared(plan, measured: list[dict], weights: dict | None = None) -> dict:
+def compared(plan, measured: list[dict], bench: ex.Bench) -> dict:
     """Each measured β beside the prediction for the pushes the lab made (their travel), with its band;
     ``within``: the measured interval meets the band."""
     states = list(dict.fromkeys(m["state"] for m in measured))
-    pred = ex.predict(plan, strokes=_strokes(measured), which=states, measured=weights)
+    pred = ex.predict(plan, strokes=_strokes(measured), which=states, bench=bench)
     by = {(r["state"], r["disk"]): r for r in pred["rows"]}
     rows = []
     for m in measured:
@@ -238,7 +238,7 @@ def compared(plan, measured: list[dict], weights: dict | None = None) -> dict:
 
 # ------------------------------------------------------------------ the calibration
 
-def calibrate(plan, measured: list[dict], weights: dict | None = None) -> dict:
+def calibrate(plan, measured: list[dict], bench: ex.Bench) -> dict:
     """The ranged fields fitted to the measured β (see the module's docstring): per field its design
     value, the fitted value and its 95 % interval, and the fit's χ² and correlations."""
     rng = [(f, lo, hi) for f, lo, hi in plan.experiment.ranges]
@@ -256,8 +256,6 @@ def calibrate(plan, measured: list[dict], weights: dict | None = None) -> dict:
                       for m in measured])
     strokes = _strokes(measured)
     keys = [(m["state"], m["disk"]) for m in measured]
-
-    bench = ex.Bench(plan, weights)
 
     def values(z):
         return {**base, **dict(zip(fields, np.clip(centre + scale * z, floor, ceiling)))}

@@ -314,13 +314,14 @@ def _sequences(plan, order: list[str], strokes: dict) -> dict[str, list[tuple[in
 
 
 def predict(plan, strokes: dict | None = None, which: list[str] | None = None, measured: dict | None = None,
-            steps: bool = False) -> dict:
+            steps: bool = False, bench: "Bench | None" = None) -> dict:
     """The experiment of a plan: every row (state, disk) with β nominal and its band, the push per
     disk, the endpoint ratio with its band (:func:`endpoint_ratio`); ``strokes``: {(state, disk): mm}
     to push instead of the disks and pushes the experiment sizes (a lab's own pushes); ``which``:
     the states (default all); ``measured``: the weights as :func:`hwgen.model.stiffness.describe`
-    takes them; ``steps``: with what to set on the bench (:func:`settings_steps`)."""
-    bench = Bench(plan, measured)
+    takes them; ``steps``: with what to set on the bench (:func:`settings_steps`); ``bench``: one
+    already at work on this plan (its robots reused)."""
+    bench = bench or Bench(plan, measured)
     sets = ends(plan)
     order = [s.name for s in sf.states(plan) if not which or s.name in which]
     if strokes is None:
