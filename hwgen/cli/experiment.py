@@ -19,10 +19,11 @@ CORRELATED = 0.9           # fitted values this correlated are said to be told a
 def _ratio_line(ep: dict | None) -> str | None:
     if not ep:
         return None
-    return (f"endpoint ratio {ep['state']}/{ep['over']} at disk {ep['disk']}: {ep['nominal']:.2f}× "
-            f"({ep['low']:.2f}–{ep['high']:.2f}× over {ep['corners']} corners of the ranges, {ep['width']:.2f}× wide); "
-            f"the paper measured {ep['paper']:g}× on its prototype ({'inside' if ep['paper_inside'] else 'outside'} "
-            f"the band)")
+    band = (f"{ep['low']:.2f}–{ep['high']:.2f}× over {ep['corners']} corners of the ranges, {ep['width']:.2f}× wide"
+            if ep["corners"] else "no band: the design gives no experiment.ranges")
+    where = f" ({'inside' if ep['paper_inside'] else 'outside'} the band)" if ep["corners"] else ""
+    return (f"endpoint ratio {ep['state']}/{ep['over']} at disk {ep['disk']}: {ep['nominal']:.2f}× ({band}); "
+            f"the paper measured {ep['paper']:g}× on its prototype{where}")
 
 
 @_command

@@ -81,9 +81,11 @@ def ends(plan) -> dict[str, dict[str, float]]:
 
 
 def corners(plan) -> list[dict[str, float]]:
-    """Every corner of the ranges (the other fields nominal)."""
+    """Every corner of the ranges (the other fields nominal); none without ranges."""
     base = nominal(plan)
     rng = [(f, (lo, hi)) for f, lo, hi in plan.experiment.ranges]
+    if not rng:
+        return []
     return [{**base, **dict(zip([f for f, _ in rng], pick))} for pick in itertools.product(*[r for _, r in rng])]
 
 

@@ -110,10 +110,11 @@ def write_protocol(result: dict, path: Path) -> None:
                                                   f"{r['nominal']:g})" for r in result["ranges"])
                   + " (each with its reason in the design's YAML).", ""]
     if ep:
+        band = (f"{ep['low']:.2f}–{ep['high']:.2f}× over the band's corners; the paper measured {ep['paper']:g}× on "
+                f"its prototype, {'inside' if ep['paper_inside'] else 'outside'} the band" if ep["corners"] else
+                f"no band: no experiment.ranges; the paper measured {ep['paper']:g}× on its prototype")
         lines += [f"Predicted endpoint ratio {ep['state']}/{ep['over']} at disk {ep['disk']}: {ep['nominal']:.2f}× "
-                  f"({ep['low']:.2f}–{ep['high']:.2f}× over the band's corners); the paper measured "
-                  f"{ep['paper']:g}× on its prototype ({'inside' if ep['paper_inside'] else 'outside'} the band).",
-                  ""]
+                  f"({band}).", ""]
     lines += ["## The states, in order", "",
               "Each state is tensioned from the robot untensioned: tensions as `hwgen stiffness` computes them (the "
               "paper's protocol); worm turns counted from the line just taut, from the line's spring (EA over its "
