@@ -39,10 +39,10 @@ from . import protocol
 from . import push as pu
 from . import statics as st
 from . import stiffness as sf
+from .settings import RANGED
 
 PAPER_ENDPOINT_RATIO = sf.PAPER_ENDPOINT_RATIO
-FIELDS = ("tendon_material.axial_stiffness_n", "tendon_material.tie_off_compliance_mm_per_n",
-          "tendon_material.eyelet_friction", "backbone.modulus_gpa")
+FIELDS = tuple(RANGED.values())     # EA, the tie-off's give, μ, the strip's E: the values the band can span
 STIFFENS = {"tendon_material.axial_stiffness_n": 1, "tendon_material.tie_off_compliance_mm_per_n": -1,
             "tendon_material.eyelet_friction": 1, "backbone.modulus_gpa": 1}     # which end of a range is the stiffer
 ROLL_DEG = {"gravity -z": 0.0, "gravity +z": 180.0}      # about the backbone, from the robot with +z up

@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..model.calibration import COLUMNS as MEASURED_COLUMNS
 from .plots import _pyplot, _save
 
 PREDICTED_COLUMNS = ("state", "disk", "s_mm", "push_mm", "beta_n_per_mm", "beta_low_n_per_mm", "beta_high_n_per_mm")
-MEASURED_COLUMNS = ("state", "disk", "repetition", "displacement_mm", "force_n")
 
 
 def write_predicted(result: dict, path: Path) -> None:
