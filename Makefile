@@ -91,6 +91,7 @@ docs-images: $(STAMP) viewer
 	rm -rf .docs-build
 	$(BIN)/hwgen build params/prototype.yaml --out .docs-build -q
 	$(BIN)/hwgen sim params/prototype.yaml --out .docs-build -q
+	$(BIN)/hwgen experiment params/prototype.yaml --out .docs-build -q
 	$(BIN)/hwgen build params/twenty-disks.yaml --out .docs-build -q || [ $$? -eq 1 ]
 	$(BIN)/python -m tests.browser .docs-build/prototype/view.html .docs-build/prototype/view.png disk_06
 	$(BIN)/python docs/pictures.py .docs-build docs/images

@@ -2,7 +2,8 @@
 
     python docs/pictures.py BUILD_ROOT docs/images
 
-BUILD_ROOT holds fresh builds of the prototype (with `hwgen sim`) and of the twenty-disk robot.
+BUILD_ROOT holds fresh builds of the prototype (with `hwgen sim` and `hwgen experiment`) and of the
+twenty-disk robot.
 Each picture is kept as a 256-colour PNG when that is smaller (the renders and plots are flat
 colours with anti-aliased edges: about a third of the bytes, no visible change), so the repository
 stays small; a picture over 1 MB is reported, one over 5 MB refused.
@@ -25,6 +26,7 @@ PICTURES = {
     "prototype-stiffness.png": "prototype/stiffness.png",
     "prototype-gravity.png": "prototype/gravity.png",
     "prototype-sim.png": "prototype/sim/sim.png",
+    "prototype-experiment.png": "prototype/experiment/experiment.png",
     "prototype-guide-step.png": "prototype/guide/step_03.png",
     "twenty-disks-bent.png": "twenty-disks/bent.png",
     "prototype-view.png": "prototype/view.png",       # view.html in headless Chromium (python -m tests.browser)

@@ -197,6 +197,7 @@ def processes(params_path: Path) -> None:
         rows.append(_process("hwgen check, empty cache", [*check[:-3], "--cache-dir", str(tmp / "empty"), "-q"], env,
                              "nothing remembered: Monte Carlo, statics, gears measured")[:5])
         rows += sim_rows(params, out, store, env)
+        rows += experiment_rows(params, tmp, env)
         if EDIT_FROM in text:
             params.write_text(text.replace(EDIT_FROM, EDIT_KEEPS_TIP))
             r = _process("one-tendon edit, tip kept", build, env, "C2: k 3 → 5 from the prototype")
@@ -212,6 +213,27 @@ def processes(params_path: Path) -> None:
     for label, wall, cpu, peak, note in rows:
         t.add_row(label, f"{wall:.2f}", f"{cpu:.2f}", f"{peak:.0f}", note)
     Console().print(t)
+
+
+# ---------------------------------------------------------------- the push test
+
+def _endpoint_note(stdout: str) -> str:
+    m = re.search(r"endpoint ratio (\S+) at disk \d+: ([\d.]+)× \(([\d.]+)–([\d.]+)×", stdout)
+    return f"{m.group(1)} {m.group(2)}× ({m.group(3)}–{m.group(4)}×)" if m else ""
+
+
+def experiment_rows(params: Path, tmp: Path, env: dict) -> list[tuple]:
+    """`hwgen experiment` from the parameters, the statics afresh (--no-cache): on a machine whose
+    numba cache has not the push's loop yet (it compiles), then with it."""
+    numba_env = {**env, "NUMBA_CACHE_DIR": str(tmp / "numba")}
+    argv = ["experiment", str(params), "--out", str(tmp / "experiment"), "--no-cache", "-q"]
+    rows = []
+    for label, note in (("hwgen experiment, first on a machine", "numba compiles the push's loop"),
+                        ("hwgen experiment", "every state tensioned and pushed on every robot of the band "
+                                             "(issue 47: at most 30 s CPU)")):
+        r = _process(label, argv, numba_env, note)
+        rows.append((*r[:4], "; ".join(x for x in (r[4], _endpoint_note(r[5])) if x)))
+    return rows
 
 
 # ---------------------------------------------------------------- the disks against OpenSCAD

@@ -381,3 +381,40 @@ def hints(doc: dict) -> dict[str, str]:
                 out[path] = f"{v:g} {unit} is {side} the usual {lo:g}-{hi:g} {unit}: {what} ({v * f:.4g} {unit})?"
                 break
     return out
+
+
+# ---------------------------------------------------------------- a design file with values changed
+
+def rewritten(path: str | Path, values: dict[str, tuple[object, str]], name: str, head: str) -> str:
+    """The text of the design file ``path`` with each dotted field of ``values`` set to its value and
+    the comment beside it replaced by the one given ({field: (value, comment)}), every other
+    comment, order and quoting kept (ruamel.yaml's round trip); its ``design`` renamed ``name``; a
+    ``base`` made absolute (the text is written elsewhere); ``head`` put first as comment lines.
+    A section the file leaves to its base is written with only the changed keys (it merges)."""
+    import io
+
+    from ruamel.yaml import YAML
+    y = YAML()
+    y.preserve_quotes = True
+    y.width = 4096
+    y.indent(mapping=2, sequence=4, offset=2)          # hwgen's files: list items two in, their keys four
+    path = Path(path)
+    doc = y.load(path.read_text())
+    if BASE_KEY in doc:
+        doc[BASE_KEY] = str(base_file(path, doc[BASE_KEY]).resolve())
+    for dotted_path, (value, comment) in values.items():
+        keys = parse_path(dotted_path)
+        node = doc
+        for k in keys[:-1]:
+            if node.get(k) is None:
+                node[k] = {}
+            node = node[k]
+        node[keys[-1]] = value
+        if hasattr(node, "yaml_add_eol_comment"):
+            if keys[-1] in node.ca.items:
+                del node.ca.items[keys[-1]]
+            node.yaml_add_eol_comment(comment, keys[-1])
+    doc["design"] = name
+    buf = io.StringIO()
+    y.dump(doc, buf)
+    return "".join(f"# {line}\n" for line in head.splitlines()) + buf.getvalue()

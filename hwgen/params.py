@@ -20,13 +20,15 @@ import re
 import types
 import typing
 from pathlib import Path
-from typing import Annotated, Literal, get_args
+from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, Field, PrivateAttr, ValidationError, model_validator
 
 from . import designfile, yamlfile
 from .errors import InputError, Problem, clip, echo, nearest
 from .fasteners import size as _fastener
+from .params_base import _Model
+from .params_experiment import Experiment
 
 M3_CLEARANCE = _fastener("clearance hole", "M3", "normal")     # ISO 273 normal series (data/fasteners.csv)
 
@@ -43,26 +45,6 @@ Coord = Annotated[float, Field(ge=-MAX_MM, le=MAX_MM, allow_inf_nan=False)]
 Finite = Annotated[float, Field(allow_inf_nan=False)]   # a finite number; bounds given per field
 Name = Annotated[str, Field(min_length=1, max_length=64)]
 Angle = Annotated[float, Field(gt=0, le=360, allow_inf_nan=False)]   # a bending sweep ±deg
-
-
-def _has_bool(value) -> bool:
-    if isinstance(value, bool):
-        return True
-    return isinstance(value, (list, tuple)) and any(_has_bool(v) for v in value)
-
-
-class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-    @field_validator("*", mode="before")
-    @classmethod
-    def _no_bool_for_numbers(cls, value, info):
-        """YAML reads true/false/yes/no/on/off as booleans, and pydantic would take them as 1 and 0."""
-        if _has_bool(value) and bool not in (cls.model_fields[info.field_name].annotation,
-                                             *get_args(cls.model_fields[info.field_name].annotation)):
-            raise ValueError("true/false is not a number or a name (YAML reads yes, no, on, off, true and "
-                             "false as booleans; quote a name that is one of them)")
-        return value
 
 
 class Backbone(_Model):
@@ -438,6 +420,7 @@ class Design(_Model):
     bom: Bom = Field(default_factory=Bom, description="bill of materials: tendon cut allowances")
     plates: Plates = Field(default_factory=Plates, description="print plates: spacing and SLA orientation")
     coupon: Coupon = Field(default_factory=Coupon, description="the calibration coupon's steps and labels")
+    experiment: Experiment = Field(default_factory=Experiment, description="the push test: hwgen experiment, compare")
 
     @property
     def stations(self) -> tuple[float, ...]:

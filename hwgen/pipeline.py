@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import errno
 import fnmatch
+import hashlib
 import json
 import os
 import shutil
@@ -569,3 +570,86 @@ def sim(loaded: params.LoadedDesign, out_root: Path,
         plan = design_plan(loaded, tensioner_record(manifest))
         result = simulate(plan, tmp, manifest, report, tmp / SIM, lambda: statics(plan, report.get("gravity")))
     return result, folder, why
+
+
+EXPERIMENT = "experiment"  # the folder of `hwgen experiment`'s and `hwgen compare`'s files inside out/<design>/
+
+
+def _current_weights(loaded: params.LoadedDesign, out_root: Path) -> tuple[dict | None, dict | None]:
+    """The weights a current build of the design measured (its report's gravity section) and its
+    tensioner's layout record, as `hwgen stiffness` takes them; (None, None) without one."""
+    folder = Path(out_root) / loaded.name
+    with output_errors(Path(out_root)), snapshot(folder) as view:
+        if stale_reason(view, loaded) is None:
+            return (read_report(view) or {}).get("gravity"), tensioner_record(read_manifest(view))
+    return None, None
+
+
+def experiment(loaded: params.LoadedDesign, out_root: Path, cache_dir: Path | None | bool = True) -> tuple[dict, Path]:
+    """`hwgen experiment`: the paper's push test predicted for the design (:mod:`hwgen.model.experiment`;
+    the weights of a current build when there is one, as `hwgen stiffness`), remembered in the
+    cache by what it reads, written as experiment/ (protocol.md, predicted.csv, experiment.json,
+    template.csv, experiment.png) into ``out_root/<design>/``, added to what is there. Returns
+    (experiment.json's content, the folder)."""
+    from .model import experiment as ex          # scipy and numba: only these commands
+    from .model import stiffness as sf
+    from .outputs import experiment as ox
+    weights, record = _current_weights(loaded, out_root)
+    plan = design_plan(loaded, record)
+    ex.disks_pushed(plan)
+    inputs = (sf.describe(plan, weights), [s.name for s in sf.states(plan)], plan.experiment,
+              None if plan.tensioner_layout is None else (plan.tensioner_layout.pair.ratio,
+                                                          plan.tensioner_layout.winding_radius))
+    with cache.using(_store(cache_dir)):
+        result = cache.remembered("experiment", inputs, lambda: ex.experiment(plan, weights))
+    result = {"design": loaded.name, "params_sha256": loaded.sha256,
+              "weights": "measured from the current build's files" if weights else "estimated from the plan",
+              **result}
+    folder = Path(out_root) / loaded.name
+    with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
+        where = tmp / EXPERIMENT
+        shutil.rmtree(where, ignore_errors=True)         # a comparison with an earlier prediction goes with it
+        where.mkdir()
+        write_json(where / "experiment.json", result)
+        ox.write_predicted(result, where / "predicted.csv")
+        ox.write_template(result, where / "template.csv")
+        ox.write_protocol(result, where / "protocol.md")
+        ox.plot_experiment(result, where / "experiment.png")
+    return result, folder
+
+
+def compare(loaded: params.LoadedDesign, measured_csv: Path, out_root: Path) -> tuple[dict, Path]:
+    """`hwgen compare`: a lab's pushes (:mod:`hwgen.model.calibration`) fitted by eq. (4), measured
+    against predicted with its band, and the ranged values fitted to them, written as
+    experiment/compare.json, compare.png and calibrated.yaml (the design file with the fitted
+    values) into ``out_root/<design>/``. Returns (compare.json's content, the folder)."""
+    from .designfile import rewritten
+    from .model import calibration as cal
+    from .model.experiment import Bench
+    from .outputs import experiment as ox
+    weights, record = _current_weights(loaded, out_root)
+    plan = design_plan(loaded, record)
+    raw = cal.read_bytes(measured_csv)
+    pushes = cal.read_measured(measured_csv, raw, plan)
+    measured = cal.fit_measured(pushes, plan.experiment.fit_window_samples)
+    bench = Bench(plan, weights)
+    result = {"design": loaded.name, "params_sha256": loaded.sha256, "measurement": str(measured_csv),
+              "measurement_sha256": hashlib.sha256(raw).hexdigest(), **cal.compared(plan, measured, bench)}
+    result["calibration"] = cal.calibrate(plan, measured, bench)
+    result["fitted"] = result["calibration"].pop("fitted")
+    name = f"{loaded.name}-calibrated" if params.SAFE_NAME.match(f"{loaded.name}-calibrated") else "calibrated"
+    head = (f"hwgen compare: {loaded.name} with {', '.join(result['fitted']) or 'nothing'} fitted by least squares to "
+            f"the pushes measured in {Path(measured_csv).name} (sha256 {result['measurement_sha256'][:16]}); "
+            f"renamed {name} so that its build does not replace the design's")
+    yaml_text = rewritten(loaded.source, {f: (round(v["value"], 6), f"fitted by hwgen compare to "
+                                          f"{Path(measured_csv).name}: 95 % {v['low']:.4g}-{v['high']:.4g}; the "
+                                          f"design had {v['design']:g}") for f, v in result["fitted"].items()},
+                          name, head)
+    folder = Path(out_root) / loaded.name
+    with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
+        where = tmp / EXPERIMENT
+        where.mkdir(exist_ok=True)
+        write_json(where / "compare.json", result)
+        (where / "calibrated.yaml").write_text(yaml_text)
+        ox.plot_experiment(result["prediction"], where / "compare.png", result)
+    return result, folder

@@ -1,4 +1,4 @@
-"""The `hwgen` command line: build, check, render, plates, coupon, routing, stiffness, sweep, tune, schema.
+"""The `hwgen` command line: build, check, render, plates, coupon, routing, stiffness, experiment, compare, sweep, tune, schema.
 
 Exit codes: 0 success, 1 design findings that fail, 2 bad input or usage, 3 a bug in hwgen.
 
@@ -17,7 +17,7 @@ import os
 import signal
 import sys
 
-from . import design, search  # noqa: F401  (each registers its commands on the app)
+from . import design, experiment, search  # noqa: F401  (each registers its commands on the app)
 from .common import (EXIT_BAD_INPUT, EXIT_BUG, EXIT_FINDINGS, EXIT_OK, _STOPPING, _errors,  # noqa: F401
                      _terminate, _write_side_file, app)
 from .design import _built_before  # noqa: F401

@@ -284,10 +284,10 @@ def stiffness(params: Path = PARAMS, out_dir: Path = OUT,
         out.print(table)
     r = rep["endpoint_ratio"]
     if r.get("ratio") is not None:
-        band = r["band"]
-        out.print(f"endpoint stiffness {r['states'][0]}/{r['states'][1]} ({r['orientation']}): {band[0]:.2f}-"
-                  f"{band[1]:.2f}× between the friction bounds, {r['ratio']:.2f}× frictionless; the paper measured "
-                  f"{r['paper']:g}× on its prototype ({'inside' if r['paper_inside'] else 'outside'} the band)")
+        each = ", ".join(f"{v:.2f}× {k}" for k, v in r["by_friction"].items())
+        out.print(Text(f"endpoint stiffness {r['states'][0]}/{r['states'][1]} ({r['orientation']}) at the tip: {each}. "
+                       f"{r['note']} The paper measured {r['paper']:g}× on its prototype: `hwgen experiment` predicts "
+                       "what its bench would, with a band."))
     out.print(Text(f"tensions: {rep['protocol']}; * a tendon's own pretension_n"))
     out.print(Text(f"friction: {rep['frictions']['capstan']}; † a tendon went slack before the push was whole "
                    "(the secant up to there); ▲ toward +z, ▼ toward −z"))

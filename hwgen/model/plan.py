@@ -20,10 +20,10 @@ from .holes import hole_diameter
 from .fixtures import JigLayout, MountLayout, base_length, disk_screw_region, jig_layout, mount_layout
 from .fixing import disk_role, disk_thicknesses, hub_lengths, hub_spec, seats_for
 from .routing import TendonPath, tendon_paths
-from .settings import (AnchorsSettings, BomSettings, CheckSettings, HubSettings, PlatesSettings, ProcessSettings,
-                       RenderSettings, TendonMaterialSettings, TensionerSettings, anchors_settings, bom_settings,
-                       check_settings, hub_settings, plates_settings, process_settings, render_settings,
-                       tendon_material_settings, tensioner_settings)
+from .settings import (AnchorsSettings, BomSettings, CheckSettings, ExperimentSettings, HubSettings, PlatesSettings,
+                       ProcessSettings, RenderSettings, TendonMaterialSettings, TensionerSettings, anchors_settings,
+                       bom_settings, check_settings, experiment_settings, hub_settings, plates_settings,
+                       process_settings, render_settings, tendon_material_settings, tensioner_settings)
 from .specs import BackboneHole, BackboneSpec, DiskSpec, Hole, Merge, slot_size
 from .tensioner_layout import TensionerLayout, layout
 
@@ -59,6 +59,7 @@ class Plan:
     render: RenderSettings
     bom: BomSettings
     plates: PlatesSettings
+    experiment: ExperimentSettings                    # the push test (hwgen experiment, compare)
     tensioner_layout: TensionerLayout | None = None   # where the worm drives go, when they can be laid out
     tensioner_error: str | None = None                # why not, otherwise
 
@@ -273,7 +274,8 @@ def make_plan(design: Design, tensioner_record: dict | None = None) -> Plan:
                  mount=mount_layout(d, [(x, z) for x, z, _ in disks[0].mount_holes]), jig=jig_layout(d),
                  check=check_settings(d), process=process_settings(d), tendon_material=tendon_material_settings(d),
                  tensioner=tensioner_settings(d), hub=hub_settings(d), anchors=anchors_settings(d),
-                 render=render_settings(d), bom=bom_settings(d), plates=plates_settings(d))
+                 render=render_settings(d), bom=bom_settings(d), plates=plates_settings(d),
+                 experiment=experiment_settings(d))
     try:
         lay = layout(d, paths, disks[-1], tensioner_record)
     except ValueError as e:

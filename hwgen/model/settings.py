@@ -135,6 +135,28 @@ class PlatesSettings:
     flat_contact_fraction: float
 
 
+@dataclass(frozen=True, kw_only=True)
+class ExperimentSettings:
+    """experiment: the push test, and the ranges of the values its prediction spans."""
+
+    orientation: str              # a key of hwgen.model.stiffness.ORIENTATIONS
+    push_toward: str              # "+z" or "-z"
+    first_disk: int               # counted from 1 at the clamped base
+    load_cell_range_n: float
+    load_fraction: float
+    max_push_mm: float
+    displacement_rate_mm_s: float
+    sample_rate_hz: float
+    fit_window_samples: int
+    repetitions: int
+    ranges: tuple[tuple[str, float, float], ...]     # (the design's dotted field, low, high) of each value given
+
+
+RANGED = {"axial_stiffness_n": "tendon_material.axial_stiffness_n",
+          "tie_off_compliance_mm_per_n": "tendon_material.tie_off_compliance_mm_per_n",
+          "eyelet_friction": "tendon_material.eyelet_friction", "modulus_gpa": "backbone.modulus_gpa"}
+
+
 def termination(t: TerminationSchema) -> Termination:
     return Termination(kind=t.kind, diameter=t.diameter, length=t.length, name=t.name)
 
@@ -198,3 +220,14 @@ def plates_settings(d: Design) -> PlatesSettings:
     p = d.plates
     return PlatesSettings(gap_mm=p.gap_mm, edge_margin_mm=p.edge_margin_mm, sla_tilt_deg=p.sla_tilt_deg,
                           flat_contact_fraction=p.flat_contact_fraction)
+
+
+def experiment_settings(d: Design) -> ExperimentSettings:
+    x = d.experiment
+    ranges = tuple((field, *getattr(x.ranges, key)) for key, field in RANGED.items()
+                   if getattr(x.ranges, key) is not None)
+    return ExperimentSettings(orientation=x.orientation, push_toward=x.push_toward, first_disk=x.first_disk,
+                              load_cell_range_n=x.load_cell_range_n, load_fraction=x.load_fraction,
+                              max_push_mm=x.max_push_mm, displacement_rate_mm_s=x.displacement_rate_mm_s,
+                              sample_rate_hz=x.sample_rate_hz, fit_window_samples=x.fit_window_samples,
+                              repetitions=x.repetitions, ranges=ranges)

@@ -318,7 +318,7 @@ def _curve(eq: st.Equilibrium) -> dict:
             "x_mm": eq.p[idx, 0].tolist()}
 
 
-def _push_rows(model: st.Model, eq: st.Equilibrium, stations) -> np.ndarray:
+def push_rows(model: st.Model, eq: st.Equilibrium, stations) -> np.ndarray:
     """(K, n_dof): the displacement along :data:`PUSH` of the centre of each disk at ``stations``."""
     kin = tuple(x[0] for x in model.forward(eq.q[None, :]))
     nodes = protocol.station_nodes(model, stations)
@@ -353,7 +353,7 @@ def evaluate(desc: Described, model: st.Model, state: State, orientation: str, m
     done = protocol.tension_state(model, state.channels, gravity, desc.pretension, desc.rules, desc.stations, memo)
     eq = done.equilibrium
     b = fr.bounds(eq)
-    rows = _push_rows(model, eq, desc.stations[1:])
+    rows = push_rows(model, eq, desc.stations[1:])
     twist = model.rotation_jacobian(eq.q, desc.robot.length, (0.0, 1.0, 0.0))
     locked = [t.name for t in desc.robot.tendons if t.channel in state.channels]
     tip = eq.at(desc.robot.length)
@@ -496,10 +496,16 @@ def _ratios(entries, pair) -> list[dict]:
     return out
 
 
+BOUNDS_NOTE = ("Each is a ratio of tangents for a small push; the friction bounds (frictionless, every eyelet stuck) "
+               "bound each state's stiffness, not the ratio of two: one state's eyelets can slip while another's "
+               "hold, and a bench's push of newtons slackens tendons the tangent keeps taut.")
+
+
 def _endpoint(ratios, pair, orientations) -> dict:
     """The headline: the first state of ``pair`` over the second at the tip in the reference
-    orientation (or the first studied), frictionless (``ratio``), its band over the frictions, and
-    the paper's 4.85× placed against it."""
+    orientation (or the first studied), frictionless (``ratio``) and at each friction's tangent
+    (``by_friction``; ``band``, their least and most, is no band of the ratio: :data:`BOUNDS_NOTE`),
+    and the paper's 4.85× placed against them (`hwgen experiment` predicts what a bench measures)."""
     o = REFERENCE if REFERENCE in orientations else orientations[0]
     rows = [r for r in ratios if r["orientation"] == o]
     if not pair or not rows:
@@ -509,7 +515,7 @@ def _endpoint(ratios, pair, orientations) -> dict:
     return {"states": pair, "orientation": o, "ratio": next(r["tip"] for r in rows if r["friction"] == "none"),
             "by_friction": {r["friction"] + (" " + r["push"] if "push" in r else ""): r["tip"] for r in rows},
             "band": band, "paper": PAPER_ENDPOINT_RATIO,
-            "paper_inside": band[0] <= PAPER_ENDPOINT_RATIO <= band[1]}
+            "paper_inside": band[0] <= PAPER_ENDPOINT_RATIO <= band[1], "note": BOUNDS_NOTE}
 
 
 def _softer(entries, todo, actuating) -> list[str]:
