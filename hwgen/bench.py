@@ -10,6 +10,7 @@ Run: python -m hwgen.bench [PARAMS]          each command as a whole process: wa
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -93,10 +94,8 @@ def _adopting_orphans() -> None:
     """This process becomes the reaper of every process its children leave behind (Linux's
     PR_SET_CHILD_SUBREAPER), so their CPU and peak count in its children's usage once reaped."""
     import ctypes
-    try:
+    with contextlib.suppress(OSError, AttributeError):     # not Linux: the orphans' usage is not counted
         ctypes.CDLL(None, use_errno=True).prctl(36, 1, 0, 0, 0)     # PR_SET_CHILD_SUBREAPER
-    except (OSError, AttributeError):
-        pass
 
 
 def _run(label: str, argv: list[str], env: dict, note: str = "") -> tuple[str, float, float, float, str, str]:

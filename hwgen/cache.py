@@ -32,7 +32,7 @@ import json
 import os
 import tempfile
 from collections.abc import Callable, Iterator
-from contextlib import ExitStack, contextmanager, nullcontext
+from contextlib import ExitStack, contextmanager, nullcontext, suppress
 from contextvars import ContextVar
 from functools import lru_cache
 from pathlib import Path
@@ -213,19 +213,15 @@ class Store:
                 f.write(data)
             os.replace(tmp, path)
         except BaseException:
-            try:
+            with suppress(OSError):     # the temp file never made: nothing to remove
                 os.unlink(tmp)
-            except OSError:
-                pass
             raise
 
     @staticmethod
     def _used(path: Path) -> None:
         """Mark an entry as just used (its modification time; access times are often not kept)."""
-        try:
+        with suppress(OSError):     # a read-only store: its entries age by when they were made
             os.utime(path)
-        except OSError:
-            pass
 
     def trim(self, limit: int) -> tuple[int, int]:
         """Remove the least recently used entries (records and bytes alike) until the store holds
@@ -309,10 +305,8 @@ class Store:
 
     def _drop(self, path: Path, what: str) -> None:
         self.corrupt.append(what)
-        try:
+        with suppress(OSError):     # gone already (another process dropped it) or read-only: not read again
             path.unlink()
-        except OSError:
-            pass
 
     # bytes, by their own hash
     def put_bytes(self, data: bytes) -> str:

@@ -34,7 +34,7 @@ import os
 import shutil
 import tempfile
 from collections.abc import Callable, Iterator
-from contextlib import ExitStack, contextmanager
+from contextlib import ExitStack, contextmanager, suppress
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -235,7 +235,7 @@ class BuildResult:
     report: Report | None = None      # the checks' report, when they ran
     built: list[str] = field(default_factory=list)     # the parts made afresh (the others came from the cache)
     reused: list[str] = field(default_factory=list)    # the stages after the files taken from the cache
-    cache_notes: list[str] = field(default_factory=list)   # damaged entries found (and rebuilt), a cache turned off
+    notes: list[str] = field(default_factory=list)   # damaged entries found (and rebuilt), a cache turned off, work ahead that failed
 
 
 def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, int, int], None] | None = None,
@@ -288,8 +288,10 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
     if chosen is not None:
         store.put_record(layout_key, {"search": chosen})
     store.trim(limit)
-    notes = [f"damaged entries rebuilt: {', '.join(store.corrupt)}"] if store.corrupt else []
-    notes += [f"not written, so not used: {store.unwritable}"] if store.unwritable else []
+    notes = [f"part cache: damaged entries rebuilt: {', '.join(store.corrupt)}"] if store.corrupt else []
+    notes += [f"part cache: not written, so not used: {store.unwritable}"] if store.unwritable else []
+    notes += [f"work done ahead of the checks failed, and the checks did it again: {f}"
+              for f in (b.ahead.failures if b.ahead is not None else [])]
     return BuildResult(target, manifest, plan, report, built, reused, notes)
 
 
@@ -437,10 +439,8 @@ def _measured(store: cache.Store, folder: Path, manifest: Manifest, plan: Plan) 
     rec = store.get_record(key)
     data = store.get_bytes(rec["report"]) if isinstance(rec, dict) and isinstance(rec.get("report"), str) else None
     if data is not None:
-        try:
+        with suppress(ValueError):     # a damaged record: the checks run again below
             return json.loads(data)
-        except ValueError:
-            pass
     with cache.using(store):
         report = cache.as_json(run_checks(folder, manifest, plan))
     store.put_record(key, {"report": store.put_bytes(json.dumps(report).encode())})

@@ -466,3 +466,24 @@ def test_the_cache_keeps_to_its_size_dropping_the_least_recently_used(tmp_path, 
     monkeypatch.setenv(cache.ENV_SIZE, "-3G")
     code, _, stderr, escaped = run_cli("build", str(PARAMS / "prototype.yaml"), "--out", str(tmp_path / "o"))
     assert escaped is None and code == 2 and "HWGEN_CACHE_SIZE" in stderr and not (tmp_path / "o").exists()
+
+
+def test_work_done_ahead_that_fails_is_said_not_swallowed(monkeypatch, tmp_path):
+    """The checks' measurement made ahead (beside assembly.step) that raises is done again by the
+    checks, and what failed is kept for the build's notes rather than dropped (issue 49)."""
+    import threading
+
+    from hwgen import pipeline
+    from hwgen.checks import run as checks_run
+    from hwgen.engine.concurrency import Ahead
+
+    plan = pipeline.design_plan(pipeline.load(PARAMS / "prototype.yaml"))
+
+    def broken(*_):
+        raise ValueError("a mesh with no faces")
+
+    monkeypatch.setattr(checks_run, "measure", broken)
+    ahead = Ahead(cache.Store(tmp_path / "store"), plan, threading.Event(), None)
+    ahead._measure(tmp_path, None, "key")
+    assert ahead.found is None
+    assert ahead.failures == ["the checks' measurement: ValueError: a mesh with no faces"]

@@ -14,6 +14,7 @@ made as before.
 """
 from __future__ import annotations
 
+import contextlib
 import weakref
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -100,9 +101,7 @@ def _read(store: cache.Store, key: str):
     if data is None:
         return None
     solid = read_brep(data)
-    try:
+    with contextlib.suppress(KeyError, TypeError, ValueError):      # measured again when asked
         volume, com = rec["mass"]
         known_mass(solid, (volume, com))
-    except (KeyError, TypeError, ValueError):
-        pass                # measured again when asked
     return solid

@@ -12,6 +12,7 @@ is ``check.robust_severity``.
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 from collections.abc import Callable
@@ -230,10 +231,8 @@ def kept_sweep(ch: tp.Chains, angles_deg, length: float) -> tuple[np.ndarray, np
               for t, h in enumerate(ch.chain)]
     got: dict[int, dict] = {}
     for t in range(T):
-        try:
+        with contextlib.suppress(_NotKept):     # not kept: solved below with the others
             got[t] = cache.kept_arrays(TENDON_SWEEP, inputs[t], _not_kept)
-        except _NotKept:
-            pass
     todo = [t for t in range(T) if t not in got]
     if todo:
         L, L0, bad = tp.sweep(tp.tendons(ch, todo), ang, length)

@@ -6,7 +6,7 @@ import os
 import sys
 import threading
 import warnings
-from contextlib import contextmanager, nullcontext
+from contextlib import contextmanager, nullcontext, suppress
 from pathlib import Path
 
 import typer
@@ -156,10 +156,8 @@ def _errors(params: Path | None):
         raise typer.Exit(130) from None
     except BrokenPipeError:
         # the reader of our output went away (| head): stop quietly, as a SIGPIPE would
-        try:
+        with suppress(OSError, ValueError):     # no stdout left to point anywhere
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        except (OSError, ValueError):
-            pass
         raise typer.Exit(141) from None
     except Exception as e:
         if os.environ.get(DEBUG_ENV) == "1":

@@ -48,8 +48,8 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
         result = run_build(loaded, out_dir, progress, cache_dir=_cache(cache_dir, no_cache, cache_size), parts=parts,
                            jobs=default_jobs() if jobs is None else jobs)
     n = len(result.manifest.parts)
-    for note in result.cache_notes:
-        say("warning:", "yellow", f"part cache: {note}")
+    for note in result.notes:
+        say("warning:", "yellow", note)
     if parts is not None:
         written = result.manifest.parts_written["names"]
         out.print(f"{loaded.name}: {len(written)} of {n} parts written to {printable(result.folder)} "

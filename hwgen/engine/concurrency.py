@@ -80,7 +80,8 @@ class Ahead:
     checks find them there, or wait for the one being made (:func:`hwgen.cache.remembered` computes
     under the entry's lock): the values are the ones the checks would compute themselves. The
     threads go on beside the stages after the files; the build joins them at its end. A failure
-    here is left for the checks to meet and report."""
+    here is left for the checks to meet and report, and kept in :attr:`failures` (the build says
+    what failed ahead, so a defect here does not hide behind the checks' second try)."""
 
     def __init__(self, store: cache.Store, plan: Plan, taken: threading.Event, hashes: Hashes):
         self.store, self.plan, self.thread, self.hashes = store, plan, None, hashes
@@ -92,6 +93,7 @@ class Ahead:
         self.measuring: threading.Thread | None = None     # the measurement (:meth:`measure`), once asked for
         self.started = threading.Event()                    # ... and started
         self.found: tuple[str, object] | None = None      # (key of the files measured, checks.run.Measured)
+        self.failures: list[str] = []   # what failed here ("measure: ValueError: ..."), done again by the checks
 
     def start(self) -> None:
         if self.thread is None:
@@ -129,8 +131,11 @@ class Ahead:
         with cache.using(self.store), reading_early(self.meshes):
             try:
                 self.found = (key, measure(folder, manifest, self.plan))
-            except Exception:       # the checks measure again and report what fails
-                pass
+            except Exception as e:      # the checks measure again and report what fails
+                self._failed("the checks' measurement", e)
+
+    def _failed(self, what: str, e: Exception) -> None:
+        self.failures.append(f"{what}: {type(e).__name__}: {e}")
 
     def measured(self, folder: Path, manifest: Manifest):
         """What :meth:`measure` found (waiting for it), when it measured the files now in
@@ -156,8 +161,8 @@ class Ahead:
             if self.store.enabled:
                 try:
                     sweeps(self.plan)
-                except Exception:       # the checks run it again and report what it raises
-                    pass
+                except Exception as e:  # the checks run it again and report what it raises
+                    self._failed("the tension sweeps", e)
                 heap.trim()
             with reading_early(self.meshes):
                 while (job := self.jobs.get()) is not None:
@@ -172,8 +177,9 @@ class Ahead:
                         elif not gears_remembered(folder, what, self.plan):
                             processes.elsewhere(gear_checks_in_child, folder, what, self.plan, self.store,
                                                 name="hwgen-gears", preload=WORKER_PRELOAD).join()
-                    except Exception:
-                        pass
+                    except Exception as e:  # the checks read, measure or check the gears again
+                        self._failed({"meshes": "reading the STLs", "measure": "starting the measurement"}
+                                     .get(kind, "the gear checks"), e)
 
     def join(self) -> None:
         if self.thread is not None:

@@ -3,6 +3,7 @@ in that order (branch and bound on the estimated load of the tensioner's weight)
 assembled into a :class:`TensionerLayout`, or a refusal that names the closest miss."""
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass
 
@@ -57,10 +58,9 @@ def layout(design: Design, paths: list[TendonPath], tip: DiskSpec, chosen: dict 
     record; it is searched afresh when no candidate matches it.
     """
     if chosen is not None:
-        try:
+        # not this design's record after all: searched afresh below
+        with contextlib.suppress(NoFit, KeyError, IndexError, TypeError, ValueError):
             return _search(design, paths, tip, _named(chosen), chosen)
-        except (NoFit, KeyError, IndexError, TypeError, ValueError):
-            pass                               # not this design's record after all: search
     return _search(design, paths, tip, None, None)
 
 
