@@ -239,13 +239,6 @@ def jig_low_top(d: Design) -> float:
     return -(max(d.backbone.thickness / 2, hub) + JIG_CLEAR)
 
 
-def jig_engagement(d: Design) -> float:
-    """How deep each disk's rim enters the comb walls along x, mm: JIG_ENGAGE, or, where the strip
-    or the hubs reach further out than the walls would start (and the walls do not stop under
-    them), less."""
-    return d.disks.outer_diameter / 2 - jig_layout(d).x_inner
-
-
 def _free_cuts(y0: float, y1: float, longest: float, slots, gaps: list[float]) -> list[float]:
     """Piece ends from y0 to y1, none longer than ``longest``, each cut JIG_CUT_CLEAR clear of every
     slot: the remaining length shared equally among the pieces it needs, each cut moved back

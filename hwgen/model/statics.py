@@ -656,11 +656,6 @@ class Equilibrium:
         c = np.einsum("kn,nk->k", np.atleast_2d(jac), y)
         return c if jac.ndim > 1 else float(c[0])
 
-    def point_stiffnesses(self, stations, direction) -> np.ndarray:
-        """:meth:`point_stiffness` at many arc lengths at once, N/mm."""
-        J = np.array([self.model.point_jacobian(self.q, s, direction) for s in stations])
-        return 1.0 / self.compliance(J)
-
     def point_stiffness(self, s: float, direction) -> float:
         """Force over displacement of a small push at the node at arc length s along the base-frame
         direction, N/mm."""

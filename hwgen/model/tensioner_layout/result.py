@@ -128,11 +128,6 @@ class TensionerLayout:
     windings: dict[str, str]                    # channel -> "same" or "opposite": how its tendons wind
     search: dict = field(default_factory=dict)  # what was tried and why this arrangement won
 
-    @property
-    def housing_volume_estimate(self) -> float:
-        """Sum of the housing members' volumes, mm³ (overlaps counted twice, cuts ignored)."""
-        return float(sum(m.volume for m in self.members))
-
     # --- placements: part file -> robot --------------------------------------------------
     def mesh_to_robot(self, unit: Unit) -> np.ndarray:
         """Mesh frame of :mod:`hwgen.model.gearing` -> robot: mesh X -> side·y (toward the worm),
