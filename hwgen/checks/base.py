@@ -47,6 +47,26 @@ class Check:
         return out
 
 
+def fails(check: Check | dict) -> bool:
+    """Whether ``check`` (a record or its JSON) fails the design: not passed, and an error (a failing
+    warning is reported and does not). The one statement of the rule: every verdict, exit code,
+    summary, sweep row and tune trial asks it here."""
+    if isinstance(check, Check):
+        return not check.passed and check.severity == "error"
+    return not check.get("passed", True) and check.get("severity") == "error"
+
+
+def failing(checks) -> list:
+    """The checks among ``checks`` that fail the design (:func:`fails`), in their order."""
+    return [c for c in checks or () if fails(c)]
+
+
+def warned(checks) -> list:
+    """The checks among ``checks`` that fail as warnings: reported, the design still passes."""
+    return [c for c in checks or () if not (c.passed if isinstance(c, Check) else c.get("passed", True))
+            and (c.severity if isinstance(c, Check) else c.get("severity")) == "warning"]
+
+
 # the fix of a check that finds hwgen's own files wrong (a part that is not where the design puts
 # it, a file missing or unreadable): nothing in the design to change
 REBUILD = ("rebuild (hwgen build); if it fails again, hwgen made this wrong: please report it with the "

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any, TypedDict
 
 from .. import atomic
+from .base import failing, fails, warned
 
 REPORT = "report.json"
 
@@ -144,7 +145,7 @@ def status(check: dict) -> str:
 def write_junit(report: dict, path: Path) -> None:
     """One test case per check; failing errors are failures, failing warnings print a warning."""
     checks = report["checks"]
-    failures = sum(1 for c in checks if not c["passed"] and c["severity"] == "error")
+    failures = len(failing(checks))
     suites = ET.Element("testsuites", name="hwgen check", tests=str(len(checks)), failures=str(failures))
     suite = ET.SubElement(suites, "testsuite", name=f"hwgen check {report['design']}", tests=str(len(checks)),
                           failures=str(failures), errors="0", skipped="0")
@@ -157,7 +158,7 @@ def write_junit(report: dict, path: Path) -> None:
         case = ET.SubElement(suite, "testcase", classname=f"hwgen.{report['design']}.{c['id']}", name=name)
         detail = f"measured={c['measured']} limit={c['limit']} where={json.dumps(c['where'])}"
         fix = c.get("fix") or ""
-        if not c["passed"] and c["severity"] == "error":
+        if fails(c):
             fail = ET.SubElement(case, "failure", message=c["message"], type=c["id"])
             fail.text = detail + (f"\nfix: {fix}" if fix else "")
         else:
@@ -257,11 +258,10 @@ def verdict_lines(report: dict, summary: Path | str, files: dict[str, str] | Non
     (:func:`finding_line`), then the warnings, then the verdict naming ``summary`` and the settings
     that lowered a failing check's severity."""
     checks = report["checks"]
-    fails = [c for c in checks if not c["passed"] and c["severity"] == "error"]
-    warns = [c for c in checks if not c["passed"] and c["severity"] == "warning"]
-    out = [("failed:", finding_line(c)) for c in fails] + [("warning:", finding_line(c)) for c in warns]
+    errs, warns = failing(checks), warned(checks)
+    out = [("failed:", finding_line(c)) for c in errs] + [("warning:", finding_line(c)) for c in warns]
     lowered = lowered_settings(report, files)
-    text = (f"{'PASS' if report['ok'] else 'FAIL'}: {len(checks)} checks, {len(fails)} failed, {len(warns)} warning(s)"
+    text = (f"{'PASS' if report['ok'] else 'FAIL'}: {len(checks)} checks, {len(errs)} failed, {len(warns)} warning(s)"
             + (f"; severity lowered by the design: {lowered}" if lowered else "") + f"; see {summary}")
     return out + [("verdict", text)]
 
@@ -275,8 +275,7 @@ def stiffening_lines(report: dict) -> list[str]:
 def write_summary(report: dict, path: Path) -> None:
     """A short Markdown summary: verdict, tendon lengths, failing and warning findings."""
     checks = report["checks"]
-    errs = [c for c in checks if not c["passed"] and c["severity"] == "error"]
-    warns = [c for c in checks if not c["passed"] and c["severity"] == "warning"]
+    errs, warns = failing(checks), warned(checks)
     sw = report["sweep"]
     soft = [c["where"]["tendon"] for c in warns if c["id"] == "tendon.robust"]
     head = f"# {report['design']}: {'PASS' if report['ok'] else 'FAIL'}"

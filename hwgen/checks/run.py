@@ -16,7 +16,7 @@ from ..cad.manifest import Manifest, manifest_files, manifest_parts, sha256
 from ..model import kinematics as kin
 from ..model.routing import table_deviations
 from .anchors import seat_checks
-from .base import REBUILD, Check
+from .base import REBUILD, Check, failing
 from .clearances import StripBend, backbone_checks, hole_checks, tendon_pair_checks, wall_checks
 from .eyelets import backbone_section, locate_eyelets, measure_disk
 from .fixtures import jig_checks, mount_checks
@@ -318,7 +318,7 @@ def _take_up_check(pair: dict) -> Check:
 def _report(name: str, checks: list[Check], angles, step_deg: float, tls, pair, emap, taut: dict) -> dict:
     """``tendons``: eq. (2) through the measured hole centres beside the taut path (nominal print)
     and the as-built statistic; ``passed`` is the verdict, on the taut path as built."""
-    ok = not any(c.severity == "error" and not bool(c.passed) for c in checks)
+    ok = not failing(checks)
     tt = {r["name"]: r for r in taut["tendons"]}
     return _plain({
         "design": name,

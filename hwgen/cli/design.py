@@ -10,6 +10,7 @@ import typer
 from rich.table import Table
 from rich.text import Text
 
+from ..checks.base import failing
 from ..errors import InputError, printable
 from ..sim import limits
 from .common import (CACHE_DIR, CACHE_SIZE, EXIT_FINDINGS, NO_CACHE, OUT, PARAMS, _cache, _command, _load,
@@ -57,8 +58,7 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
         return
     reused = f" ({n - len(result.built)} from the part cache)" if len(result.built) < n else ""
     out.print(f"{loaded.name}: {n} parts written to {printable(result.folder)}{reused}")
-    failed = [c for c in (result.manifest.checks or []) if not c.get("passed", True)
-              and c.get("severity") == "error"]
+    failed = failing(result.manifest.checks)
     for f in result.plan.findings:
         say("finding:", "yellow", f)
     if (result.manifest.render or {}).get("status") in ("unavailable", "failed"):

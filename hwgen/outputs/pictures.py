@@ -29,6 +29,7 @@ import numpy as np
 
 from .. import cache
 from ..cad.manifest import Added, Manifest, sha256
+from ..checks.base import fails
 from ..checks.report import named
 from ..model import kinematics as kin
 from .bom import family_label
@@ -98,7 +99,7 @@ def failing_marks(checks) -> tuple[dict[str, list[str]], dict[str, list[str]]]:
     parts: dict[str, list[str]] = {}
     tendons: dict[str, list[str]] = {}
     for c in checks or []:
-        if c.get("passed", True) or c.get("severity") != "error":
+        if not fails(c):
             continue
         for names, into in zip(named(c), (parts, tendons)):
             for one in names:

@@ -13,6 +13,7 @@ import tempfile
 from pathlib import Path
 
 from .. import pipeline
+from ..checks.base import failing
 from ..outputs.view import BACKEND_ENV
 from ..outputs.webview import VIEWER_ENV
 from ..params import LoadedDesign
@@ -44,5 +45,5 @@ def build_and_check(r: Resolved, options: dict) -> tuple[list[dict], str | None]
                     os.environ[name] = value
         kept = None
     checks = (result.report or {}).get("checks", [])
-    failed = [c for c in checks if not c.get("passed", True) and c.get("severity") == "error"]
+    failed = failing(checks)
     return failed, kept
