@@ -60,7 +60,13 @@ clients:
 
 # one pytest worker per core (pytest-xdist); the tests that share a module's build run in one
 # worker, and the workers share one part cache (tests/conftest.py)
-test: $(STAMP) clients bytecode viewer
+# the clients' install (apt-get: minutes, mostly downloading) runs beside the environment's (pip,
+# npm) rather than before it; its output is shown once it ends
+test:
+	@$(MAKE) --no-print-directory clients > .clients.log 2>&1 & clients=$$!; \
+	  $(MAKE) --no-print-directory $(STAMP) bytecode viewer; made=$$?; \
+	  wait $$clients; installed=$$?; cat .clients.log; rm -f .clients.log; \
+	  [ $$made = 0 ] && [ $$installed = 0 ]
 	$(BIN)/python -m pytest -q -n auto --dist loadgroup
 
 # every print plate sliced in PrusaSlicer as the process prints it (SLA: minutes per plate); not in make test
