@@ -57,6 +57,9 @@ def fixes_of(trial: Trial, check: dict, base: dict | None = None) -> list[Fix]:
 def _with_stiffening(trial: Trial, fix: Fix) -> Fix:
     """``then`` with the stiffening of the changed design, and ``breaks`` with the stiffening's
     checks where it falls under their floors (that passed before)."""
+    if trial.plan_with(fix.set) is None:           # the changed design is refused: not a fix
+        return replace(fix, then={**fix.then, "passed": False, "refused": True},
+                       note=fix.note + "; the design with this change is refused (hwgen check says why)")
     s = trial.stiffening(fix.set)
     if s is None:
         return fix
@@ -100,7 +103,8 @@ def _together(trial: Trial, failing: list[dict], found: dict[tuple, list[Fix]]) 
         found[k][i] = replace(mine, note=mine.note + f"; with this round's other fixes ({names}) applied it measures "
                                                      f"{then['measured']:.4g} and fails: apply the fix computed after "
                                                      f"them instead")
-        after = [replace(f, note=f.note + f" (computed after {names})") for f in TRIERS[c["id"]](trial, c, base)
+        again = {**c, "measured": then["measured"], "limit": then.get("limit", c.get("limit"))}
+        after = [replace(f, note=f.note + f" (computed after {names})") for f in TRIERS[c["id"]](trial, again, base)
                  if not f.relax]
         found[k][i + 1:i + 1] = after[:1]
 
