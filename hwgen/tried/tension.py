@@ -104,7 +104,8 @@ def overload(trial: Trial, check: dict, base: dict) -> list[Fix]:
 
 def actuation_tension(trial: Trial, check: dict, base: dict) -> list[Fix]:
     """The actuating tendon's pull at the sweep's end over what its line may carry: a stronger
-    line; the stiffening tendons locked lower; or (a relaxation) a smaller safety factor."""
+    line; or (a relaxation) a smaller safety factor. (Locking the stiffening tendons lower barely
+    moves it where the coupling passes: it is actuation.coupling's fix.)"""
     pull = check["measured"]
     if pull is None:
         return []
@@ -113,7 +114,6 @@ def actuation_tension(trial: Trial, check: dict, base: dict) -> list[Fix]:
     out.append(_fix(trial, {**base, "tendon_material.break_load": need}, target,
                     f"a line of at least {need:g} N break load carries the {pull:.1f} N pull with the safety factor "
                     f"{chk.tendon_safety_factor:g}"))
-    out.append(_lower_stiffening(trial, check, base))
     brk = float(base.get("tendon_material.break_load", trial.plan.tendon_material.break_load))
     factor = down(0.99 * brk / pull, 0.1)
     if 1.0 <= factor < chk.tendon_safety_factor:

@@ -7,8 +7,10 @@ cache by the robot it describes)."""
 from __future__ import annotations
 
 import copy
+import hashlib
 import json
 import math
+import pickle
 from dataclasses import replace
 
 import numpy as np
@@ -16,7 +18,7 @@ import numpy as np
 from .. import cache, params
 from ..checks import purpose
 from ..checks.base import Check
-from ..checks.tension import tension_checks
+from ..checks.tension import sweeps, tension_checks, working_tensions
 from ..designfile import keys_of
 from ..errors import DesignError, InputError
 from ..model import feasibility
@@ -65,7 +67,10 @@ class Trial:
         self.centre = {t["name"]: t["max_abs_delta_mm"] for t in report.get("tendons", [])}
         self.base = purpose.figures(study)
         self.base_checks = {ident(c): c for c in report.get("checks", [])}
+        lay = plan.tensioner_layout
+        self.record = lay.search if lay is not None and lay.search else None
         self._plans: dict[str, object] = {}
+        self._swept: dict[bytes, tuple] = {}
         self._tension: dict[str, list[Check] | None] = {}
         self._stiff: dict[str, dict | None] = {}
 
@@ -105,7 +110,7 @@ class Trial:
             d = params.validate(doc, self.loaded.source)
             if feasibility.problems(d):
                 return None
-            plan = make_plan(d)
+            plan = make_plan(d, self.record)       # the build's tensioner arrangement, laid out again
             feasibility.check_plan(plan, d)
         except (InputError, DesignError, *MODEL_ERRORS):
             return None
@@ -120,11 +125,22 @@ class Trial:
             got = None
             if plan is not None:
                 try:
-                    got = tension_checks(plan, self.taut, self.centre)[1]
+                    got = tension_checks(plan, self.taut, self.centre, self._sweeps(plan))[1]
                 except MODEL_ERRORS:
                     got = None
             self._tension[key] = got
         return self._tension[key]
+
+    def _sweeps(self, plan) -> tuple:
+        """:func:`hwgen.checks.tension.sweeps` of ``plan``, once per robot: a change to the line's
+        strength or the checks' limits moves none of the sweep's tensions (only the rules the
+        statics does not read in it), so it sweeps once for them all."""
+        desc = sf.describe(plan)
+        key = hashlib.sha256(pickle.dumps((replace(desc, rules=None), working_tensions(desc, plan),
+                                           plan.check.max_angle_deg))).digest()
+        if key not in self._swept:
+            self._swept[key] = sweeps(plan)
+        return self._swept[key]
 
     def stiffening(self, changes: dict) -> dict | None:
         """{"tip", "torsion"} ratios (all tendons over the pair, reference orientation,
