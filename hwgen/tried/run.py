@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import asdict, replace
 
 from ..checks.base import Fix, fix_text
-from . import tension
+from . import asbuilt, tension
 from .trial import Trial, ident, up
 
 __all__ = ["Trial", "attach"]
@@ -114,8 +114,9 @@ def attach(report: dict, trial: Trial) -> dict:
     where any was tried; other checks as they were."""
     failing = [c for c in report["checks"] if not c["passed"]]
     found: dict[tuple, list[Fix]] = {}
+    tighter = asbuilt.clearance_fixes(trial, [c for c in failing if c["id"] == "tendon.robust"])
     for c in failing:
-        got = fixes_of(trial, c)
+        got = ([tighter[ident(c)]] if ident(c) in tighter else []) + fixes_of(trial, c)
         if got:
             found[ident(c)] = got
     _together(trial, failing, found)

@@ -60,7 +60,7 @@ class Trial:
     """A loaded design, its plan and what its build measured, ready to be changed and evaluated."""
 
     def __init__(self, loaded: params.LoadedDesign, plan, report: dict, study: dict):
-        self.loaded, self.plan = loaded, plan
+        self.loaded, self.plan, self.report = loaded, plan, report
         self.doc = loaded.layers.doc
         self.gravity = report.get("gravity")
         self.taut = (report.get("as_built") or {}).get("taut") or {}
