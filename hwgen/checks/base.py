@@ -55,7 +55,7 @@ REBUILD = ("rebuild (hwgen build); if it fails again, hwgen made this wrong: ple
 
 def _value(v) -> str:
     if isinstance(v, float):
-        return f"{v:.4g}"
+        return f"{v:.0f}" if abs(v) >= 1000 else f"{v:.4g}"
     return str(v)
 
 
