@@ -28,10 +28,10 @@ LABS = sorted((ROOT / "tests" / "labs").glob("*.yaml"))
 ROBOTS = [ROOT / "params" / "prototype.yaml", *LABS]
 
 
-def _checks(plan, trial: Trial) -> list[dict]:
+def _checks(plan, trial: Trial, tension: bool = True, stiffening: bool = True) -> list[dict]:
     """The plan-level checks: the tension sweep's (no as-built excess) and the stiffening's."""
-    fig = trial.stiffening({})
-    return ([c.to_json() for c in tension_checks(plan, {}, {})[1]]
+    fig = trial.stiffening({}) if stiffening else None
+    return (([c.to_json() for c in tension_checks(plan, {}, {})[1]] if tension else [])
             + ([c.to_json() for c in purpose.judge(plan, fig)] if fig else []))
 
 
@@ -44,8 +44,9 @@ def _report(path: Path) -> tuple[dict, Trial]:
     return tried.attach(report, trial), trial
 
 
-def _applied(trial: Trial, fix: dict, folder: Path) -> dict[tuple, dict]:
-    """The plan-level checks of the design's file with ``fix`` applied, written and loaded again."""
+def _applied(trial: Trial, fix: dict, folder: Path, cid: str) -> dict[tuple, dict]:
+    """The plan-level checks of ``cid``'s model of the design's file with ``fix`` applied, written
+    and loaded again."""
     doc = copy.deepcopy(trial.loaded.layers.doc)
     for path, value in fix["set"].items():
         put(doc, path, value)
@@ -53,7 +54,8 @@ def _applied(trial: Trial, fix: dict, folder: Path) -> dict[tuple, dict]:
     f.write_text(yaml.safe_dump(doc, sort_keys=False))
     loaded = pipeline.load(f)
     plan = pipeline.design_plan(loaded)
-    return {ident(c): c for c in _checks(plan, Trial(loaded, plan, {"checks": []}, {}))}
+    purpose_ = cid.startswith("stiffening.")
+    return {ident(c): c for c in _checks(plan, Trial(loaded, plan, {"checks": []}, {}), not purpose_, purpose_)}
 
 
 @pytest.fixture(scope="module")
@@ -74,14 +76,15 @@ def test_each_failing_checks_first_fix_makes_it_pass_at_that_place(reports, tmp_
             first = c["fixes"][0]
             assert not c["fix"].lower().startswith("or"), c["fix"]
             assert "stiffening" in first["then"], (path.name, c["id"])      # what it does to the stiffening
-            again = _applied(trial, first, tmp_path).get(ident(c))
+            again = _applied(trial, first, tmp_path, c["id"]).get(ident(c))
             tries += 1
             if again is not None and again["passed"]:
                 passed += 1
             else:
                 failed.append((path.name, c["id"], first["set"], again and again["measured"]))
     assert tries >= 10
-    assert passed >= 0.9 * tries, failed
+    assert passed >= 0.9 * tries, (passed, tries, failed)
+    print(f"{passed} of {tries} first fixes pass their check")
 
 
 @pytest.mark.slow
@@ -93,7 +96,9 @@ def test_the_labs_robots_say_what_their_stiffening_tendons_add(reports):
         got = {c["id"]: c for c in report["checks"] if c["id"].startswith("stiffening.")}
         assert set(got) == {"stiffening.tip", "stiffening.torsion"}, path.name
         base = trial.stiffening({})
-        assert got["stiffening.tip"]["measured"] == pytest.approx(base["tip"])
+        # the same statics (to the protocol search's tolerance: a trial may keep a robot's stiffening
+        # found under another ceiling of the protocol's tensions, hwgen.tried.trial)
+        assert got["stiffening.tip"]["measured"] == pytest.approx(base["tip"], rel=1e-3)
         assert got["stiffening.tip"]["passed"] == (base["tip"] >= trial.plan.check.min_stiffening)
         for c in report["checks"]:
             for f in c.get("fixes", ()):
