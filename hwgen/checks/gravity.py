@@ -335,7 +335,7 @@ class _StripStudy:
             t_need = math.ceil(t_need * 100) / 100
             got, bend = self.own_weight(t_need), self.bend(t_need)
             out.append(Fix({"backbone.thickness": t_need}, {"measured": got, "passed": got <= a, "limit": a},
-                           ("backbone.bend_stress",) if bend > a else (),
+                           ("backbone.bend_stress",) if bend > a >= self.bend(self.t) else (),
                            f"from {self.t:g} mm, solved again: {got:.1f} MPa; the bend to {self.ang:g}° then "
                            f"stresses it {bend:.0f} MPa (backbone.bend_stress)"))
         if h_need is not None:
@@ -356,7 +356,7 @@ class _StripStudy:
             t_max = math.floor(t_max * 100) / 100
             got, weight = self.bend(t_max), self.own_weight(t_max)
             out.append(Fix({"backbone.thickness": t_max}, {"measured": got, "passed": got <= a, "limit": a},
-                           ("gravity.strip_stress",) if weight > a else (),
+                           ("gravity.strip_stress",) if weight > a >= self.r.max_stress else (),
                            f"from {self.t:g} mm, solved again: {got:.1f} MPa; its own weight then stresses it "
                            f"{weight:.0f} MPa (gravity.strip_stress)"))
         ang = float(math.floor(self.ang * a / stress))
