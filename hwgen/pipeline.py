@@ -137,7 +137,10 @@ def checked(folder: Path, manifest: Manifest, plan: Plan, ahead: Ahead | None = 
     report["ok"] = report["ok"] and all(c["passed"] or c["severity"] != "error" for c in purpose)
     if loaded is not None and not all(c["passed"] for c in report["checks"]):
         from .tried import run as tried      # the models again: only where a check fails
-        report = tried.attach(report, tried.Trial(loaded, plan, report, study))
+        try:
+            report = tried.attach(report, tried.Trial(loaded, plan, report, study))
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError) as e:    # the checks stand, untried
+            report["tried"] = {"skipped": f"the fixes were not tried: {e}"}
     return report, study
 
 

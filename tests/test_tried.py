@@ -112,6 +112,11 @@ def test_the_stiffening_check_fails_under_its_floor_and_names_it():
         class check:
             min_stiffening, min_torsion_stiffening = 2.5, 2.0
 
+        class tensioner:
+            actuating_channel = "A"
+
+        paths = ()
+
     got = {c.id: c for c in purpose.judge(Plan, {"states": ["AC1C2H", "A"], "tip": 1.0, "torsion": 3.0})}
     assert not got["stiffening.tip"].passed and "check.min_stiffening" in got["stiffening.tip"].message
     assert got["stiffening.torsion"].passed

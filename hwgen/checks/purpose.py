@@ -51,6 +51,8 @@ def judge(plan, got: dict) -> list[Check]:
     """The two checks of :func:`stiffening_checks` from the ratios (:func:`figures`)."""
     chk = plan.check
     full, act = got["states"]
+    act_channel = plan.tensioner.actuating_channel
+    locked = list(dict.fromkeys(p.name for p in plan.paths if p.channel != act_channel))
     out = []
     for cid, key, floor, what, field in (
             ("stiffening.tip", "tip", chk.min_stiffening, "tip stiffness", "check.min_stiffening"),
@@ -60,7 +62,7 @@ def judge(plan, got: dict) -> list[Check]:
         ok = v >= floor
         msg = (f"{full} over {act}: {what} {v:.2f}× (gravity -z, frictionless, tensioned by the protocol), "
                f"{'at or over' if ok else 'under'} the {floor:g}× the design states ({field})")
-        out.append(Check(cid, "error", ok, msg, v, floor, {"states": [full, act]},
+        out.append(Check(cid, "error", ok, msg, v, floor, {"tendons": locked, "states": [full, act]},
                          fix="" if ok else _fix(key, field)))
     return out
 

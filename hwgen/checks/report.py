@@ -215,7 +215,8 @@ UNITS = {"disk.tilt": "°", "disk.station": " mm", "gravity.strip_stress": " MPa
          "part.volume": "%", "backbone.hole_angle": " mm", "backbone.crossing": " mm", "gear.center_distance": " mm",
          "gear.gap": " mm", "gear.interference": " mm³", "gear.shaft_angle": "°", "gear.lewis": "×", "gear.hertz": "×",
          "print.cup": " mm²", "tendon.seat": " mm", "routing.table_vs_function": " mm",
-         "mount.clamp": " mm", "mount.foot": " mm", "jig.hold": " mm²"}
+         "mount.clamp": " mm", "mount.foot": " mm", "jig.hold": " mm²", "stiffening.tip": "×",
+         "stiffening.torsion": "×"}
 
 
 def _value(v, unit: str) -> str:

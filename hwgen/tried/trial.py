@@ -26,7 +26,8 @@ from ..model import statics as st
 from ..model import stiffness as sf
 from ..model.plan import make_plan
 
-WORST_OF = ("actuation.coupling", "actuation.tension")    # one check, on whichever tendon is worst
+# one check a design, whichever tendon it names (the worst; the stiffening ones)
+WORST_OF = ("actuation.coupling", "actuation.tension", "stiffening.tip", "stiffening.torsion")
 MODEL_ERRORS = (ValueError, ArithmeticError, np.linalg.LinAlgError)
 
 
