@@ -134,3 +134,21 @@ def test_the_fix_text_prints_only_what_passes_and_says_when_nothing_does():
     assert none.startswith("no change tried") and "0.35" in none and "still fails" in none
     c = Check("tendon.taut", "error", False, "m", fixes=(good,))
     assert c.to_json()["fixes"][0]["set"] == {"tendons[2].pretension_n": 5.7}
+
+
+@pytest.mark.parametrize("hertz", [False, True])
+def test_a_weak_gear_tooth_is_fixed_by_the_law_its_check_applies(hertz):
+    """gear.lewis's safety goes as the face, gear.hertz's as its square root; both as the resin's
+    strength: the first fix (a wider face) reaches the safety factor, and says by how much."""
+    from types import SimpleNamespace
+
+    from hwgen.checks.gear_mesh import _strength_fix, _strength_fixes
+    ts = SimpleNamespace(face_width=8.0, resin_strength=35.0, safety_factor=2.0, wheel_teeth=24, module=1.25)
+    face, resin = _strength_fixes(ts, 1.5, hertz)
+    k = face.set["tensioner.face_width"] / 8.0
+    assert face.then["passed"] and face.then["measured"] == pytest.approx(1.5 * (k ** 0.5 if hertz else k))
+    assert face.then["measured"] >= 2.0 and (face.set["tensioner.face_width"] - 0.1) / 8.0 < (4 / 2.25 if hertz
+                                                                                              else 2 / 1.5)
+    assert resin.then["passed"] and resin.set["tensioner.resin_strength"] == 47.0
+    text = _strength_fix(ts, 2.0 / 1.5, hertz)
+    assert text.startswith("(1) tensioner.face_width") and "Also (not tried): tensioner.wheel_teeth" in text
