@@ -117,13 +117,15 @@ def overload(trial: Trial, check: dict, base: dict) -> list[Fix]:
 
 
 def actuation_tension(trial: Trial, check: dict, base: dict) -> list[Fix]:
-    """The actuating tendon's pull at the sweep's end over what its line may carry: a stronger
-    line; or (a relaxation) a smaller safety factor. (Locking the stiffening tendons lower barely
+    """The actuating tendon's pull at the sweep's end over what its line may carry: shorter hubs
+    (a tighter slot), where the hubs are what stiffens the strip; a stronger line; or (a
+    relaxation) a smaller safety factor. (Locking the stiffening tendons lower barely
     moves it where the coupling passes: it is actuation.coupling's fix.)"""
     pull = check["measured"]
     if pull is None:
         return []
     chk, target, out = trial.plan.check, ident(check), []
+    out.append(_shorter_hubs(trial, target, base))
     need = up(pull * chk.tendon_safety_factor + 0.5, 1.0)
     out.append(_fix(trial, {**base, "tendon_material.break_load": need}, target,
                     f"a line of at least {need:g} N break load carries the {pull:.1f} N pull with the safety factor "
@@ -134,6 +136,26 @@ def actuation_tension(trial: Trial, check: dict, base: dict) -> list[Fix]:
         out.append(_fix(trial, {**base, "check.tendon_safety_factor": factor}, target,
                         f"accept a safety factor of {factor:g} on the {brk:g} N break load", relax=True))
     return [f for f in out if f]
+
+
+def _shorter_hubs(trial: Trial, target: tuple, base: dict) -> Fix | None:
+    """A slot half as tight: the hubs, whose length hwgen derives to hold ``disks.hub.max_tilt_deg``
+    with the slot's play, come out shorter, and the strip they stiffen bends for less pull (an FDM
+    slot's 0.1 mm a side can treble it). Where that alone does not pass, the line the rest of
+    the pull needs is computed on that design and set with it."""
+    now = trial.current("disks.slot_clearance")
+    if not now:
+        return None
+    new = round(float(base.get("disks.slot_clearance", now)) / 2, 3)
+    note = (f"slot from {now:g} to {new:g} mm a side: the hubs hwgen derives to hold disks.hub.max_tilt_deg then "
+            f"come out shorter and stiffen less of the strip (if the printer holds the tighter slot)")
+    fix = _fix(trial, {**base, "disks.slot_clearance": new}, target, note)
+    if fix is None or fix.then["passed"] or fix.then["measured"] is None:
+        return fix
+    pull, safety = fix.then["measured"], trial.plan.check.tendon_safety_factor
+    need = up(pull * safety + 0.5, 1.0)
+    return _fix(trial, {**fix.set, "tendon_material.break_load": need}, target,
+                f"{note}; the {pull:.1f} N pull left then needs a line of at least {need:g} N break load")
 
 
 def coupling(trial: Trial, check: dict, base: dict) -> list[Fix]:
