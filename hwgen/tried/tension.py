@@ -12,6 +12,7 @@ from .trial import Trial, down, ident, up
 STEPS = 6                      # secant steps on a pretension at most (each one sweep, under a second)
 MARGIN_N = 0.05                # above the floor, N: a tension that lands on it is not a pass
 SHARES = (0.5, 0.25)           # the stiffening tendons' pretensions scaled by these, in turn
+HUBS_CAUSE = 0.25              # a tighter slot that takes this share off the pull names the hubs as its cause
 
 
 def outcome(trial: Trial, changes: dict, target: tuple) -> tuple[dict, tuple[str, ...]] | None:
@@ -125,11 +126,15 @@ def actuation_tension(trial: Trial, check: dict, base: dict) -> list[Fix]:
     if pull is None:
         return []
     chk, target, out = trial.plan.check, ident(check), []
-    out.append(_shorter_hubs(trial, target, base))
+    hubs = _shorter_hubs(trial, target, base)
     need = up(pull * chk.tendon_safety_factor + 0.5, 1.0)
     out.append(_fix(trial, {**base, "tendon_material.break_load": need}, target,
                     f"a line of at least {need:g} N break load carries the {pull:.1f} N pull with the safety factor "
                     f"{chk.tendon_safety_factor:g}"))
+    # the hubs first where they are the cause: a tighter slot takes a quarter or more off the pull
+    if hubs is not None:
+        cause = hubs.then["measured"] is not None and hubs.then["measured"] < (1 - HUBS_CAUSE) * pull
+        out.insert(0 if cause else len(out), hubs)
     brk = float(base.get("tendon_material.break_load", trial.plan.tendon_material.break_load))
     factor = down(0.99 * brk / pull, 0.1)
     if 1.0 <= factor < chk.tendon_safety_factor:
