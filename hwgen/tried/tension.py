@@ -126,7 +126,7 @@ def actuation_tension(trial: Trial, check: dict, base: dict) -> list[Fix]:
     if pull is None:
         return []
     chk, target, out = trial.plan.check, ident(check), []
-    hubs = _shorter_hubs(trial, target, base)
+    hubs = None if base else _shorter_hubs(trial, target, base)     # after the round's other fixes: the line
     need = up(pull * chk.tendon_safety_factor + 0.5, 1.0)
     out.append(_fix(trial, {**base, "tendon_material.break_load": need}, target,
                     f"a line of at least {need:g} N break load carries the {pull:.1f} N pull with the safety factor "
