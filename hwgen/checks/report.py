@@ -21,7 +21,9 @@ REPORT = "report.json"
 # what they read back from the file); these types say which keys it has and what each holds.
 
 class CheckRecord(TypedDict):
-    """One check (:class:`hwgen.checks.base.Check` as JSON)."""
+    """One check (:class:`hwgen.checks.base.Check` as JSON). A failing check whose fixes were tried
+    also holds ``fixes``: each :class:`hwgen.checks.base.Fix` as JSON (set, then, breaks, note,
+    relax), best first; ``fix`` is written from them."""
     id: str
     severity: str                 # "error", "warning" or "info"
     passed: bool
@@ -214,7 +216,8 @@ UNITS = {"disk.tilt": "°", "disk.station": " mm", "gravity.strip_stress": " MPa
          "part.volume": "%", "backbone.hole_angle": " mm", "backbone.crossing": " mm", "gear.center_distance": " mm",
          "gear.gap": " mm", "gear.interference": " mm³", "gear.shaft_angle": "°", "gear.lewis": "×", "gear.hertz": "×",
          "print.cup": " mm²", "tendon.seat": " mm", "routing.table_vs_function": " mm",
-         "mount.clamp": " mm", "mount.foot": " mm", "jig.hold": " mm²"}
+         "mount.clamp": " mm", "mount.foot": " mm", "jig.hold": " mm²", "stiffening.tip": "×",
+         "stiffening.torsion": "×"}
 
 
 def _value(v, unit: str) -> str:
