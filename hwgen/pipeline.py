@@ -45,6 +45,7 @@ from .atomic import new_folder, snapshot, write_json
 from .cad import export
 from .cad.families import kernel_errors, part_count
 from .cad.manifest import MANIFEST, Added, Manifest, manifest_files, read_manifest, write_manifest
+from .checks.base import failing
 from .checks.meshes import reading_early
 from .checks.purpose import stiffening_checks
 from .checks.report import REPORT, Report, read_report, write_report, write_summary
@@ -134,7 +135,7 @@ def checked(folder: Path, manifest: Manifest, plan: Plan, ahead: Ahead | None = 
     report["stiffening"] = study.get("stiffening") or ({"skipped": study["skipped"]} if "skipped" in study else None)
     purpose = [c.to_json() for c in stiffening_checks(plan, study)]
     report["checks"] = report["checks"] + purpose
-    report["ok"] = report["ok"] and all(c["passed"] or c["severity"] != "error" for c in purpose)
+    report["ok"] = report["ok"] and not failing(purpose)
     if loaded is not None and not all(c["passed"] for c in report["checks"]):
         from .tried import run as tried      # the models again: only where a check fails
         try:
