@@ -248,6 +248,15 @@ def _bend_check(study: _StripStudy, spans, I: float, part: str) -> tuple[dict, l
                    fix="" if ok else study.bend_fix(stress, bare))])
 
 
+
+def _options(out: list[str]) -> str:
+    """Options joined "a; or b; or c": the first never begins with "or", whichever options the
+    design leaves (issue 43: "fix: or bend it no further than ±24°", the first option missing)."""
+    if out and out[0].startswith("or "):
+        out = [out[0][3:], *out[1:]]
+    return "; ".join(out)
+
+
 class _StripStudy:
     """The strip's two stress checks solved again at another strip (thickness, width) to say how far
     to change it: the own-weight stress (state N, :func:`sag.solve_sag`, the disks and the tip
@@ -321,7 +330,7 @@ class _StripStudy:
                        f"the wider slot)")
         out.append("or lighter or fewer disks (disks.count, disks.thickness, disks.outer_diameter) or a lighter "
                    "tensioner: the weight beyond the base is what loads it")
-        return "; ".join(out)
+        return _options(out)
 
     def bend_fix(self, stress: float, bare: float) -> str:
         """What to change when the bend's stress is over the allowable, and what it costs the own weight."""
@@ -343,4 +352,4 @@ class _StripStudy:
                        f"and hubs hold the strip straight over part of its length, so the rest curves "
                        f"{stress / bare:.1f}× as much as a bare strip would")
         out.append("or a laminate of measured higher strength (backbone.allowable_stress_mpa)")
-        return "; ".join(out)
+        return _options(out)
