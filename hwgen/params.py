@@ -358,6 +358,17 @@ class CheckSettings(_Model):
     stiffness_push_n: Finite = Field(1.0, gt=0, le=1000,
                                      description="the push the stiffness with eyelet friction (capstan) is taken "
                                                  "over, at the tip, N")
+    min_stiffening: Finite = Field(
+        1.5, ge=1, le=100,
+        description="what the stiffening tendons are for: the least tip stiffness with every tendon locked over the "
+                    "actuating pair's alone (gravity -z, frictionless, tensioned by the protocol) the design may have "
+                    "(default 1.5: tendons, drums and tensioning that add less than half the pair's own stiffness do "
+                    "not earn their place; the paper's robot measured 4.85)")
+    min_torsion_stiffening: Finite = Field(
+        1.0, ge=0, le=100,
+        description="the least tip torsional stiffness with every tendon locked over the actuating pair's alone, "
+                    "as min_stiffening (default 1.0: locking the stiffening tendons must not leave the tip softer in "
+                    "torsion than the pair alone)")
 
 
 class Render(_Model):

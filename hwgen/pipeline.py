@@ -46,6 +46,7 @@ from .cad import export
 from .cad.families import kernel_errors, part_count
 from .cad.manifest import MANIFEST, Added, Manifest, manifest_files, read_manifest, write_manifest
 from .checks.meshes import reading_early
+from .checks.purpose import stiffening_checks
 from .checks.report import REPORT, Report, read_report, write_report, write_summary
 from .engine.concurrency import Ahead, Beside, default_jobs, start_beside
 from .engine.context import STAGE_ENV, Build, Hashes, StageInput, StageResult
@@ -136,12 +137,13 @@ def output_errors(out_root: Path) -> Iterator[None]:
 
 # ---------------------------------------------------------------- stages after the files
 
-def run_checks(folder: Path, manifest: Manifest, plan: Plan) -> Report:
+def run_checks(folder: Path, manifest: Manifest, plan: Plan, loaded: params.LoadedDesign | None = None) -> Report:
     """:func:`checked`'s report."""
-    return checked(folder, manifest, plan)[0]
+    return checked(folder, manifest, plan, loaded=loaded)[0]
 
 
-def checked(folder: Path, manifest: Manifest, plan: Plan, ahead: Ahead | None = None) -> tuple[Report, dict]:
+def checked(folder: Path, manifest: Manifest, plan: Plan, ahead: Ahead | None = None,
+            loaded: params.LoadedDesign | None = None) -> tuple[Report, dict]:
     """:func:`hwgen.checks.run.run_checks`, imported when the checks run: it brings scipy's
     optimisers, which a build whose stages all come from the cache never needs. In a build, with
     what the work ahead (``ahead``) measured on these very files while assembly.step was written,
@@ -154,6 +156,12 @@ def checked(folder: Path, manifest: Manifest, plan: Plan, ahead: Ahead | None = 
     except (ValueError, ArithmeticError, np.linalg.LinAlgError) as e:      # the statics says why, the rest stands
         study = {"skipped": f"the tendon states' statics was not computed: {e}"}
     report["stiffening"] = study.get("stiffening") or ({"skipped": study["skipped"]} if "skipped" in study else None)
+    purpose = [c.to_json() for c in stiffening_checks(plan, study)]
+    report["checks"] = report["checks"] + purpose
+    report["ok"] = report["ok"] and all(c["passed"] or c["severity"] != "error" for c in purpose)
+    if loaded is not None and not all(c["passed"] for c in report["checks"]):
+        from .tried import run as tried      # the models again: only where a check fails
+        report = tried.attach(report, tried.Trial(loaded, plan, report, study))
     return report, study
 
 
@@ -173,7 +181,7 @@ def checks_stage(s: StageInput) -> StageResult:
     checks go into the manifest. And the tendon states' statics: stiffness.json, stiffness.png,
     gravity.png."""
     folder = s.folder
-    report, study = checked(folder, s.manifest, s.plan, s.ahead)
+    report, study = checked(folder, s.manifest, s.plan, s.ahead, s.loaded)
     write_report(report, folder)
     write_summary(report, folder / SUMMARY)
     plot_lengths(report, folder / PLOT)
@@ -386,7 +394,8 @@ def _after_files(b: Build, manifest: Manifest, side: dict[str, Beside], reused: 
             manifest = manifest.adding(beside.join(b.folder))
             reused += beside.reused
             continue
-        given = StageInput(b.plan, b.folder, manifest, report, b.ahead if name == "checks" else None)
+        given = StageInput(b.plan, b.folder, manifest, report, b.ahead if name == "checks" else None,
+                           b.loaded if name == "checks" else None)
         done = cached_stage(b.store, b.hashes, name, stage, given, reused)
         manifest = manifest.adding(done.added)
         if name == "checks":
@@ -460,7 +469,7 @@ def check(loaded: params.LoadedDesign, out_root: Path, progress=None,
             # in the arrangement the build chose (its manifest says which), not searched for again
             plan = design_plan(loaded, tensioner_record(manifest))
             store = _store(cache_dir)
-            report = _measured(store, view, manifest, plan)
+            report = _measured(store, view, manifest, plan, loaded)
             store.trim(limit)
             return report, folder, None
     return build(loaded, Path(out_root), progress, cache_dir=cache_dir).report, folder, why
@@ -474,10 +483,11 @@ def tensioner_record(manifest: Manifest) -> dict | None:
     return None
 
 
-def _measured(store: cache.Store, folder: Path, manifest: Manifest, plan: Plan) -> Report:
+def _measured(store: cache.Store, folder: Path, manifest: Manifest, plan: Plan,
+              loaded: params.LoadedDesign | None = None) -> Report:
     """run_checks on the folder, or its report from the last time these very files were measured."""
     if not store.enabled:
-        return run_checks(folder, manifest, plan)
+        return run_checks(folder, manifest, plan, loaded)
     key = cache.entry_key("check", (Hashes().files(folder), manifest, plan,
                                     {e: os.environ.get(e) for e in STAGE_ENV["checks"]}), libraries=cache.LIBRARIES)
     rec = store.get_record(key)
@@ -488,7 +498,7 @@ def _measured(store: cache.Store, folder: Path, manifest: Manifest, plan: Plan) 
         except ValueError:
             pass
     with cache.using(store):
-        report = cache.as_json(run_checks(folder, manifest, plan))
+        report = cache.as_json(run_checks(folder, manifest, plan, loaded))
     store.put_record(key, {"report": store.put_bytes(json.dumps(report).encode())})
     return report
 

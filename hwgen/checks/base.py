@@ -51,3 +51,40 @@ class Check:
 # it, a file missing or unreadable): nothing in the design to change
 REBUILD = ("rebuild (hwgen build); if it fails again, hwgen made this wrong: please report it with the "
            "parameter file")
+
+
+def _value(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v)
+
+
+def fix_words(f: Fix) -> str:
+    """One tried fix in words: what to set, why, and what the check then measured."""
+    change = ", ".join(f"{k}: {_value(v)}" for k, v in f.set.items())
+    then = f.then
+    got = then.get("measured")
+    out = f"{change}" + (f" ({f.note})" if f.note else "")
+    if got is not None:
+        out += f": tried, the check then measures {_value(float(got))}" + (
+            " and passes" if then.get("passed") else " and still fails")
+    if then.get("stiffening") is not None:
+        out += f"; stiffening then {then['stiffening']:.2f}×"
+    if f.breaks:
+        out += f"; breaks {', '.join(f.breaks)}"
+    if f.relax:
+        out += " [relaxes a requirement, not the design]"
+    return out
+
+
+def fix_text(fixes: tuple[Fix, ...] | list[Fix], measured_word: str = "") -> str:
+    """The printed ``fix`` of a check, written from its tried ``fixes``: the ones that pass, best
+    first, numbered; where none passes, the best within bounds and what it reaches."""
+    good = [f for f in fixes if f.then.get("passed")]
+    if good:
+        return " ".join(f"({i}) {fix_words(f)}." for i, f in enumerate(good, start=1)).rstrip(".")
+    if not fixes:
+        return ""
+    best = fixes[0]
+    return (f"no change tried within the schema's bounds passes; the best within bounds: {fix_words(best)}"
+            + (f" ({measured_word})" if measured_word else ""))

@@ -92,6 +92,7 @@ class StageInput:
     manifest: Manifest
     report: Report | None = None    # the checks' report (None for the checks and the stages beside them)
     ahead: WorkAhead | None = None      # what the build measured ahead for the checks (None: measure here)
+    loaded: params.LoadedDesign | None = None   # the checks: the design, to try their fixes on (None: untried)
 
 
 @dataclass(frozen=True)

@@ -37,6 +37,8 @@ class CheckSettings:
     working_tension_n: float
     straight_within_mm: float
     stiffness_push_n: float
+    min_stiffening: float         # all tendons locked over the actuating pair alone, at the tip (what the stiffening tendons are for)
+    min_torsion_stiffening: float     # the same for the tip's torsion
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -170,7 +172,8 @@ def check_settings(d: Design) -> CheckSettings:
                          taut_floor_n=c.taut_floor_n, tendon_safety_factor=c.tendon_safety_factor,
                          max_coupling=c.max_coupling, working_tension_n=c.working_tension_n,
                          straight_within_mm=c.straight_within_mm,
-                         stiffness_push_n=c.stiffness_push_n)
+                         stiffness_push_n=c.stiffness_push_n, min_stiffening=c.min_stiffening,
+                         min_torsion_stiffening=c.min_torsion_stiffening)
 
 
 def process_settings(d: Design) -> ProcessSettings:
