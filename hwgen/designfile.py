@@ -394,8 +394,11 @@ def rewritten(path: str | Path, values: dict[str, tuple[object, str]], name: str
     import io
 
     from ruamel.yaml import YAML
+    from ruamel.yaml.comments import CommentedMap
     y = YAML()
     y.preserve_quotes = True
+    # null as the file wrote it (``spacing: null``), not as an empty value
+    y.representer.add_representer(type(None), lambda r, _: r.represent_scalar("tag:yaml.org,2002:null", "null"))
     y.width = 4096
     y.indent(mapping=2, sequence=4, offset=2)          # hwgen's files: list items two in, their keys four
     path = Path(path)
@@ -406,9 +409,9 @@ def rewritten(path: str | Path, values: dict[str, tuple[object, str]], name: str
         keys = parse_path(dotted_path)
         node = doc
         for k in keys[:-1]:
-            if node.get(k) is None:
-                node[k] = {}
-            node = node[k]
+            if not isinstance(k, int) and node.get(k) is None:
+                node[k] = CommentedMap()                # a section the file leaves to its base: its comments too
+            node = node[k]                              # a list's item: the file writes the list
         node[keys[-1]] = value
         if hasattr(node, "yaml_add_eol_comment"):
             if keys[-1] in node.ca.items:
