@@ -138,8 +138,9 @@ class Fixer:
 
     def build(self, changes: dict[str, Change]) -> tuple[dict, Path]:
         """fixed.yaml with ``changes`` written, built and checked: (its report, its build's folder)."""
-        self.folder.mkdir(parents=True, exist_ok=True)
-        write_text(self.folder / FIXED, fixed_text(self, list(changes.values())))
+        with pipeline.output_errors(self.folder.parent.parent):          # OUT: bad input naming --out
+            self.folder.mkdir(parents=True, exist_ok=True)
+            write_text(self.folder / FIXED, fixed_text(self, list(changes.values())))
         loaded = pipeline.load(self.folder / FIXED)
         result = pipeline.build(loaded, self.folder, cache_dir=self.cache, jobs=self.jobs)
         self.builds += 1
@@ -326,4 +327,6 @@ def _state(c: dict | None) -> str:
         return "passes"
     m = c.get("measured")
     got = f"{m:.4g}" if isinstance(m, (int, float)) else "-"
-    return f"fails ({c['severity']}): {got} against {c.get('limit')}"
+    lim = c.get("limit")
+    return f"fails ({c['severity']}): {got} against {lim:.4g}" if isinstance(lim, (int, float)) else \
+        f"fails ({c['severity']}): {got}"
