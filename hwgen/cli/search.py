@@ -1,4 +1,4 @@
-"""The commands over many designs: sweep and tune, on Dask."""
+"""The commands over many designs: sweep and tune, on Dask, and fix, which builds design after design."""
 from __future__ import annotations
 
 import sys
