@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import copy
 import math
+import shutil
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -205,18 +206,21 @@ def fix(loaded: LoadedDesign, out_root: Path, keep: tuple[str, ...] = (), relax:
 
 def search(fx: Fixer, changes: dict[str, Change], picked: choose.Picked, index: int, with_: dict) -> dict[str, Any]:
     """Values for the paths two options set differently: a tune over them (free between the values
-    the options name, the others of the round applied, goal pass, the coupling level: no CAD), the
-    passing design nearest the round's; where no trial passes, each path's value farthest from the
+    the options name, the others of the round applied, goal pass with the conflicting checks required, the coupling
+    level: no CAD), the
+    passing design nearest the design before the round; where no trial passes, each path's value farthest from the
     design's (the stronger change). Written under ``search/``."""
     import yaml
 
     from ..tune import best as tune_best
     from ..tune import spec as tune_spec
     where = fx.folder / "search" / f"round-{index}"
+    shutil.rmtree(where, ignore_errors=True)            # an earlier run's: another design, another search
     where.mkdir(parents=True, exist_ok=True)
     base = dict(changes)
     for p, v in picked.values.items():
-        base[p] = Change(p, v, fx.old(p), [], "", False, index)
+        if p not in picked.conflicts:                   # a conflict's path: the design's value, searched from
+            base[p] = Change(p, v, fx.old(p), [], "", False, index)
     write_text(where / "base.yaml", fixed_text(fx, list(base.values())))
     free = []
     for p, values in picked.conflicts.items():
@@ -227,7 +231,11 @@ def search(fx: Fixer, changes: dict[str, Change], picked: choose.Picked, index: 
         else:
             free.append({"path": p, "choices": list(values)})
     spec = {"tune": f"fix-{index}", "base": str((where / "base.yaml").resolve()), "level": "coupling",
-            "budget": SEARCH_TRIALS, "robust_samples": 200, "free": free, "goal": {"pass": True}}
+            "budget": SEARCH_TRIALS, "robust_samples": 200, "free": free,
+            # the checks whose fixes conflict must pass (the round's build judges the rest: at this level
+            # eq. (2) through the hole centres counts as a failure, where the build reports it as information)
+            "goal": {"pass": True, "checks": "required",
+                     "require": sorted({o.check.split()[0] for p in picked.conflicts for o in picked.why[p]})}}
     write_text(where / "tune.yaml", yaml.safe_dump(spec, sort_keys=False, allow_unicode=True))
     loaded = tune_spec.load(where / "tune.yaml")
     t = tune_best.tune(loaded, where, with_.get("scheduler"), with_.get("workers"), None, fx.cache, build=False)
