@@ -90,6 +90,9 @@ def test_fixed_yaml_is_the_users_file_with_its_comments_and_each_change_commente
     assert "hwgen fix, round 1: fixes tendon.taut C1; was 3" in text
     assert "relaxes a requirement (--allow-relax) tendon.robust C1; was error" in text
     assert "spacing: null" in text
+    # a key added at the end of a section takes the blank line after it: the sections stay apart
+    fx2 = fixed_text(fx, [Change("tendon_material.eyelet_friction", 0.2, 0.15, ["x"], "", False, 1)])
+    assert "eyelet_friction: 0.2  # hwgen fix, round 1: fixes x; was 0.15\n\nprocess:" in fx2
 
 
 @pytest.mark.parametrize("args, field", [
