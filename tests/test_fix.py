@@ -144,3 +144,21 @@ def test_a_lab_robot_is_fixed_whole_and_keep_is_honoured(tmp_path):
     assert all(kept.tendons[i].budget_mm > 0.2 for i in (1, 2, 3))        # the relaxation it was allowed
     summary = (folder / "summary.md").read_text()
     assert "**FAIL**" in summary and "which --keep tendons[1].pretension_n holds" in summary
+
+
+@pytest.mark.slow
+def test_two_fixes_that_conflict_are_searched_with_the_tune_engine(tmp_path, monkeypatch):
+    """C1's pretension wanted at 4.7 N by one fix and 2 N by another: the tune engine searches between
+    them from the design's 3 N for the value that passes tendon.taut (at least about 4.6 N), or,
+    where no trial of its budget passes, takes the stronger change."""
+    from hwgen import pipeline
+    from hwgen.fix import run as fixing
+    monkeypatch.setattr(fixing, "SEARCH_TRIALS", 4)
+    fx = fixing.Fixer(pipeline.load(LAB), tmp_path, jobs=0)
+    picked = choose.combine([choose.Option("tendon.taut C1", {"tendons[1].pretension_n": 4.7}, True, False),
+                             choose.Option("tendon.taut C1", {"tendons[1].pretension_n": 2.0}, True, False)])
+    found = fixing.search(fx, {}, picked, 1, {"scheduler": "inline"})
+    assert 4.5 <= found["tendons[1].pretension_n"] <= 4.7
+    where = fx.folder / "search" / "round-1"
+    assert (where / "tunes" / "fix-1" / "trials.parquet").is_file()
+    assert "pretension_n: 3 " in (where / "base.yaml").read_text()      # searched from the design's value
