@@ -73,6 +73,7 @@ class Fixed:
     builds: int
     seconds: float
     files: list[Path]
+    stiffening: dict = field(default_factory=dict)   # stiffening.tip and .torsion: (before, after, floor)
 
 
 def check_paths(given: tuple[str, ...], option: str, source) -> None:
@@ -157,7 +158,7 @@ def fix(loaded: LoadedDesign, out_root: Path, keep: tuple[str, ...] = (), relax:
     say = on_round or (lambda *a: None)
     say(0, budget, "building the design as written")
     report, folder = fx.build({})
-    before = _failing(report)
+    before, first = _failing(report), report
     changes: dict[str, Change] = {}
     best = (report, folder, dict(changes))
     rounds: list[Round] = []
@@ -199,9 +200,18 @@ def fix(loaded: LoadedDesign, out_root: Path, keep: tuple[str, ...] = (), relax:
         paths = {p for c in failing for o in choose.options(c) for p in o.set}
         _, left = choose.pick(failing, fx.current(changes, paths), keep, relax, spent)
     out = Fixed(fx.folder, list(changes.values()), before, _failing(report), not _errors(report), folder, left,
-                rounds, fx.builds, time.monotonic() - start, [fx.folder / FIXED, fx.folder / SUMMARY])
+                rounds, fx.builds, time.monotonic() - start, [fx.folder / FIXED, fx.folder / SUMMARY],
+                _stiffening(first, report))
     write_text(fx.folder / SUMMARY, summary(fx, out))
     return out
+
+
+def _stiffening(before: dict, after: dict) -> dict:
+    """What the robot is for, before and after: each stiffening check's value and floor."""
+    def of(report):
+        return {c["id"]: c for c in report.get("checks", []) if c["id"].startswith("stiffening.")}
+    b, a = of(before), of(after)
+    return {k: (b[k].get("measured") if k in b else None, c.get("measured"), c.get("limit")) for k, c in a.items()}
 
 
 def search(fx: Fixer, changes: dict[str, Change], picked: choose.Picked, index: int, with_: dict) -> dict[str, Any]:
@@ -302,6 +312,11 @@ def summary(fx: Fixer, f: Fixed) -> str:
                 f"{'yes (--allow-relax)' if c.relax else 'no'} | {c.note} |" for c in f.changes]
     else:
         out.append("None kept.")
+    for cid, (was, now, floor) in f.stiffening.items():
+        if isinstance(now, (int, float)) and isinstance(floor, (int, float)):
+            first = f"{was:.3g}×" if isinstance(was, (int, float)) else "not measured"
+            out += ["", f"{cid}: {first} as written, {now:.3g}× fixed, floor {floor:g}×"
+                        + (" (under it: the check fails)" if now < floor else "")]
     out += ["", "## Rounds", ""]
     for r in f.rounds:
         out.append(f"{r.index}. set {', '.join(f'`{p}` {_value(v)}' for p, v in r.applied.items())}"
