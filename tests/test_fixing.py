@@ -138,6 +138,12 @@ def test_a_shortened_hub_fails_the_tilt_check_with_its_name(faulty):
     assert bad[0]["measured"] == pytest.approx(math.degrees(math.atan(play / held)), abs=0.01)
     assert bad[0]["message"].startswith(f"disk_05: the slot holds the strip over {held:.1f}")
     assert "more than the 0.5° allowed" in bad[0]["message"]
+    # its first fix, tried by the same pitch: a tighter slot, whose play over the same hub holds 0.5°
+    first = bad[0]["fixes"][0]
+    assert list(first["set"]) == ["disks.slot_clearance"] and first["then"]["passed"] and not first["relax"]
+    less = play - 2 * (d.disks.slot_clearance - first["set"]["disks.slot_clearance"])
+    assert first["then"]["measured"] == pytest.approx(math.degrees(math.atan(less / held)), abs=0.01)
+    assert first["then"]["measured"] <= 0.5 and not bad[0]["fix"].startswith("or")
 
 
 def test_each_hub_has_a_glue_port_into_the_slot(built):

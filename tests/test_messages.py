@@ -206,14 +206,3 @@ def test_a_tune_choice_of_no_kind_is_one_line_not_one_a_kind(tmp_path):
     lines = refused("tune", str(f), "--out", str(tmp_path / "out"), "--scheduler", "inline")
     assert lines == [f"error: {f}: free[0].choices[1]: Input should be a string, an integer, a number or a "
                      f"boolean (got {{'a': 1}})"], lines
-
-
-def test_a_fix_whose_first_option_the_design_leaves_out_does_not_begin_with_or():
-    """The bend's fix when no thickness passes: "or bend it no further than ±24°" began it (issue 43)."""
-    from hwgen.checks.gravity import _StripStudy
-    study = _StripStudy.__new__(_StripStudy)
-    study.ang, study.allow, study.t = 90.0, 167.0, 0.5
-    study._reach = lambda *a: None                  # no thickness within the range brings it down
-    text = study.bend_fix(250.0, 240.0)
-    assert text.startswith("bend it no further than ±60°"), text
-    assert "; or a laminate" in text

@@ -275,6 +275,12 @@ def test_the_readmes_own_robot_builds_from_params_and_says_what_fails(tmp_path):
     assert lines[-1] == (f"twenty-disks: FAIL: {len(report['checks'])} checks, {len(failed)} failed, "
                          f"{sum(not c['passed'] and c['severity'] == 'warning' for c in report['checks'])} "
                          f"warning(s); see {folder / 'summary.md'}")
+    # every fix tried (issue 43): the model's checks carry their fixes, each with what it does to the
+    # stiffening; no fix text begins with "or"
+    assert not [c["fix"] for c in report["checks"] if c["fix"].lower().startswith("or")]
+    tried = {c["id"] for c in failed if c.get("fixes")}
+    assert {"disk.tilt", "gravity.strip_stress", "backbone.bend_stress", "stiffening.tip"} <= tried, tried
+    assert all("stiffening" in f["then"] for c in failed for f in c.get("fixes", ()) if not f["then"].get("refused"))
     # the strip's two stresses each say what the other costs
     fix = {c["id"]: c["fix"] for c in failed}
     assert "backbone.bend_stress" in fix["gravity.strip_stress"] and "gravity.strip_stress" in fix["backbone.bend_stress"]

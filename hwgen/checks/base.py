@@ -55,7 +55,7 @@ REBUILD = ("rebuild (hwgen build); if it fails again, hwgen made this wrong: ple
 
 def _value(v) -> str:
     if isinstance(v, float):
-        return f"{v:.4g}"
+        return f"{v:.0f}" if abs(v) >= 1000 else f"{v:.4g}"
     return str(v)
 
 
@@ -81,10 +81,13 @@ def fix_text(fixes: tuple[Fix, ...] | list[Fix], measured_word: str = "") -> str
     """The printed ``fix`` of a check, written from its tried ``fixes``: the ones that pass, best
     first, numbered; where none passes, the best within bounds and what it reaches."""
     good = [f for f in fixes if f.then.get("passed")]
-    if good:
-        return " ".join(f"({i}) {fix_words(f)}." for i, f in enumerate(good, start=1)).rstrip(".")
-    if not fixes:
-        return ""
-    best = fixes[0]
-    return (f"no change tried within the schema's bounds passes; the best within bounds: {fix_words(best)}"
-            + (f" ({measured_word})" if measured_word else ""))
+    short = [f for f in fixes if not f.then.get("passed") and not f.relax]
+    if not good:
+        if not fixes:
+            return ""
+        return (f"no change tried within the schema's bounds passes; the best within bounds: {fix_words(fixes[0])}"
+                + (f" ({measured_word})" if measured_word else ""))
+    text = " ".join(f"({i}) {fix_words(f)}." for i, f in enumerate(good, start=1))
+    if short and all(f.relax for f in good):
+        text += f" No change to the design tried passes: the best within bounds, {fix_words(short[0])}."
+    return text.rstrip(".")

@@ -25,7 +25,7 @@ import numpy as np
 
 from ..cad.manifest import Manifest
 from ..model import sag, steel
-from .base import REBUILD, Check
+from .base import REBUILD, Check, Fix, fix_text
 from .polygons import section_moments
 from .sections import chain_loops, section_robot
 from .seating import SlotFit
@@ -171,9 +171,10 @@ def gravity_checks(parts, manifest: Manifest, plan, fits: list[SlotFit], strip_h
             f"{sum(ms):.1f} g of disks and {strip['mass_g']:.1f} g of strip (printed masses from the STLs and the "
             f"manifest's densities; E = {E / 1000:g} GPa); as a bare strip without hubs "
             f"{bare.tip_sag:.1f} mm and {bare.max_stress:.1f} MPa")
+    own = () if ok else tuple(strip_study.own_weight_fixes(r.max_stress))
     checks.append(Check("gravity.strip_stress", sev if not ok else "error", ok, text, r.max_stress, allow,
                         {"part": strip["part"], "gravity": worst_key, "s_mm": r.s_max_stress},
-                        fix="" if ok else strip_study.own_weight_fix(r.max_stress),
+                        fix="" if ok else _fix_text(own, OWN_WEIGHT_ELSE), fixes=own,
                         lowered_by="check.overstress" if not ok and sev == "warning" else ""))
     checks.append(Check("gravity.sag", "info", True, f"state N: tip sag {r.tip_sag:.1f} mm (small-deflection "
                         f"theory: {r.lin_tip_sag:.1f} mm)", r.tip_sag, None, {"gravity": worst_key}))
@@ -233,6 +234,27 @@ def _mount_check(parts, limit: float, r: sag.SagResult, e_print: float, e_why: s
     return rep, [Check("mount.stiffness", "error", ok, msg, share, limit, {"part": mount.name}, fix=fix)]
 
 
+MARGIN = 0.005     # a fix aims this share inside the allowable: the built strip is measured, not the plan's
+
+
+OWN_WEIGHT_ELSE = ("lighter or fewer disks (disks.count, disks.thickness, disks.outer_diameter) or a lighter tensioner "
+                   "(not tried): the weight beyond the base is what loads it")
+
+
+def _bend_else(stress: float, bare: float) -> str:
+    """What else bears on the bend's stress, untried."""
+    if stress <= 1.2 * bare:
+        return ""
+    return (f"shorter hubs (disks.hub.length) or fewer disks (not tried): the disks' plates and hubs hold the strip "
+            f"straight over part of its length, so the rest curves {stress / bare:.1f}× as much as a bare strip would")
+
+
+def _fix_text(fixes: list[Fix], also: str) -> str:
+    """The tried fixes in words, then what else bears on it (untried, said so)."""
+    text = fix_text(fixes)
+    return f"{text}. Also: {also}" if also else text
+
+
 def _bend_check(study: _StripStudy, spans, I: float, part: str) -> tuple[dict, list[Check]]:
     """The strip bent to the check's sweep end against its allowable stress, MPa (``study``: the
     strip, its sweep and allowable)."""
@@ -243,18 +265,10 @@ def _bend_check(study: _StripStudy, spans, I: float, part: str) -> tuple[dict, l
     msg = (f"bent {ang:g}° by the actuating pair (a moment uniform along the strip), the strip between the disks' "
            f"plates and hubs (measured) curves at {kappa * 1000:.2f} /m: {stress:.1f} MPa, "
            f"{'under' if ok else 'over'} the allowable {allow:g} MPa (a strip without hubs: {bare:.1f} MPa)")
+    fixes = () if ok else tuple(study.bend_fixes(stress))
     return ({"angle_deg": ang, "stress_mpa": stress, "curvature_per_mm": kappa, "bare_stress_mpa": bare},
             [Check("backbone.bend_stress", "error", ok, msg, stress, allow, {"part": part, "angle_deg": ang},
-                   fix="" if ok else study.bend_fix(stress, bare))])
-
-
-
-def _options(out: list[str]) -> str:
-    """Options joined "a; or b; or c": the first never begins with "or", whichever options the
-    design leaves (issue 43: "fix: or bend it no further than ±24°", the first option missing)."""
-    if out and out[0].startswith("or "):
-        out = [out[0][3:], *out[1:]]
-    return "; ".join(out)
+                   fix="" if ok else _fix_text(fixes, _bend_else(stress, bare)), fixes=fixes)])
 
 
 class _StripStudy:
@@ -309,47 +323,53 @@ class _StripStudy:
             x, s = nxt, got
         return x
 
-    def own_weight_fix(self, stress: float) -> str:
-        """What to change when the own-weight stress is over the allowable, and what it costs the bend."""
+    def own_weight_fixes(self, stress: float) -> list[Fix]:
+        """The own-weight stress over the allowable: a thicker or a taller strip, each solved again
+        (the elastica with the disks' spans), with what the thicker one costs the bend."""
         a = self.allow
-        t_need = self._reach(self.own_weight, self.t, stress, a, -2.0, self.t, 4 * self.t)
-        h_need = self._reach(lambda h: self.own_weight(self.t, h), self.h, stress, a, -1.0, self.h, 4 * self.h)
+        target = a * (1 - MARGIN)
+        t_need = self._reach(self.own_weight, self.t, stress, target, -2.0, self.t, 4 * self.t)
+        h_need = self._reach(lambda h: self.own_weight(self.t, h), self.h, stress, target, -1.0, self.h, 4 * self.h)
         out = []
         if t_need is not None:
             t_need = math.ceil(t_need * 100) / 100
-            bend = self.bend(t_need)
-            cost = ("which backbone.bend_stress still passes" if bend <= a else
-                    "but a thicker strip fails backbone.bend_stress")
-            out.append(f"backbone.thickness from {self.t:g} to at least {t_need:.2f} mm (solved again: "
-                       f"{self.own_weight(t_need):.0f} MPa; the bend to {self.ang:g}° then stresses it "
-                       f"{bend:.0f} MPa, {cost})")
+            got, bend = self.own_weight(t_need), self.bend(t_need)
+            out.append(Fix({"backbone.thickness": t_need}, {"measured": got, "passed": got <= a, "limit": a},
+                           ("backbone.bend_stress",) if bend > a >= self.bend(self.t) else (),
+                           f"from {self.t:g} mm, solved again: {got:.1f} MPa; the bend to {self.ang:g}° then "
+                           f"stresses it {bend:.0f} MPa (backbone.bend_stress)"))
         if h_need is not None:
-            h_need = math.ceil(h_need)
-            out.append(f"or backbone.height from {self.h:g} to at least {h_need:g} mm (the bend's stress does not "
-                       f"depend on the width; the disks then need an outer_diameter above {h_need:g} mm to hold "
-                       f"the wider slot)")
-        out.append("or lighter or fewer disks (disks.count, disks.thickness, disks.outer_diameter) or a lighter "
-                   "tensioner: the weight beyond the base is what loads it")
-        return _options(out)
+            h_need = float(math.ceil(h_need))
+            got = self.own_weight(self.t, h_need)
+            out.append(Fix({"backbone.height": h_need}, {"measured": got, "passed": got <= a, "limit": a}, (),
+                           f"from {self.h:g} mm, solved again: {got:.1f} MPa (the bend's stress does not depend on "
+                           f"the width; the disks must hold the wider slot)"))
+        return out
 
-    def bend_fix(self, stress: float, bare: float) -> str:
-        """What to change when the bend's stress is over the allowable, and what it costs the own weight."""
+    def bend_fixes(self, stress: float) -> list[Fix]:
+        """The bend's stress over the allowable: a thinner strip, or (a relaxation) a smaller sweep
+        or a higher allowable, each solved again, with what the thinner one costs the own weight."""
         a = self.allow
         out = []
-        t_max = self._reach(self.bend, self.t, stress, a, 1.0, self.t / 4, self.t)
+        t_max = self._reach(self.bend, self.t, stress, a * (1 - MARGIN), 1.0, self.t / 4, self.t)
         if t_max is not None:
             t_max = math.floor(t_max * 100) / 100
-            weight = self.own_weight(t_max)
-            cost = ("which gravity.strip_stress still passes" if weight <= a else
-                    "but a thinner strip fails gravity.strip_stress under its own weight: no thickness passes "
-                    "both, change something else below")
-            out.append(f"backbone.thickness from {self.t:g} to at most {t_max:.2f} mm (the bend then stresses it "
-                       f"{self.bend(t_max):.0f} MPa; its own weight {weight:.0f} MPa, {cost})")
-        ang = self.ang * a / stress
-        out.append(f"or bend it no further than ±{math.floor(ang):g}° (disks.eyelets.sweep_deg, check.max_angle_deg)")
-        if stress > 1.2 * bare:
-            out.append(f"or shorter hubs (disks.hub.length, disks.hub.max_tilt_deg) or fewer disks: the disks' plates "
-                       f"and hubs hold the strip straight over part of its length, so the rest curves "
-                       f"{stress / bare:.1f}× as much as a bare strip would")
-        out.append("or a laminate of measured higher strength (backbone.allowable_stress_mpa)")
-        return _options(out)
+            got, weight = self.bend(t_max), self.own_weight(t_max)
+            out.append(Fix({"backbone.thickness": t_max}, {"measured": got, "passed": got <= a, "limit": a},
+                           ("gravity.strip_stress",) if weight > a >= self.r.max_stress else (),
+                           f"from {self.t:g} mm, solved again: {got:.1f} MPa; its own weight then stresses it "
+                           f"{weight:.0f} MPa (gravity.strip_stress)"))
+        ang = float(math.floor(self.ang * a / stress))
+        for _ in range(5):                   # the stress falls about as the angle: a step or two below
+            got = self.bend(self.t, ang)
+            if got <= a or ang <= 1:
+                break
+            ang = float(math.floor(ang * a / got)) if ang * a / got < ang else ang - 1
+        out.append(Fix({"check.max_angle_deg": ang, "disks.eyelets.sweep_deg": ang},
+                       {"measured": got, "passed": got <= a, "limit": a}, (),
+                       f"bend it no further than ±{ang:g}° (from ±{self.ang:g}°), solved again: {got:.1f} MPa",
+                       relax=True))
+        out.append(Fix({"backbone.allowable_stress_mpa": float(math.ceil(stress * (1 + MARGIN)))},
+                       {"measured": stress, "passed": True, "limit": float(math.ceil(stress * (1 + MARGIN)))}, (),
+                       "only for a laminate of measured higher strength", relax=True))
+        return out

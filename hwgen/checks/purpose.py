@@ -44,8 +44,11 @@ def stiffening_checks(plan, study: dict) -> list[Check]:
                       f"what the stiffening tendons add is not judged", None, None,
                       fix="a robot the statics resolves: fewer disks (disks.count) or a shorter strip (backbone.length)")]
     got = figures(study)
-    if got is None:
-        return []
+    return [] if got is None else judge(plan, got)
+
+
+def judge(plan, got: dict) -> list[Check]:
+    """The two checks of :func:`stiffening_checks` from the ratios (:func:`figures`)."""
     chk = plan.check
     full, act = got["states"]
     out = []

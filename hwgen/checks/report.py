@@ -20,7 +20,9 @@ REPORT = "report.json"
 # what they read back from the file); these types say which keys it has and what each holds.
 
 class CheckRecord(TypedDict):
-    """One check (:class:`hwgen.checks.base.Check` as JSON)."""
+    """One check (:class:`hwgen.checks.base.Check` as JSON). A failing check whose fixes were tried
+    also holds ``fixes``: each :class:`hwgen.checks.base.Fix` as JSON (set, then, breaks, note,
+    relax), best first; ``fix`` is written from them."""
     id: str
     severity: str                 # "error", "warning" or "info"
     passed: bool

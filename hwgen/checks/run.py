@@ -214,7 +214,8 @@ def _seating(parts, emap, bb_outline, strip_t, plan, angles):
     radius = {e.station: 0.0 for e in emap.eyelets}
     for e in emap.eyelets:
         radius[e.station] = max(radius[e.station], float(np.hypot(*e.design_xz)))
-    checks = tilt_checks(fits, plan.hub.max_tilt_deg, radius)
+    checks = tilt_checks(fits, plan.hub.max_tilt_deg, radius,
+                         (plan.disks[0].slot_height - plan.backbone.thickness) / 2)   # disks.slot_clearance
     checks += hub_checks(emap, fits, {p.name: p.mesh for p in parts}, {p.name: p.placement for p in parts},
                          plan.tendon_material.diameter, angles, plan.backbone.length)
     return fits, checks

@@ -25,7 +25,7 @@ import numpy as np
 
 from ..model import kinematics as kin
 from ..model.fixing import HUB_GAP_MM
-from .base import Check
+from .base import Check, Fix, fix_text
 from .eyelets import DiskSections, EyeletMap
 from .polygons import inside_many, points_to_polyline, section_moments
 from .sections import chain_loops, section_robot
@@ -165,9 +165,11 @@ def measure_fit(disk: DiskSections, mesh, placement, strip_h: float, strip_t: fl
     return fit
 
 
-def tilt_checks(fits: list[SlotFit], max_tilt_deg: float, radius: dict[int, float]) -> list[Check]:
+def tilt_checks(fits: list[SlotFit], max_tilt_deg: float, radius: dict[int, float], clearance: float = 0.0
+                ) -> list[Check]:
     """One check per disk: the pitch its slot allows against the limit, naming the other freedoms
-    and how far it moves the disk's outermost eyelet (at ``radius[station]``) along the backbone."""
+    and how far it moves the disk's outermost eyelet (at ``radius[station]``) along the backbone;
+    ``clearance``: the design's slot clearance a side, which a tighter slot's fix starts from."""
     out = []
     for f in fits:
         where = {"part": f.part, "station": f.station}
@@ -192,18 +194,39 @@ def tilt_checks(fits: list[SlotFit], max_tilt_deg: float, radius: dict[int, floa
                f"{max(abs(v) for v in f.tilt_z):.3f}°, roll ±{max(abs(v) for v in f.tilt_y):.3f}°, slide "
                f"{f.play_x:.3f} mm across the strip")
         out.append(Check("disk.tilt", "error", ok, msg, tilt, max_tilt_deg, where,
-                         fix="" if ok else _tilt_fix(f, tilt, max_tilt_deg)))
+                         fix="" if ok else _tilt_fix(f, tilt, max_tilt_deg, clearance),
+                         fixes=() if ok else _tilt_fixes(f, tilt, max_tilt_deg, clearance)))
     return out
 
 
-def _tilt_fix(f: SlotFit, tilt: float, limit: float) -> str:
-    """How far each of the three settings that hold a disk's pitch must move for this disk."""
+def _tilt_fix(f: SlotFit, tilt: float, limit: float, clearance: float) -> str:
+    """How far each of the three settings that hold a disk's pitch must move for this disk: the
+    clearance and the allowed tilt tried (:func:`_tilt_fixes`), the engagement in words."""
+    need = f.play_z / math.tan(math.radians(limit))
+    return (f"{fix_text(_tilt_fixes(f, tilt, limit, clearance))}. Also (not tried): {need:.1f} mm of engagement, "
+            f"for which the hubs need more room between the disks (a larger disks.spacing, or fewer disks: "
+            f"disks.count)")
+
+
+def _tilt_fixes(f: SlotFit, tilt: float, limit: float, clearance: float) -> tuple[Fix, ...]:
+    """A tighter slot, its pitch worked out again from the measured play less the clearance taken
+    off both sides, over the measured engagement (the slot's own model of the pitch, not a new
+    build); and (a relaxation) the tilt it has, allowed."""
+    out = []
     tan = math.tan(math.radians(limit))
-    need = f.play_z / tan
-    return (f"disks.slot_clearance to at most {f.engagement * tan / 2:.3f} mm a side (its {f.play_z:.3f} mm of play "
-            f"then holds {limit:g}° over the {f.engagement:.2f} mm it has); or {need:.1f} mm of engagement, for "
-            f"which the hubs need more room between the disks (a larger disks.spacing, or fewer disks: "
-            f"disks.count); or allow disks.hub.max_tilt_deg of at least {math.ceil(tilt * 100) / 100:g}°")
+    new = math.floor((clearance - (f.play_z - 0.98 * f.engagement * tan) / 2) * 1000) / 1000
+    if new >= 0:
+        play = f.play_z - 2 * (clearance - new)
+        got = math.degrees(math.atan2(max(play, 0.0), f.engagement))
+        out.append(Fix({"disks.slot_clearance": new}, {"measured": got, "passed": got <= limit + ANGLE_TOL_DEG,
+                                                       "limit": limit}, (),
+                       f"from {clearance:g} mm a side: {max(play, 0.0):.3f} mm of play over the {f.engagement:.2f} mm "
+                       f"the slot holds the strip"))
+    allow = math.ceil(tilt * 100) / 100
+    out.append(Fix({"disks.hub.max_tilt_deg": allow}, {"measured": tilt, "passed": tilt <= allow + ANGLE_TOL_DEG,
+                                                         "limit": allow}, (),
+                   f"allow the {tilt:.2f}° this disk can pitch", relax=True))
+    return tuple(out)
 
 
 def hub_checks(emap: EyeletMap, fits: list[SlotFit], meshes: dict, placements: dict, tendon_d: float,

@@ -9,7 +9,7 @@ from __future__ import annotations
 from ..checks.base import Fix
 from .trial import Trial, down, ident, up
 
-STEPS = 5                      # secant steps on a pretension at most (each one sweep, under a second)
+STEPS = 6                      # secant steps on a pretension at most (each one sweep, under a second)
 MARGIN_N = 0.05                # above the floor, N: a tension that lands on it is not a pass
 SHARES = (0.5, 0.25)           # the stiffening tendons' pretensions scaled by these, in turn
 
@@ -54,7 +54,8 @@ def _stiffening_names(trial: Trial) -> list[str]:
 
 def taut(trial: Trial, check: dict, base: dict) -> list[Fix]:
     """A locked tendon that goes slack: its pretension raised until its least tension as built
-    clears the floor (secant steps on the swept tension), within the schema's bound."""
+    clears the floor (secant steps on the swept tension; doubled while it stays slack), within the
+    schema's bound."""
     name, floor, m0 = check["where"]["tendon"], check["limit"], check["measured"]
     got = _pretension(trial, name)
     if got is None or floor is None or m0 is None:
@@ -76,11 +77,24 @@ def taut(trial: Trial, check: dict, base: dict) -> list[Fix]:
         m = fix.then["measured"]
         if fix.then["passed"] or m is None:
             break
-        slope = (m - m_prev) / (p - p_prev) if p != p_prev else 1.0
-        slope = slope if slope > 0.05 else 1.0
+        slope = (m - m_prev) / (p - p_prev) if p != p_prev else 0.0
         p_prev, m_prev = p, m
-        p = up(p + (floor - m) / slope + MARGIN_N)
+        # slack throughout (no slope to follow): double it; else a secant step on the least tension
+        p = up(p * 2) if m <= 0 or slope <= 0.05 else up(p + (floor - m) / slope + MARGIN_N)
+    if best is not None and best.then["passed"] and m_prev is not None and p_prev < p_of(best):
+        # passed from a doubling step: one secant step back between the last slack and it
+        hi_p, hi_m = p_of(best), best.then["measured"]
+        if hi_m > m_prev:
+            q = up(p_prev + (floor + MARGIN_N - m_prev) * (hi_p - p_prev) / (hi_m - m_prev))
+            if p_prev < q < hi_p:
+                fix = _fix(trial, {**base, path: q}, target, best.note.replace(f"at {hi_p:g} N", f"at {q:g} N"))
+                best = fix if fix is not None and fix.then["passed"] else best
     return [best] if best else []
+
+
+def p_of(fix: Fix) -> float:
+    """The one pretension a fix of :func:`taut` sets."""
+    return next(v for k, v in fix.set.items() if k.endswith(".pretension_n"))
 
 
 def overload(trial: Trial, check: dict, base: dict) -> list[Fix]:
@@ -104,7 +118,8 @@ def overload(trial: Trial, check: dict, base: dict) -> list[Fix]:
 
 def actuation_tension(trial: Trial, check: dict, base: dict) -> list[Fix]:
     """The actuating tendon's pull at the sweep's end over what its line may carry: a stronger
-    line; the stiffening tendons locked lower; or (a relaxation) a smaller safety factor."""
+    line; or (a relaxation) a smaller safety factor. (Locking the stiffening tendons lower barely
+    moves it where the coupling passes: it is actuation.coupling's fix.)"""
     pull = check["measured"]
     if pull is None:
         return []
@@ -113,7 +128,6 @@ def actuation_tension(trial: Trial, check: dict, base: dict) -> list[Fix]:
     out.append(_fix(trial, {**base, "tendon_material.break_load": need}, target,
                     f"a line of at least {need:g} N break load carries the {pull:.1f} N pull with the safety factor "
                     f"{chk.tendon_safety_factor:g}"))
-    out.append(_lower_stiffening(trial, check, base))
     brk = float(base.get("tendon_material.break_load", trial.plan.tendon_material.break_load))
     factor = down(0.99 * brk / pull, 0.1)
     if 1.0 <= factor < chk.tendon_safety_factor:

@@ -7,8 +7,10 @@ cache by the robot it describes)."""
 from __future__ import annotations
 
 import copy
+import hashlib
 import json
 import math
+import pickle
 from dataclasses import replace
 
 import numpy as np
@@ -16,7 +18,7 @@ import numpy as np
 from .. import cache, params
 from ..checks import purpose
 from ..checks.base import Check
-from ..checks.tension import tension_checks
+from ..checks.tension import sweeps, tension_checks, working_tensions
 from ..designfile import keys_of
 from ..errors import DesignError, InputError
 from ..model import feasibility
@@ -58,16 +60,20 @@ class Trial:
     """A loaded design, its plan and what its build measured, ready to be changed and evaluated."""
 
     def __init__(self, loaded: params.LoadedDesign, plan, report: dict, study: dict):
-        self.loaded, self.plan = loaded, plan
+        self.loaded, self.plan, self.report = loaded, plan, report
         self.doc = loaded.layers.doc
         self.gravity = report.get("gravity")
         self.taut = (report.get("as_built") or {}).get("taut") or {}
         self.centre = {t["name"]: t["max_abs_delta_mm"] for t in report.get("tendons", [])}
         self.base = purpose.figures(study)
         self.base_checks = {ident(c): c for c in report.get("checks", [])}
+        lay = plan.tensioner_layout
+        self.record = lay.search if lay is not None and lay.search else None
         self._plans: dict[str, object] = {}
+        self._swept: dict[bytes, tuple] = {}
         self._tension: dict[str, list[Check] | None] = {}
         self._stiff: dict[str, dict | None] = {}
+        self._robots: dict[bytes, dict] = {}      # the stiffening per robot, whatever its protocol's ceiling
 
     # ------------------------------------------------------------ where a value is
     def index(self, tendon: str) -> int | None:
@@ -105,7 +111,7 @@ class Trial:
             d = params.validate(doc, self.loaded.source)
             if feasibility.problems(d):
                 return None
-            plan = make_plan(d)
+            plan = make_plan(d, self.record)       # the build's tensioner arrangement, laid out again
             feasibility.check_plan(plan, d)
         except (InputError, DesignError, *MODEL_ERRORS):
             return None
@@ -120,11 +126,22 @@ class Trial:
             got = None
             if plan is not None:
                 try:
-                    got = tension_checks(plan, self.taut, self.centre)[1]
+                    got = tension_checks(plan, self.taut, self.centre, self._sweeps(plan))[1]
                 except MODEL_ERRORS:
                     got = None
             self._tension[key] = got
         return self._tension[key]
+
+    def _sweeps(self, plan) -> tuple:
+        """:func:`hwgen.checks.tension.sweeps` of ``plan``, once per robot: a change to the line's
+        strength or the checks' limits moves none of the sweep's tensions (only the rules the
+        statics does not read in it), so it sweeps once for them all."""
+        desc = sf.describe(plan)
+        key = hashlib.sha256(pickle.dumps((replace(desc, rules=None), working_tensions(desc, plan),
+                                           plan.check.max_angle_deg))).digest()
+        if key not in self._swept:
+            self._swept[key] = sweeps(plan)
+        return self._swept[key]
 
     def stiffening(self, changes: dict) -> dict | None:
         """{"tip", "torsion"} ratios (all tendons over the pair, reference orientation,
@@ -144,8 +161,17 @@ class Trial:
             return None
         try:
             desc = replace(sf.describe(plan, self.gravity), eyelet_friction=None)   # frictionless: no capstan
-            inputs = (desc, full, by[act], sf.REFERENCE, sf.STUDY_H_MAX)
-            got = cache.remembered("tried stiffening", inputs, lambda: _two_states(desc, full, by[act]))
+            robot = hashlib.sha256(pickle.dumps((replace(desc, rules=replace(desc.rules, allowable_n=0.0)),
+                                                 full, by[act]))).digest()
+            kept = self._robots.get(robot)
+            if kept is not None and kept["max_set_n"] < 0.99 * min(kept["allowable_n"], desc.rules.allowable_n):
+                got = kept      # only the protocol's ceiling moved, and it pulled nowhere near either
+            else:
+                inputs = (desc, full, by[act], sf.REFERENCE, sf.STUDY_H_MAX)
+                got = cache.remembered("tried stiffening", inputs, lambda: _two_states(desc, full, by[act]))
+                if got is not None:
+                    got = {**got, "allowable_n": desc.rules.allowable_n}
+                    self._robots.setdefault(robot, got)
         except MODEL_ERRORS:
             return None
         if got is None:
@@ -163,7 +189,9 @@ def _two_states(desc: sf.Described, full: sf.State, act: sf.State) -> dict | Non
     for s in (act, full):
         got[s.name] = next(e for e in sf.evaluate(desc, model, s, sf.REFERENCE, memo)
                            if e["friction"] == purpose.FRICTION)
-    return purpose.ratios(got[full.name], got[act.name], (full.name, act.name))
+    pulled = [v for e in got.values() for v in e["set_n"].values() if v is not None]
+    return {**purpose.ratios(got[full.name], got[act.name], (full.name, act.name)),
+            "max_set_n": max(pulled, default=0.0)}
 
 
 def ident(check) -> tuple:
