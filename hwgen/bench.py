@@ -428,7 +428,7 @@ def tune_rows(tmp: Path, budget: int = 60) -> list[tuple]:
     return [(*r[:4], "; ".join(x for x in (r[4], note) if x))]
 
 
-FIX_LAB = "tests/labs/fdm-ten-disks.yaml"
+FIX_LAB = "tests/labs/fdm-ten-fix.yaml"
 FIX_PASS = re.compile(r": (PASS|FAIL).*?after (\d+) change\(s\), (\d+) design\(s\) built")
 
 

@@ -12,7 +12,7 @@ from hwgen.fix import choose
 
 from .clirunner import hwgen
 
-LAB = Path(__file__).parent / "labs" / "fdm-ten-disks.yaml"
+LAB = Path(__file__).parent / "labs" / "fdm-ten-fix.yaml"
 
 
 def _check(cid: str, tendon: str, *fixes: dict, severity: str = "error") -> dict:
@@ -85,7 +85,7 @@ def test_fixed_yaml_is_the_users_file_with_its_comments_and_each_change_commente
     for line in original.splitlines():          # every comment of the user's file, except the changed value's
         if "#" in line and "pretension_n" not in line:
             assert line.split("#", 1)[1].strip() in text, line
-    assert doc["design"] == "lab-fdm-ten-fixed" and Path(doc["base"]).is_absolute()
+    assert doc["design"] == "lab-fdm-ten-fix-fixed" and Path(doc["base"]).is_absolute()
     assert doc["tendons"][1]["pretension_n"] == 4.7 and doc["check"]["robust_severity"] == "warning"
     assert "hwgen fix, round 1: fixes tendon.taut C1; was 3" in text
     assert "relaxes a requirement (--allow-relax) tendon.robust C1; was error" in text
@@ -122,12 +122,12 @@ def test_a_lab_robot_is_fixed_whole_and_keep_is_honoured(tmp_path):
     r = hwgen("fix", str(LAB), "--allow-relax", "check.robust_severity", "--out", str(out), "-q")
     assert r.returncode == 0, r.stdout + r.stderr
     assert time.monotonic() - start < 900
-    folder = out / "fixes" / "lab-fdm-ten"
+    folder = out / "fixes" / "lab-fdm-ten-fix"
     text = (folder / "fixed.yaml").read_text()
     assert 1 <= text.count("# hwgen fix, round") <= 8
     fixed = pipeline.load(folder / "fixed.yaml").design
     assert fixed.check.robust_severity == "warning" and fixed.tendons[1].pretension_n > 3
-    report = json.loads((folder / "lab-fdm-ten-fixed" / "report.json").read_text())
+    report = json.loads((folder / "lab-fdm-ten-fix-fixed" / "report.json").read_text())
     assert not [c["id"] for c in report["checks"] if not c["passed"] and c["severity"] == "error"]
     tip = next(c for c in report["checks"] if c["id"] == "stiffening.tip")
     assert tip["passed"] and tip["measured"] >= tip["limit"]
@@ -138,7 +138,7 @@ def test_a_lab_robot_is_fixed_whole_and_keep_is_honoured(tmp_path):
     r = hwgen("fix", str(LAB), "--allow-relax", "tendons.budget_mm", "--keep", "tendons[1].pretension_n",
               "--out", str(tmp_path / "kept"), "-q")
     assert r.returncode == 1, r.stdout + r.stderr
-    folder = tmp_path / "kept" / "fixes" / "lab-fdm-ten"
+    folder = tmp_path / "kept" / "fixes" / "lab-fdm-ten-fix"
     kept = pipeline.load(folder / "fixed.yaml").design
     assert kept.tendons[1].pretension_n == 3 and kept.check.robust_severity == "error"
     assert all(kept.tendons[i].budget_mm > 0.2 for i in (1, 2, 3))        # the relaxation it was allowed
