@@ -249,8 +249,8 @@ def search(fx: Fixer, changes: dict[str, Change], picked: choose.Picked, index: 
     write_text(where / "tune.yaml", yaml.safe_dump(spec, sort_keys=False, allow_unicode=True))
     loaded = tune_spec.load(where / "tune.yaml")
     t = tune_best.tune(loaded, where, with_.get("scheduler"), with_.get("workers"), None, fx.cache, build=False)
-    if t.best is not None:
-        return dict(zip(loaded.names, t.best["values"]))
+    if t.best is not None:                   # four figures: a value a lab sets (and the tune's own, to 0.1 %)
+        return {n: float(f"{v:.4g}") if isinstance(v, float) else v for n, v in zip(loaded.names, t.best["values"])}
     out = {}
     for p, values in picked.conflicts.items():
         now = fx.old(p)
