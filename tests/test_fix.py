@@ -28,6 +28,12 @@ TAUT = _check("tendon.taut", "C1", _fix({"tendons[1].pretension_n": 6.1}))
 ROBUST = _check("tendon.robust", "C2", _fix({"tendons[2].budget_mm": 0.37}, relax=True))
 
 
+def test_a_check_is_named_by_what_it_is_about():
+    assert choose.check_name(TAUT) == "tendon.taut C1"
+    assert choose.check_name({"id": "tendon.clearance", "where": {"tendons": ["C1", "C2"]}}) == "tendon.clearance C1+C2"
+    assert choose.check_name({"id": "disk.tilt", "where": {"part": "disk_08"}}) == "disk.tilt disk_08"
+
+
 def test_a_round_takes_each_checks_first_design_change():
     picked, left = choose.pick([TAUT], {"tendons[1].pretension_n": 5.0}, (), (), set())
     assert picked.values == {"tendons[1].pretension_n": 6.1} and not picked.conflicts and not left

@@ -52,7 +52,8 @@ class Picked:
 def check_name(c: dict) -> str:
     """A check as a person names it: its id and the tendon, part or channel it is about."""
     w = c.get("where") or {}
-    at = next((str(w[k]) for k in ("tendon", "part", "channel", "pair") if w.get(k) not in (None, "")), "")
+    at = "+".join(map(str, w["tendons"])) if isinstance(w.get("tendons"), list) else ""
+    at = at or next((str(w[k]) for k in ("tendon", "part", "channel", "pair") if w.get(k) not in (None, "")), "")
     return f"{c['id']} {at}".strip()
 
 
