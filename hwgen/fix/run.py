@@ -7,7 +7,9 @@ design the others of its round change is the check's own business: h43's ``tried
 design so changed (``hwgen build`` and its checks, the part cache doing most of it) and keeps the
 round when fewer errors fail, or as many failing by less (relative to their limits, as the tune
 engine counts them); else it goes back to the design before the round, and the options of the
-checks that still fail are not applied again. Two options that set one path to different values
+checks that still fail are not applied again, while those that passed their checks are tried
+again alone in the next round (one of the others broke it; undone again, they are not applied
+again either). Two options that set one path to different values
 are searched with the tune engine (:func:`search`: free over the values they name, goal pass) and
 the round applies what it finds. It stops when every check passes, when no option is left, or when
 ``budget`` designs have been built.
@@ -58,6 +60,7 @@ class Round:
     after: list[str]             # after it
     kept: bool
     searched: list[str] = field(default_factory=list)
+    alone: bool = False          # the fixes that passed their checks in the round before, undone, again alone
 
 
 @dataclass
@@ -164,10 +167,15 @@ def fix(loaded: LoadedDesign, out_root: Path, keep: tuple[str, ...] = (), relax:
     rounds: list[Round] = []
     spent: set = set()
     left: dict[str, list[str]] = {}
+    retry: list[choose.Option] = []
     while _errors(best[0]) and fx.builds < budget:
         failing = _errors(best[0])
-        paths = {p for c in failing for o in choose.options(c) for p in o.set}
-        picked, left = choose.pick(failing, fx.current(changes, paths), keep, relax, spent)
+        if retry:                       # after an undone round: what passed its check there, alone
+            picked, retrying, retry = choose.combine(retry), True, []
+        else:
+            paths = {p for c in failing for o in choose.options(c) for p in o.set}
+            picked, left = choose.pick(failing, fx.current(changes, paths), keep, relax, spent)
+            retrying = False
         if not picked.values:
             break
         searched = []
@@ -186,9 +194,15 @@ def fix(loaded: LoadedDesign, out_root: Path, keep: tuple[str, ...] = (), relax:
         report, folder = fx.build(trial)
         kept = _score(report) < _score(best[0])
         rounds.append(Round(len(rounds) + 1, picked.values, [choose.check_name(c) for c in failing],
-                            [choose.check_name(c) for c in _errors(report)], kept, searched))
+                            [choose.check_name(c) for c in _errors(report)], kept, searched, retrying))
         still = {choose.check_name(c) for c in _errors(report)}
-        spent |= {o.key for os_ in picked.why.values() for o in os_ if o.check in still or not kept}
+        applied = list({o.key: o for os_ in picked.why.values() for o in os_}.values())
+        spent |= {o.key for o in applied if o.check in still or (not kept and retrying)}
+        helped = [o for o in applied if o.check not in still]
+        if not kept and not retrying and 0 < len(helped) < len(applied):
+            retry = helped              # one of the others broke the round: these are tried again alone
+        elif not kept:
+            spent |= {o.key for o in helped}
         if kept:
             changes = trial
             best = (report, folder, dict(changes))
@@ -321,6 +335,7 @@ def summary(fx: Fixer, f: Fixed) -> str:
     for r in f.rounds:
         out.append(f"{r.index}. set {', '.join(f'`{p}` {_value(v)}' for p, v in r.applied.items())}"
                    + (f" (searched with the tune engine: {', '.join(r.searched)})" if r.searched else "")
+                   + (" (again alone: they passed their checks in the round undone before)" if r.alone else "")
                    + f": {len(r.before)} error(s) failing before, {len(r.after)} after"
                    + ("" if r.kept else " — no better: undone, and these fixes not applied again") + ".")
     out += ["", "## Checks before and after", "", "| check | before | after |", "|---|---|---|"]
