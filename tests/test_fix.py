@@ -168,3 +168,39 @@ def test_two_fixes_that_conflict_are_searched_with_the_tune_engine(tmp_path, mon
     where = fx.folder / "search" / "round-1"
     assert (where / "tunes" / "fix-1" / "trials.parquet").is_file()
     assert "pretension_n: 3 " in (where / "base.yaml").read_text()      # searched from the design's value
+
+
+def test_a_round_that_breaks_something_is_undone_and_what_helped_tried_again_alone(tmp_path, monkeypatch):
+    """The rounds on a stand-in for the build: C1 slack (fixed by its pretension), a disk's tilt (by the
+    slot's clearance) and C1 as built (by tighter holes, which pull the knots through their seats: four
+    new errors). The round of all three is undone; the fixes that passed their checks are tried again
+    apart; the holes, breaking the round alone too, are left out, and what is left says so."""
+    from hwgen import pipeline
+    from hwgen.fix import run as fixing
+
+    def report(v: dict) -> dict:
+        def check(cid, where, ok):
+            return {"id": cid, "severity": "error", "passed": ok, "where": where, "measured": 1.0, "limit": 0.5}
+        checks = [check("tendon.taut", {"tendon": "C1"}, v.get("tendons[1].pretension_n", 3) >= 6),
+                  check("disk.tilt", {"part": "disk_08"}, v.get("disks.slot_clearance", 0.1) <= 0.06),
+                  check("tendon.robust", {"tendon": "C1"}, v.get("process.hole_clearance", 0.2) <= 0.05)]
+        checks[0]["fixes"] = [_fix({"tendons[1].pretension_n": 6.1})]
+        checks[1]["fixes"] = [_fix({"disks.slot_clearance": 0.059})]
+        checks[2]["fixes"] = [_fix({"process.hole_clearance": 0.0})]
+        if v.get("process.hole_clearance", 0.2) == 0.0:
+            checks += [check("tendon.seat", {"part": f"disk_00 {n}"}, False) for n in ("A1", "A2", "C1", "C2")]
+        return {"checks": checks}
+
+    def build(self, changes):
+        self.folder.mkdir(parents=True, exist_ok=True)
+        (self.folder / fixing.FIXED).write_text(fixing.fixed_text(self, list(changes.values())))
+        self.builds += 1
+        return report({p: c.value for p, c in changes.items()}), self.folder / self.name
+
+    monkeypatch.setattr(fixing.Fixer, "build", build)
+    f = fixing.fix(pipeline.load(LAB), tmp_path, budget=8)
+    assert {c.path: c.value for c in f.changes} == {"tendons[1].pretension_n": 6.1, "disks.slot_clearance": 0.059}
+    assert [r.kept for r in f.rounds] == [False, True, False, True, False]
+    assert [r.alone for r in f.rounds] == [False, True, False, True, False]
+    assert not f.passed and f.builds == 7       # the design, five rounds, and the best again (the last undone)
+    assert f.left["tendon.robust C1"][0] == "process.hole_clearance: 0.0: applied before and did not help"

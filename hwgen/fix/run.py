@@ -8,8 +8,8 @@ design so changed (``hwgen build`` and its checks, the part cache doing most of 
 round when fewer errors fail, or as many failing by less (relative to their limits, as the tune
 engine counts them); else it goes back to the design before the round, and the options of the
 checks that still fail are not applied again, while those that passed their checks are tried
-again alone in the next round (one of the others broke it; undone again, they are not applied
-again either). Two options that set one path to different values
+again alone in the next round (one of the others broke it; when every one passed, the first half
+of them; undone again, they are not applied again either). Two options that set one path to different values
 are searched with the tune engine (:func:`search`: free over the values they name, goal pass) and
 the round applies what it finds. It stops when every check passes, when no option is left, or when
 ``budget`` designs have been built.
@@ -199,8 +199,10 @@ def fix(loaded: LoadedDesign, out_root: Path, keep: tuple[str, ...] = (), relax:
         applied = list({o.key: o for os_ in picked.why.values() for o in os_}.values())
         spent |= {o.key for o in applied if o.check in still or (not kept and retrying)}
         helped = [o for o in applied if o.check not in still]
-        if not kept and not retrying and 0 < len(helped) < len(applied):
-            retry = helped              # one of the others broke the round: these are tried again alone
+        if not kept and not retrying and helped and len(applied) > 1:
+            # one of the others broke the round: these again alone (every one passed its check: the first
+            # half of them, the rest left for later rounds)
+            retry = helped if len(helped) < len(applied) else helped[:max(1, len(helped) // 2)]
         elif not kept:
             spent |= {o.key for o in helped}
         if kept:
