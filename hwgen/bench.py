@@ -5,6 +5,7 @@ Run: python -m hwgen.bench [PARAMS]          each command as a whole process: wa
      python -m hwgen.bench --sweep-build     the build level of hwgen sweep: 2 designs on 2 workers
                                              against the same 2 built one after the other (minutes)
      python -m hwgen.bench --tune            hwgen tune's stiffness example on a small budget alone
+     python -m hwgen.bench --fix             hwgen fix on the FDM lab robot of tests/labs/ alone
      python -m hwgen.bench --view [PARAMS]   view.html's stage on a fresh build, step by step
      python -m hwgen.bench --sim [PARAMS]    hwgen sim alone, on a build made first (not timed)
 """
@@ -205,6 +206,7 @@ def processes(params_path: Path) -> None:
         rows += disk_rows(params, tmp, env)
         rows += sweep_rows(params, tmp)
         rows += tune_rows(tmp)
+        rows += fix_rows(tmp)
     t = Table(title=f"hwgen benchmark: {params_path} (whole processes, {os.cpu_count()} cores, "
                     f"load {os.getloadavg()[0]:.1f})")
     for col, right in (("command", False), ("wall s", True), ("CPU s", True), ("peak MB", True), ("note", False)):
@@ -425,6 +427,25 @@ def tune_rows(tmp: Path, budget: int = 60) -> list[tuple]:
     return [(*r[:4], "; ".join(x for x in (r[4], note) if x))]
 
 
+FIX_LAB = "tests/labs/fdm-ten-fix.yaml"
+FIX_PASS = re.compile(r": (PASS|FAIL).*?after (\d+) change\(s\), (\d+) design\(s\) built")
+
+
+def fix_rows(tmp: Path) -> list[tuple]:
+    """hwgen fix on the lab robot of tests/labs/ (FDM, ten disks) with the relaxation the prototype
+    states, from an empty part cache: the rounds, their builds, the values changed."""
+    env = {k: v for k, v in os.environ.items() if k not in ("HWGEN_CHECK_SAMPLES", "HWGEN_CACHE_DIR")}
+    if not Path(FIX_LAB).is_file():
+        return []
+    r = _process("hwgen fix, the FDM lab robot", ["fix", FIX_LAB, "--allow-relax", "check.robust_severity", "--out",
+                                                  str(tmp / "fix"), "--cache-dir", str(tmp / "fix-cache"), "-q"],
+                 env)
+    m = FIX_PASS.search(r[5])
+    note = f"{m.group(1)}: {m.group(2)} value(s) changed, {m.group(3)} designs built, empty cache" if m else \
+        "no verdict line"
+    return [(*r[:4], "; ".join(x for x in (r[4], note) if x))]
+
+
 def sweep_build() -> None:
     """The build level: two designs (C1's amplitude 24 and 26 mm) on 2 workers, and inline one after
     the other, each run from an empty part cache of its own: the variants of one run share the
@@ -523,6 +544,11 @@ def main(argv: list[str]) -> None:
         with tempfile.TemporaryDirectory(prefix="hwgen-bench-") as tmp:
             rows = tune_rows(Path(tmp))
         _print_rows("hwgen tune", rows)
+        return
+    if "--fix" in argv:
+        with tempfile.TemporaryDirectory(prefix="hwgen-bench-") as tmp:
+            rows = fix_rows(Path(tmp))
+        _print_rows("hwgen fix", rows)
         return
     if "--sweep-build" in argv:
         sweep_build()

@@ -394,8 +394,11 @@ def rewritten(path: str | Path, values: dict[str, tuple[object, str]], name: str
     import io
 
     from ruamel.yaml import YAML
+    from ruamel.yaml.comments import CommentedMap
     y = YAML()
     y.preserve_quotes = True
+    # null as the file wrote it (``spacing: null``), not as an empty value
+    y.representer.add_representer(type(None), lambda r, _: r.represent_scalar("tag:yaml.org,2002:null", "null"))
     y.width = 4096
     y.indent(mapping=2, sequence=4, offset=2)          # hwgen's files: list items two in, their keys four
     path = Path(path)
@@ -406,15 +409,45 @@ def rewritten(path: str | Path, values: dict[str, tuple[object, str]], name: str
         keys = parse_path(dotted_path)
         node = doc
         for k in keys[:-1]:
-            if node.get(k) is None:
-                node[k] = {}
-            node = node[k]
+            if not isinstance(k, int) and node.get(k) is None:
+                node[k] = CommentedMap()                # a section the file leaves to its base: its comments too
+            node = node[k]                              # a list's item: the file writes the list
+        new = isinstance(node, CommentedMap) and keys[-1] not in node
+        before = _blank_after(node, list(node)[-1]) if new and len(node) else None
         node[keys[-1]] = value
         if hasattr(node, "yaml_add_eol_comment"):
+            blank = ""
             if keys[-1] in node.ca.items:
+                blank = _take_blank(node.ca.items[keys[-1]])
                 del node.ca.items[keys[-1]]
+            elif before is not None:
+                blank = _take_blank(before)            # the blank line after the section's last key: after this one
             node.yaml_add_eol_comment(comment, keys[-1])
+            if blank and node.ca.items[keys[-1]][2] is not None:
+                node.ca.items[keys[-1]][2].value += "\n" + blank     # its line ends here, then the blank
     doc["design"] = name
     buf = io.StringIO()
     y.dump(doc, buf)
     return "".join(f"# {line}\n" for line in head.splitlines()) + buf.getvalue()
+
+
+def _blank_after(node, key):
+    """The comment slot (ruamel.yaml's) that holds the blank lines after ``key``'s entry: its own
+    line's, or that of the last key of the mapping it holds (the deepest); None without one."""
+    from ruamel.yaml.comments import CommentedMap
+    while isinstance(node.get(key), CommentedMap) and len(node[key]):
+        node, key = node[key], list(node[key])[-1]
+    slot = node.ca.items.get(key)
+    return slot if slot and len(slot) > 2 and slot[2] is not None else None
+
+
+def _take_blank(slot) -> str:
+    """The blank lines at the end of a comment slot, taken off it (kept once the entry is rewritten)."""
+    tok = slot[2] if slot and len(slot) > 2 else None
+    if tok is None or not isinstance(tok.value, str):
+        return ""
+    text = tok.value.rstrip("\n")
+    blank = tok.value[len(text) + 1:]
+    if blank:
+        tok.value = text + "\n"
+    return blank

@@ -376,8 +376,10 @@ class Render(_Model):
 
     explode_mm: NonNegLength = Field(20.0, description="exploded views: gap added between neighbouring disks; "
                                                        "other parts move this far from their assembly, mm")
-    bend_deg: Annotated[float, Field(ge=-360, le=360, allow_inf_nan=False)] = Field(
-        90.0, description="bending angle θ = κL of the bent picture, deg")
+    bend_deg: Annotated[float, Field(ge=-360, le=360, allow_inf_nan=False)] | None = Field(
+        None, description="bending angle θ = κL of the bent picture, deg (default: the checks' sweep angle, "
+                          "check.max_angle_deg, else disks.eyelets.sweep_deg: the design is drawn as far as it "
+                          "is checked)")
     width_px: int = Field(1800, ge=400, le=8000, description="width of the PNG pictures, px")
 
 
@@ -584,6 +586,33 @@ def _unknown_key(model: type[BaseModel], loc, missing: set[str], far: bool = Tru
     return f"unknown key; {where} takes {clip(', '.join(names), 300)}", None
 
 
+# pydantic's tag for each member of a union of plain types, and the words for it
+UNION_TAGS = {"str": "a string", "int": "an integer", "float": "a number", "bool": "a boolean", "none": "null"}
+
+
+def _union_merged(errs: list[tuple[tuple, dict]]) -> list[tuple[tuple, dict]]:
+    """A value that fits no member of a union of plain types (``str | int | float | bool``) is one
+    problem, not one a member: pydantic gives an error for each, under the member's tag."""
+    def tag(loc):
+        return loc[-1] if loc and isinstance(loc[-1], str) and loc[-1] in UNION_TAGS else None
+    count: dict[tuple, int] = {}
+    for loc, _ in errs:
+        if tag(loc):
+            count[loc[:-1]] = count.get(loc[:-1], 0) + 1
+    out, done = [], set()
+    for loc, err in errs:
+        if not tag(loc) or count[loc[:-1]] < 2:
+            out.append((loc, err))
+            continue
+        if loc[:-1] in done:
+            continue
+        done.add(loc[:-1])
+        kinds = [UNION_TAGS[lc[-1]] for lc, _ in errs if lc[:-1] == loc[:-1] and tag(lc)]
+        words = ", ".join(kinds[:-1]) + f" or {kinds[-1]}"
+        out.append((loc[:-1], {"type": "union", "msg": f"Input should be {words} (got {echo(err.get('input'))})"}))
+    return out
+
+
 def schema_problems(e: ValidationError, model: type[BaseModel] = None) -> list[tuple[str, str]]:
     """Every error pydantic found, each as (field path, what is wrong and what is allowed): a
     missing field with what it holds, an unknown key with the nearest known one."""
@@ -592,6 +621,7 @@ def schema_problems(e: ValidationError, model: type[BaseModel] = None) -> list[t
     for err in e.errors():
         loc = tuple(p for p in err["loc"] if not (isinstance(p, str) and p.startswith("function-")))
         errs.append((loc, err))
+    errs = _union_merged(errs)
     missing = {_path(loc) for loc, err in errs if err["type"] == "missing"}
     extra = [i for i, (_, err) in enumerate(errs) if err["type"] == "extra_forbidden"]
     unknown = {i: _unknown_key(model, errs[i][0], missing, n < SUGGESTED) for n, i in enumerate(extra)}

@@ -40,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__, cache, params
+from . import __version__, cache, designfile, params
 from .atomic import new_folder, snapshot, write_json
 from .cad import export
 from .cad.families import kernel_errors, part_count
@@ -54,7 +54,7 @@ from .engine.context import STAGE_ENV, Build, Hashes, StageInput, StageResult
 from .engine.stagecache import cached_stage
 from .engine.units import PartFiles
 from .errors import InputError, clip
-from .model import feasibility
+from .model import feasibility, materials
 from .model.plan import Plan, make_plan
 from .outputs import bom, guide, pictures, plates as print_plates, webview
 from .outputs.plots import plot_lengths, plot_sag, plot_tolerance
@@ -71,11 +71,35 @@ def load(path: str | Path) -> params.LoadedDesign:
 
     Raises :class:`hwgen.errors.InputError` naming, for every fault, the file and the field path.
     """
-    loaded = params.read(path)
+    try:
+        loaded = params.read(path)
+    except InputError as e:
+        raise _material_too(e, path) from None
     found = feasibility.problems(loaded.design)
     if found:
         raise params.refuse(found, loaded.layers)
     return loaded
+
+
+def _material_too(e: InputError, path: str | Path) -> InputError:
+    """A refusal by the schema or its rules with the process's material named too when hwgen does
+    not know it (the feasibility checks, which name it otherwise, run only once these pass): every
+    fault of a file in one run."""
+    if any(p.path.startswith("process") and "material" in p.message for p in e.problems):
+        return e
+    try:
+        layers = designfile.read_layers(path)
+    except InputError:
+        return e                        # the file itself cannot be read: that is the news
+    process = layers.doc.get("process")
+    material = process.get("material") if isinstance(process, dict) else None
+    technology = process.get("technology") if isinstance(process, dict) else None
+    why = materials.name_problem(material, technology if isinstance(technology, str) else None) \
+        if isinstance(material, str) else None
+    if why is None:
+        return e
+    return InputError.of([*e.problems, InputError(layers.file_of("process.material"), "process.material", why)],
+                         e.notes)
 
 
 def design_plan(loaded: params.LoadedDesign, tensioner_record: dict | None = None) -> Plan:
@@ -296,6 +320,8 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
                 b.ahead.join()      # the checks met what it did (waiting for the entry it was making), or did it
                 b.ahead.meshes.clear()
         write_manifest(tmp, manifest)
+        if post_build and b.whole:
+            _keep_added(target, tmp, manifest)
     chosen = tensioner_record(manifest)
     if chosen is not None:
         store.put_record(layout_key, {"search": chosen})
@@ -305,6 +331,26 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
     notes += [f"work done ahead of the checks failed, and the checks did it again: {f}"
               for f in (b.ahead.failures if b.ahead is not None else [])]
     return BuildResult(target, manifest, plan, report, built, reused, notes)
+
+
+def _keep_added(target: Path, tmp: Path, manifest: Manifest) -> None:
+    """Into a new build's folder, the folders the other commands added to the one it replaces
+    (:data:`ADDED`: `hwgen sim`'s, `hwgen experiment`'s, `hwgen coupon`'s), when that one is the
+    same build: the same design's bytes, the same hwgen, every file the same bytes (an unchanged
+    rebuild keeps them, issue 43; a changed one drops them, as they describe another robot)."""
+    def files(m: Manifest) -> dict:
+        return {f.path: f.sha256 for f in manifest_files(m)}
+
+    with snapshot(target) as view:
+        try:
+            old = read_manifest(view)
+            same = (old.params_sha256 == manifest.params_sha256 and old.hwgen_version == manifest.hwgen_version
+                    and files(old) == files(manifest))
+        except (OSError, ValueError, AttributeError, KeyError, TypeError):
+            return                  # nothing there, or no build hwgen wrote: nothing to keep
+        for name in ADDED if same else ():
+            if (view / name).is_dir() and not (tmp / name).exists():
+                shutil.copytree(view / name, tmp / name)
 
 
 def _files_stage(b: Build) -> tuple[Manifest, list[str], dict[str, Beside]]:
@@ -505,8 +551,8 @@ COUPON = "coupon"          # the folder of `hwgen coupon`'s files inside out/<de
 def coupon(loaded: params.LoadedDesign, out_root: Path) -> tuple[dict, Path]:
     """`hwgen coupon`: the calibration coupon of the design (:mod:`hwgen.model.coupon`), written
     as coupon/coupon.stl, coupon.step and coupon.json (each feature, its label and where it is)
-    into ``out_root/<design>/``, added to what is there (a later build replaces the folder and
-    drops it, as it does the stiffness files). Returns (coupon.json's content, the folder)."""
+    into ``out_root/<design>/``, added to what is there (an unchanged rebuild keeps it; a build of
+    changed files drops it: :func:`_keep_added`). Returns (coupon.json's content, the folder)."""
     from .cad.coupon import build_coupon
     from .model.coupon import coupon_spec
 
@@ -567,8 +613,8 @@ SIM = "sim"                # the folder of `hwgen sim`'s files inside out/<desig
 def sim(loaded: params.LoadedDesign, out_root: Path,
         cache_dir: Path | None | bool = True) -> tuple[dict, Path, str | None]:
     """`hwgen sim`: the MuJoCo model of the built robot (:mod:`hwgen.sim`), written as sim/robot.xml,
-    its meshes, sim.json and sim.png into ``out_root/<design>/`` (added to what is there; a later
-    build replaces the folder and drops it). Builds first when the outputs are missing or stale.
+    its meshes, sim.json and sim.png into ``out_root/<design>/`` (added to what is there; an
+    unchanged rebuild keeps it, a build of changed files drops it: :func:`_keep_added`). Builds first when the outputs are missing or stale.
     Checked against the build's stiffness.json, else :func:`statics` (remembered in the cache).
     Returns (sim.json's content, the folder, why it was rebuilt or None)."""
     from .sim.run import simulate            # MuJoCo: only this command
@@ -587,6 +633,8 @@ def sim(loaded: params.LoadedDesign, out_root: Path,
 
 
 EXPERIMENT = "experiment"  # the folder of `hwgen experiment`'s and `hwgen compare`'s files inside out/<design>/
+# the folders other commands add to a build's: an unchanged rebuild keeps them (:func:`_keep_added`)
+ADDED = (SIM, EXPERIMENT, COUPON)
 
 
 def _current_weights(loaded: params.LoadedDesign, out_root: Path) -> tuple[dict | None, dict | None]:

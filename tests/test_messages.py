@@ -181,3 +181,28 @@ def test_every_unknown_state_is_named_at_once(tmp_path):
     assert len(lines) == 1 and lines[0].startswith(f"error: {PROTO}: --states: unknown states 'AX', 'BY'; this "
                                                    f"design's are N, A, "), lines
     assert not (tmp_path / "out").exists()
+
+
+def test_an_unknown_material_is_named_in_the_same_run_as_the_schemas_faults(tmp_path):
+    """The material is checked after the schema passes; a file the schema refuses names it too
+    (issue 43: the user learnt of it only once the other faults were gone)."""
+    lines = refused("routing", str(based(tmp_path, "process:\n  material: petgg\ndisks:\n  bogus_key: 3\n")))
+    assert lines[0].endswith(": 2 problems:"), lines
+    assert lines[1].startswith("  - disks.bogus_key: unknown key;"), lines
+    assert lines[2].startswith("  - process.material: unknown material 'petgg'; did you mean PETG?"), lines
+
+
+def test_a_known_material_adds_nothing_to_the_schemas_faults(tmp_path):
+    lines = refused("routing", str(based(tmp_path, "process:\n  material: PETG\n  technology: FDM\n"
+                                                   "disks:\n  bogus_key: 3\n")))
+    assert len(lines) == 1 and lines[0].endswith(": disks.bogus_key: unknown key; disks takes count, spacing, "
+                                                 "stations, thickness, end_thickness, outer_diameter, "
+                                                 "slot_clearance, eyelets, hub, anchors, tip_mount"), lines
+
+
+def test_a_tune_choice_of_no_kind_is_one_line_not_one_a_kind(tmp_path):
+    f = _search_file(tmp_path, "tune", {"free": [{"path": "tendons[2].routing.function.k",
+                                                  "choices": [3, {"a": 1}]}], "goal": {"pass": True}})
+    lines = refused("tune", str(f), "--out", str(tmp_path / "out"), "--scheduler", "inline")
+    assert lines == [f"error: {f}: free[0].choices[1]: Input should be a string, an integer, a number or a "
+                     f"boolean (got {{'a': 1}})"], lines

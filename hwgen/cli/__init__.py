@@ -1,4 +1,4 @@
-"""The `hwgen` command line: build, check, render, plates, coupon, routing, stiffness, experiment, compare, sweep, tune, schema.
+"""The `hwgen` command line: build, check, render, plates, coupon, routing, stiffness, experiment, compare, sweep, tune, fix, schema.
 
 Exit codes: 0 success, 1 design findings that fail, 2 bad input or usage, 3 a bug in hwgen.
 

@@ -220,7 +220,7 @@ def coupon(params: Path = PARAMS, out_dir: Path = OUT,
            quiet: bool = typer.Option(False, "--quiet", "-q", help="no spinner")) -> None:
     """The calibration coupon: the design's eyelet hole and strip slot in steps around their values, each labelled.
 
-    Writes OUT/<design>/coupon/coupon.stl, coupon.step and coupon.json (added to what is there; a later build replaces the folder and drops them). Print it first; the README says how to read it.
+    Writes OUT/<design>/coupon/coupon.stl, coupon.step and coupon.json (added to what is there; a rebuild that writes the same files keeps them, one whose files changed drops them). Print it first; the README says how to read it.
     """
     loaded = _load(params)
     from ..pipeline import coupon as make_coupon

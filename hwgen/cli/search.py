@@ -1,4 +1,4 @@
-"""The commands over many designs: sweep and tune, on Dask."""
+"""The commands over many designs: sweep and tune, on Dask, and fix, which builds design after design."""
 from __future__ import annotations
 
 import sys
@@ -8,7 +8,7 @@ import typer
 from rich.table import Table
 
 from ..errors import printable
-from .common import (CACHE_DIR, EXIT_FINDINGS, NO_CACHE, SCHEDULER, WORKERS, _cache, _check_scheduler, _command,
+from .common import (CACHE_DIR, EXIT_FINDINGS, NO_CACHE, SCHEDULER, WORKERS, _cache, _check_scheduler, _command, _load,
                      err, out, say)
 
 
@@ -127,3 +127,55 @@ def tune(tune_file: Path = typer.Argument(..., help="tune YAML: a base design, f
         raise typer.Exit(EXIT_FINDINGS)
 
 
+
+
+@_command
+def fix(params: Path = typer.Argument(..., help="design parameter YAML that fails its checks", show_default=False),
+        keep: list[str] = typer.Option([], "--keep", help="a parameter path never changed (a section, or a field "
+                                                          "below it; tendons.pretension_n: every tendon's); repeat",
+                                       show_default=False),
+        allow_relax: list[str] = typer.Option([], "--allow-relax", help="a relaxation that may be applied, by the "
+                                                                        "path it sets (check.robust_severity, "
+                                                                        "tendons.budget_mm); repeat",
+                                              show_default=False),
+        budget: int = typer.Option(8, "--budget", min=1, help="designs built and checked at most, the design as "
+                                                              "written included"),
+        out_dir: Path = typer.Option(Path("out"), "--out", help="output root; results go to OUT/fixes/<design>/"),
+        scheduler: str = SCHEDULER, workers: int = WORKERS,
+        quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
+        cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
+    """The nearest design that passes every check, from the failing checks' tried fixes: fixed.yaml (your file, its comments and base kept, each change commented), summary.md, and the fixed design built.
+
+    Round by round: every failing check's first fix applied, the design built and checked again, a round that does not help undone. Fixes that set one value two ways are searched with the tune engine (--scheduler, --workers as hwgen tune). A --keep path is never changed; a relaxation (a severity, a budget, a limit) only where --allow-relax names it. Exit 0 when the fixed design passes, 1 when the nearest found still fails (summary.md says what is left), 2 for bad input.
+    """
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from ..fix import run as fixing
+
+    _check_scheduler(scheduler)
+    loaded = _load(params)
+    fixing.check_paths(tuple(keep), "--keep", params)
+    fixing.check_paths(tuple(allow_relax), "--allow-relax", params)
+    with Progress(TextColumn("{task.description}", markup=False), BarColumn(), MofNCompleteColumn(),
+                  TimeElapsedColumn(), console=err, disable=quiet or not err.is_terminal, transient=True) as bar:
+        task = bar.add_task(f"fixing {loaded.name}", total=budget)
+        f = fixing.fix(loaded, out_dir, tuple(keep), tuple(allow_relax), budget,
+                       {"scheduler": scheduler, "workers": workers}, _cache(cache_dir, no_cache),
+                       on_round=lambda done, total, words: bar.update(task, completed=done, total=total,
+                                                                      description=words))
+    for c in f.changes:
+        out.print(f"  {c.path}: {fixing._value(c.old)} -> {fixing._value(c.value)} ({', '.join(dict.fromkeys(c.checks))}"
+                  + (", a relaxation" if c.relax else "") + ")", soft_wrap=True, markup=False)
+    if f.passed:
+        out.print(f"{loaded.name}: PASS after {len(f.changes)} change(s), {f.builds} design(s) built in "
+                  f"{f.seconds:.0f} s", soft_wrap=True)
+    else:
+        say("FAIL:", "red", f"{loaded.name}: the nearest design found still fails "
+                            f"{', '.join(fixing.choose.check_name(c) for c in fixing._errs(f.after))}; "
+                            f"see {printable(f.folder / fixing.SUMMARY)}")
+    for p in f.files:
+        out.print(f"  {printable(p)}")
+    if f.build_folder is not None:
+        out.print(f"  {printable(f.build_folder)}/ (the fixed design, built)")
+    if not f.passed:
+        raise typer.Exit(EXIT_FINDINGS)

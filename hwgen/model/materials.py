@@ -35,14 +35,20 @@ def table() -> dict[str, Material]:
 
 def material_problem(process: Process) -> str | None:
     """Why the process's material is not one hwgen knows for its technology, or None."""
+    return name_problem(process.material, process.technology)
+
+
+def name_problem(material: str, technology: str | None) -> str | None:
+    """Why ``material`` is not one hwgen knows (for ``technology``, when it is given), or None: also
+    asked of a file the schema refuses, so that its material is named in the same run."""
     known = table()
-    m = known.get(process.material)
+    m = known.get(material)
     if m is None:
-        close = nearest(process.material, known)
+        close = nearest(material, known)
         meant = f"did you mean {close}? " if close else ""
-        return f"unknown material {process.material!r}; {meant}hwgen knows {', '.join(sorted(known))}"
-    if m.technology != process.technology:
-        return f"{m.name} is a {m.technology} material, process.technology is {process.technology}"
+        return f"unknown material {material!r}; {meant}hwgen knows {', '.join(sorted(known))}"
+    if technology is not None and m.technology != technology:
+        return f"{m.name} is a {m.technology} material, process.technology is {technology}"
     return None
 
 

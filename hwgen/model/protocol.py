@@ -46,6 +46,19 @@ SUMMARY = ("the actuating pair locked straight (strip on edge) at the least tens
            "turned; each further channel, in channel order, pulled in the stated orientation to the least tension "
            "that holds the disks within check.straight_within_mm of the straightest it can, never under "
            "check.taut_floor_n nor over the allowable load, and locked there (Sect. III-B)")
+def set_words(name: str, set_n: float | None, source: str) -> str:
+    """A tendon's set tension in the one wording every output uses: ``C1 to 5.60 N (its
+    pretension_n)``; the tension it carries once its state is locked is :func:`locked_words`'s."""
+    if set_n is None:
+        return f"{name} taut"
+    return f"{name} to {set_n:.2f} N" + (" (its pretension_n)" if source == "pretension_n" else "")
+
+
+def locked_words(tensions: dict[str, float]) -> str:
+    """The tensions the tendons carry once locked, in the one wording: ``C1 8.54 N, C2 7.10 N``."""
+    return ", ".join(f"{n} {v:.2f} N" for n, v in tensions.items())
+
+
 FLOOR_TOL = 1e-3                    # N: a tension this close to its goal is at it (the searches stop there)
 FIXUP_TOL = 0.01                    # N: a protocol tendon that ends this far under the floor is set higher and tensioned again
 LEVEL_ITERATIONS = 8                # the pair's level: solves at most (one suffices where both stay taut)

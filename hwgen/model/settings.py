@@ -212,7 +212,8 @@ def anchors_settings(d: Design) -> AnchorsSettings:
 
 def render_settings(d: Design) -> RenderSettings:
     r = d.render
-    return RenderSettings(explode_mm=r.explode_mm, bend_deg=r.bend_deg, width_px=r.width_px)
+    bend = r.bend_deg if r.bend_deg is not None else d.check_angle_deg     # drawn as far as it is checked
+    return RenderSettings(explode_mm=r.explode_mm, bend_deg=bend, width_px=r.width_px)
 
 
 def bom_settings(d: Design) -> BomSettings:

@@ -561,9 +561,9 @@ def stiffening(report: dict, desc: Described) -> dict:
     lines = [f"Stiffening, {full} over {act} at the tip (and the least over the disks, counted from 1 at the clamped "
              f"base as the paper does; `stiffness.json`, `stiffness.png`), tensioned by the paper's protocol:", ""]
     lines += [f"- {b['orientation']}: {_words(b, desc)}" for b in by]
-    lines += ["", f"Locked in {full}, {ref}: " + ", ".join(
-        f"{n} {v:.2f} N" + (" (its pretension_n)" if entry["tension_from"][n] == "pretension_n" else "")
-        for n, v in entry["tensions_n"].items()) + f"; protocol: {protocol.SUMMARY}."]
+    lines += ["", f"Set in {full}, {ref}: " + ", ".join(
+        protocol.set_words(n, entry["set_n"].get(n), entry["tension_from"][n]) for n in entry["tensions_n"])
+        + f"; locked, the tendons carry {protocol.locked_words(entry['tensions_n'])}; protocol: {protocol.SUMMARY}."]
     if low:
         lines += ["", f"Under {LOW_STIFFENING:g}× ({ref}, frictionless): " + " ".join(why)]
     b = next(b for b in by if b["orientation"] == ref)

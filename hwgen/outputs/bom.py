@@ -151,9 +151,18 @@ def bom_rows(folder: Path, manifest: Manifest, plan, report: dict | None) -> tup
     for item, qty, size, material, notes in _fasteners(manifest):
         add(category="purchased", part=item, family="hardware", qty=qty, size=size, material=material, notes=notes)
     ml, how = _adhesive_ml(manifest, plan.backbone.height, plan.backbone.thickness, report)
+    gap = _slot_gap(manifest, plan.backbone.thickness)
     add(category="purchased", part="adhesive", family="consumable", qty=1, material=plan.anchors.adhesive,
-        size=f"{ml:.2f} ml", notes=how)
+        size=f"{ml:.2f} ml", notes=(f"the slot's gap is {gap:.3g} mm a side (disks.slot_clearance); " if gap else "")
+        + how)
     return rows, source
+
+
+def _slot_gap(manifest: Manifest, t: float) -> float | None:
+    """The gap a side between the strip (thickness ``t``) and a disk's slot, as the design sizes it
+    (written from the value, never from a base's words about another value, issue 43)."""
+    disks = manifest.design_report.get("disks") or []
+    return (disks[0]["slot_mm"][1] - t) / 2 if disks and "slot_mm" in disks[0] else None
 
 
 def _adhesive_ml(manifest: Manifest, h: float, t: float, report: dict | None) -> tuple[float, str]:

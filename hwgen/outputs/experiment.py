@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..model import protocol
 from ..model.calibration import COLUMNS as MEASURED_COLUMNS
 from .plots import _pyplot, _save
 
@@ -52,8 +53,7 @@ def _channel(tendons: list[dict]) -> str:
         names = ", ".join(t["tendon"] for t in tendons)
         each = " each" if len(tendons) > 1 else ""
         return f"turn its worm {_turns(tendons[0])}: {names} to {tendons[0]['set_n']:.2f} N{each}"
-    return "; ".join(f"{t['tendon']} to {t['set_n']:.2f} N" + (" (its pretension_n)" if t["from"] == "pretension_n"
-                                                               else "") + f": {_turns(t)}" for t in tendons)
+    return "; ".join(f"{protocol.set_words(t['tendon'], t['set_n'], t['from'])}: {_turns(t)}" for t in tendons)
 
 
 def _state_lines(state: dict, rows: list[dict]) -> list[str]:
@@ -70,7 +70,7 @@ def _state_lines(state: dict, rows: list[dict]) -> list[str]:
                     "direction" if c["on_edge"] else f"rolled to {c['roll_deg']:g}°" if c["roll_deg"] is not None
                     else "weightless")
             out.append(f"{n}. Channel {c['channel']}, the robot {roll}: {_channel(c['tendons'])}; the worm holds it.")
-        locked = ", ".join(f"{t['tendon']} {t['locked_n']:.2f} N" for c in state["channels"] for t in c["tendons"])
+        locked = protocol.locked_words({t["tendon"]: t["locked_n"] for c in state["channels"] for t in c["tendons"]})
         out += [f"{len(state['channels']) + 2}. Roll the robot to {state['push_roll_deg']:g}° for the pushes. "
                 f"Locked, the tendons then carry {locked}." if state["push_roll_deg"] is not None else
                 f"{len(state['channels']) + 2}. Locked, the tendons carry {locked}."]
