@@ -54,7 +54,7 @@ INDEX_ANGLES = (0.0, 90.0)  # the cradle's index holes, deg of roll
 INDEX_RADIUS = 24.0         # the index pin's radius about the axis: inside the front upright, clear of its bearing, mm
 DOWEL_PIN = 3.0             # ISO 2338 Ø3 dowel the worm's far end turns on (the tensioner's), mm
 DOWEL_LENGTH = 12.0
-WORM_HEX_KEY = 2.5          # the drive shaft's socket: the tensioner's key, mm
+M6_HEAD = 10.0              # ISO 4762 M6 head, mm: the plate's screws stand clear of the uprights by it
 M6_NUT = (10.0, 5.2)        # ISO 4032 M6: across flats, height, mm
 RESIN_HOLD_N = 500.0        # what one hand-tight M6 through a resin plate is counted to clamp with: a 2 N·m
 #                             tightening (K = 0.2) gives 1.7 kN, taken at under a third for the resin's creep, N
@@ -116,6 +116,7 @@ class FrameLayout:
     tip_y: float                                     # the robot's tip (the push's place), mm
     disk_radius: float
     teeth_given: bool                                # base_frame.wheel_teeth was given (a fix names it)
+    hex_key: float                                   # the drive shaft's socket: tensioner.hex_key, mm
 
 
 def frame_pair(d: Design, teeth: int | None = None) -> WormPair:
@@ -182,7 +183,7 @@ def frame_layout(d: Design, mount: MountLayout, envelope: float) -> FrameLayout:
     # the base plate under the uprights and posts: two rows of M6 holes on the 25 mm grid, one behind
     # the back upright, one between the uprights, outside the worm's posts
     pitch_grid, _, _ = BOLT_PATTERNS["M6_25mm"]
-    need = max(UPRIGHT_HALF_X, far_post[1], -near_post[0] + DRIVE_FLANGE[1]) + PLATE_HOLE_EDGE
+    need = max(UPRIGHT_HALF_X, far_post[1], -near_post[0] + DRIVE_FLANGE[1]) + M6_HEAD / 2 + 1.0
     hx = pitch_grid / 2 + pitch_grid * math.ceil((need - pitch_grid / 2) / pitch_grid)
     px = hx + PLATE_HOLE_EDGE
     y_row = back[0] - PLATE_HOLE_EDGE
@@ -203,7 +204,7 @@ def frame_layout(d: Design, mount: MountLayout, envelope: float) -> FrameLayout:
         envelope_radius=env, clearance=bf.clearance_mm, mark_step_deg=bf.mark_step_deg,
         push_n=bf.push_n or d.experiment.load_cell_range_n, safety_factor=bf.safety_factor,
         max_tip_shift_mm=bf.max_tip_shift_mm, tip_y=d.backbone.length, disk_radius=d.disks.outer_diameter / 2,
-        teeth_given=bf.wheel_teeth is not None)
+        teeth_given=bf.wheel_teeth is not None, hex_key=d.tensioner.hex_key)
 
 
 # ---------------------------------------------------------------------------------------- statics

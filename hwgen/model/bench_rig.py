@@ -19,7 +19,6 @@ from . import bench_parts as bp
 from .fixtures import BOLT_PATTERNS
 
 PAD = (10.0, 12.0)          # the push block's contact pad: along y, across x, mm
-PAD_CHAMFER = 1.0           # its edges broken so it meets the rim on a line, mm
 ARM = 8.0                   # the bracket's arm over the cell's fixed end, mm
 COLUMN = 14.0               # the bracket's column, along x, mm
 DISC = 8.0                  # the flange disc's thickness, mm
