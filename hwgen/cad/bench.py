@@ -37,7 +37,6 @@ TAP_M3 = 2.5                # the pilot an M3 screw cuts its thread into cured r
 UPRIGHT_SCREWS_X = 20.0     # the uprights' two screws up from the base plate, ±x, mm
 POINTER = (2.0, 25.0)       # the front upright's pointer fin over the flange's marks: width, reach above the upright, mm
 UPRIGHT_TOP = 8.0           # resin above the upper bearing's seat, mm
-POST_Y = 12.0               # the worm's posts, along y, mm
 R_Y = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]])   # gear mesh frame -> robot (see _mesh_to_robot)
 
 
@@ -121,8 +120,8 @@ def base_solid(lay: FrameLayout) -> cq.Solid:
     z0, z1 = lay.z_table, lay.z_base
     body = box(x0, x1, y0, y1, z0, z1)
     zt = lay.z_worm + max(DRIVE_SHAFT, bf.DOWEL_PIN) / 2 + bf.POST_WALL + 3.0
-    posts = [box(*lay.near_post, lay.y_wheel - POST_Y / 2, lay.y_wheel + POST_Y / 2, z1 - TOOL, zt),
-             box(*lay.far_post, lay.y_wheel - POST_Y / 2, lay.y_wheel + POST_Y / 2, z1 - TOOL, zt)]
+    posts = [box(*lay.near_post, lay.y_wheel - bf.POST_Y / 2, lay.y_wheel + bf.POST_Y / 2, z1 - TOOL, zt),
+             box(*lay.far_post, lay.y_wheel - bf.POST_Y / 2, lay.y_wheel + bf.POST_Y / 2, z1 - TOOL, zt)]
     body = body.fuse(*posts).clean()
     m6 = stock.clearance_hole("M6")
     m3 = stock.clearance_hole("M3")
@@ -223,20 +222,19 @@ def bf_lengths() -> tuple[float, ...]:
 # ------------------------------------------------------------------------------------------- rig
 
 def push_block_solid(lay: RigLayout) -> cq.Solid:
-    """Under the cell's free end: a block screwed up into the cell, a pad below it over the disk."""
+    """Under the cell's free end: a block the cell's screws come down into (through its end holes,
+    cutting their thread in the block's pilots, open through the pad so no cup forms), the pad below
+    it over the disk, centred under the holes where the cell is loaded."""
     w = lay.cell[1]
     y = lay.y_disk
-    xa = min(lay.free_holes) - bp_screw_head(lay.screw) / 2 - 2.0
+    xa = min(lay.free_holes) - 4.0
     xb = lay.cell_x[1]
     z_body = lay.z_pad + 4.0
     body = box(xa, xb, y - w / 2, y + w / 2, z_body, lay.cell_z)
     pad = box(-PAD[1] / 2, PAD[1] / 2, y - PAD[0] / 2, y + PAD[0] / 2, lay.z_pad, z_body + TOOL)
     body = body.fuse(pad).clean()
-    head = bp_screw_head(lay.screw) + 0.5
-    tools = []
-    for x in lay.free_holes:
-        tools.append(cylinder(lay.screw_hole / 2, (x, y, z_body - TOOL), (x, y, lay.cell_z + TOOL)))
-        tools.append(cylinder(head / 2, (x, y, z_body - TOOL), (x, y, lay.cell_z - 4.0)))
+    tools = [cylinder(TAP_M3 / 2 if lay.screw == "M3" else lay.screw_hole / 2 - 0.45, (x, y, lay.z_pad - TOOL),
+                      (x, y, lay.cell_z + TOOL)) for x in lay.free_holes]
     return one(body.cut(*tools))
 
 
@@ -293,7 +291,7 @@ def rig_parts(lay: RigLayout) -> Iterator[Part]:
         hardware("beam load cell", f"{lay.cell_name}, 0-{lay.range_n:g} N", 1, material="aluminium",
                  notes=f"{lay.cell[0]:g} × {lay.cell[1]:g} × {lay.cell[2]:g} mm"),
         hardware("socket head cap screw ISO 4762", f"{lay.screw} × {screw_len:g}", 4,
-                 notes="the cell to the bracket and the push block"),
+                 notes="the cell's fixed end up into the bracket; its free end down into the push block"),
         hardware("socket head cap screw ISO 4762", "M6 × 16", len(lay.flange_holes),
                  notes="the bracket to the " + ("arm's flange" if lay.pin else "stage's carriage")),
         hardware("socket head cap screw ISO 4762", "M6 × 20", len(lay.support_feet), notes="the support to the table"),

@@ -153,9 +153,7 @@ def _teeth(lay, torque: float, tensioner, plan) -> Check:
     ok = sf >= lay.safety_factor
     fixes, fix = (), ""
     if not ok:
-        z = p.teeth
-        while z < 120 and _lewis(replace(p, teeth=z), torque, strength) < lay.safety_factor:
-            z += 1
+        z = _least_teeth(p, torque, strength, lay.safety_factor)
         then = _lewis(replace(p, teeth=z), torque, strength)
         fixes = (Fix({"base_frame.wheel_teeth": z}, {"measured": then, "passed": then >= lay.safety_factor},
                      note="a larger wheel: a longer lever, less force on each tooth"),)
@@ -164,6 +162,18 @@ def _teeth(lay, torque: float, tensioner, plan) -> Check:
                  f"base frame wheel ({p.teeth} teeth, module {p.module:g} mm): Lewis factor of safety {sf:.2f} "
                  f"{'≥' if ok else '<'} {lay.safety_factor:g} under {torque:.0f} N·mm", sf, lay.safety_factor,
                  {"part": "base_frame_wheel"}, fix=fix, fixes=fixes)
+
+
+def _least_teeth(p, torque: float, strength: float, need: float, most: int = 120) -> int:
+    """The least tooth count from the pair's up to ``most`` whose Lewis factor meets ``need`` (the
+    factor grows with the teeth: bisected); ``most`` when none does."""
+    lo, hi = p.teeth, most
+    if _lewis(replace(p, teeth=hi), torque, strength) < need:
+        return hi
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        lo, hi = (lo, mid) if _lewis(replace(p, teeth=mid), torque, strength) >= need else (mid, hi)
+    return hi
 
 
 def tensioner_strength(plan) -> float:

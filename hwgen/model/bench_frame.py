@@ -46,6 +46,7 @@ WHEEL_HUB_RADIUS = 9.0
 SHAFT_FLAT = 0.5            # depth of the ground flat on a shaft a part is fixed to by its D bore, mm
 PRESS_FIT = 0.05            # diametral interference of a printed D bore on a ground shaft, mm
 RUNNING_FIT = 0.2           # diametral clearance of a printed part turning on a dowel, mm
+POST_Y = 12.0               # the worm's posts, along y, mm
 WORM_CLEAR = 3.0            # the worm's thread stands this far above the base plate, mm
 POST_WALL = 3.0             # resin round the worm's drive shaft and dowel in their posts, mm
 MARK = (0.8, 0.6, 6.0)      # angle mark: width, depth, length (radial), mm; 0° and 90° twice as long
@@ -156,7 +157,7 @@ def frame_layout(d: Design, mount: MountLayout, envelope: float) -> FrameLayout:
     hub = (front[1] + HUB_GAP, y_flange[0])
     y_belt = front[0] - BETWEEN - plen / 2
     y_wheel = y_belt - plen / 2 - BETWEEN - WHEEL_HUB - pair.face_width / 2
-    back_front = y_wheel - pair.face_width / 2 - BETWEEN
+    back_front = y_wheel - max(pair.face_width / 2, pair.ra1, POST_Y / 2) - BETWEEN   # the worm and its posts too
     back = (back_front - UPRIGHT, back_front)
 
     # heights: the axis clears the base plate by the envelope and the clearance; the worm stands on the plate
