@@ -165,6 +165,8 @@ def frame_parts(lay: FrameLayout) -> Iterator[Part]:
     upper = stock.shortest_reaching(bf_lengths(), lay.upper_shaft[1] - lay.upper_shaft[0])
     lower = stock.shortest_reaching(bf_lengths(), lay.lower_shaft[1] - lay.lower_shaft[0])
     d = f"Ø{lay.shaft_d:g}"
+    foot_len = stock.shortest_reaching(stock.lengths("socket head cap screw", "any"),
+                                       lay.foot[4] - lay.z_plate + stock.size("washer", "M6", "thickness") + 0.5)
     bought = [
         hardware("ground shaft h6, with a flat", f"{d} × {upper:g}", 1, notes="⑤ the supporting shaft, on the robot's axis"),
         hardware("ground shaft h6, with a flat", f"{d} × {lower:g}", 1, notes="⑦ the lower shaft, under the wheel"),
@@ -179,6 +181,9 @@ def frame_parts(lay: FrameLayout) -> Iterator[Part]:
         hardware("socket head cap screw ISO 4762", "M3 × 16", 4, notes="the uprights onto the base plate"),
         hardware("socket head cap screw ISO 4762", "M6 × 16", len(lay.plate_holes), notes="the base plate to the breadboard" if lay.mounting == "breadboard"
                  else "the base plate to the rig's support"),
+        hardware("socket head cap screw ISO 4762", f"M6 × {foot_len:g}" if lay.foot_bolt == "M6" else
+                 f"1/4-20 × {math.ceil(foot_len / 25.4 * 4) / 4:g} in", len(lay.foot_holes),
+                 notes="the mount's foot onto the cradle (in place of its screws to the table)"),
         hardware("hex nut ISO 4032", lay.foot_bolt if lay.foot_bolt == "M6" else "1/4-20", len(lay.foot_holes),
                  notes="the mount's foot screws, in the cradle's nut traps"),
     ]
