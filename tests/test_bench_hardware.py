@@ -107,9 +107,8 @@ def test_a_heavier_robot_gets_a_larger_wheel_as_a_tried_fix():
     fix = heavy.fixes[0]
     assert fix.set["base_frame.wheel_teeth"] > lay.pair.teeth and fix.then["passed"]
     # the fix is true: that wheel under that torque holds
-    from hwgen.checks.bench import _lewis
     p = replace(lay.pair, teeth=fix.set["base_frame.wheel_teeth"])
-    assert _lewis(p, 2_000.0, plan.tensioner.resin_strength) >= lay.safety_factor
+    assert bf.lewis_factor(p, 2_000.0, plan.tensioner.resin_strength) >= lay.safety_factor
 
 
 def test_a_worm_that_does_not_lock_fails_with_a_tried_fix():
@@ -164,3 +163,15 @@ def test_the_prototype_builds_its_frame_and_rig(built):
         assert word in items, word
     guide = (folder / "assembly.md").read_text(encoding="utf-8")
     assert "rotating base frame" in guide.lower() and "stiffness rig" in guide.lower()
+
+
+def test_a_heavier_tensioner_is_laid_out_with_a_larger_wheel():
+    d, plan = _design(), _plan()
+    lay = plan.frame
+    assert lay.pair.teeth == d.tensioner.wheel_teeth          # the prototype's torque needs no more
+    env = lay.envelope_radius
+    heavy = bf.frame_layout(d, plan.mount, env, 10 * lay.torque_estimate)
+    assert heavy.pair.teeth > lay.pair.teeth
+    assert bf.lewis_factor(heavy.pair, 10 * lay.torque_estimate, d.tensioner.resin_strength) >= lay.safety_factor
+    assert bf.lewis_factor(replace(heavy.pair, teeth=heavy.pair.teeth - 1), 10 * lay.torque_estimate,
+                           d.tensioner.resin_strength) < lay.safety_factor

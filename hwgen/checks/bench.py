@@ -149,12 +149,12 @@ def _self_locking(lay, torque: float, t_gravity: float) -> Check:
 def _teeth(lay, torque: float, tensioner, plan) -> Check:
     strength = tensioner_strength(plan)
     p = lay.pair
-    sf = _lewis(p, torque, strength)
+    sf = bf.lewis_factor(p, torque, strength)
     ok = sf >= lay.safety_factor
     fixes, fix = (), ""
     if not ok:
-        z = _least_teeth(p, torque, strength, lay.safety_factor)
-        then = _lewis(replace(p, teeth=z), torque, strength)
+        z = bf.least_teeth(p, torque, strength, lay.safety_factor)
+        then = bf.lewis_factor(replace(p, teeth=z), torque, strength)
         fixes = (Fix({"base_frame.wheel_teeth": z}, {"measured": then, "passed": then >= lay.safety_factor},
                      note="a larger wheel: a longer lever, less force on each tooth"),)
         fix = f"base_frame.wheel_teeth: {z} (Lewis safety {then:.2f})"
@@ -164,26 +164,9 @@ def _teeth(lay, torque: float, tensioner, plan) -> Check:
                  {"part": "base_frame_wheel"}, fix=fix, fixes=fixes)
 
 
-def _least_teeth(p, torque: float, strength: float, need: float, most: int = 120) -> int:
-    """The least tooth count from the pair's up to ``most`` whose Lewis factor meets ``need`` (the
-    factor grows with the teeth: bisected); ``most`` when none does."""
-    lo, hi = p.teeth, most
-    if _lewis(replace(p, teeth=hi), torque, strength) < need:
-        return hi
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        lo, hi = (lo, mid) if _lewis(replace(p, teeth=mid), torque, strength) >= need else (mid, hi)
-    return hi
-
-
 def tensioner_strength(plan) -> float:
     """The resin's tensile strength the tensioner's teeth are judged on, MPa."""
     return float(plan.tensioner.resin_strength)
-
-
-def _lewis(p, torque: float, strength: float) -> float:
-    s = p.lewis_stress(torque, p.face_width, p.lewis_form_factor())
-    return strength / s if s > 0 else math.inf
 
 
 def _shaft(lay, s: dict) -> list[Check]:

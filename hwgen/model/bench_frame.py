@@ -23,7 +23,9 @@ the tensioner's unless ``base_frame`` gives its own.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+
+import numpy as np
 
 from ..params import Design
 from . import bench_parts as bp
@@ -117,6 +119,7 @@ class FrameLayout:
     tip_y: float                                     # the robot's tip (the push's place), mm
     disk_radius: float
     teeth_given: bool                                # base_frame.wheel_teeth was given (a fix names it)
+    torque_estimate: float                           # the torque about the shaft the wheel was sized for, N·mm
     hex_key: float                                   # the drive shaft's socket: tensioner.hex_key, mm
 
 
@@ -129,11 +132,14 @@ def frame_pair(d: Design, teeth: int | None = None) -> WormPair:
     return worm_pair(merged, d.process.min_wall)
 
 
-def frame_layout(d: Design, mount: MountLayout, envelope: float) -> FrameLayout:
+def frame_layout(d: Design, mount: MountLayout, envelope: float, torque_nmm: float) -> FrameLayout:
     """The frame for design ``d`` around its base mount ``mount``; ``envelope``: the robot's own
-    turning radius (its disks and tensioner, from the plan)."""
+    turning radius (its disks and tensioner, from the plan); ``torque_nmm``: the torque about the
+    shaft it is sized for (:func:`torque_estimate`): a wheel not given gets the teeth that carry it."""
     bf = d.base_frame
     pair = frame_pair(d)
+    if bf.wheel_teeth is None:
+        pair = frame_pair(d, least_teeth(pair, torque_nmm, d.tensioner.resin_strength, bf.safety_factor))
     mu = bf.friction_coefficient or d.tensioner.friction_coefficient
     b = bf.bearing
     shaft_d = bp.size("ball bearing", b, "bore")
@@ -205,7 +211,7 @@ def frame_layout(d: Design, mount: MountLayout, envelope: float) -> FrameLayout:
         envelope_radius=env, clearance=bf.clearance_mm, mark_step_deg=bf.mark_step_deg,
         push_n=bf.push_n or d.experiment.load_cell_range_n, safety_factor=bf.safety_factor,
         max_tip_shift_mm=bf.max_tip_shift_mm, tip_y=d.backbone.length, disk_radius=d.disks.outer_diameter / 2,
-        teeth_given=bf.wheel_teeth is not None, hex_key=d.tensioner.hex_key)
+        teeth_given=bf.wheel_teeth is not None, hex_key=d.tensioner.hex_key, torque_estimate=torque_nmm)
 
 
 # ---------------------------------------------------------------------------------------- statics
@@ -230,18 +236,57 @@ def shaft_statics(lay: FrameLayout, weight_n: float, y_weight: float, push_n: fl
             "tip_shift_mm": abs(defl + slope * (lay.tip_y - y_end)), "span_mm": span, "overhang_mm": c}
 
 
-def lewis_teeth(lay: FrameLayout, torque_nmm: float, strength_mpa: float, d: Design | None = None) -> tuple[float, int]:
-    """(the safety factor of the wheel's teeth under ``torque_nmm`` by Lewis, the least tooth count
-    from the wheel's up to 120 that meets ``lay.safety_factor``)."""
-    def factor(pair: WormPair) -> float:
-        s = pair.lewis_stress(torque_nmm, pair.face_width, pair.lewis_form_factor())
-        return strength_mpa / s if s > 0 else math.inf
-    now = factor(lay.pair)
-    least = lay.pair.teeth
-    if d is not None:
-        while least < 120 and factor(frame_pair(d, least)) < lay.safety_factor:
-            least += 1
-    return now, least
+def lewis_factor(pair: WormPair, torque_nmm: float, strength_mpa: float) -> float:
+    """The wheel's Lewis factor of safety under ``torque_nmm``: strength over the tooth root stress."""
+    s = pair.lewis_stress(torque_nmm, pair.face_width, pair.lewis_form_factor())
+    return strength_mpa / s if s > 0 else math.inf
+
+
+def least_teeth(pair: WormPair, torque_nmm: float, strength_mpa: float, need: float, most: int = 120) -> int:
+    """The least tooth count from the pair's up to ``most`` whose Lewis factor meets ``need`` (it grows
+    with the teeth: bisected); ``most`` when none does."""
+    lo, hi = pair.teeth, most
+    if lewis_factor(pair, torque_nmm, strength_mpa) >= need:
+        return pair.teeth
+    if lewis_factor(replace(pair, teeth=hi), torque_nmm, strength_mpa) < need:
+        return hi
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        lo, hi = (lo, mid) if lewis_factor(replace(pair, teeth=mid), torque_nmm, strength_mpa) >= need else (mid, hi)
+    return hi
+
+
+def torque_estimate(d: Design, tensioner, metal: tuple[float, np.ndarray], density_g_cm3: float) -> float:
+    """The largest torque about the shaft the frame is laid out for, N·mm, before any file exists: the
+    tensioner's housing members and wheels as solid resin (overlaps counted twice: an upper bound)
+    and its bought metal ``metal`` (mass g, centre mm) off the axis, and the push at a disk's rim.
+    The checks measure it again from the files."""
+    bfs = d.base_frame
+    push = (bfs.push_n or d.experiment.load_cell_range_n) * d.disks.outer_diameter / 2
+    moment = np.asarray(metal[1], float)[[0, 2]] * metal[0]
+    if tensioner is not None:
+        turn = np.asarray(tensioner.turn, float)
+        for m in tensioner.members:
+            c = _member_centre(m)
+            if c is None:
+                continue
+            w = turn[:3, :3] @ c + turn[:3, 3]
+            moment = moment + m.volume / 1000 * density_g_cm3 * w[[0, 2]]
+        r = tensioner.pair.outside_radius
+        for u in tensioner.units:
+            vol = math.pi * r ** 2 * (u.z_part[1] - u.z_part[0])
+            w = turn[:3, :3] @ np.array([u.center[0], u.center[1], sum(u.z_part) / 2]) + turn[:3, 3]
+            moment = moment + vol / 1000 * density_g_cm3 * w[[0, 2]]
+    return float(np.hypot(*moment)) * G + push
+
+
+def _member_centre(m) -> np.ndarray | None:
+    d = m.dims
+    if m.kind == "box":
+        return np.array([(d[0] + d[1]) / 2, (d[2] + d[3]) / 2, (d[4] + d[5]) / 2])
+    if m.kind in ("cyl", "hex"):
+        return (np.asarray(d[1:4], float) + np.asarray(d[4:7], float)) / 2
+    return None
 
 
 def holding_torque(lay: FrameLayout, torque_nmm: float, mu: float | None = None) -> float:

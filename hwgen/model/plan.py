@@ -15,7 +15,8 @@ from ..errors import DesignError
 from ..params import Design
 from . import kinematics as kin
 from . import screws
-from .bench_frame import FrameLayout, frame_layout, robot_envelope
+from . import steel
+from .bench_frame import FrameLayout, frame_layout, robot_envelope, torque_estimate
 from .bench_rig import RigLayout, rig_layout
 from .crossings import crossing_angles, in_strip_plane, strip_crossings
 from .holes import hole_diameter
@@ -294,7 +295,9 @@ def _bench(d: Design, plan: Plan) -> Plan:
     """The plan with the base frame and the rig laid out where the design asks for them."""
     frame = rig = None
     if d.base_frame.enabled:
-        frame = frame_layout(d, plan.mount, robot_envelope(d.disks.outer_diameter / 2, plan.tensioner_layout))
+        metal = steel.total(steel.tip_pieces(plan))
+        torque = torque_estimate(d, plan.tensioner_layout, metal[:2], plan.process.density_g_cm3)
+        frame = frame_layout(d, plan.mount, robot_envelope(d.disks.outer_diameter / 2, plan.tensioner_layout), torque)
     if d.rig.enabled:
         k = min(d.experiment.first_disk, len(plan.disks)) - 1
         rig = rig_layout(d, plan.stations, plan.disks[k].thickness, frame)
