@@ -41,8 +41,17 @@ R_Y = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]])   # gear m
 
 
 def _file(solid: cq.Solid) -> tuple[cq.Solid, np.ndarray]:
-    """A robot-frame solid moved so its box's lowest corner is at the origin: (file solid, placement)."""
+    """A robot-frame solid moved so its box's lowest corner is at the origin, and turned a quarter
+    about Z where it is longer along y than x (the printer's long axis is X; slicers place a part
+    as its file has it): (file solid, placement file -> robot)."""
     bb = solid.BoundingBox()
+    if bb.ylen > bb.xlen + 1e-6:
+        # file (X, Y) = robot (y, -x): the placement turns it back
+        turned = solid.rotate(cq.Vector(0, 0, 0), cq.Vector(0, 0, 1), -90)
+        tb = turned.BoundingBox()
+        shift = np.array([tb.xmin, tb.ymin, tb.zmin])
+        rot = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])    # file -> robot
+        return turned.translate(cq.Vector(*(-shift))), placement(rot, rot @ shift)
     shift = np.array([bb.xmin, bb.ymin, bb.zmin])
     return solid.translate(cq.Vector(*(-shift))), placement(np.eye(3), shift)
 

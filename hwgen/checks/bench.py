@@ -38,6 +38,7 @@ from .base import Check, Fix
 G = 9.81e-3                 # N per gram
 BIN_MM = 0.5                # the turning solid's profile is kept per this much of the axis
 SAMPLES = 20_000            # surface points per part for the clearance
+NEAR_MM = 30.0              # a turning part this near the frame along the axis has its surface sampled, mm
 
 
 def _bench(e: dict) -> str:
@@ -58,6 +59,10 @@ def _points(p, n: int = SAMPLES) -> np.ndarray:
     pts, _ = trimesh.sample.sample_surface(p.mesh, n, seed=0)
     v = np.vstack([np.asarray(p.mesh.vertices), pts])
     return v @ p.placement[:3, :3].T + p.placement[:3, 3]
+
+
+def _vertices(p) -> np.ndarray:
+    return np.asarray(p.mesh.vertices) @ p.placement[:3, :3].T + p.placement[:3, 3]
 
 
 def _group(rows) -> tuple[float, np.ndarray]:
@@ -237,13 +242,17 @@ def _clearance(lay, parts, by) -> Check:
     if not turning or not fixed:
         return Check("base_frame.clearance", "error", True, "base frame: nothing fixed to measure against", None,
                      lay.clearance)
-    tp = np.vstack([_points(p, 4000 if p.role == "disk" else SAMPLES) for p in turning])
+    reach = max(float(p.robot_bounds()[1, 1]) for p in fixed) + NEAR_MM
+    # the farthest a part reaches from the axis is at a vertex (the radius is convex); surfaces are
+    # sampled on the parts that come near the frame along the axis
+    tp = np.vstack([_points(p) if p.robot_bounds()[0, 1] < reach else _vertices(p) for p in turning])
     ty, tr = tp[:, 1], np.hypot(tp[:, 0], tp[:, 2])
     y0 = ty.min()
     k = ((ty - y0) // BIN_MM).astype(int)
     rmax = np.full(k.max() + 1, -1.0)
     np.maximum.at(rmax, k, tr)
     keep = rmax >= 0
+    keep[(y0 + np.arange(len(rmax)) * BIN_MM) > reach] = False     # farther along the axis than NEAR_MM: not nearer
     lo = y0 + np.arange(len(rmax))[keep] * BIN_MM
     hi, rm = lo + BIN_MM, rmax[keep]
     fp = np.vstack([_points(p) for p in fixed])
