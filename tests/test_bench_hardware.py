@@ -131,6 +131,7 @@ def test_the_rig_bolts_to_the_ur5e_flange():
     assert len(r) == 4 and np.allclose(r, 25.0)              # ISO 9409-1-50-4-M6: 4 × M6 on Ø50
     assert rig.flange_hole == pytest.approx(6.6)
     assert rig.z_pad > rig.disk_radius                        # it starts above the rim
+    assert sum(rig.free_holes) / 2 == pytest.approx(0.0)      # the cell is loaded where the pad meets the disk (x = 0)
 
 
 # ----------------------------------------------------------------------------------- the build
@@ -161,7 +162,7 @@ def test_the_prototype_builds_its_frame_and_rig(built):
     items = " ".join(r["part"] + " " + r["size"] for r in rows)
     for word in ("ground shaft", "ball bearing", "GT2 closed-loop belt", "GT2 pulley", "beam load cell"):
         assert word in items, word
-    guide = (folder / "assembly.md").read_text(encoding="utf-8")
+    guide = (folder / "guide" / "assembly.md").read_text(encoding="utf-8")
     assert "rotating base frame" in guide.lower() and "stiffness rig" in guide.lower()
 
 

@@ -35,7 +35,10 @@ BEARING_PRESS = 0.05        # a bearing's seat is this much under its outside di
 SHAFT_CLEAR = 2.0           # the shaft's hole through a bearing seat's shoulder is this much over it, mm
 TAP_M3 = 2.5                # the pilot an M3 screw cuts its thread into cured resin in, mm
 UPRIGHT_SCREWS_X = 20.0     # the uprights' two screws up from the base plate, ±x, mm
-POINTER = (2.0, 25.0)       # the front upright's pointer fin over the flange's marks: width, reach above the upright, mm
+CELL_THREAD = 4.0           # a screw's thread in the load cell's tapped end hole, mm
+BLOCK_THREAD = 6.0          # and in the push block's pilot, mm
+POINTER = (2.0, 2.0)        # the front upright's pointer fin the flange's marks are read at: its width, and how far
+#                             it stops short of the flange's rim, mm
 UPRIGHT_TOP = 8.0           # resin above the upper bearing's seat, mm
 R_Y = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]])   # gear mesh frame -> robot (see _mesh_to_robot)
 
@@ -105,7 +108,7 @@ def _upright(lay: FrameLayout, y_out: float, y_in: float, front: bool) -> cq.Sol
     body = box(-hx, hx, y_out, y_in, lay.z_base, top)
     if front:
         body = body.fuse(box(-POINTER[0] / 2, POINTER[0] / 2, y_out, y_in, top - TOOL,
-                             lay.flange_radius - 2.0)).clean()
+                             lay.flange_radius - POINTER[1])).clean()
     s = 1.0 if y_in > y_out else -1.0
     lip = y_out + s * bf.BEARING_LIP
     tools = []
@@ -300,12 +303,16 @@ def _plate_len(lay: RigLayout) -> float:
 
 def rig_parts(lay: RigLayout) -> Iterator[Part]:
     common = {"grounded": True, "bench": "rig"}
-    screw_len = stock.shortest_reaching(stock.lengths("socket head cap screw", "any"), 8.0)
+    lengths = stock.lengths("socket head cap screw", "any")
+    fixed_len = stock.shortest_reaching(lengths, 3.0 + CELL_THREAD)               # the arm under the head, then the cell
+    free_len = stock.shortest_reaching(lengths, lay.cell[2] + BLOCK_THREAD)       # through the cell into the block
     bought = [
         hardware("beam load cell", f"{lay.cell_name}, 0-{lay.range_n:g} N", 1, material="aluminium",
                  notes=f"{lay.cell[0]:g} × {lay.cell[1]:g} × {lay.cell[2]:g} mm"),
-        hardware("socket head cap screw ISO 4762", f"{lay.screw} × {screw_len:g}", 4,
-                 notes="the cell's fixed end up into the bracket; its free end down into the push block"),
+        hardware("socket head cap screw ISO 4762", f"{lay.screw} × {fixed_len:g}", 2,
+                 notes="down through the bracket's arm into the cell's fixed end"),
+        hardware("socket head cap screw ISO 4762", f"{lay.screw} × {free_len:g}", 2,
+                 notes="down through the cell's free end into the push block's pilots"),
         hardware("socket head cap screw ISO 4762", "M6 × 16", len(lay.flange_holes),
                  notes="the bracket to the " + ("arm's flange" if lay.pin else "stage's carriage")),
         hardware("socket head cap screw ISO 4762", "M6 × 20", len(lay.support_feet), notes="the support to the table"),
