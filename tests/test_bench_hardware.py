@@ -170,9 +170,11 @@ def test_a_heavier_tensioner_is_laid_out_with_a_larger_wheel():
     d, plan = _design(), _plan()
     lay = plan.frame
     assert lay.pair.teeth == d.tensioner.wheel_teeth          # the prototype's torque needs no more
-    env = lay.envelope_radius
-    heavy = bf.frame_layout(d, plan.mount, env, 10 * lay.torque_estimate)
+    from hwgen.model import steel
+    torque = 10 * bf.torque_estimate(d, plan.tensioner_layout, steel.total(steel.tip_pieces(plan))[:2],
+                                     plan.process.density_g_cm3)
+    heavy = bf.frame_layout(d, plan.mount, lay.envelope_radius, torque)
     assert heavy.pair.teeth > lay.pair.teeth
-    assert bf.lewis_factor(heavy.pair, 10 * lay.torque_estimate, d.tensioner.resin_strength) >= lay.safety_factor
-    assert bf.lewis_factor(replace(heavy.pair, teeth=heavy.pair.teeth - 1), 10 * lay.torque_estimate,
+    assert bf.lewis_factor(heavy.pair, torque, d.tensioner.resin_strength) >= lay.safety_factor
+    assert bf.lewis_factor(replace(heavy.pair, teeth=heavy.pair.teeth - 1), torque,
                            d.tensioner.resin_strength) < lay.safety_factor

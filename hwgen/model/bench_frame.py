@@ -119,7 +119,6 @@ class FrameLayout:
     tip_y: float                                     # the robot's tip (the push's place), mm
     disk_radius: float
     teeth_given: bool                                # base_frame.wheel_teeth was given (a fix names it)
-    torque_estimate: float                           # the torque about the shaft the wheel was sized for, N·mm
     hex_key: float                                   # the drive shaft's socket: tensioner.hex_key, mm
 
 
@@ -211,7 +210,7 @@ def frame_layout(d: Design, mount: MountLayout, envelope: float, torque_nmm: flo
         envelope_radius=env, clearance=bf.clearance_mm, mark_step_deg=bf.mark_step_deg,
         push_n=bf.push_n or d.experiment.load_cell_range_n, safety_factor=bf.safety_factor,
         max_tip_shift_mm=bf.max_tip_shift_mm, tip_y=d.backbone.length, disk_radius=d.disks.outer_diameter / 2,
-        teeth_given=bf.wheel_teeth is not None, hex_key=d.tensioner.hex_key, torque_estimate=torque_nmm)
+        teeth_given=bf.wheel_teeth is not None, hex_key=d.tensioner.hex_key)
 
 
 # ---------------------------------------------------------------------------------------- statics
