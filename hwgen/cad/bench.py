@@ -79,7 +79,7 @@ def cradle_solid(lay: FrameLayout) -> cq.Solid:
         cylinder(bf.HUB_RADIUS, (0, lay.hub[0], 0), (0, y0 + TOOL, 0))).clean()
     r = (lay.shaft_d - bf.PRESS_FIT) / 2
     tools = [_d_bore(r, lay.hub[0] - TOOL, y1 + TOOL)]
-    af, th = bf.M6_NUT
+    af, th = bf.FOOT_NUTS[lay.foot_bolt]
     for x, y in lay.foot_holes:
         tools.append(cylinder(lay.foot_hole / 2, (x, y, lay.z_plate - TOOL), (x, y, z_foot + TOOL)))
         tools.append(hex_prism(af + NUT_PLAY, (x, y, lay.z_plate - TOOL), (x, y, lay.z_plate + th + NUT_PLAY), (1, 0, 0)))
@@ -196,7 +196,7 @@ def frame_parts(lay: FrameLayout) -> Iterator[Part]:
         hardware("socket head cap screw ISO 4762", f"M6 × {foot_len:g}" if lay.foot_bolt == "M6" else
                  f"1/4-20 × {math.ceil(foot_len / 25.4 * 4) / 4:g} in", len(lay.foot_holes),
                  notes="the mount's foot onto the cradle (in place of its screws to the table)"),
-        hardware("hex nut ISO 4032", lay.foot_bolt if lay.foot_bolt == "M6" else "1/4-20", len(lay.foot_holes),
+        hardware("hex nut ISO 4032" if lay.foot_bolt == "M6" else "hex nut ASME B18.2.2", lay.foot_bolt, len(lay.foot_holes),
                  notes="the mount's foot screws, in the cradle's nut traps"),
     ]
     if lay.mounting == "table_edge":

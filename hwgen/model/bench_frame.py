@@ -58,7 +58,8 @@ INDEX_RADIUS = 24.0         # the index pin's radius about the axis: inside the 
 DOWEL_PIN = 3.0             # ISO 2338 Ø3 dowel the worm's far end turns on (the tensioner's), mm
 DOWEL_LENGTH = 12.0
 M6_HEAD = 10.0              # ISO 4762 M6 head, mm: the plate's screws stand clear of the uprights by it
-M6_NUT = (10.0, 5.2)        # ISO 4032 M6: across flats, height, mm
+FOOT_NUTS = {"M6": (10.0, 5.2),           # ISO 4032 M6: across flats, height, mm
+             "1/4-20 UNC": (11.11, 5.56)}  # ASME B18.2.2 1/4 in hex nut: 7/16 in across flats, 7/32 in high
 RESIN_HOLD_N = 500.0        # what one hand-tight M6 through a resin plate is counted to clamp with: a 2 N·m
 #                             tightening (K = 0.2) gives 1.7 kN, taken at under a third for the resin's creep, N
 RESIN_FRICTION = 0.3        # μ of resin on resin (the mount's foot on the cradle), dry
