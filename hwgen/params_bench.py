@@ -33,7 +33,8 @@ class BaseFrame(_Model):
                                                 description="μ of the worm on the wheel (default: the tensioner's)")
     bearing: Literal["608", "625"] = Field("608", description="the ball bearings the shafts turn in "
                                                               "(hwgen/data/bench_parts.csv)")
-    pulley_teeth: int = Field(20, ge=12, le=60, description="teeth of the two GT2 pulleys (1:1)")
+    pulley_teeth: Literal[20, 36, 40] = Field(20, description="teeth of the two GT2 pulleys (1:1), a stock size of "
+                                                             "hwgen/data/bench_parts.csv")
     mounting: Literal["breadboard", "table_edge"] = Field(
         "breadboard", description="breadboard: the frame's base screws to an M6 25 mm grid; table_edge: two G-clamps "
                                   "hold it at a table's edge and the robot overhangs")

@@ -178,3 +178,14 @@ def test_a_heavier_tensioner_is_laid_out_with_a_larger_wheel():
     assert bf.lewis_factor(heavy.pair, torque, d.tensioner.resin_strength) >= lay.safety_factor
     assert bf.lewis_factor(replace(heavy.pair, teeth=heavy.pair.teeth - 1), torque,
                            d.tensioner.resin_strength) < lay.safety_factor
+
+
+def test_a_bad_bench_value_names_its_field(tmp_path):
+    from hwgen.errors import InputError
+    f = tmp_path / "mine.yaml"
+    f.write_text(f"base: {ROOT / 'params' / 'prototype.yaml'}\ndesign: mine\nbase_frame:\n  pulley_teeth: 25\n"
+                 f"rig:\n  load_cell:\n    length: -3\n", encoding="utf-8")
+    with pytest.raises(InputError) as e:
+        params.read(f)
+    paths = {p.path for p in e.value.problems}
+    assert "base_frame.pulley_teeth" in paths and "rig.load_cell.length" in paths

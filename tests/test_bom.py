@@ -116,7 +116,8 @@ def test_fasteners_from_the_tip_mount_and_part_hardware(proto, tmp_path):
     folder, m0, rows, d = proto
     n = len(m0["design_report"]["disks"][-1]["mount_holes"])
     screws = [r for r in rows if r["family"] == "hardware" and r["part"] == bom.TIP_SCREW
-              and "base_mount" not in r["notes"]]        # the base mount's screws are other sizes
+              and not any(w in r["notes"] for w in ("base_mount", "base_frame_", "rig_"))]
+    # the base mount's, the base frame's and the rig's screws are other sizes
     assert len(screws) == 1 and int(screws[0]["qty"]) >= n and screws[0]["size"].startswith("M3")
     m = _copy(folder, tmp_path)
     for p, k in zip(m["parts"][:3], (1, 2, 3)):
