@@ -100,9 +100,9 @@ def test_a_heavier_robot_gets_a_larger_wheel_as_a_tried_fix():
     from hwgen.checks.bench import _teeth
     plan = _plan()
     lay = plan.frame
-    ok = _teeth(lay, 200.0, None, plan)
+    ok = _teeth(lay, 200.0, plan.tensioner.resin_strength)
     assert ok.passed
-    heavy = _teeth(lay, 2_000.0, None, plan)          # ten times the prototype's torque
+    heavy = _teeth(lay, 2_000.0, plan.tensioner.resin_strength)          # ten times the prototype's torque
     assert not heavy.passed and heavy.fixes
     fix = heavy.fixes[0]
     assert fix.set["base_frame.wheel_teeth"] > lay.pair.teeth and fix.then["passed"]

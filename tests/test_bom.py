@@ -149,7 +149,9 @@ def test_tensioner_hardware_matches_its_parts(proto, tmp_path):
             hw[(r["part"], r["size"])] = hw.get((r["part"], r["size"]), 0) + int(r["qty"])
     assert len(hw) == len([r for r in rows if r["family"] == "hardware"])   # one row per item and size
     dowels = sum(q for (item, _), q in hw.items() if item.startswith("dowel pin"))
-    assert dowels == worms + 2 * wheels
+    bench = sum(int(h["qty"]) for p in m["parts"] if p.get("bench") for h in p.get("hardware", [])
+                if h["item"].startswith("dowel pin"))        # the base frame's and the rig's (issue 46)
+    assert dowels == worms + 2 * wheels + bench
     n_tip = len(m["design_report"]["disks"][-1]["mount_holes"])
     # the bill sums what the parts list; the tensioner's own lines follow from its parts
     listed: dict[tuple[str, str], int] = {}

@@ -17,9 +17,10 @@ import cadquery as cq
 import numpy as np
 
 from ..model import bench_frame as bf
+from ..model import bench_parts as bp
 from ..model import hardware as stock
 from ..model.bench_frame import FrameLayout
-from ..model.bench_rig import ARM, COLUMN, DISC, PAD, SPIGOT, WALL, LEDGE, RigLayout, bp_screw_head
+from ..model.bench_rig import ARM, COLUMN, DISC, LEDGE, LEDGE_Y, PAD, SPIGOT, WALL, RigLayout, bp_screw_head
 from ..model.gearing import WORM_TO_MESH
 from ..model.tensioner_layout.sizes import AXIAL_PLAY, DRIVE_FLANGE, DRIVE_HEX, DRIVE_SHAFT, POST
 from . import Part, placement
@@ -149,7 +150,7 @@ def base_solid(lay: FrameLayout) -> cq.Solid:
     return one(body.cut(*tools))
 
 
-def wheel_solid(lay: FrameLayout, gear: cq.Solid) -> cq.Solid:
+def frame_wheel_solid(lay: FrameLayout, gear: cq.Solid) -> cq.Solid:
     """The tensioner's generated gear (file Z 0 to the face width) with a hub on its -Z side and a
     D bore; file Z from the hub's end."""
     p = lay.pair
@@ -174,14 +175,14 @@ def frame_parts(lay: FrameLayout) -> Iterator[Part]:
     drive_inputs = (float(POST), float(hex_key))
     drive = kept("drive shaft", drive_inputs, lambda: drive_solid(*drive_inputs))
 
-    upper = stock.shortest_reaching(bf_lengths(), lay.upper_shaft[1] - lay.upper_shaft[0])
-    lower = stock.shortest_reaching(bf_lengths(), lay.lower_shaft[1] - lay.lower_shaft[0])
+    upper = stock.shortest_reaching(bp.lengths("shaft"), lay.upper_shaft[1] - lay.upper_shaft[0])
+    lower = stock.shortest_reaching(bp.lengths("shaft"), lay.lower_shaft[1] - lay.lower_shaft[0])
     d = f"Ø{lay.shaft_d:g}"
     foot_len = stock.shortest_reaching(stock.lengths("socket head cap screw", "any"),
                                        lay.foot[4] - lay.z_plate + stock.size("washer", "M6", "thickness") + 0.5)
     bought = [
-        hardware("ground shaft h6, with a flat", f"{d} × {upper:g}", 1, notes="⑤ the supporting shaft, on the robot's axis"),
-        hardware("ground shaft h6, with a flat", f"{d} × {lower:g}", 1, notes="⑦ the lower shaft, under the wheel"),
+        hardware("ground shaft h6 with a flat", f"{d} × {upper:g}", 1, notes="⑤ the supporting shaft, on the robot's axis"),
+        hardware("ground shaft h6 with a flat", f"{d} × {lower:g}", 1, notes="⑦ the lower shaft, under the wheel"),
         hardware("deep-groove ball bearing", lay.bearing, 4, notes="pressed into the uprights"),
         hardware("GT2 pulley", f"{lay.pulley_teeth}T, {d} bore, 6 mm belt", 2, material="aluminium",
                  notes="⑥ one on each shaft, set screws on the flats"),
@@ -217,13 +218,14 @@ def frame_parts(lay: FrameLayout) -> Iterator[Part]:
     m2r = _mesh_to_robot(lay)
     t = np.eye(4)
     t[2, 3] = -(p.face_width / 2 + bf.WHEEL_HUB)
-    yield Part("base_frame_wheel", "base_frame_gear", wheel_solid(lay, gear), m2r @ t, GEAR_COLOR,
+    yield Part("base_frame_wheel", "base_frame_gear", frame_wheel_solid(lay, gear), m2r @ t, GEAR_COLOR,
                meta={**common, "turns": True, "mesh_with": "base_frame_worm", "teeth": p.teeth})
     n = round(-p.worm_length / (2 * p.pitch))
     wf = np.eye(4)
     wf[:3, :3] = WORM_TO_MESH
     wf[:3, 3] = [p.center_distance, -nm + n * p.pitch, 0.0]
-    yield Part("base_frame_worm", "base_frame_gear", worm, m2r @ wf, GEAR_COLOR,
+    lying, to_file = _lying(worm)
+    yield Part("base_frame_worm", "base_frame_gear", lying, m2r @ wf @ np.linalg.inv(to_file), GEAR_COLOR,
                meta={**common, "hex_key_mm": hex_key})
     td = np.eye(4)
     td[2, 3] = -(POST + AXIAL_PLAY / 2 + DRIVE_FLANGE[1])
@@ -231,9 +233,15 @@ def frame_parts(lay: FrameLayout) -> Iterator[Part]:
                meta={**common, "hex_key_mm": hex_key})
 
 
-def bf_lengths() -> tuple[float, ...]:
-    from ..model.bench_parts import lengths
-    return lengths("shaft")
+def _lying(solid: cq.Solid) -> tuple[cq.Solid, np.ndarray]:
+    """A solid along file Z laid along file X (a quarter turn about Y), its box's lowest corner at
+    the origin: (the solid, the 4x4 from the old file to the new)."""
+    turned = solid.rotate(cq.Vector(0, 0, 0), cq.Vector(0, 1, 0), 90)      # (x, y, z) -> (z, y, -x)
+    bb = turned.BoundingBox()
+    m = np.eye(4)
+    m[:3, :3] = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]
+    m[:3, 3] = [-bb.xmin, -bb.ymin, -bb.zmin]
+    return turned.translate(cq.Vector(-bb.xmin, -bb.ymin, -bb.zmin)), m
 
 
 # ------------------------------------------------------------------------------------------- rig
@@ -297,7 +305,6 @@ def support_solid(lay: RigLayout) -> cq.Solid:
 
 
 def _plate_len(lay: RigLayout) -> float:
-    from ..model.bench_rig import LEDGE_Y
     return lay.support[3] - lay.support[2] - 2 * LEDGE_Y
 
 

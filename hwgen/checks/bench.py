@@ -106,7 +106,7 @@ def bench_checks(parts, plan) -> tuple[dict, list[Check]]:
               "gravity_torque_nmm": t_gravity, "push_torque_nmm": t_push, "frame_mass_g": m_fix,
               "wheel_teeth": lay.pair.teeth, "belt_mm": lay.belt_length, "axis_above_plate_mm": -lay.z_base}
     out.append(_self_locking(lay, torque, t_gravity))
-    out.append(_teeth(lay, torque, plan.tensioner_layout, plan))
+    out.append(_teeth(lay, torque, float(plan.tensioner.resin_strength)))
     yf = _mid_y(by.get("base_frame_front"), sum(lay.front) / 2)
     yb = _mid_y(by.get("base_frame_back"), sum(lay.back) / 2)
     shaft = bf.shaft_statics(replace(lay, front=(yf, yf), back=(yb, yb)), m_turn * G, float(c_turn[1]),
@@ -151,8 +151,8 @@ def _self_locking(lay, torque: float, t_gravity: float) -> Check:
                  fixes=fixes)
 
 
-def _teeth(lay, torque: float, tensioner, plan) -> Check:
-    strength = tensioner_strength(plan)
+def _teeth(lay, torque: float, strength: float) -> Check:
+    """``strength``: the resin's tensile strength the tensioner's teeth are judged on too, MPa."""
     p = lay.pair
     sf = bf.lewis_factor(p, torque, strength)
     ok = sf >= lay.safety_factor
@@ -167,11 +167,6 @@ def _teeth(lay, torque: float, tensioner, plan) -> Check:
                  f"base frame wheel ({p.teeth} teeth, module {p.module:g} mm): Lewis factor of safety {sf:.2f} "
                  f"{'≥' if ok else '<'} {lay.safety_factor:g} under {torque:.0f} N·mm", sf, lay.safety_factor,
                  {"part": "base_frame_wheel"}, fix=fix, fixes=fixes)
-
-
-def tensioner_strength(plan) -> float:
-    """The resin's tensile strength the tensioner's teeth are judged on, MPa."""
-    return float(plan.tensioner.resin_strength)
 
 
 def _shaft(lay, s: dict) -> list[Check]:

@@ -31,7 +31,7 @@ from ..params import Design
 from . import bench_parts as bp
 from .fixtures import BOLT_PATTERNS, MountLayout
 from .gearing import WormPair, worm_pair
-from .tensioner_layout.sizes import AXIAL_PLAY, DRIVE_FLANGE, DRIVE_HEX, POST, WORM_END
+from .tensioner_layout.sizes import AXIAL_PLAY, DRIVE_FLANGE, POST, WORM_END
 
 PLATE = 10.0                # the cradle's plate under the mount's foot, mm
 FLANGE = 8.0                # the cradle's flange, along y, mm
@@ -144,7 +144,7 @@ def frame_layout(d: Design, mount: MountLayout, envelope: float, torque_nmm: flo
     b = bf.bearing
     shaft_d = bp.size("ball bearing", b, "bore")
     bod, bw = bp.size("ball bearing", b, "outer_diameter"), bp.size("ball bearing", b, "width")
-    z_pulley = str(bf.pulley_teeth) if ("GT2 pulley", str(bf.pulley_teeth), "length") in bp.table() else "20"
+    z_pulley = str(bf.pulley_teeth)             # a stock size of the table (the schema allows no other)
     pitch = bp.size("GT2 belt", "any", "pitch")
     pd = bf.pulley_teeth * pitch / math.pi
     pfl, plen = bp.size("GT2 pulley", z_pulley, "flange_diameter"), bp.size("GT2 pulley", z_pulley, "length")
