@@ -224,24 +224,12 @@ def frame_parts(lay: FrameLayout) -> Iterator[Part]:
     wf = np.eye(4)
     wf[:3, :3] = WORM_TO_MESH
     wf[:3, 3] = [p.center_distance, -nm + n * p.pitch, 0.0]
-    lying, to_file = _lying(worm)
-    yield Part("base_frame_worm", "base_frame_gear", lying, m2r @ wf @ np.linalg.inv(to_file), GEAR_COLOR,
+    yield Part("base_frame_worm", "base_frame_gear", worm, m2r @ wf, GEAR_COLOR,
                meta={**common, "hex_key_mm": hex_key})
     td = np.eye(4)
     td[2, 3] = -(POST + AXIAL_PLAY / 2 + DRIVE_FLANGE[1])
     yield Part("base_frame_drive", "base_frame_gear", drive, m2r @ wf @ td, GEAR_COLOR,
                meta={**common, "hex_key_mm": hex_key})
-
-
-def _lying(solid: cq.Solid) -> tuple[cq.Solid, np.ndarray]:
-    """A solid along file Z laid along file X (a quarter turn about Y), its box's lowest corner at
-    the origin: (the solid, the 4x4 from the old file to the new)."""
-    turned = solid.rotate(cq.Vector(0, 0, 0), cq.Vector(0, 1, 0), 90)      # (x, y, z) -> (z, y, -x)
-    bb = turned.BoundingBox()
-    m = np.eye(4)
-    m[:3, :3] = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]
-    m[:3, 3] = [-bb.xmin, -bb.ymin, -bb.zmin]
-    return turned.translate(cq.Vector(-bb.xmin, -bb.ymin, -bb.zmin)), m
 
 
 # ------------------------------------------------------------------------------------------- rig

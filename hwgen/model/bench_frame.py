@@ -31,7 +31,7 @@ from ..params import Design
 from . import bench_parts as bp
 from .fixtures import BOLT_PATTERNS, MountLayout
 from .gearing import WormPair, worm_pair
-from .tensioner_layout.sizes import AXIAL_PLAY, DRIVE_FLANGE, POST, WORM_END
+from .tensioner_layout.sizes import AXIAL_PLAY, DRIVE_FLANGE, GAP, POST, WORM_END
 
 PLATE = 10.0                # the cradle's plate under the mount's foot, mm
 FLANGE = 8.0                # the cradle's flange, along y, mm
@@ -181,7 +181,7 @@ def frame_layout(d: Design, mount: MountLayout, envelope: float, torque_nmm: flo
 
     # the worm across x, its thread centred under the wheel (the tensioner's convention, mesh Y = world x)
     n = round(-pair.worm_length / (2 * pair.pitch))
-    near_end = max(WORM_END, pair.outside_radius + BETWEEN + n * pair.pitch)
+    near_end = max(WORM_END, pair.outside_radius + GAP + n * pair.pitch)      # as the tensioner's: its very worm
     worm_x0 = n * pair.pitch - near_end
     worm_far = n * pair.pitch + pair.worm_length + WORM_END
     near_post = (worm_x0 - AXIAL_PLAY / 2 - POST, worm_x0 - AXIAL_PLAY / 2)
