@@ -28,6 +28,7 @@ from . import designfile, yamlfile
 from .errors import InputError, Problem, clip, echo, nearest
 from .fasteners import size as _fastener
 from .params_base import _Model
+from .params_bench import BaseFrame, Rig
 from .params_experiment import Experiment
 
 M3_CLEARANCE = _fastener("clearance hole", "M3", "normal")     # ISO 273 normal series (data/fasteners.csv)
@@ -434,6 +435,8 @@ class Design(_Model):
     plates: Plates = Field(default_factory=Plates, description="print plates: spacing and SLA orientation")
     coupon: Coupon = Field(default_factory=Coupon, description="the calibration coupon's steps and labels")
     experiment: Experiment = Field(default_factory=Experiment, description="the push test: hwgen experiment, compare")
+    base_frame: BaseFrame = Field(default_factory=BaseFrame, description="the rotating base frame (Fig. 3)")
+    rig: Rig = Field(default_factory=Rig, description="the stiffness rig: load-cell bracket, push block, support")
 
     @property
     def stations(self) -> tuple[float, ...]:

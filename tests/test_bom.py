@@ -116,7 +116,8 @@ def test_fasteners_from_the_tip_mount_and_part_hardware(proto, tmp_path):
     folder, m0, rows, d = proto
     n = len(m0["design_report"]["disks"][-1]["mount_holes"])
     screws = [r for r in rows if r["family"] == "hardware" and r["part"] == bom.TIP_SCREW
-              and "base_mount" not in r["notes"]]        # the base mount's screws are other sizes
+              and not any(w in r["notes"] for w in ("base_mount", "base_frame_", "rig_"))]
+    # the base mount's, the base frame's and the rig's screws are other sizes
     assert len(screws) == 1 and int(screws[0]["qty"]) >= n and screws[0]["size"].startswith("M3")
     m = _copy(folder, tmp_path)
     for p, k in zip(m["parts"][:3], (1, 2, 3)):
@@ -148,7 +149,9 @@ def test_tensioner_hardware_matches_its_parts(proto, tmp_path):
             hw[(r["part"], r["size"])] = hw.get((r["part"], r["size"]), 0) + int(r["qty"])
     assert len(hw) == len([r for r in rows if r["family"] == "hardware"])   # one row per item and size
     dowels = sum(q for (item, _), q in hw.items() if item.startswith("dowel pin"))
-    assert dowels == worms + 2 * wheels
+    bench = sum(int(h["qty"]) for p in m["parts"] if p.get("bench") for h in p.get("hardware", [])
+                if h["item"].startswith("dowel pin"))        # the base frame's and the rig's (issue 46)
+    assert dowels == worms + 2 * wheels + bench
     n_tip = len(m["design_report"]["disks"][-1]["mount_holes"])
     # the bill sums what the parts list; the tensioner's own lines follow from its parts
     listed: dict[tuple[str, str], int] = {}

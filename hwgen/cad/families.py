@@ -54,6 +54,22 @@ def _jig(plan: Plan) -> Iterator[Part]:
     yield from build_jig(plan.jig, [s.name for s in plan.disks] + [plan.backbone.name])
 
 
+FRAME_PARTS = 7             # cradle, front, back, base, wheel, worm, drive shaft (hwgen.cad.bench)
+RIG_PARTS = 3               # bracket, push block, support
+
+
+def _frame(plan: Plan) -> Iterator[Part]:
+    from .bench import frame_parts
+    if plan.frame is not None:
+        yield from frame_parts(plan.frame)
+
+
+def _rig(plan: Plan) -> Iterator[Part]:
+    from .bench import rig_parts
+    if plan.rig is not None:
+        yield from rig_parts(plan.rig)
+
+
 class Unit(NamedTuple):
     """Parts built together: what they are made from (frozen values, hashed for the cache), how
     many there are and the builder."""
@@ -105,6 +121,30 @@ def _mount_units(plan: Plan) -> list[Unit]:
 def _jig_units(plan: Plan) -> list[Unit]:
     inputs = (plan.jig, [s.name for s in plan.disks], plan.backbone.name)   # what build_jig reads
     return [Unit(inputs, _jig_count(plan), lambda: _jig(plan))]
+
+
+def _frame_units(plan: Plan) -> list[Unit]:
+    # what frame_parts reads: the frame's layout
+    return [] if plan.frame is None else [Unit((plan.frame, "base frame"),
+                                               FRAME_PARTS, lambda: _frame(plan))]
+
+
+def _rig_units(plan: Plan) -> list[Unit]:
+    return [] if plan.rig is None else [Unit((plan.rig, "rig"), RIG_PARTS, lambda: _rig(plan))]
+
+
+def _frame_made_from(plan: Plan, index: int) -> tuple[str, str]:
+    f = plan.frame
+    names = ("cradle", "front upright", "back upright", "base plate", "worm wheel", "worm", "drive shaft")
+    return (f"base frame {names[min(index, len(names) - 1)]}",
+            f"module {f.pair.module:g} mm, {f.pair.teeth} teeth, {f.bearing} bearings on Ø{f.shaft_d:g} shafts, "
+            f"GT2 belt {f.belt_length:g} mm, axis {-f.z_base:.1f} mm over the plate")
+
+
+def _rig_made_from(plan: Plan, index: int) -> tuple[str, str]:
+    r = plan.rig
+    return (("rig bracket", "push block", "support")[min(index, 2)],
+            f"{r.cell_name} {r.cell[0]:g} × {r.cell[1]:g} × {r.cell[2]:g} mm on {r.flange}; disk {r.station + 1}")
 
 
 def _jig_count(plan: Plan) -> int:
@@ -169,6 +209,9 @@ FAMILIES: list[Family] = [
     Family("tensioner", "tensioner", _tensioner_count, _tensioner, _tensioner_made_from, _tensioner_units),
     Family("base mount", "base_mount", lambda p: 2, _mount, _mount_made_from, _mount_units),
     Family("jig", "jig", _jig_count, _jig, _jig_made_from, _jig_units),
+    Family("base frame", "base_frame", lambda p: 0 if p.frame is None else FRAME_PARTS, _frame, _frame_made_from,
+           _frame_units),
+    Family("rig", "rig", lambda p: 0 if p.rig is None else RIG_PARTS, _rig, _rig_made_from, _rig_units),
 ]
 
 
@@ -259,4 +302,8 @@ def _family_of(part: Part) -> str:
         return "base mount"
     if part.role == "jig":
         return "jig"
+    if part.role in ("base_frame", "base_frame_gear"):
+        return "base frame"
+    if part.role == "rig":
+        return "rig"
     return "backbone" if part.role == "backbone" else "tensioner"

@@ -192,7 +192,8 @@ def mass_summary(parts: list[LoadedPart], manifest: Manifest) -> tuple[dict, lis
     rows = []
     for p in parts:
         e = entries.get(p.name, {})
-        closed = None if "density_g_cm3" not in e or p.fixture else p.volume_and_centroid()
+        # the bench's frame and rig are not the robot's (hwgen.checks.bench weighs them)
+        closed = None if "density_g_cm3" not in e or p.fixture or e.get("bench") else p.volume_and_centroid()
         if closed is None:
             continue
         volume, com = closed

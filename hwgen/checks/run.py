@@ -19,6 +19,7 @@ from .anchors import seat_checks
 from .base import REBUILD, Check, failing
 from .clearances import StripBend, backbone_checks, hole_checks, tendon_pair_checks, wall_checks
 from .eyelets import backbone_section, locate_eyelets, measure_disk
+from .bench import bench_checks
 from .fixtures import jig_checks, mount_checks
 from .gear_mesh import gear_checks, gear_pairs
 from .gravity import gravity_checks
@@ -188,7 +189,10 @@ def _measure(folder: Path, manifest: Manifest, plan) -> Measured:
     gravity, c = gravity_checks(parts, manifest, plan, fits, None if bb_outline is None else bb_outline.extent[0],
                                 strip_t, L)
     checks += c
+    bench, c = bench_checks(parts, plan)
+    checks += c
     checks[gears_at:gears_at] = gear_checks(folder, manifest.parts, plan)
+    sections_bench = {"bench": _plain(bench)} if bench else {}
     return Measured(checks, angles, tls, pair, emap, taut, {
         "mass": _plain(mass),
         "as_built": _plain({
@@ -201,7 +205,7 @@ def _measure(folder: Path, manifest: Manifest, plan) -> Measured:
             "taut": taut}),
         "seats": _plain(seats),
         "gravity": _plain(gravity),
-        "tension": _plain(tension)})
+        "tension": _plain(tension), **sections_bench})
 
 
 def _seating(parts, emap, bb_outline, strip_t, plan, angles):

@@ -15,6 +15,9 @@ from ..errors import DesignError
 from ..params import Design
 from . import kinematics as kin
 from . import screws
+from . import steel
+from .bench_frame import FrameLayout, frame_layout, robot_envelope, torque_estimate
+from .bench_rig import RigLayout, rig_layout
 from .crossings import crossing_angles, in_strip_plane, strip_crossings
 from .holes import hole_diameter
 from .fixtures import JigLayout, MountLayout, base_length, disk_screw_region, jig_layout, mount_layout
@@ -62,6 +65,8 @@ class Plan:
     experiment: ExperimentSettings                    # the push test (hwgen experiment, compare)
     tensioner_layout: TensionerLayout | None = None   # where the worm drives go, when they can be laid out
     tensioner_error: str | None = None                # why not, otherwise
+    frame: FrameLayout | None = None                  # the rotating base frame (base_frame.enabled)
+    rig: RigLayout | None = None                      # the stiffness rig (rig.enabled)
 
     @property
     def min_wall(self) -> float:
@@ -279,11 +284,24 @@ def make_plan(design: Design, tensioner_record: dict | None = None) -> Plan:
     try:
         lay = layout(d, paths, disks[-1], tensioner_record)
     except ValueError as e:
-        return replace(first, tensioner_error=str(e))
+        return _bench(d, replace(first, tensioner_error=str(e)))
     exits = {r.tendon: np.subtract(r.end, r.start) / r.length for r in lay.runs}
     tip, tip_merges = _disk_spec(d, len(disks) - 1, paths, rest_axes, exits, sweeps, hubs)
     merges = [m for m in merges if m.station != tip.index] + tip_merges
-    return replace(first, disks=(*disks[:-1], tip), merges=tuple(merges), tensioner_layout=lay)
+    return _bench(d, replace(first, disks=(*disks[:-1], tip), merges=tuple(merges), tensioner_layout=lay))
+
+
+def _bench(d: Design, plan: Plan) -> Plan:
+    """The plan with the base frame and the rig laid out where the design asks for them."""
+    frame = rig = None
+    if d.base_frame.enabled:
+        metal = steel.total(steel.tip_pieces(plan))
+        torque = torque_estimate(d, plan.tensioner_layout, metal[:2], plan.process.density_g_cm3)
+        frame = frame_layout(d, plan.mount, robot_envelope(d.disks.outer_diameter / 2, plan.tensioner_layout), torque)
+    if d.rig.enabled:
+        k = min(d.experiment.first_disk, len(plan.disks)) - 1
+        rig = rig_layout(d, plan.stations, plan.disks[k].thickness, frame)
+    return replace(plan, frame=frame, rig=rig) if frame or rig else plan
 
 
 def _backbone_holes(d: Design, paths: list[TendonPath], disks: list[DiskSpec]):

@@ -39,7 +39,8 @@ CLEARANCE_MATCH_MM = 0.35          # a hole within this of a table size takes th
 TIP_SCREW = "socket head cap screw ISO 4762"   # fastens the tensioner (or a fixture) to the tip disk
 
 FAMILY_LABELS = {"disk": "tendon-support disk", "backbone": "backbone strip",
-                 "jig": "assembly jig"}   # others: the role, spaced
+                 "jig": "assembly jig", "base_frame": "rotating base frame", "base_frame_gear": "base frame worm drive",
+                 "rig": "stiffness rig"}   # others: the role, spaced
 ADHESIVE_MARGIN = 2.0              # adhesive bought: this many times what fills the slots' gaps
 
 
@@ -187,6 +188,11 @@ def _printed_note(e: dict) -> str:
     if e["role"] in ("base_mount", "base_clamp"):
         bits.append("base mount: clamps the strip's base; " + ("bolts to the table" if e["role"] == "base_mount"
                                                                else "the upper jaw"))
+    if e.get("bench") == "base_frame":
+        bits.append("base frame (Fig. 3): " + ("turns with the robot" if e.get("turns") and e["role"] == "base_frame"
+                                               else "stands on the table"))
+    if e.get("bench") == "rig":
+        bits.append("stiffness rig (Sect. IV-C): not part of the robot")
     if "station" in e:
         bits.append(f"station {e['station']}")
     if e.get("disk_role") in ("base", "tip"):

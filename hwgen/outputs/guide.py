@@ -109,6 +109,8 @@ def steps(folder: Path, manifest: Manifest, plan, bom: list[dict] | None = None)
     jig = names(lambda p: p.get("fixture"))
     base = names(lambda p: p["role"] in ("base_mount", "base_clamp"))
     tensioner = names(lambda p: p["role"].startswith("tensioner"))
+    frame = names(lambda p: p.get("bench") == "base_frame")
+    rig = names(lambda p: p.get("bench") == "rig")
     rows = {r["part"]: r for r in bom}
     tendon_rows = [r for r in bom if r["family"] == "tendon"]
     out: list[Step] = []
@@ -151,6 +153,8 @@ def steps(folder: Path, manifest: Manifest, plan, bom: list[dict] | None = None)
         if hw:
             lines.append("Hardware: " + "; ".join(cite(r) for r in hw) + ".")
         out.append(Step("base", "The base mount", lines, strip + disks + base, base, tendons=True))
+    if frame:
+        out.append(_frame_step(frame, base, strip + disks, rows, bom, manifest))
 
     if tensioner:
         clamps = names(lambda p: p["role"] == "tensioner_clamp")
@@ -194,9 +198,39 @@ def steps(folder: Path, manifest: Manifest, plan, bom: list[dict] | None = None)
         out.append(Step("tension", "Tensioning", lines, strip + disks[-1:] + inside,   # the housing hides the worms
                         names(lambda p: p["role"] in ("tensioner_worm", "tensioner_drive")), tendons=True,
                         extra={"take_up": ups}))
+    if rig:
+        hw = _hardware_for(bom, set(rig))
+        lines = ["For the push test (Sect. III-C): screw the load cell's fixed end under the bracket's arm and the "
+                 "push block under its free end, bolt the bracket to the arm's flange (its spigot in the flange's "
+                 "recess, the pin in its hole), and stand the base frame on the support: "
+                 + "; ".join(cite(rows[n]) for n in rig if n in rows) + "."]
+        if hw:
+            lines.append("Hardware: " + "; ".join(cite(r) for r in hw) + ".")
+        lines.append("Jog the arm until the pad stands just above the first disk's rim, then push down at a constant "
+                     "speed; the pad meets the rim above every eyelet, so no tendon is touched.")
+        out.append(Step("rig", "The stiffness rig", lines, strip + disks + base + frame + rig, rig))
     for i, s in enumerate(out, start=1):
         s.picture = f"{FOLDER}/step_{i:02d}.png"
     return out
+
+
+def _frame_step(frame: list[str], base: list[str], robot: list[str], rows: dict, bom: list[dict],
+                manifest: Manifest) -> Step:
+    """The rotating base frame (Fig. 3): built, and the base mount bolted onto its cradle."""
+    hw = _hardware_for(bom, set(frame))
+    cradle = next((p for p in manifest.parts if p["name"] == "base_frame_cradle"), {})
+    step = cradle.get("mark_step_deg", 15)
+    lines = ["Press a bearing into each seat of the two uprights and screw the uprights onto the base plate; push "
+             "the supporting shaft (on the robot's axis) and the lower shaft through them with a pulley each and the "
+             "belt round both, the wheel on the lower shaft's flat; set the worm on its drive shaft and dowel between "
+             "the base plate's posts; press the cradle's hub onto the supporting shaft's flat and bolt the base "
+             "mount's foot onto the cradle: " + "; ".join(cite(rows[n]) for n in frame if n in rows) + "."]
+    if hw:
+        lines.append("Hardware: " + "; ".join(cite(r) for r in hw) + ".")
+    lines.append(f"The flange is marked every {step:g}°, longer at 0° and 90°; a Ø4 dowel through the front upright "
+                 f"into the flange's index hole holds the robot at 0° or 90°. Turn the worm with the hex key to roll "
+                 f"the robot (1:1 belt: one wheel turn, one robot turn); it self-locks at any angle.")
+    return Step("frame", "The rotating base frame", lines, robot + base + frame, frame, tendons=True)
 
 
 def picture_jobs(folder: Path, manifest: Manifest, plan) -> list[dict]:

@@ -12,11 +12,13 @@ Views (parallel projection, robot coordinates: y along the backbone, bending tow
   the housing along their own offsets (see :func:`hwgen.outputs.scene.exploded_placements`);
 * assembled: every part where the manifest places it, tendons drawn through their eyelets;
 * bent: the constant-curvature pose of eq. (1) at ``render.bend_deg``: disks moved rigidly
-  to their frames T_i, the strip bent point by point, each tendon a tube through its eyelets.
+  to their frames T_i, the strip bent point by point, each tendon a tube through its eyelets;
+* turned (a design with a base frame): the robot rolled by TURNED_DEG in its frame (issue 46).
 """
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -46,7 +48,8 @@ INSTALL_HINT = (
     "(pip install --extra-index-url https://wheels.vtk.org vtk-osmesa). "
     "The parts, checks and bill of materials were written without the pictures.")
 LABEL_GAP_MM = 6.0          # disk numbers sit this far above the disk's top on screen
-OUTPUTS = ("exploded.png", "assembled.png", "bent.png", "jig.png", "exploded.svg")
+OUTPUTS = ("exploded.png", "assembled.png", "turned.png", "bent.png", "jig.png", "exploded.svg")
+TURNED_DEG = 90.0          # turned.png: the robot rolled this far in its base frame (the protocol turns it by 90°)
 EXIT_NO_BACKEND = 3      # the child's exit code for RenderUnavailable
 # Mesa's llvmpipe rasterises in the drawing thread itself (unless the user sets it otherwise): its
 # rasteriser threads' scene memory made about a tenth of the renderer's peak, the pictures have the
@@ -203,6 +206,11 @@ def render_pictures(folder: Path, manifest: Manifest, settings: Settings, svg_ta
     timings["assembled_s"] = time.perf_counter() - t
 
     t = time.perf_counter()
+    if "turned.png" in wanted and any(p.meta.get("turns") for p in parts):
+        images["turned.png"] = _turned(r, parts, colours, report, tcol, d, folder / "turned.png", manifest.name)
+    timings["turned_s"] = time.perf_counter() - t
+
+    t = time.perf_counter()
     if "bent.png" in wanted:
         kappa = float(kin.kappas_for_angles([settings.bend_deg], st[-1] - st[0])[0])
         b = np.asarray(BENT.toward_camera, float)
@@ -250,6 +258,26 @@ def render_pictures(folder: Path, manifest: Manifest, settings: Settings, svg_ta
                                            title=f"{manifest.name}: exploded assembly")
         timings["svg_s"] = time.perf_counter() - t
     return result
+
+
+def _turned(r: Renderer, parts, colours: dict, report: dict, tcol: dict, d: np.ndarray, path: Path,
+            name: str) -> dict:
+    """The robot rolled by TURNED_DEG about its axis (y) in its base frame: what turns (the robot's
+    parts and the frame's cradle, by their manifest entries) turned, the frame where it stands;
+    the rig, moved by the arm, left out."""
+    a = math.radians(TURNED_DEG)
+    roll = np.eye(4)
+    roll[:3, :3] = [[math.cos(a), 0.0, math.sin(a)], [0.0, 1.0, 0.0], [-math.sin(a), 0.0, math.cos(a)]]
+    bench = [p for p in parts if p.meta.get("bench") == "base_frame"]
+    turning = [p for p in parts if not p.meta.get("bench") or p.meta.get("turns") and p.role == "base_frame"]
+    posed = [pose_rigid(p, roll @ p.placement, d) for p in turning]
+    posed += [pose_rigid(p, p.placement, d) for p in bench if p not in turning]
+    tubes = {n: (pts @ roll[:3, :3].T, tcol[n]) for n, pts in tendon_polylines(report, 0.0).items()}
+    shown = {p.role for p in turning} | {p.role for p in bench}
+    legend = [(family_label(role), colours[role]) for role in colours if role in shown]
+    _, W, H = r.draw(posed, colours, ISOMETRIC, path, tubes=tubes,
+                     texts=_legend(legend, f"{name}: turned {TURNED_DEG:g}° in its base frame"))
+    return {"width": W, "height": H}
 
 
 CONTEXT_ROLE, CONTEXT_GREY = "(context)", (0.86, 0.86, 0.86)   # a guide picture's parts not of its step
