@@ -132,7 +132,7 @@ def test_a_tendons_mapping_is_told_to_be_a_list(tmp_path):
 
 @pytest.mark.parametrize("body, field, words", [
     ("count: 10\n", "count", "unknown key here; did you mean disks.count?"),
-    ("heigth: 10\n", "heigth", "unknown key here; did you mean backbone.height?"),
+    ("heigth: 10\n", "heigth", "unknown key here; did you mean backbone.height or rig.load_cell.height?"),
     ("disks:\n  extra_tip: 3\n", "disks.extra_tip", "unknown key here; did you mean backbone.extra_tip?"),
     ("disks:\n  spacng: 22.5\n", "disks.spacng", "unknown key; did you mean spacing?"),
     ("tendons:\n  - {name: A1, chanel: A, routing: {function: {kind: straight, z0: 30}}}\n", "tendons[0].chanel",
