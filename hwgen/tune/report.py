@@ -84,7 +84,7 @@ def best(loaded: Loaded, rows: list[dict], rejected=()) -> tuple[dict | None, li
 # ---------------------------------------------------------------- trials.parquet
 
 def table(loaded: Loaded, rows: list[dict]) -> pa.Table:
-    state = loaded.spec.goal.state or (loaded.states[0] if loaded.states else "")
+    state = loaded.state
     cols: dict[str, list] = {"trial": [], "hash": []}
     for n in loaded.names:
         cols[n] = []
@@ -225,22 +225,24 @@ def importances(loaded: Loaded, rows: list[dict]) -> dict[str, dict[str, float]]
 def markdown(loaded: Loaded, rows: list[dict], base_row: dict, outcome=None, built: dict | None = None,
              stiffness: dict | None = None, rejected=None) -> str:
     rejected = rejected or {}
-    best_row, front = best(loaded, rows, rejected)
+    best_row, front = best(loaded, [base_row, *rows], rejected)       # the base is a candidate like any trial
     g = loaded.spec.goal
     goal = "pass every check, nearest the base" if g.pass_ else ", ".join(f"{how} {n}" for n, how in
                                                                           loaded.objectives)
     n_ok = sum(r["feasible"] for r in rows)
+    base_ok = bool(base_row["feasible"])
     lines = [f"# Tune {loaded.spec.tune}", "",
              f"Base design: `{loaded.base_path.name}`" + (f" with {', '.join(f'`{k}`' for k in loaded.spec.set)} set"
                                                          if loaded.spec.set else "") + f"; level {loaded.spec.level}; "
              f"goal: {goal}" + (f", subject to {', '.join(bounds(loaded))}" if bounds(loaded) else "")
              + (f"; required even as warnings: {', '.join(g.require)}" if g.require else "") + ".", "",
              *([f"Statics (the study `hwgen stiffness` runs, the plan's estimated masses): state "
-                f"{g.state or loaded.states[0]}, {g.orientation}, eyelets "
+                f"{loaded.state}, {g.orientation}, eyelets "
                 f"{'frictionless' if g.friction == 'none' else 'stuck (every segment held at its eyelets)'}; each "
                 f"tendon tensioned by the paper's protocol, or at its own `pretension_n` where the design gives one.",
                 ""] if loaded.states else []),
-             f"{len(rows)} trials told, {n_ok} feasible, "
+             f"{len(rows)} trials told, {n_ok} feasible (the base, trial -1, "
+             f"{'feasible' if base_ok else 'infeasible'} besides), "
              f"{sum(1 for r in rows if r.get('same_as') is not None)} told from an earlier trial of the same design."]
     if outcome is not None:
         lines += ["", f"This run: {outcome.evaluated} trials evaluated in {outcome.seconds:.1f} s on "
@@ -251,8 +253,9 @@ def markdown(loaded: Loaded, rows: list[dict], base_row: dict, outcome=None, bui
     if best_row is None:
         lines += ["No trial passes. " + binding(loaded, rows)]
     else:
-        state = g.state or (loaded.states[0] if loaded.states else "")
-        lines += [f"Trial {best_row['trial']} (`best.yaml`).", "", "| | base | best |", "|---|---:|---:|"]
+        state = loaded.state
+        who = "The base itself (trial -1): no trial passes further" if best_row["trial"] < 0 else f"Trial {best_row['trial']}"
+        lines += [f"{who} (`best.yaml`).", "", "| | base | best |", "|---|---:|---:|"]
         for n, b, v in zip(loaded.names, loaded.base_values, best_row["values"]):
             lines.append(f"| `{n}` | {_fmt(b)} | {_fmt(v)} |")
         shown = [n for n, _ in loaded.objectives] + [*g.at_least, *g.at_most]
@@ -374,7 +377,7 @@ def write(loaded: Loaded, study, folder: Path, outcome=None, built=None, stiffne
     write_trials(loaded, [base_row, *rows], folder / "trials.parquet")
     files = [folder / "trials.parquet"]
     rejected = study.user_attrs.get("rejected", {})
-    best_row, front = best(loaded, rows, rejected)
+    best_row, front = best(loaded, [base_row, *rows], rejected)
     if best_row is not None:
         write_text(folder / "best.yaml", best_yaml(loaded, best_row))
         files.append(folder / "best.yaml")

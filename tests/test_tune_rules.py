@@ -1,0 +1,120 @@
+"""hwgen tune's rules written once: the goal's default state, the base a trial like any other (on
+or off the grid, feasible when it passes), a bound by a missing base figure refused, and the best
+named after builds that fail the best built (issue 44)."""
+from __future__ import annotations
+
+from pathlib import Path
+from types import SimpleNamespace
+
+import pyarrow.parquet as pq
+import pytest
+import yaml
+
+from hwgen.errors import InputError
+from hwgen.tune import best as tune_best, run as tune_run, spec
+
+from .clirunner import hwgen
+from .conftest import PARAMS
+
+PROTOTYPE = PARAMS / "prototype.yaml"
+K = "tendons[1].routing.function.k"
+
+
+def _tune_file(tmp_path: Path, body: dict) -> Path:
+    doc = {"tune": "t", "base": str(PROTOTYPE), "level": "lengths",
+           "free": [{"path": K, "low": 0.5, "high": 4}], "goal": {"minimize": "centre_mm.C1"}, **body}
+    p = tmp_path / "t.yaml"
+    p.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return p
+
+
+def _trials(out: Path) -> list[dict]:
+    return pq.read_table(out / "tunes" / "t" / "trials.parquet").to_pylist()
+
+
+def test_the_goals_state_is_every_tendon_locked_wherever_a_result_names_another(tmp_path):
+    """A result named after '@' first no longer moves the state the goal's other results are of."""
+    f = _tune_file(tmp_path, {"level": "coupling", "goal": {"maximize": "tip_stiffness@A",
+                                                            "at_least": {"tip_torsion": "base"}}})
+    loaded = spec.load(f)
+    assert loaded.states == ("A", "AC1C2H") and loaded.state == "AC1C2H"
+    base = {"verdict": "pass", "failures": [], "statics": {"tip_stiffness@A": 0.1, "tip_torsion@A": 100,
+                                                           "tip_torsion@AC1C2H": 700}}
+    row = {"verdict": "pass", "failures": [], "statics": {"tip_stiffness@A": 0.2, "tip_torsion@A": 900,
+                                                          "tip_torsion@AC1C2H": 350}}
+    values, cons, ok = tune_run.score(loaded, row, base)
+    assert values == [0.2] and cons[1] == pytest.approx(0.5) and not ok      # judged on AC1C2H, not on A
+    assert tune_run.bound_limits(loaded, base) == [("tip_torsion@AC1C2H", 1.0, 700.0)]
+
+
+def test_a_bound_by_a_missing_base_figure_is_not_met_and_is_refused(tmp_path):
+    f = _tune_file(tmp_path, {"level": "coupling", "goal": {"maximize": "tip_stiffness",
+                                                            "at_least": {"tip_torsion": "base"}}})
+    loaded = spec.load(f)
+    base = {"verdict": "error", "message": "the statics did not converge", "failures": []}
+    row = {"verdict": "pass", "failures": [], "statics": {"tip_stiffness@AC1C2H": 0.2, "tip_torsion@AC1C2H": 350}}
+    assert not tune_run.score(loaded, row, base)[2]
+    made = tmp_path / "out"
+    made.mkdir()
+    with pytest.raises(InputError) as e:
+        tune_run._base_figures(loaded, base, made)
+    assert e.value.path == "goal.at_least.tip_torsion" and "did not converge" in e.value.message
+    assert not made.exists()                                  # bad input writes nothing
+
+
+def test_a_base_off_the_grid_is_trial_0(tmp_path):
+    """The base's k 2.6 on a 0.5 grid from 0.5: the grid runs through it (0.6, 1.1, ... 3.6) and the
+    base is the first trial, not an exit 3 after every trial."""
+    f = _tune_file(tmp_path, {"budget": 6, "set": {K: 2.6},
+                              "free": [{"path": K, "low": 0.5, "high": 4, "step": 0.5}],
+                              "goal": {"minimize": "centre_mm.C1", "checks": "required"}})
+    r = hwgen("tune", str(f), "--out", str(tmp_path / "out"), "--scheduler", "inline", "--no-build")
+    assert r.returncode == 0, r.stdout + r.stderr
+    rows = {t["trial"]: t for t in _trials(tmp_path / "out")}
+    assert rows[0][K] == pytest.approx(2.6) and rows[0]["hash"] == rows[-1]["hash"]
+    for t in rows.values():
+        assert ((t[K] - 0.1) / 0.5) == pytest.approx(round((t[K] - 0.1) / 0.5)) and 0.5 <= t[K] <= 4
+
+
+def test_a_base_that_passes_is_feasible_and_can_be_the_best(tmp_path):
+    """Half-integer k lengthen C1 by millimetres over the bend; the base (k 1) is not among the choices,
+    so no trial but the base passes the bound of its own figure: the base is the best, and the tune
+    says so instead of "no trial passes"."""
+    f = _tune_file(tmp_path, {"budget": 4, "free": [{"path": K, "choices": [1.5, 2.5]}],
+                              "goal": {"minimize": "taut_mm.C1", "at_most": {"centre_mm.C1": "base"},
+                                       "checks": "required"}})
+    r = hwgen("tune", str(f), "--out", str(tmp_path / "out"), "--scheduler", "inline", "--no-build")
+    assert r.returncode == 0, r.stdout + r.stderr
+    rows = _trials(tmp_path / "out")
+    assert [t["feasible"] for t in rows if t["trial"] == -1] == [True]
+    assert not any(t["feasible"] for t in rows if t["trial"] >= 0)
+    folder = tmp_path / "out" / "tunes" / "t"
+    assert "The base itself (trial -1)" in (folder / "summary.md").read_text()
+    assert "(trial -1)" in (folder / "best.yaml").read_text().splitlines()[0]
+
+
+def test_after_builds_that_fail_the_best_named_is_the_last_built(tmp_path, monkeypatch):
+    """Every build fails a check: three designs are built, the first two set aside, and best.yaml and
+    the tune's best are the third (built), not a fourth nobody built."""
+    built = []
+
+    def load(path):
+        head = Path(path).read_text().splitlines()[0]
+        built.append(int(head.split("(trial ")[1].split(")")[0]))
+        return SimpleNamespace(name=f"d{len(built)}", design=None)
+
+    def build(d, out, cache_dir=None, jobs=None):
+        return SimpleNamespace(report={"checks": [{"id": "part.build_volume", "passed": False, "severity": "error",
+                                                   "message": "too tall"}]},
+                               manifest=SimpleNamespace(parts=[]), folder=Path(out) / d.name)
+
+    monkeypatch.setattr(tune_best.pipeline, "load", load)
+    monkeypatch.setattr(tune_best.pipeline, "build", build)
+    f = _tune_file(tmp_path, {"budget": 12, "free": [{"path": K, "low": 1, "high": 6, "integer": True}],
+                              "goal": {"minimize": "centre_mm.C1", "checks": "required"}})
+    t = tune_best.tune(spec.load(f), tmp_path / "out", "inline")
+    assert len(built) == tune_best.BUILD_TRIES and len(set(built)) == tune_best.BUILD_TRIES
+    assert t.best["trial"] == built[-1] and t.build_ok is False
+    folder = tmp_path / "out" / "tunes" / "t"
+    assert f"(trial {built[-1]})" in (folder / "best.yaml").read_text().splitlines()[0]
+    assert "Set aside" in (folder / "summary.md").read_text()
