@@ -32,6 +32,15 @@ def _trials(out: Path) -> list[dict]:
     return pq.read_table(out / "tunes" / "t" / "trials.parquet").to_pylist()
 
 
+@pytest.mark.parametrize("goal", [{"maximize": "tip_stiffness", "minimize": "tip_stiffness"},
+                                  {"maximize": ["tip_torsion", "tip_torsion"]}])
+def test_a_result_twice_in_the_goal_is_bad_input(tmp_path, goal):
+    f = _tune_file(tmp_path, {"level": "coupling", "goal": goal})
+    with pytest.raises(InputError) as e:
+        spec.load(f)
+    assert e.value.path == "goal" and "objective once" in e.value.message, e.value
+
+
 def test_the_goals_state_is_every_tendon_locked_wherever_a_result_names_another(tmp_path):
     """A result named after '@' first no longer moves the state the goal's other results are of."""
     f = _tune_file(tmp_path, {"level": "coupling", "goal": {"maximize": "tip_stiffness@A",

@@ -115,6 +115,11 @@ class Goal(_Model):
             raise ValueError("give 'pass' or results to maximize/minimize, not both")
         if not self.pass_ and not (self.maximize or self.minimize):
             raise ValueError("give 'maximize', 'minimize' (a result or a list) or 'pass: true'")
+        names = [n for n, _ in self.objectives()]
+        twice = sorted({n for n in names if names.count(n) > 1})
+        if twice:
+            raise ValueError(f"{', '.join(twice)}: each result is an objective once (maximized or minimized, "
+                             f"not both, not twice)")
         return self
 
     def binds(self, f: dict) -> bool:
