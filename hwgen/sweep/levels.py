@@ -154,7 +154,7 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
     failures = list(row["failures"])
     for f in _plan_screens(plan, d.process.min_wall):
         if not any(g["id"] == f["id"] for g in failures):
-            fails.append(f["message"])
+            (fails if f["severity"] == "error" else warns).append(f["message"])
             failures.append(f)
     for t in budgeted:
         if t["robust_mm"] > t["budget_mm"]:
@@ -201,7 +201,8 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
 def _plan_screens(plan: Plan, min_wall: float) -> list[dict]:
     """What the full plan says that the lengths level cannot (``hwgen check`` fails each): on the tip
     disk, its eyelets turned toward the drums (sized there without the turn), tendons whose holes run
-    into one opening (the plan's "overlap" merges: ``eyelet.overlap``) or a wall between two holes
+    into one opening (the plan's "overlap" merges: ``eyelet.overlap``; one with a driven tendon:
+    ``eyelet.shared_sliding``) or a wall between two holes
     under ``process.min_wall`` (their circles on the mid-plane: ``eyelet.wall``); on the base disk, a
     seat as wide as its knot or crimp (a steep tendon's slanted seat: ``tendon.seat``); in the strip,
     a hole for a crossing that breaks through its edge or end (``backbone.crossing``: the helix of 30
@@ -232,6 +233,12 @@ def _plan_screens(plan: Plan, min_wall: float) -> list[dict]:
                                                      f"outline (a notch, not a hole)", "error",
                                 bb.height / 2 + over, bb.height / 2, h.tendon))
             break
+    driven = {p.name for p in plan.paths if p.channel == plan.tensioner.actuating_channel}
+    slide = [m for m in plan.merges if m.station == tip.index and driven & set(m.tendons) and len(m.tendons) > 1]
+    if slide:
+        out.append(failure("eyelet.shared_sliding", "a driven tendon slides through one opening with another on the "
+                                                     "tip disk (its eyelets turned toward the drums): "
+                            + "; ".join("+".join(m.tendons) for m in slide), plan.check.shared_sliding, 2, 1))
     for seat in plan.disks[0].seats:
         if seat.termination and seat.diameter >= seat.termination:
             out.append(failure("tendon.seat", f"{seat.tendon}'s seat on the base disk opens to Ø{seat.diameter:.2f} "

@@ -177,7 +177,12 @@ def load(path: str | Path) -> Loaded:
     """Read and check a tune file and its base design; raise InputError naming the file and field."""
     path = Path(path)
     spec, base_path, layers = sweep_spec.read_with_base(path, Tune, "tune", Tune)
-    base = layers.doc
+    return resolve(path, spec, base_path, layers.doc)
+
+
+def resolve(path: Path, spec: Tune, base_path: Path, base: dict) -> Loaded:
+    """A tune (read from ``path``, or derived from a design there: :mod:`hwgen.tune.derive`) over
+    the base design's document ``base``, checked as a tune file is."""
     for key, value in spec.set.items():
         keys = _keys(path, f"set.{key}", key, base)
         if value is None and isinstance(keys[-1], int):
