@@ -3,6 +3,7 @@ or off the grid, feasible when it passes), a bound by a missing base figure refu
 named after builds that fail the best built (issue 44)."""
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -127,3 +128,26 @@ def test_after_builds_that_fail_the_best_named_is_the_last_built(tmp_path, monke
     folder = tmp_path / "out" / "tunes" / "t"
     assert f"(trial {built[-1]})" in (folder / "best.yaml").read_text().splitlines()[0]
     assert "Set aside" in (folder / "summary.md").read_text()
+
+
+def test_the_summary_lists_near_misses_and_the_front_where_a_bound_binds(tmp_path):
+    """Maximise C1's taut-path length change with its eq. (2) change held to 0.2 mm: the bound binds
+    at the best; the summary lists the infeasible trials past the best, nearest feasible first, each
+    with what stops it, and the front of the objective against the bound's result."""
+    f = _tune_file(tmp_path, {"budget": 30, "free": [{"path": "tendons[1].routing.function.a", "low": 15, "high": 32,
+                                                      "step": 0.5}, {"path": K, "low": 1, "high": 3, "step": 0.5}],
+                              "goal": {"maximize": "taut_mm.C1", "at_most": {"centre_mm.C1": 0.2}}})
+    r = hwgen("tune", str(f), "--out", str(tmp_path / "out"), "--scheduler", "inline", "--no-build")
+    assert r.returncode == 0, r.stdout + r.stderr
+    text = (tmp_path / "out" / "tunes" / "t" / "summary.md").read_text()
+    rows = {t["trial"]: t for t in _trials(tmp_path / "out")}
+    best = max((t for t in rows.values() if t["feasible"]), key=lambda t: t["taut_mm.C1"])
+    near = text.split("## Near misses")[1].split("##")[0]
+    listed = [line.split("|") for line in near.splitlines() if line.startswith("| ") and "trial" not in line]
+    assert 1 <= len(listed) <= 5
+    for cells in listed:
+        t = rows[int(cells[1])]
+        assert not t["feasible"] and t["taut_mm.C1"] > best["taut_mm.C1"]
+        stop = cells[3].strip().strip("`")
+        assert stop in {f["id"] for f in json.loads(t["failed_checks"])} | {"centre_mm.C1 ≤ 0.2"}
+    assert "## The front: taut_mm.C1 against centre_mm.C1" in text

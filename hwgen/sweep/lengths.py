@@ -321,10 +321,15 @@ def verdict(row: dict) -> tuple[str, str, dict]:
     return ("fail" if fails else "pass"), "; ".join(fails), figures
 
 
-def failure(cid: str, message: str, severity: str = "error", measured=None, limit=None, where=None) -> dict:
-    """One record of a rule a sweep's row breaks (or only warns of): what a tune's constraints read."""
-    return {"id": cid, "severity": severity, "where": where, "measured": measured, "limit": limit,
-            "message": message}
+def failure(cid: str, message: str, severity: str = "error", measured=None, limit=None, where=None,
+            fix: str = "") -> dict:
+    """One record of a rule a sweep's row breaks (or only warns of): what a tune's constraints read,
+    and the check's fix where the check gives one."""
+    out = {"id": cid, "severity": severity, "where": where, "measured": measured, "limit": limit,
+           "message": message}
+    if fix:
+        out["fix"] = fix
+    return out
 
 
 def failures(row: dict) -> list[dict]:
@@ -342,7 +347,9 @@ def failures(row: dict) -> list[dict]:
         pairs = sorted({p.split("@")[0] for p in row["shared_sliding"]})
         out.append(failure("eyelet.shared_sliding", f"{', '.join(pairs)}: a driven tendon slides through one "
                                                     f"opening with another on {len(row['shared_sliding'])} disk(s)",
-                           row.get("shared_sliding_severity", "error"), 2, 1, row["shared_sliding"]))
+                           row.get("shared_sliding_severity", "error"), 2, 1, row["shared_sliding"],
+                           "route the other tendon clear of the driven one's eyelets (its amplitude or phase: "
+                           "tendons[].routing.function)"))
     if row["clearance_mm"] < row["min_wall_mm"]:
         out.append(failure("eyelet.wall", f"least wall {row['clearance_mm']:.2f} mm, under process.min_wall "
                                           f"{row['min_wall_mm']:g} mm", "error", row["clearance_mm"],

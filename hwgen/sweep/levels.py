@@ -175,7 +175,7 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
         for c in report.get("failed", []):
             (fails if c["severity"] == "error" else warns).append(f"{c['id']}: {c['message']}")
             failures.append(failure(c["id"], c["message"], c["severity"], c.get("measured"), c.get("limit"),
-                                     (c.get("where") or {}).get("tendon")))
+                                     (c.get("where") or {}).get("tendon"), c.get("fix") or ""))
         row["coupling"] = report.get("coupling")
         row["least_tension_n"] = report.get("least_tension_n")
     if level == "build":
@@ -186,7 +186,8 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
         # the build's verdict is hwgen check's, which runs every rule above on the built files (eq. (2)
         # through the centres only as information): the screening figures stay on record as warnings
         failures = [dict(f, severity="warning") for f in failures]
-        failures += [failure(c["id"], c["message"], c["severity"], c.get("measured"), c.get("limit"))
+        failures += [failure(c["id"], c["message"], c["severity"], c.get("measured"), c.get("limit"), None,
+                             c.get("fix") or "")
                      for c in failed]
         warns = [f"screening: {f}" for f in fails if f] + warns
         fails = [f"{c['id']}: {c['message']}" for c in failed[:3]]
