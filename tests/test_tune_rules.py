@@ -169,3 +169,26 @@ def test_the_sampler_beats_random_search_on_a_known_answer(tmp_path):
         p.write_text(yaml.safe_dump(doc))
         found[sampler] = tune_best.tune(spec.load(p), tmp_path / "out", "inline", build=False).best["objectives"][0]
     assert found["auto"] < 0.9 * found["random"], found
+
+
+def test_the_shipped_stiffness_tune_is_the_space_the_design_derives():
+    """params/tune-stiffness.yaml holds no answer of an earlier search: its free parameters and bounds
+    are those `hwgen tune params/prototype.yaml --goal stiffness` derives, each by its stated rule."""
+    from hwgen.tune import derive
+    shipped, derived = spec.load(PARAMS / "tune-stiffness.yaml"), derive.load(PROTOTYPE, "stiffness")
+    assert shipped.names == derived.names and shipped.base_values == derived.base_values
+    for a, b in zip(shipped.free, derived.free):
+        assert (a.low, a.high, a.step, a.integer) == (b.low, b.high, b.step, b.integer), a.path
+        assert (a.choices is None) == (b.choices is None) and set(a.choices or ()) == set(b.choices or ()), a.path
+    assert shipped.spec.goal.model_dump(exclude={"state"}) == derived.spec.goal.model_dump(exclude={"state"})
+    assert shipped.state == derived.state == "AC1C2H"
+    # the actuating pair and everything structural stay fixed
+    assert not any(n.startswith(("tendons[0]", "disks", "backbone", "process")) for n in derived.names)
+
+
+def test_a_design_file_with_a_goal_is_tuned_and_a_bad_goal_is_exit_2(tmp_path):
+    r = hwgen("tune", str(PROTOTYPE), "--goal", "stiff", "--out", str(tmp_path / "out"), "--scheduler", "inline")
+    assert r.returncode == 2 and "--goal" in r.stderr and "stiffness, torsion, pass" in r.stderr, r.stderr
+    r = hwgen("tune", str(PROTOTYPE), "--out", str(tmp_path / "out"), "--scheduler", "inline")
+    assert r.returncode == 2 and "give --goal" in r.stderr, r.stderr
+    assert not (tmp_path / "out").exists()
