@@ -17,8 +17,8 @@ from an earlier search's answers.
     whole k keeps its length over the bend; a push at the tip bends the strip with a curvature growing as
     (L - s), and ∫ a·cos(kπs/L)(L - s) ds is 2aL²/(kπ)² at odd k and nothing at even k: an even k adds no
     stiffness); its phase 0 or 180° (eq. (2): at odd k, ∫ a·cos(kπs/L + φ) ds = -2aL·sin φ/(kπ)
-    vanishes only there); its offset across the strip (``x0``, or ``z0`` for a cosine along x) within
-    the strip less the crossing's hole and a wall, on the same grid;
+    vanishes only there); its offset (``x0`` across the strip, within it less the crossing's hole and
+    a wall; ``z0`` for a cosine along x, within the disk's rim), on the same grid;
   - a helix's half turns ``k``: whole numbers 1 to :data:`K_MAX` (eq. (2)); its phase over the whole
     circle, on a :data:`PHASE_STEP_DEG` grid;
   - its pre-tension ``pretension_n``, from :data:`LEAST_TENSION_N` up to the allowable load
@@ -97,7 +97,7 @@ def free_space(design: params.Design) -> list[tune_spec.Free]:
                                       choices=sorted({*range(1, K_MAX + 1, 2), fn.k})))
             out.append(tune_spec.Free(path=f"{at}.routing.function.phase_deg", choices=sorted({0.0, 180.0,
                                                                                               fn.phase_deg})))
-            off = _grid(height - r - mw, LENGTH_STEP, False)
+            off = _grid((height if fn.axis == "z" else R) - r - mw, LENGTH_STEP, False)
             if off > 0:
                 out.append(tune_spec.Free(path=f"{at}.routing.function.{'x0' if fn.axis == 'z' else 'z0'}",
                                           low=-off, high=off, step=LENGTH_STEP))
