@@ -192,3 +192,23 @@ def test_a_design_file_with_a_goal_is_tuned_and_a_bad_goal_is_exit_2(tmp_path):
     r = hwgen("tune", str(PROTOTYPE), "--out", str(tmp_path / "out"), "--scheduler", "inline")
     assert r.returncode == 2 and "give --goal" in r.stderr, r.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_the_plan_screens_tendons_that_rub_between_disks():
+    """`hwgen check`'s tendon.clearance, judged on the plan at the robust level and above: the
+    prototype's tendons keep a line's width apart over the sweep; a helix on C1's cosine does not (the
+    lab tune's first best built failed it after its trials had passed the coupling level)."""
+    import copy
+
+    from hwgen.model.plan import make_plan
+    from hwgen.params import Design
+    from hwgen.sweep import levels
+    doc = yaml.safe_load(PROTOTYPE.read_text())
+    assert levels._rubbing(make_plan(Design.model_validate(doc))) is None
+    from hwgen import designfile
+    doc = copy.deepcopy(designfile.read_layers(Path(__file__).parent / "labs" / "lab-fdm.yaml").doc)
+    assert levels._rubbing(make_plan(Design.model_validate(doc))) is None
+    doc["tendons"][1]["routing"]["function"].update(a=20.2, x0=-1.8)          # the lab tune's trial 579
+    doc["tendons"][2]["routing"]["function"].update(a=16.8, k=6, phase_deg=65)
+    f = levels._rubbing(make_plan(Design.model_validate(doc)))
+    assert f is not None and f["id"] == "tendon.clearance" and f["measured"] < f["limit"] == 0.15

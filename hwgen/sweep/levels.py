@@ -29,11 +29,15 @@ from __future__ import annotations
 import json
 import math
 import time
+from itertools import combinations
 
 import numpy as np
 
 from ..errors import DesignError, InputError
 from ..model import feasibility, scatter as mc
+from ..checks.clearances import segment_distance
+from ..checks.lengths import sweep_angles
+from ..model import kinematics as kin
 from ..model.plan import Plan, make_plan
 from . import lengths
 from .lengths import failure
@@ -199,13 +203,45 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
     row["message"] = "; ".join([f for f in fails if f] + [f"warning: {w}" for w in warns])[:2000]
 
 
+def _rubbing(plan: Plan) -> dict | None:
+    """``tendon.clearance`` as ``hwgen check`` judges it, from the plan's eyelet positions: the closest
+    two tendons come between two disks over the check's sweep, bay by bay, leaving out the bays that
+    end in an eyelet they share by design; a failure record when it is under the tendon's diameter."""
+    ang = sweep_angles(plan.check.max_angle_deg, plan.check.step_deg)
+    kappa = kin.kappas_for_angles(ang, plan.backbone.length)
+    st = np.asarray(plan.stations, float)
+    pts = {p.name: kin.points_in_space(st, p.points, kappa) for p in plan.paths}
+    shared: dict[tuple[str, str], set[int]] = {}
+    for m in plan.merges:
+        if m.kind == "shared":
+            for a, b in combinations(m.tendons, 2):
+                shared.setdefault(tuple(sorted((a, b))), set()).add(m.station)
+    d = plan.tendon_material.diameter
+    worst = None
+    for a, b in combinations(pts, 2):
+        sh = shared.get(tuple(sorted((a, b))), set())
+        keep = np.array([j for j in range(len(st) - 1) if j not in sh and j + 1 not in sh], int)
+        if keep.size == 0:
+            continue
+        P, Q = pts[a], pts[b]
+        gap = float(segment_distance(P[:, keep], P[:, keep + 1], Q[:, keep], Q[:, keep + 1]).min())
+        if worst is None or gap < worst[0]:
+            worst = (gap, a, b)
+    if worst is None or worst[0] >= d:
+        return None
+    gap, a, b = worst
+    return failure("tendon.clearance", f"{a} and {b} rub between two disks: {gap:.3f} mm apart over the sweep, "
+                                       f"less than the tendon diameter {d:g} mm", "error", gap, d)
+
+
 def _plan_screens(plan: Plan, min_wall: float) -> list[dict]:
     """What the full plan says that the lengths level cannot (``hwgen check`` fails each): on the tip
     disk, its eyelets turned toward the drums (sized there without the turn), tendons whose holes run
     into one opening (the plan's "overlap" merges: ``eyelet.overlap``; one with a driven tendon:
     ``eyelet.shared_sliding``) or a wall between two holes
     under ``process.min_wall`` (their circles on the mid-plane: ``eyelet.wall``); on the base disk, a
-    seat as wide as its knot or crimp (a steep tendon's slanted seat: ``tendon.seat``); in the strip,
+    seat as wide as its knot or crimp (a steep tendon's slanted seat: ``tendon.seat``); between the
+    disks, two tendons closer than a line's diameter over the sweep (``tendon.clearance``); in the strip,
     a hole for a crossing that breaks through its edge or end (``backbone.crossing``: the helix of 30
     mm at 5 half turns lies on the 60 mm strip's edge at the middle disk)."""
     out = []
@@ -240,6 +276,9 @@ def _plan_screens(plan: Plan, min_wall: float) -> list[dict]:
         out.append(failure("eyelet.shared_sliding", "a driven tendon slides through one opening with another on the "
                                                      "tip disk (its eyelets turned toward the drums): "
                             + "; ".join("+".join(m.tendons) for m in slide), plan.check.shared_sliding, 2, 1))
+    rub = _rubbing(plan)
+    if rub is not None:
+        out.append(rub)
     for seat in plan.disks[0].seats:
         if seat.termination and seat.diameter >= seat.termination:
             out.append(failure("tendon.seat", f"{seat.tendon}'s seat on the base disk opens to Ø{seat.diameter:.2f} "
