@@ -127,8 +127,10 @@ def tune(tune_file: Path = typer.Argument(..., help="tune YAML (a base design, f
         say("no trial passes;", "red", f"see {printable(o.folder / 'summary.md')}")
     else:
         objs = ", ".join(f"{n} {v:.4g}" for (n, _), v in zip(loaded.objectives, t.best["objectives"]))
-        found = f" (found {o.first_best_s:.1f} s into this run)" if o.first_best_s is not None else ""
-        out.print(f"best: trial {t.best['trial']}: {objs}{found}" + (f"; front of {len(t.front)}" if len(t.front) > 1
+        base = t.best["trial"] < 0
+        found = f" (found {o.first_best_s:.1f} s into this run)" if o.first_best_s is not None and not base else ""
+        who = "the base itself (trial -1), no trial passes further" if base else f"trial {t.best['trial']}"
+        out.print(f"best: {who}: {objs}{found}" + (f"; front of {len(t.front)}" if len(t.front) > 1
                                                                      and len(loaded.objectives) > 1 else ""),
                   soft_wrap=True)
     for f in t.files:
