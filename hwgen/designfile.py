@@ -38,7 +38,7 @@ from .errors import InputError, clip
 BASE_KEY = "base"
 MAX_CHAIN = 16                  # files in one chain of bases: far more than a lab keeps
 # (section, key): a setting that lowers a failing check's severity, for one robot and its reason
-NOT_INHERITED = (("check", "robust_severity"), ("check", "overstress"))
+NOT_INHERITED = (("check", "robust_severity"), ("check", "overstress"), ("check", "shared_sliding"))
 # Keys that moved: (old section, key) -> (new section, key). Read from the old place for one release.
 MOVED_KEYS = {("render", "tie_off_mm"): ("bom", "tie_off_mm"), ("render", "spool_mm"): ("bom", "spool_mm"),
               ("tensioner", "backlash"): ("tensioner", "center_offset")}

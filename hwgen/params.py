@@ -338,6 +338,10 @@ class CheckSettings(_Model):
                           "or is no wider than this, mm (0: only clear of the budget)")
     robust_severity: Literal["error", "warning"] = Field(
         "error", description="what a budgeted tendon over its budget at that statistic is")
+    shared_sliding: Literal["error", "warning"] = Field(
+        "error", description="what a tendon of the actuating channel sliding through one opening with another "
+                             "tendon is (eyelet.shared_sliding): the lines rub there, and no model here says "
+                             "what that does")
     taut_floor_n: Finite = Field(0.5, ge=0, le=1000,
                                  description="least tension a locked stiffening tendon may fall to over the "
                                              "bending sweep and still count as taut, N")

@@ -232,3 +232,14 @@ def test_no_failure_is_swallowed_in_silence():
 def test_the_silent_handler_finder_finds_one():
     assert _silent_handlers(ast.parse("try:\n    x()\nexcept OSError:\n    pass\n")) == [3]
     assert _silent_handlers(ast.parse("try:\n    x()\nexcept OSError:\n    log()\n")) == []
+
+
+def test_a_failing_check_is_defined_once():
+    """'A check that fails the design' (not passed, an error) is :func:`hwgen.checks.base.fails`;
+    no other module writes the rule out again (two bugs came from copies that drifted: issue 49)."""
+    import re
+    rule = re.compile(r"""not\s+c(?:heck)?(?:\.get\(\s*["']passed["']|\[["']passed["']\]|\.passed)[^\n]*severity[^\n]*==\s*["']error""")
+    found = [str(f.relative_to(PKG.parent)) for m, f in _modules().items()
+             if m != "hwgen.checks.base" and rule.search(f.read_text())]
+    assert not found, f"the failing-check rule written out again in {found}: use checks.base.failing"
+    assert rule.search('x = [c for c in cs if not c.get("passed", True) and c.get("severity") == "error"]')

@@ -10,6 +10,7 @@ diameters enlarged by that much before they are compared.
 from __future__ import annotations
 
 import math
+import re
 from itertools import combinations
 from pathlib import Path
 from typing import NamedTuple
@@ -53,8 +54,9 @@ def _hole_names(emap: EyeletMap, report: dict) -> dict[int, dict[int, str]]:
     return names
 
 
-def wall_checks(emap: EyeletMap, report: dict, min_wall: float) -> list[Check]:
-    """Eyelet-to-edge, eyelet-to-eyelet and eyelet-to-slot walls, one check of each per disk."""
+def wall_checks(emap: EyeletMap, report: dict, min_wall: float, driven: set[str] = frozenset()) -> list[Check]:
+    """Eyelet-to-edge, eyelet-to-eyelet and eyelet-to-slot walls, one check of each per disk.
+    ``driven``: the tendons the drive slides, which no fix routes into another's eyelet."""
     out = []
     names = _hole_names(emap, report)
     for disk in emap.disks:
@@ -101,13 +103,17 @@ def wall_checks(emap: EyeletMap, report: dict, min_wall: float) -> list[Check]:
                        f"{min_wall:g} mm" + (f"; also thin: {', '.join(p for p in bad if p != place)}"
                                              if len(bad) > 1 else ""))
             rd = next((r for r in report["disks"] if r["index"] == disk.station), {})
-            fix = "" if ok else _wall_fix(cid, place, min_wall - w, disk.station, rd.get("outer_diameter_mm"))
+            fix = "" if ok else _wall_fix(cid, place, min_wall - w, disk.station, rd.get("outer_diameter_mm"),
+                                          driven)
             out.append(Check(cid, "error", ok, msg, max(w, 0.0), min_wall, {**where, "at": place}, fix=fix))
     return out
 
 
-def _wall_fix(cid: str, place: str, short: float, station: int, diameter: float | None) -> str:
-    """What gives a wall under the process minimum the ``short`` mm it lacks, at ``place``."""
+def _wall_fix(cid: str, place: str, short: float, station: int, diameter: float | None,
+              driven: set[str] = frozenset()) -> str:
+    """What gives a wall under the process minimum the ``short`` mm it lacks, at ``place``; two
+    holes are offered one shared eyelet only when neither holds a driven tendon (a driven line
+    slides, and would rub the other: eyelet.shared_sliding)."""
     holes = place.split(" (")[0]
     thinner = "; or a process that prints thinner walls (process.min_wall)"
     if cid == "eyelet.wall.edge":
@@ -118,8 +124,10 @@ def _wall_fix(cid: str, place: str, short: float, station: int, diameter: float 
     if cid == "eyelet.wall.slot":
         return (f"route the tendon of {holes} at least {short:.2f} mm further from the strip at station {station} "
                 f"(tendons[].routing: a larger |z| there), or a smaller disks.slot_clearance{thinner}")
-    return (f"route {holes} at least {short:.2f} mm further apart at station {station} (tendons[].routing), or "
-            f"route them into one shared eyelet; or smaller eyelets (process.hole_clearance){thinner}")
+    names = set(re.findall(r"[^\s+/]+", holes.replace("eyelet ", " ").replace(" and ", " ")))
+    share = "" if names & set(driven) else ", or route them into one shared eyelet"
+    return (f"route {holes} at least {short:.2f} mm further apart at station {station} (tendons[].routing)"
+            f"{share}; or smaller eyelets (process.hole_clearance){thinner}")
 
 
 def hole_checks(emap: EyeletMap, min_hole: float, tendon_d: float, angles_deg: np.ndarray,

@@ -18,6 +18,7 @@ from ..model.routing import table_deviations
 from .anchors import seat_checks
 from .base import REBUILD, Check, failing
 from .clearances import StripBend, backbone_checks, hole_checks, tendon_pair_checks, wall_checks
+from .sliding import driven_tendons, sliding_checks
 from .eyelets import backbone_section, locate_eyelets, measure_disk
 from .bench import bench_checks
 from .fixtures import jig_checks, mount_checks
@@ -156,7 +157,9 @@ def _measure(folder: Path, manifest: Manifest, plan) -> Measured:
         checks.append(_take_up_check(pair))
 
     proc, td = plan.process, plan.tendon_material.diameter
-    checks += wall_checks(emap, rep_in, proc.min_wall)
+    driven = driven_tendons(rep_in, plan.tensioner.actuating_channel)
+    checks += wall_checks(emap, rep_in, proc.min_wall, driven)
+    checks += sliding_checks(emap, rep_in, plan.tensioner.actuating_channel, proc.min_wall, s.shared_sliding)
     checks += hole_checks(emap, proc.min_hole, td, angles, L, tip_exits(manifest))
     checks += tendon_pair_checks(emap, rep_in, td, angles, L)
     checks += backbone_checks(emap, folder / backbone_template(manifest), bb_outline, bb_holes, td,

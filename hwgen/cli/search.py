@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from ..errors import printable
+from ..errors import InputError, printable
 from .common import (CACHE_DIR, EXIT_FINDINGS, NO_CACHE, SCHEDULER, WORKERS, _cache, _check_scheduler, _command, _load,
                      err, out, say)
 
@@ -67,8 +67,11 @@ def sweep(sweep_file: Path = typer.Argument(..., help="sweep YAML: a base design
 
 
 @_command
-def tune(tune_file: Path = typer.Argument(..., help="tune YAML: a base design, free parameters with bounds, a goal",
-                                          show_default=False),
+def tune(tune_file: Path = typer.Argument(..., help="tune YAML (a base design, free parameters with bounds, a goal), "
+                                                    "or a design YAML with --goal", show_default=False),
+         goal: str = typer.Option(None, "--goal", show_default=False,
+                                  help="with a design file: stiffness, torsion or pass, over the space derived from "
+                                       "the design (its stiffening tendons' routing, pre-tension and termination)"),
          out_dir: Path = typer.Option(Path("out"), "--out", help="output root; results go to OUT/tunes/<name>/"),
          scheduler: str = SCHEDULER, workers: int = WORKERS,
          budget: int = typer.Option(None, "--budget", min=1, show_default=False,
@@ -79,7 +82,7 @@ def tune(tune_file: Path = typer.Argument(..., help="tune YAML: a base design, f
          cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
     """Search a design's parameters for the best one (Optuna on the sweep's Dask workers): trials.parquet, best.yaml, summary.md, convergence.png, and the best built and checked.
 
-    Goals: maximize or minimize results of the statics or the checks subject to every check of the level passing (several: a Pareto front), or pass (the passing design nearest the base). A rerun goes on from the trials already told. Exit 1 when no trial passes or the best's build fails a check; exit 2 for a bad tune file.
+    Goals: maximize or minimize results of the statics or the checks subject to every check of the level passing (several: a Pareto front), or pass (the passing design nearest the base). A design file with --goal stiffness|torsion|pass: the space derived from the design (hwgen.tune.derive), the tip's torsion (or stiffness) and least disk stiffness kept at least the design's own. A rerun goes on from the trials already told. Exit 1 when no trial passes or the best's build fails a check; exit 2 for a bad tune file.
     """
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -87,8 +90,18 @@ def tune(tune_file: Path = typer.Argument(..., help="tune YAML: a base design, f
     from ..tune import run as tune_run
     from ..tune import spec as tune_spec
 
+    from ..tune import derive
+
     _check_scheduler(scheduler)
-    loaded = tune_spec.load(tune_file)
+    if derive.is_design(tune_file):
+        if goal is None:
+            raise InputError(tune_file, "--goal", f"a design file is tuned toward a goal: give --goal "
+                                                  f"{'|'.join(derive.GOALS)} (or write a tune file)")
+        loaded = derive.load(tune_file, goal, budget)
+    elif goal is not None:
+        raise InputError(tune_file, "--goal", "--goal is for a design file; a tune file states its own goal")
+    else:
+        loaded = tune_spec.load(tune_file)
     with Progress(TextColumn("{task.description}", markup=False), BarColumn(), MofNCompleteColumn(),
                   TimeElapsedColumn(), console=err, disable=quiet or not err.is_terminal, transient=True) as bar:
         task = bar.add_task(f"tuning {loaded.spec.tune}", total=budget or loaded.spec.budget)
@@ -114,8 +127,10 @@ def tune(tune_file: Path = typer.Argument(..., help="tune YAML: a base design, f
         say("no trial passes;", "red", f"see {printable(o.folder / 'summary.md')}")
     else:
         objs = ", ".join(f"{n} {v:.4g}" for (n, _), v in zip(loaded.objectives, t.best["objectives"]))
-        found = f" (found {o.first_best_s:.1f} s into this run)" if o.first_best_s is not None else ""
-        out.print(f"best: trial {t.best['trial']}: {objs}{found}" + (f"; front of {len(t.front)}" if len(t.front) > 1
+        base = t.best["trial"] < 0
+        found = f" (found {o.first_best_s:.1f} s into this run)" if o.first_best_s is not None and not base else ""
+        who = "the base itself (trial -1), no trial passes further" if base else f"trial {t.best['trial']}"
+        out.print(f"best: {who}: {objs}{found}" + (f"; front of {len(t.front)}" if len(t.front) > 1
                                                                      and len(loaded.objectives) > 1 else ""),
                   soft_wrap=True)
     for f in t.files:

@@ -31,6 +31,7 @@ class CheckSettings:
     robust_confidence: float
     robust_precision_mm: float
     robust_severity: str          # "error" or "warning"
+    shared_sliding: str           # "error" or "warning"
     taut_floor_n: float
     tendon_safety_factor: float
     max_coupling: float
@@ -169,6 +170,7 @@ def check_settings(d: Design) -> CheckSettings:
                          interference_tol_mm3=c.interference_tol_mm3, overstress=c.overstress, samples=c.samples,
                          seed=c.seed, robust=c.robust, robust_confidence=c.robust_confidence,
                          robust_precision_mm=c.robust_precision_mm, robust_severity=c.robust_severity,
+                         shared_sliding=c.shared_sliding,
                          taut_floor_n=c.taut_floor_n, tendon_safety_factor=c.tendon_safety_factor,
                          max_coupling=c.max_coupling, working_tension_n=c.working_tension_n,
                          straight_within_mm=c.straight_within_mm,

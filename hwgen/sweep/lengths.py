@@ -246,6 +246,7 @@ def _group(ds: list[Design]) -> list[dict]:
     dia = np.empty((V, T, N))
     centre_xz = np.empty((V, T, N, 2))
     overlaps = np.empty(V, int)
+    sliding: list[list[str]] = [[] for _ in range(V)]
     least = np.empty(V)
     crossings = np.empty(V, int)
     mass = np.empty(V)
@@ -257,6 +258,9 @@ def _group(ds: list[Design]) -> list[dict]:
         least[m], crossings[m] = _clearances(d, c_, dia_, joined, overlap)
         mass[m] = _mass(d, dia_, joined, thick)
         overlaps[m] = overlap.any(axis=(2, 3)).sum(axis=1)
+        for j, k in enumerate(m):
+            sliding[k] = shared_sliding([q.name for q in paths[k]], [q.channel for q in paths[k]],
+                                        ds[k].tensioner.actuating_channel, joined[j])
     # the nominal print's taut path: each distinct chain (a tendon's holes, anchor and end) one sample
     free = np.array([[d.tendon_material.diameter] for d in ds])                 # (V, 1)
     chains = np.concatenate([centre_xz.reshape(V, T, -1), ax.reshape(V, T, -1), dia,
@@ -280,9 +284,21 @@ def _group(ds: list[Design]) -> list[dict]:
                     "centre_mm": float(centre[v, t]), "taut_mm": float(tautd[v, t]),
                     "rest_mm": float(L0[v, t])} for t, p in enumerate(paths[v])]
         rows.append({"tendons": tendons, "clearance_mm": float(least[v]), "strip_crossings": int(crossings[v]),
-                     "overlapping_eyelets": int(overlaps[v]),
+                     "overlapping_eyelets": int(overlaps[v]), "shared_sliding": sliding[v],
+                     "shared_sliding_severity": d.check.shared_sliding,
                      "mass_g": float(mass[v]), "min_wall_mm": d.process.min_wall})
     return rows
+
+
+def shared_sliding(names: list[str], channels: list[str], actuating: str, joined: np.ndarray) -> list[str]:
+    """"DRIVEN+OTHER@station" for every disk past the base (where the lines end in their seats)
+    on which a tendon of the actuating channel passes one opening with another tendon (``joined``
+    (N, T, T): tendons of one hole), as ``hwgen check``'s ``eyelet.shared_sliding`` finds it."""
+    out = []
+    for i, t, u in zip(*np.nonzero(joined[1:])):
+        if t != u and channels[t] == actuating and (channels[u] != actuating or t < u):
+            out.append(f"{names[t]}+{names[u]}@{i + 1}")
+    return out
 
 
 def _by(items, key) -> dict:
@@ -296,7 +312,7 @@ def verdict(row: dict) -> tuple[str, str, dict]:
     """(verdict, message, summary figures) of a lengths row: a budgeted tendon over its budget by
     eq. (2) through the hole centres, or a wall thinner than the process's minimum, fails."""
     budgeted = [t for t in row["tendons"] if t["budget_mm"] is not None]
-    fails = [f["message"] for f in failures(row)]
+    fails = [f["message"] for f in failures(row) if f["severity"] == "error"]
     figures = {"centre_mm": max((t["centre_mm"] for t in budgeted), default=None),
                "taut_mm": max((t["taut_mm"] for t in budgeted), default=None),
                "decoupled": all(t["centre_mm"] <= t["budget_mm"] for t in budgeted),
@@ -305,22 +321,35 @@ def verdict(row: dict) -> tuple[str, str, dict]:
     return ("fail" if fails else "pass"), "; ".join(fails), figures
 
 
-def failure(cid: str, message: str, severity: str = "error", measured=None, limit=None, where=None) -> dict:
-    """One record of a rule a sweep's row breaks (or only warns of): what a tune's constraints read."""
-    return {"id": cid, "severity": severity, "where": where, "measured": measured, "limit": limit,
-            "message": message}
+def failure(cid: str, message: str, severity: str = "error", measured=None, limit=None, where=None,
+            fix: str = "") -> dict:
+    """One record of a rule a sweep's row breaks (or only warns of): what a tune's constraints read,
+    and the check's fix where the check gives one."""
+    out = {"id": cid, "severity": severity, "where": where, "measured": measured, "limit": limit,
+           "message": message}
+    if fix:
+        out["fix"] = fix
+    return out
 
 
 def failures(row: dict) -> list[dict]:
     """What fails in a lengths row, one :func:`failure` record a rule: a budgeted tendon over its
     budget by eq. (2) through the hole centres (``tendon.length``), tendons routed into one opening
-    (``eyelet.overlap``), a wall under the process's minimum (``eyelet.wall``)."""
+    (``eyelet.overlap``), a driven tendon through one opening with another (``eyelet.shared_sliding``),
+    a wall under the process's minimum (``eyelet.wall``)."""
     out = [failure("tendon.length", f"{t['name']} changes {t['centre_mm']:.3f} mm by eq. (2), budget "
                                     f"{t['budget_mm']:g} mm", "error", t["centre_mm"], t["budget_mm"], t["name"])
            for t in row["tendons"] if t["budget_mm"] is not None and t["centre_mm"] > t["budget_mm"]]
     if row.get("overlapping_eyelets"):
         out.append(failure("eyelet.overlap", f"tendons routed into each other share one opening on "
                                              f"{row['overlapping_eyelets']} disk(s)"))
+    if row.get("shared_sliding"):
+        pairs = sorted({p.split("@")[0] for p in row["shared_sliding"]})
+        out.append(failure("eyelet.shared_sliding", f"{', '.join(pairs)}: a driven tendon slides through one "
+                                                    f"opening with another on {len(row['shared_sliding'])} disk(s)",
+                           row.get("shared_sliding_severity", "error"), 2, 1, row["shared_sliding"],
+                           "route the other tendon clear of the driven one's eyelets (its amplitude or phase: "
+                           "tendons[].routing.function)"))
     if row["clearance_mm"] < row["min_wall_mm"]:
         out.append(failure("eyelet.wall", f"least wall {row['clearance_mm']:.2f} mm, under process.min_wall "
                                           f"{row['min_wall_mm']:g} mm", "error", row["clearance_mm"],

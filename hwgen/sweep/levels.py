@@ -29,11 +29,15 @@ from __future__ import annotations
 import json
 import math
 import time
+from itertools import combinations
 
 import numpy as np
 
 from ..errors import DesignError, InputError
 from ..model import feasibility, scatter as mc
+from ..checks.clearances import segment_distance
+from ..checks.lengths import sweep_angles
+from ..model import kinematics as kin
 from ..model.plan import Plan, make_plan
 from . import lengths
 from .lengths import failure
@@ -154,7 +158,7 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
     failures = list(row["failures"])
     for f in _plan_screens(plan, d.process.min_wall):
         if not any(g["id"] == f["id"] for g in failures):
-            fails.append(f["message"])
+            (fails if f["severity"] == "error" else warns).append(f["message"])
             failures.append(f)
     for t in budgeted:
         if t["robust_mm"] > t["budget_mm"]:
@@ -175,7 +179,7 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
         for c in report.get("failed", []):
             (fails if c["severity"] == "error" else warns).append(f"{c['id']}: {c['message']}")
             failures.append(failure(c["id"], c["message"], c["severity"], c.get("measured"), c.get("limit"),
-                                     (c.get("where") or {}).get("tendon")))
+                                     (c.get("where") or {}).get("tendon"), c.get("fix") or ""))
         row["coupling"] = report.get("coupling")
         row["least_tension_n"] = report.get("least_tension_n")
     if level == "build":
@@ -186,7 +190,8 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
         # the build's verdict is hwgen check's, which runs every rule above on the built files (eq. (2)
         # through the centres only as information): the screening figures stay on record as warnings
         failures = [dict(f, severity="warning") for f in failures]
-        failures += [failure(c["id"], c["message"], c["severity"], c.get("measured"), c.get("limit"))
+        failures += [failure(c["id"], c["message"], c["severity"], c.get("measured"), c.get("limit"), None,
+                             c.get("fix") or "")
                      for c in failed]
         warns = [f"screening: {f}" for f in fails if f] + warns
         fails = [f"{c['id']}: {c['message']}" for c in failed[:3]]
@@ -198,12 +203,45 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
     row["message"] = "; ".join([f for f in fails if f] + [f"warning: {w}" for w in warns])[:2000]
 
 
+def _rubbing(plan: Plan) -> dict | None:
+    """``tendon.clearance`` as ``hwgen check`` judges it, from the plan's eyelet positions: the closest
+    two tendons come between two disks over the check's sweep, bay by bay, leaving out the bays that
+    end in an eyelet they share by design; a failure record when it is under the tendon's diameter."""
+    ang = sweep_angles(plan.check.max_angle_deg, plan.check.step_deg)
+    kappa = kin.kappas_for_angles(ang, plan.backbone.length)
+    st = np.asarray(plan.stations, float)
+    pts = {p.name: kin.points_in_space(st, p.points, kappa) for p in plan.paths}
+    shared: dict[tuple[str, str], set[int]] = {}
+    for m in plan.merges:
+        if m.kind == "shared":
+            for a, b in combinations(m.tendons, 2):
+                shared.setdefault(tuple(sorted((a, b))), set()).add(m.station)
+    d = plan.tendon_material.diameter
+    worst = None
+    for a, b in combinations(pts, 2):
+        sh = shared.get(tuple(sorted((a, b))), set())
+        keep = np.array([j for j in range(len(st) - 1) if j not in sh and j + 1 not in sh], int)
+        if keep.size == 0:
+            continue
+        P, Q = pts[a], pts[b]
+        gap = float(segment_distance(P[:, keep], P[:, keep + 1], Q[:, keep], Q[:, keep + 1]).min())
+        if worst is None or gap < worst[0]:
+            worst = (gap, a, b)
+    if worst is None or worst[0] >= d:
+        return None
+    gap, a, b = worst
+    return failure("tendon.clearance", f"{a} and {b} rub between two disks: {gap:.3f} mm apart over the sweep, "
+                                       f"less than the tendon diameter {d:g} mm", "error", gap, d)
+
+
 def _plan_screens(plan: Plan, min_wall: float) -> list[dict]:
     """What the full plan says that the lengths level cannot (``hwgen check`` fails each): on the tip
     disk, its eyelets turned toward the drums (sized there without the turn), tendons whose holes run
-    into one opening (the plan's "overlap" merges: ``eyelet.overlap``) or a wall between two holes
+    into one opening (the plan's "overlap" merges: ``eyelet.overlap``; one with a driven tendon:
+    ``eyelet.shared_sliding``) or a wall between two holes
     under ``process.min_wall`` (their circles on the mid-plane: ``eyelet.wall``); on the base disk, a
-    seat as wide as its knot or crimp (a steep tendon's slanted seat: ``tendon.seat``); in the strip,
+    seat as wide as its knot or crimp (a steep tendon's slanted seat: ``tendon.seat``); between the
+    disks, two tendons closer than a line's diameter over the sweep (``tendon.clearance``); in the strip,
     a hole for a crossing that breaks through its edge or end (``backbone.crossing``: the helix of 30
     mm at 5 half turns lies on the 60 mm strip's edge at the middle disk)."""
     out = []
@@ -232,6 +270,15 @@ def _plan_screens(plan: Plan, min_wall: float) -> list[dict]:
                                                      f"outline (a notch, not a hole)", "error",
                                 bb.height / 2 + over, bb.height / 2, h.tendon))
             break
+    driven = {p.name for p in plan.paths if p.channel == plan.tensioner.actuating_channel}
+    slide = [m for m in plan.merges if m.station == tip.index and driven & set(m.tendons) and len(m.tendons) > 1]
+    if slide:
+        out.append(failure("eyelet.shared_sliding", "a driven tendon slides through one opening with another on the "
+                                                     "tip disk (its eyelets turned toward the drums): "
+                            + "; ".join("+".join(m.tendons) for m in slide), plan.check.shared_sliding, 2, 1))
+    rub = _rubbing(plan)
+    if rub is not None:
+        out.append(rub)
     for seat in plan.disks[0].seats:
         if seat.termination and seat.diameter >= seat.termination:
             out.append(failure("tendon.seat", f"{seat.tendon}'s seat on the base disk opens to Ø{seat.diameter:.2f} "

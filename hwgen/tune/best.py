@@ -5,6 +5,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .. import pipeline
+from ..checks.base import failing
 from . import report, results, run as tune_run
 from .spec import Loaded
 
@@ -47,7 +48,8 @@ def tune(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: 
     """Run the tune, write its results, and build the best whole (``hwgen build`` and its checks)
     into ``OUT/tunes/<name>/build/<design>/``. A best whose build fails a check the tune's level
     does not screen for is set aside (kept in the study, said in summary.md) and the next best
-    built, up to :data:`BUILD_TRIES` designs."""
+    built, up to :data:`BUILD_TRIES` designs; the best named (best.yaml, summary.md) is always the
+    last one built: when that one fails too, it stays the best named and the tune says it fails."""
     outcome, study = tune_run.run(loaded, out_root, scheduler, workers, budget, cache, on_trial)
     folder = outcome.folder
     written = report.write(loaded, study, folder, outcome)
@@ -55,22 +57,21 @@ def tune(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: 
     if best is None or not build:
         return Tuned(outcome, best, written["front"], written["files"], None, None, [])
     lines: list[str] = []
-    for _ in range(BUILD_TRIES):
+    for attempt in range(BUILD_TRIES):
         best_loaded = pipeline.load(folder / "best.yaml")
         result = pipeline.build(best_loaded, folder / "build", cache_dir=cache, jobs=pipeline.default_jobs())
         checks = (result.report or {}).get("checks", [])
-        failed = [c for c in checks if not c.get("passed", True) and c.get("severity") == "error"]
+        failed = failing(checks)
         lines.append(f"Trial {best['trial']}: `hwgen build best.yaml`: {len(result.manifest.parts)} parts in "
                      f"`build/{best_loaded.name}/`; `hwgen check`: {len(checks)} checks, {len(failed)} failed"
                      + (": " + "; ".join(f"{c['id']}: {c['message']}" for c in failed[:5]) if failed else "") + ".")
-        if not failed:
-            break
-        rejected = dict(study.user_attrs.get("rejected", {}))
-        rejected[best["hash"]] = sorted({c["id"] for c in failed})
+        if not failed or attempt + 1 == BUILD_TRIES:
+            break          # the best named is the last one built, passing or not
+        rejected = {**study.user_attrs.get("rejected", {}), best["hash"]: sorted({c["id"] for c in failed})}
+        if report.best(loaded, [written["base"], *written["rows"]], rejected)[0] is None:
+            break          # nothing left to build: the failing one stays the best named
         study.set_user_attr("rejected", rejected)
         written = report.write(loaded, study, folder, outcome)
-        if written["best"] is None:
-            break
         best = written["best"]
         lines[-1] += " Set aside: the next best is built."
     stiff = _stiffness(loaded, best_loaded.design)

@@ -84,7 +84,7 @@ def best(loaded: Loaded, rows: list[dict], rejected=()) -> tuple[dict | None, li
 # ---------------------------------------------------------------- trials.parquet
 
 def table(loaded: Loaded, rows: list[dict]) -> pa.Table:
-    state = loaded.spec.goal.state or (loaded.states[0] if loaded.states else "")
+    state = loaded.state
     cols: dict[str, list] = {"trial": [], "hash": []}
     for n in loaded.names:
         cols[n] = []
@@ -225,22 +225,24 @@ def importances(loaded: Loaded, rows: list[dict]) -> dict[str, dict[str, float]]
 def markdown(loaded: Loaded, rows: list[dict], base_row: dict, outcome=None, built: dict | None = None,
              stiffness: dict | None = None, rejected=None) -> str:
     rejected = rejected or {}
-    best_row, front = best(loaded, rows, rejected)
+    best_row, front = best(loaded, [base_row, *rows], rejected)       # the base is a candidate like any trial
     g = loaded.spec.goal
     goal = "pass every check, nearest the base" if g.pass_ else ", ".join(f"{how} {n}" for n, how in
                                                                           loaded.objectives)
     n_ok = sum(r["feasible"] for r in rows)
+    base_ok = bool(base_row["feasible"])
     lines = [f"# Tune {loaded.spec.tune}", "",
              f"Base design: `{loaded.base_path.name}`" + (f" with {', '.join(f'`{k}`' for k in loaded.spec.set)} set"
                                                          if loaded.spec.set else "") + f"; level {loaded.spec.level}; "
              f"goal: {goal}" + (f", subject to {', '.join(bounds(loaded))}" if bounds(loaded) else "")
              + (f"; required even as warnings: {', '.join(g.require)}" if g.require else "") + ".", "",
              *([f"Statics (the study `hwgen stiffness` runs, the plan's estimated masses): state "
-                f"{g.state or loaded.states[0]}, {g.orientation}, eyelets "
+                f"{loaded.state}, {g.orientation}, eyelets "
                 f"{'frictionless' if g.friction == 'none' else 'stuck (every segment held at its eyelets)'}; each "
                 f"tendon tensioned by the paper's protocol, or at its own `pretension_n` where the design gives one.",
                 ""] if loaded.states else []),
-             f"{len(rows)} trials told, {n_ok} feasible, "
+             f"{len(rows)} trials told, {n_ok} feasible (the base, trial -1, "
+             f"{'feasible' if base_ok else 'infeasible'} besides), "
              f"{sum(1 for r in rows if r.get('same_as') is not None)} told from an earlier trial of the same design."]
     if outcome is not None:
         lines += ["", f"This run: {outcome.evaluated} trials evaluated in {outcome.seconds:.1f} s on "
@@ -251,8 +253,9 @@ def markdown(loaded: Loaded, rows: list[dict], base_row: dict, outcome=None, bui
     if best_row is None:
         lines += ["No trial passes. " + binding(loaded, rows)]
     else:
-        state = g.state or (loaded.states[0] if loaded.states else "")
-        lines += [f"Trial {best_row['trial']} (`best.yaml`).", "", "| | base | best |", "|---|---:|---:|"]
+        state = loaded.state
+        who = "The base itself (trial -1): no trial passes further" if best_row["trial"] < 0 else f"Trial {best_row['trial']}"
+        lines += [f"{who} (`best.yaml`).", "", "| | base | best |", "|---|---:|---:|"]
         for n, b, v in zip(loaded.names, loaded.base_values, best_row["values"]):
             lines.append(f"| `{n}` | {_fmt(b)} | {_fmt(v)} |")
         shown = [n for n, _ in loaded.objectives] + [*g.at_least, *g.at_most]
@@ -297,9 +300,96 @@ def markdown(loaded: Loaded, rows: list[dict], base_row: dict, outcome=None, bui
         for r in front[:50]:
             lines.append(f"| {r['trial']} | " + " | ".join(_fmt(v) for v in r["values"]) + " | "
                          + " | ".join(_fmt(v) for v in r["objectives"]) + " |")
+    if best_row is not None:
+        lines += bound_fronts(loaded, [base_row, *rows], best_row)
+    if n_ok < len(rows):
+        lines += near_misses(loaded, rows, best_row, base_row)
     if best_row is not None and n_ok < len(rows):
         lines += ["", "## What kept the others out", "", binding(loaded, rows)]
     return "\n".join(lines) + "\n"
+
+
+BINDS = 0.02            # a bound binds at the best when the best is within this share of it
+NEAR_MISSES = 5
+FRONT_ROWS = 12
+
+
+def _stops(loaded: Loaded, r: dict, base_row: dict) -> tuple[str, str, str]:
+    """(what stops an infeasible trial, how far, its fix): the constraint it breaks furthest, a
+    check (its message and the check's own fix) or a bound of the goal (the figure against it)."""
+    from .run import _violation
+    g = loaded.spec.goal
+    worst = None
+    for f in r.get("failures") or []:
+        if g.binds(f):
+            v = _violation(f)
+            if worst is None or v > worst[0]:
+                worst = (v, f["id"], f.get("message") or "", f.get("fix") or "")
+    for label, c, (n, how) in zip(bounds(loaded), r["constraints"][1:],
+                                  [*((n, "≥") for n in g.at_least), *((n, "≤") for n in g.at_most)]):
+        if c > 0 and (worst is None or c > worst[0]):
+            b = (g.at_least | g.at_most)[n]
+            ref = results.value(n, base_row, loaded.state) if b == "base" else b
+            got = results.value(n, r, loaded.state)
+            worst = (c, label, f"{n} {_fmt(got)} against {_fmt(ref)}", "")      # a bound of the goal: no check's fix
+    if worst is None:
+        return r.get("verdict") or "-", r.get("message") or "", ""
+    return worst[1], worst[2], worst[3]
+
+
+def near_misses(loaded: Loaded, rows: list[dict], best_row: dict | None, base_row: dict) -> list[str]:
+    """The :data:`NEAR_MISSES` infeasible trials nearest feasible (least violation) of those better in
+    the (first) objective than the best, each with the one constraint that stops it furthest and
+    that check's fix: where a lab's judgement (a bead on a seat, a warning stated with its reason)
+    may take a better design than the search could."""
+    sign = 1.0 if loaded.objectives[0][1] == "maximize" else -1.0
+    bar = None if best_row is None else sign * best_row["objectives"][0]
+    seen, out = set(), []
+    cands = [r for r in rows if not r["feasible"] and r.get("verdict") not in ("bad input", "error")
+             and results.value(loaded.objectives[0][0], r, loaded.state) is not None
+             and (bar is None or sign * r["objectives"][0] > bar)]
+    for r in sorted(cands, key=lambda r: (sum(r["constraints"]), -sign * r["objectives"][0], r["trial"])):
+        if r.get("hash") in seen:
+            continue
+        seen.add(r.get("hash"))
+        out.append(r)
+        if len(out) == NEAR_MISSES:
+            break
+    name = loaded.objectives[0][0]
+    head = ["", f"## Near misses ({len(out)}: the infeasible trials nearest feasible"
+                + (f" of those past the best in {name}" if best_row is not None else "") + ")", ""]
+    if not out:
+        return head + [f"No infeasible trial beats the best in {name}."]
+    head += [f"| trial | {name} | stopped by | measured | fix |", "|---|---:|---|---|---|"]
+    for r in out:
+        cid, what, fix = _stops(loaded, r, base_row)
+        head.append(f"| {r['trial']} | {_fmt(r['objectives'][0])} | `{cid}` | {_fmt(what)} | {_fmt(fix) if fix else '-'} |")
+    return head
+
+
+def bound_fronts(loaded: Loaded, rows: list[dict], best_row: dict) -> list[str]:
+    """For each bound of the goal that binds at the best (within :data:`BINDS`), the feasible trials no
+    other beats in both the objective and that bound's result: what the bound costs."""
+    if len(loaded.objectives) != 1 or loaded.objectives[0][0] == "distance":
+        return []
+    g = loaded.spec.goal
+    name, how = loaded.objectives[0]
+    s_obj = 1.0 if how == "maximize" else -1.0
+    out = []
+    for n, b, s_b in [*((n, b, 1.0) for n, b in g.at_least.items()), *((n, b, -1.0) for n, b in g.at_most.items())]:
+        ref = results.value(n, rows[0], loaded.state) if b == "base" else b
+        got = results.value(n, best_row, loaded.state)
+        if ref is None or got is None or abs(got - ref) > BINDS * max(abs(ref), 1e-12):
+            continue
+        ok = [(s_obj * r["objectives"][0], s_b * v, r) for r in rows if r["feasible"]
+              and (v := results.value(n, r, loaded.state)) is not None]
+        front = {id(r): r for a, c, r in ok if not any(a2 >= a and c2 >= c and (a2, c2) != (a, c) for a2, c2, _ in ok)}
+        pts = sorted(front.values(), key=lambda r: -s_obj * r["objectives"][0])[:FRONT_ROWS]
+        out += ["", f"## The front: {name} against {n} (the bound {n} {'≥' if s_b > 0 else '≤'} {_fmt(ref)} binds "
+                    f"at the best)", "", f"| trial | {name} | {n} |", "|---|---:|---:|"]
+        out += [f"| {r['trial']} | {_fmt(r['objectives'][0])} | {_fmt(results.value(n, r, loaded.state))} |"
+                for r in pts]
+    return out
 
 
 def binding(loaded: Loaded, rows: list[dict]) -> str:
@@ -374,7 +464,7 @@ def write(loaded: Loaded, study, folder: Path, outcome=None, built=None, stiffne
     write_trials(loaded, [base_row, *rows], folder / "trials.parquet")
     files = [folder / "trials.parquet"]
     rejected = study.user_attrs.get("rejected", {})
-    best_row, front = best(loaded, rows, rejected)
+    best_row, front = best(loaded, [base_row, *rows], rejected)
     if best_row is not None:
         write_text(folder / "best.yaml", best_yaml(loaded, best_row))
         files.append(folder / "best.yaml")

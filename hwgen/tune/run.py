@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 import time
 import uuid
 from dataclasses import dataclass, field
@@ -85,17 +86,34 @@ def _optuna():
     return optuna
 
 
+def grid_low(fr, base) -> float:
+    """Where a free parameter's step grid starts: at ``low``, or, where the base's value lies within the
+    bounds but off that grid (7.6 on a 0.5 grid from 4), at the first point at or above ``low`` of the
+    grid through the base's value, so that the base is a trial like any other."""
+    if fr.step is None or fr.choices is not None or not isinstance(base, (int, float)) or isinstance(base, bool):
+        return fr.low
+    if not fr.low <= base <= fr.high:
+        return fr.low
+    n = (base - fr.low) / fr.step
+    if abs(n - round(n)) < 1e-9:
+        return fr.low
+    return base - math.floor(n) * fr.step
+
+
 def distributions(loaded: Loaded) -> dict:
     optuna = _optuna()
     out = {}
-    for fr in loaded.free:
+    for fr, b in zip(loaded.free, loaded.base_values):
         if fr.choices is not None:
             out[fr.path] = optuna.distributions.CategoricalDistribution(fr.choices)
-        elif fr.integer:
-            out[fr.path] = optuna.distributions.IntDistribution(int(fr.low), int(fr.high), log=fr.log,
+            continue
+        low = grid_low(fr, b)
+        high = fr.high if fr.step is None else low + math.floor((fr.high - low) / fr.step + 1e-9) * fr.step
+        if fr.integer:
+            out[fr.path] = optuna.distributions.IntDistribution(int(low), int(round(high)), log=fr.log,
                                                                 step=int(fr.step or 1))
         else:
-            out[fr.path] = optuna.distributions.FloatDistribution(fr.low, fr.high, log=fr.log, step=fr.step)
+            out[fr.path] = optuna.distributions.FloatDistribution(low, high, log=fr.log, step=fr.step)
     return out
 
 
@@ -146,7 +164,8 @@ def open_study(loaded: Loaded, folder: Path):
     else:
         study = optuna.create_study(study_name=name, storage=storage, directions=directions)
         study.set_user_attr("digest", loaded.digest)
-        start = {n: v for fr, n, v in zip(loaded.free, loaded.names, loaded.base_values) if _within(fr, v)}
+        dists = distributions(loaded)
+        start = {n: v for n, v in zip(loaded.names, loaded.base_values) if _within(dists[n], v)}
         if start:
             # the base is the first trial (told the base's own evaluation): the search starts from what works;
             # a value the base leaves unset (pretension_n: the protocol's) or outside the bounds is drawn
@@ -164,11 +183,15 @@ def constraint_names(loaded: Loaded) -> list[str]:
     return ["checks", *(f"{n} >= {b}" for n, b in g.at_least.items()), *(f"{n} <= {b}" for n, b in g.at_most.items())]
 
 
-def _within(fr, v) -> bool:
-    """Whether a value lies within a free parameter's bounds (a choice among the choices)."""
-    if fr.choices is not None:
-        return v in fr.choices
-    return v is not None and fr.low <= v <= fr.high and not (fr.integer and v != int(v))
+def _within(dist, v) -> bool:
+    """Whether a value is one the sampler may draw from a free parameter's distribution (within its
+    bounds, on its grid, a choice among the choices)."""
+    if v is None:
+        return False
+    try:
+        return bool(dist._contains(dist.to_internal_repr(v)))
+    except (ValueError, TypeError):
+        return False
 
 
 def score(loaded: Loaded, row: dict, base_row: dict | None,
@@ -178,7 +201,7 @@ def score(loaded: Loaded, row: dict, base_row: dict | None,
     ``margin``: each bound of the goal taken that much further (relative), as the sampler is told
     them (:data:`SEARCH_MARGIN`); feasible is then by the bounds so moved."""
     g = loaded.spec.goal
-    state = g.state or (loaded.states[0] if loaded.states else "")
+    state = loaded.state
     if row["verdict"] in ("bad input", "error"):
         checks = BAD
     else:
@@ -193,7 +216,7 @@ def score(loaded: Loaded, row: dict, base_row: dict | None,
                 bound = results.value(name, base_row or {}, state)
             v = results.value(name, row, state)
             if bound is None or v is None:
-                bounds.append(0.0 if bound is None and v is not None else BAD)
+                bounds.append(BAD)          # a bound not measured is not met (run() refuses a base without it)
                 continue
             short = sign * (bound - v) / max(abs(bound), 1e-12) + margin
             bounds.append(max(0.0, short))
@@ -211,7 +234,7 @@ def bound_limits(loaded: Loaded, base_row: dict) -> list[tuple[str, float, float
     """(result, +1 for at least / -1 for at most, the bound's value) of each statics bound of the goal
     (``base``: the base's own figure), for :func:`short_of_bounds` on a worker."""
     g = loaded.spec.goal
-    state = g.state or (loaded.states[0] if loaded.states else "")
+    state = loaded.state
     out = []
     for how, sign in (("at_least", 1.0), ("at_most", -1.0)):
         for name, bound in getattr(g, how).items():
@@ -272,6 +295,22 @@ def _finish(loaded: Loaded, row: dict, values: tuple) -> dict:
     return row
 
 
+def _base_figures(loaded: Loaded, base: dict, made: Path | None) -> None:
+    """InputError naming the goal's field when a bound of ``base`` has no base figure to bound by
+    (the base is bad input, or its evaluation failed): such a bound cannot be met or judged. A
+    folder this run made is removed first: bad input writes nothing."""
+    g = loaded.spec.goal
+    for how in ("at_least", "at_most"):
+        for name, bound in getattr(g, how).items():
+            if bound == "base" and results.value(name, base, loaded.state) is None:
+                if made is not None:
+                    shutil.rmtree(made, ignore_errors=True)
+                raise InputError(loaded.source, f"goal.{how}.{name}",
+                                 f"the base design gives no {name} to bound by (its evaluation: {base['verdict']}"
+                                 f"{': ' + base['message'] if base.get('message') else ''}): give a number, or "
+                                 f"a base that evaluates")
+
+
 def base_row(loaded: Loaded, study, p, options: dict) -> dict:
     """The base design evaluated like a trial (kept in the study: a resumed tune reads it back)."""
     if "base_row" in study.user_attrs:
@@ -291,6 +330,9 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
     from optuna.trial import TrialState
 
     folder = folder_of(loaded, out_root)
+    made = None if folder.exists() else folder          # the outermost folder this run makes
+    while made is not None and not made.parent.exists():
+        made = made.parent
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as e:
@@ -307,6 +349,7 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
         options = _options(loaded, folder, cache, p)
         t0 = time.perf_counter()
         base = base_row(loaded, study, p, options)
+        _base_figures(loaded, base, made)
         if options.get("screen") and loaded.spec.level != "lengths":
             limits = bound_limits(loaded, base)
             if limits:

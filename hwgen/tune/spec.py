@@ -115,6 +115,11 @@ class Goal(_Model):
             raise ValueError("give 'pass' or results to maximize/minimize, not both")
         if not self.pass_ and not (self.maximize or self.minimize):
             raise ValueError("give 'maximize', 'minimize' (a result or a list) or 'pass: true'")
+        names = [n for n, _ in self.objectives()]
+        twice = sorted({n for n in names if names.count(n) > 1})
+        if twice:
+            raise ValueError(f"{', '.join(twice)}: each result is an objective once (maximized or minimized, "
+                             f"not both, not twice)")
         return self
 
     def binds(self, f: dict) -> bool:
@@ -160,6 +165,7 @@ class Loaded:
     base_values: tuple             # each free parameter's value in the base (defaults filled in)
     objectives: tuple[tuple[str, str], ...]
     states: tuple[str, ...]        # the tendon states the statics is asked for
+    state: str                     # the goal's state: a statics result without "@" is of it ("" without statics)
     digest: str                    # what makes trials comparable: base, set, free, goal, level
 
     @property
@@ -171,7 +177,12 @@ def load(path: str | Path) -> Loaded:
     """Read and check a tune file and its base design; raise InputError naming the file and field."""
     path = Path(path)
     spec, base_path, layers = sweep_spec.read_with_base(path, Tune, "tune", Tune)
-    base = layers.doc
+    return resolve(path, spec, base_path, layers.doc)
+
+
+def resolve(path: Path, spec: Tune, base_path: Path, base: dict) -> Loaded:
+    """A tune (read from ``path``, or derived from a design there: :mod:`hwgen.tune.derive`) over
+    the base design's document ``base``, checked as a tune file is."""
     for key, value in spec.set.items():
         keys = _keys(path, f"set.{key}", key, base)
         if value is None and isinstance(keys[-1], int):
@@ -197,11 +208,11 @@ def load(path: str | Path) -> Loaded:
     from ..model.stiffness import states as plan_states
     known = tuple(s.name for s in plan_states(make_plan(fixed.design)))
     objectives = tuple(spec.goal.objectives())
-    states = _check_goal(path, spec, known)
+    states, state = _check_goal(path, spec, known)
     digest = sweep_spec.digest({"base": base, "free": [f.model_dump() for f in spec.free],
                                 "goal": spec.goal.model_dump(by_alias=True), "level": spec.level,
                                 "robust_samples": spec.robust_samples})
-    return Loaded(spec, path, base_path, base, tuple(names), values, objectives, states, digest)
+    return Loaded(spec, path, base_path, base, tuple(names), values, objectives, states, state, digest)
 
 
 def _base_value(dump: dict, name: str):
@@ -235,13 +246,20 @@ def _drop(doc: dict, keys: list) -> dict:
     return sweep_spec.set_path(doc, parent, {k: v for k, v in node.items() if k != keys[-1]})
 
 
-def _check_goal(path: Path, spec: Tune, known: tuple[str, ...]) -> tuple[str, ...]:
-    """The tendon states the goal's results need; InputError naming the goal's field that is wrong."""
+def default_state(goal: Goal, known: tuple[str, ...]) -> str:
+    """The one rule for the state a statics result without "@" is of: the goal's ``state``, else
+    every tendon locked (the base's last state, as ``hwgen stiffness`` lists them)."""
+    return goal.state or (known[-1] if known else "")
+
+
+def _check_goal(path: Path, spec: Tune, known: tuple[str, ...]) -> tuple[tuple[str, ...], str]:
+    """(the tendon states the goal's results need, the goal's state); InputError naming the goal's
+    field that is wrong."""
     g = spec.goal
     if g.state is not None and g.state not in known:
         raise InputError(path, "goal.state", f"{echo(g.state)} is not a tendon state of the base: "
                                              f"{', '.join(known)}")
-    default = g.state or known[-1]
+    default = default_state(g, known)
     wanted = []
 
     def name(field: str, text: str) -> None:
@@ -261,7 +279,8 @@ def _check_goal(path: Path, spec: Tune, known: tuple[str, ...]) -> tuple[str, ..
     for i, cid in enumerate(g.require):
         if not results.CHECK_ID.fullmatch(cid):
             raise InputError(path, f"goal.require[{i}]", f"{echo(cid)} is not a check id (tendon.taut, ...)")
-    return tuple(dict.fromkeys(wanted))
+    states = tuple(dict.fromkeys(wanted))
+    return states, (default if states else "")
 
 
 def distance(loaded: Loaded, values: tuple) -> float:
