@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import designfile, pipeline
+from ..checks.base import failing
 from ..atomic import write_text
 from ..errors import InputError, echo, nearest
 from ..params import Design, LoadedDesign
@@ -93,7 +94,7 @@ def check_paths(given: tuple[str, ...], option: str, source) -> None:
 
 
 def _errors(report: dict) -> list[dict]:
-    return [c for c in report.get("checks", []) if not c["passed"] and c["severity"] == "error"]
+    return failing(report.get("checks", []))
 
 
 def _failing(report: dict) -> list[dict]:
