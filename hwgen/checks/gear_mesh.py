@@ -513,7 +513,7 @@ def _strength_checks(measured: dict, of: dict, measurer: _Measurer, pairs: dict,
                          f"{pair.module:g} mm: safety {sf:.2f} against the design's resin_strength "
                          f"{ts.resin_strength:g} MPa (need {ts.safety_factor:g})", sf, ts.safety_factor,
                          {**where, "stress_mpa": sigma, "face_mm": face, "form_factor": y},
-                         fix="" if sf >= ts.safety_factor else _strength_fix(ts, ts.safety_factor / sf, False)))
+                         fix="" if sf >= ts.safety_factor else _strength_fix(ts, pair, ts.safety_factor / sf, False)))
         hz = pair.hertz_line(t2, face, mu, e_mpa, nu)
         sh = allow / hz["p0_mpa"]
         out.append(Check("gear.hertz", "error", sh >= ts.safety_factor,
@@ -525,7 +525,7 @@ def _strength_checks(measured: dict, of: dict, measurer: _Measurer, pairs: dict,
                          f"surface; E = {e_mpa:g} MPa, ν = {nu:g} from the materials table, {proc.material}) "
                          f"(need {ts.safety_factor:g})", sh, ts.safety_factor,
                          {**where, "p0_mpa": hz["p0_mpa"], "allowable_mpa": allow, "elasticity": why},
-                         fix="" if sh >= ts.safety_factor else _strength_fix(ts, ts.safety_factor / sh, True)))
+                         fix="" if sh >= ts.safety_factor else _strength_fix(ts, pair, ts.safety_factor / sh, True)))
         t1 = pair.worm_torque(t2, mu)
         out.append(Check("gear.worm_torque", "info", True,
                          f"channel {channel}: {t1:.1f} N·mm on the worm's hex key to hold the tendon break load "
@@ -533,13 +533,14 @@ def _strength_checks(measured: dict, of: dict, measurer: _Measurer, pairs: dict,
     return out
 
 
-def _strength_fix(ts, k: float, hertz: bool) -> str:
+def _strength_fix(ts, pair, k: float, hertz: bool) -> str:
     """How far the tensioner's settings move a tooth stress whose safety is ``k`` times short. Lewis:
     σ = T / (r2 b m Y) with r2 = m z2 / 2, so face, teeth and module² each by k; Hertz: p0 goes as
-    1 / (m z2 √b) (the force as 1 / r2, the flank's radius as r2), so face by k², teeth and module by k."""
+    1 / (m z2 √b) (the force as 1 / r2, the flank's radius as r2), so face by k², teeth and module by k.
+    The gear's sizes are the pair's (``pair``, what was built); the strength figures the settings' (``ts``)."""
     face, teeth, module = (k * k, k, k) if hertz else (k, k, math.sqrt(k))
-    return (f"tensioner.face_width from {ts.face_width:g} to about {ts.face_width * face:.1f} mm, or "
-            f"tensioner.wheel_teeth from {ts.wheel_teeth} to about {math.ceil(ts.wheel_teeth * teeth)} (a larger wheel "
-            f"pushes its teeth less for the same tendon pull), or tensioner.module from {ts.module:g} to about "
-            f"{ts.module * module:.2f} mm; or a stronger material: tensioner.resin_strength from {ts.resin_strength:g} "
+    return (f"tensioner.face_width from {pair.face_width:g} to about {pair.face_width * face:.1f} mm, or "
+            f"tensioner.wheel_teeth from {pair.teeth} to about {math.ceil(pair.teeth * teeth)} (a larger wheel "
+            f"pushes its teeth less for the same tendon pull), or tensioner.module from {pair.module:g} to about "
+            f"{pair.module * module:.2f} mm; or a stronger material: tensioner.resin_strength from {ts.resin_strength:g} "
             f"to {ts.resin_strength * k:.0f} MPa (a tough resin), if it has it; each with the tensioner laid out again")
