@@ -179,6 +179,8 @@ def build_disk(spec: DiskSpec) -> Part:
         body = blank
         for tool in tools:
             body = body.cut(tool)
+    if spec.seat_chambers:
+        body = _one_floor(body, blank)
     solid = body if isinstance(body, cq.Solid) else body.Solids()[0]
     place = disk_placement(spec.y, T)
     if spec.hub is not None and spec.hub.side < 0:
@@ -187,6 +189,16 @@ def build_disk(spec: DiskSpec) -> Part:
         place = place @ flip_about_x(T)
     meta = {"disk_role": spec.role, "thickness_mm": T, "engagement_mm": spec.engagement}
     return Part(spec.name, "disk", solid, place, COLOR, station=spec.index, meta=meta)
+
+
+def _one_floor(body: cq.Shape, blank: cq.Shape) -> cq.Shape:
+    """A seat chamber's floor and the eyelet bores cut short at the seat plate lie in one plane, the
+    plate's top: the cut leaves it as several faces, two outlines that nearly meet (seats 1.7 mm
+    apart) making faces of no area whose edges the STL's tessellation leaves open. Merged into one
+    face (OCCT's unify-same-domain), with the volume checked: the body as cut where that fails."""
+    merged = body.clean()
+    return merged if _sound_cut(merged, blank) and abs(merged.Volume() - body.Volume()) < 1e-6 * blank.Volume() \
+        else body
 
 
 def _sound_cut(body: cq.Shape, blank: cq.Shape) -> bool:
