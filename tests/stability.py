@@ -1,4 +1,4 @@
-"""The stability run: robots as a lab writes them (:mod:`tests.robots`), each built whole by the CLI in
+"""The stability run: robots as a lab writes them (:func:`tests.robots.lab_robot`), each built whole by the CLI in
 its own process, classified by exit code with the checks it fails, and a table at the end.
 
     python -m tests.stability [--robots 100] [--seed 20261125] [--jobs 2] [--keep DIR]
@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from .robots import random_robot
+from .robots import lab_robot
 
 SEED = 20261125
 ROBOTS = 100
@@ -69,7 +69,8 @@ def describe(doc: dict) -> str:
             f"{dk.get('thickness', 0):g}/{dk.get('end_thickness', 0):g} over {bb['length']:g} mm, strip "
             f"{bb['height']:g} × {bb['thickness']:g} + {bb.get('extra_base', '-')}/{bb.get('extra_tip', 0):g}, "
             f"slot ±{dk['slot_clearance']:g}, {doc['process']['material']}, tendons "
-            + ", ".join(f"{n} {k}" for k, n in sorted(kinds.items())))
+            + ", ".join(f"{n} {k}" for k, n in sorted(kinds.items()))
+            + f" on {len(doc['tensioner']['channels'])} channel(s)")
 
 
 def build_one(index: int, doc: dict, root: Path) -> Outcome:
@@ -103,7 +104,7 @@ def run(robots: int = ROBOTS, seed: int = SEED, jobs: int = 2, keep: Path | None
     """Robots ``first`` to ``robots - 1`` of the seeded draw (the same robots whatever ``first``),
     each outcome appended to ``results`` (JSON lines) as it comes."""
     rng = np.random.default_rng(seed)
-    docs = [random_robot(rng, f"robot{i:03d}") for i in range(robots)]
+    docs = [lab_robot(rng, f"robot{i:03d}") for i in range(robots)]
     with tempfile.TemporaryDirectory() as tmp:
         root = keep or Path(tmp)
         root.mkdir(parents=True, exist_ok=True)
