@@ -200,6 +200,7 @@ TIGHT_MARGIN_MM = (0.0, 3.0)      # ... plus RIM_MM and this much, to 0.5 mm (ne
 BUDGETED = 0.15                   # share of the tendons given a length budget ...
 BUDGET_MM = (5.0, 20.0, 50.0)     # ... one of these, mm
 FDM_MIN_WALL_MM = (0.8, 0.9, 1.0, 1.2)   # an FDM lab's walls: two 0.4 mm perimeters, or what its slicer holds
+GEAR_LEFT = ("module", "worm_pitch_diameter", "worm_length", "worm_starts")   # an FDM lab does not write these
 
 
 def _channels(rng: np.random.Generator, doc: dict) -> None:
@@ -259,6 +260,8 @@ def lab_robot(rng: np.random.Generator, name: str) -> dict:
             t["budget_mm"] = float(rng.choice(BUDGET_MM))
     if doc["process"]["technology"] == "FDM":
         doc["process"]["min_wall"] = float(rng.choice(FDM_MIN_WALL_MM))
+        for key in GEAR_LEFT:              # the gear left to hwgen: it follows the walls
+            doc["tensioner"].pop(key, None)
     return doc
 
 
