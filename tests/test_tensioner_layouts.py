@@ -184,6 +184,29 @@ def test_the_housing_floor_meshes_closed(tmp_path, robot):
     assert mesh.volume == pytest.approx(body.Volume(), rel=2e-3)
 
 
+def test_the_cross_bar_keeps_a_band_beyond_every_passage_it_meets(tmp_path):
+    """Robot 12 of the widened draw (a 73.7 mm strip, passages 3.7 and 10.7 mm off it): the bar, grown
+    past the first passage, met the second and was cut through; the housing came out in two pieces
+    (exit 2, "expected one solid, got 2"). The bar grows until every passage it meets has FRAME of
+    bar beyond it."""
+    from hwgen.model.tensioner_layout.housing import FRAME
+    from hwgen.pipeline import design_plan, load
+    from .robots import lab_robot
+    from .stability import SEED
+    rng = np.random.default_rng(SEED)
+    doc = [lab_robot(rng, f"robot{i:03d}") for i in range(13)][12]
+    src = tmp_path / "robot012.yaml"
+    src.write_text(yaml.safe_dump(doc, sort_keys=False))
+    lay = design_plan(load(src)).tensioner_layout
+    (bar,) = [m for m in lay.members if m.name == "cross bar"]
+    x0, x1, _, _, z0, z1 = bar.dims
+    met = [(c.dims[3], c.dims[0]) for c in lay.cuts if c.name == "tendon passage"
+           and x0 - c.dims[0] < c.dims[1] < x1 + c.dims[0] and z0 - c.dims[0] < c.dims[3] < z1 + c.dims[0]]
+    assert len(met) >= 2
+    for z, r in met:
+        assert z0 <= z - r - FRAME + 1e-9 and z + r + FRAME <= z1 + 1e-9
+
+
 def test_a_tendon_where_the_strip_clamp_stands_leaves_the_clamp_off_and_says_so(tmp_path):
     """A tendon that leaves the tip in the strip's plane, where the strip's tip would be clamped on
     either side: the tensioner is laid out without the clamp, and the plan's findings name the
