@@ -208,12 +208,12 @@ def test_the_jig_walls_take_the_disks_rims_clear_of_the_strip_and_hubs(height, o
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("index", [12, 37, 53])
+@pytest.mark.parametrize("index", [12, 37])
 def test_the_widened_draw_builds_without_breaking_its_own_parts(index, tmp_path):
-    """Three cheap robots (four or five disks) of `make stability`'s widened draw, built whole by
-    the CLI: 12 a table measured with Gaussian noise and FDM walls of 0.9 mm with the gear left to
-    hwgen, 37 two mirrored pairs on one channel with 1.2 mm walls, 53 six tendons on two channels with
-    a length budget. Exit 0 or 1, none of the checks that say the generator broke its own parts."""
+    """Two cheap robots (four or five disks) of `make stability`'s widened draw, built whole by the
+    CLI: 12 a table measured with Gaussian noise and FDM walls of 0.9 mm with the gear left to hwgen
+    (its housing once came out in two pieces: exit 2), 37 two mirrored pairs on one channel with
+    1.2 mm walls. Exit 0 or 1, none of the checks that say the generator broke its own parts."""
     rng = np.random.default_rng(SEED)
     docs = [lab_robot(rng, f"robot{i:03d}") for i in range(index + 1)]
     out = build_one(index, docs[index], tmp_path)
