@@ -201,3 +201,27 @@ def test_step_zeros_lose_their_sign_only_as_whole_values():
     assert unsigned_zeros(b"#5 = DIRECTION('',(1.,-0.,0.));") == b"#5 = DIRECTION('',(1.,0.,0.));"
     for kept in (b"(-0.5,1.)", b"(1.,-0.25)", b"(1.E-0,2.)", b"( -0.,1.)", b"(-10.,1.)", b"'-0.'"):
         assert unsigned_zeros(kept) == kept
+
+
+@pytest.mark.slow                   # builds one disk with the CAD kernel
+def test_an_eyelet_a_hair_off_the_normal_is_chamfered_along_it(tmp_path):
+    """Robot 4 of the widened stability draw: T4's eyelet on disk 23 has an axis 2e-5 rad off the
+    normal, drilled along the normal in the disk's face but chamfered along its own axis: the cones
+    met the bore nearly tangent and the STL's bore face came out open (144 edges, part.mesh). Its
+    chamfers follow the bore it has: the disk is watertight."""
+    import trimesh
+    import yaml
+
+    from hwgen.cad.disk import build_disk
+    from hwgen.cad.export import write_stl
+    from hwgen.pipeline import design_plan
+
+    from .robots import lab_robot
+    from .stability import SEED
+    rng = np.random.default_rng(SEED)
+    doc = [lab_robot(rng, f"robot{i:03d}") for i in range(5)][4]
+    spec = design_plan(_load(tmp_path, yaml.safe_dump(doc, sort_keys=False))).disks[23]
+    assert any(0 < abs(abs(h.axis[1]) - 1) < 1e-9 for h in spec.holes)       # the near-normal eyelet
+    part = build_disk(spec)
+    write_stl(part.solid, tmp_path / "disk.stl")
+    assert trimesh.load(tmp_path / "disk.stl").is_watertight

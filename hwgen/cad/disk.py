@@ -8,6 +8,7 @@ stop at the seat plate on its outer face (Z = 0 to the plate's thickness), which
 tendon."""
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import cadquery as cq
@@ -154,8 +155,10 @@ def blank_and_tools(spec: DiskSpec) -> tuple[cq.Solid, list[cq.Solid]]:
     for h in slanted:
         tool = _eyelet_tool(h, T, spec.edge_size, base_side, True, with_bore=True)
         tools.append(_truncated(tool, spec.seat_plate, spec) if seated and not h.in_slot else tool)
-    for h in normal:
-        tools.extend(_eyelet_tool(h, T, spec.edge_size, base_side, True, with_bore=False))
+    for h in normal:        # drilled along the normal: its chamfers too (an axis 2e-5 rad off it left them
+        #                     meeting the bore nearly tangent, a bore face the STL's mesher left open)
+        square = dataclasses.replace(h, axis=(0.0, math.copysign(1.0, h.axis[1]), 0.0))
+        tools.extend(_eyelet_tool(square, T, spec.edge_size, base_side, True, with_bore=False))
     overlap = seat_overlap(T, spec.seat_plate)
     for s in spec.seats:
         fx, fy = _to_file(s.x, s.z)
