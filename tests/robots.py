@@ -185,6 +185,86 @@ def random_robot(rng: np.random.Generator, name: str) -> dict:
     return doc
 
 
+# ---- the widened draw (issue 45): what the robots that broke the generator wrote -----------------
+# :func:`lab_robot` is :func:`random_robot` (so the robots the tests name by index are unchanged)
+# and, drawn after it from the same stream, what the repro robots of issue 45 showed the first draw
+# never writes: several tendons on one channel, tables measured with Gaussian noise, disks only as
+# large as the tendons need, tendons with a length budget, and FDM walls the prototype's gear does
+# not print with (the gear left to hwgen).
+SHARED_CHANNELS = 0.35            # share of robots with two or more tendons whose tendons share channels ...
+#                                   (channel count drawn from 1 to one fewer than the tendons)
+NOISY_TABLES = 0.15               # share of the function-routed tendons written instead as a table measured ...
+TABLE_SIGMA_MM = (0.02, 0.05, 0.1)  # ... with Gaussian noise of one of these σ in x and z, to 0.01 mm
+TIGHT_DISKS = 0.3                 # share of robots whose disks are only as large as their eyelets need ...
+TIGHT_MARGIN_MM = (0.0, 3.0)      # ... plus RIM_MM and this much, to 0.5 mm (never under the strip + DISK_OVER_STRIP_MM)
+BUDGETED = 0.15                   # share of the tendons given a length budget ...
+BUDGET_MM = (5.0, 20.0, 50.0)     # ... one of these, mm
+FDM_MIN_WALL_MM = (0.8, 0.9, 1.0, 1.2)   # an FDM lab's walls: two 0.4 mm perimeters, or what its slicer holds
+GEAR_LEFT = ("module", "worm_pitch_diameter", "worm_length", "worm_starts")   # an FDM lab does not write these
+
+
+def _channels(rng: np.random.Generator, doc: dict) -> None:
+    """Several tendons on one channel: the tendons dealt over fewer channels, each channel one at least."""
+    tendons = doc["tendons"]
+    if len(tendons) < 2 or rng.random() >= SHARED_CHANNELS:
+        return
+    count = int(rng.integers(1, len(tendons)))
+    deal = np.concatenate([np.arange(count), rng.integers(0, count, len(tendons) - count)])
+    rng.shuffle(deal)
+    for t, c in zip(tendons, deal):
+        t["channel"] = f"C{int(c)}"
+    doc["tensioner"]["channels"] = [f"C{c}" for c in range(count)]
+    doc["tensioner"]["actuating_channel"] = tendons[0]["channel"]
+
+
+def _noisy_tables(rng: np.random.Generator, doc: dict, stations, length: float) -> None:
+    from hwgen.model.routing import sample_function
+    from hwgen.params import RoutingFunction
+    for t in doc["tendons"]:
+        f = t["routing"].get("function")
+        if f is None or rng.random() >= NOISY_TABLES:
+            continue
+        sigma = float(rng.choice(TABLE_SIGMA_MM))
+        pts = sample_function(RoutingFunction(**f), stations, length)
+        pts = pts + rng.normal(0.0, sigma, pts.shape)
+        t["routing"]["table"] = [[_round(float(x), 0.01), _round(float(z), 0.01)] for x, z in pts]
+        del t["routing"]["function"]
+
+
+def _reach(doc: dict, stations, length: float) -> float:
+    """The largest distance of any tendon's eyelet from the disks' centre (mirrors included), mm."""
+    from hwgen.model.routing import sample_function
+    from hwgen.params import RoutingFunction
+    r = 0.0
+    for t in doc["tendons"]:
+        table = t["routing"].get("table")
+        pts = (np.asarray(table, dtype=float) if table is not None else
+               sample_function(RoutingFunction(**t["routing"]["function"]), stations, length))
+        r = max(r, float(np.max(np.hypot(pts[:, 0], pts[:, 1]))))
+    return r
+
+
+def lab_robot(rng: np.random.Generator, name: str) -> dict:
+    """The stability draw: :func:`random_robot`, widened by the ranges above."""
+    doc = random_robot(rng, name)
+    bb, dk = doc["backbone"], doc["disks"]
+    length = bb["length"]
+    stations = dk.get("stations") or [i * length / (dk["count"] - 1) for i in range(dk["count"])]
+    _channels(rng, doc)
+    _noisy_tables(rng, doc, stations, length)
+    if rng.random() < TIGHT_DISKS:
+        need = 2 * (_reach(doc, stations, length) + RIM_MM + float(rng.uniform(*TIGHT_MARGIN_MM)))
+        dk["outer_diameter"] = max(math.ceil(need * 2) / 2, bb["height"] + DISK_OVER_STRIP_MM)
+    for t in doc["tendons"]:
+        if rng.random() < BUDGETED:
+            t["budget_mm"] = float(rng.choice(BUDGET_MM))
+    if doc["process"]["technology"] == "FDM":
+        doc["process"]["min_wall"] = float(rng.choice(FDM_MIN_WALL_MM))
+        for key in GEAR_LEFT:              # the gear left to hwgen: it follows the walls
+            doc["tensioner"].pop(key, None)
+    return doc
+
+
 # ---- the first draw (issue 16), for the tests that name its robots ----------------------------------
 class Classic:
     """The first draw's ranges: the prototype's disks (Ø at least the strip + 12 mm, 72 mm at least),

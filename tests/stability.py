@@ -1,4 +1,4 @@
-"""The stability run: robots as a lab writes them (:mod:`tests.robots`), each built whole by the CLI in
+"""The stability run: robots as a lab writes them (:func:`tests.robots.lab_robot`), each built whole by the CLI in
 its own process, classified by exit code with the checks it fails, and a table at the end.
 
     python -m tests.stability [--robots 100] [--seed 20261125] [--jobs 2] [--keep DIR]
@@ -29,19 +29,20 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from .robots import random_robot
+from .robots import lab_robot
 
 SEED = 20261125
 ROBOTS = 100
 TIME_LIMIT_S = 900          # one robot's whole build and checks (today's slowest: about 2 minutes alone)
 SELF_FAULTS = ("part.interference", "part.mesh", "eyelet.position", "eyelet.unexpected")
 HWGEN = Path(sys.executable).with_name("hwgen")
+CAD_FAILED = "the CAD kernel could not make"     # exit 2 for a part its plan described: the generator's fault
 
 
 @dataclass
 class Outcome:
     index: int
-    exit: int | str                  # 0, 1, 2, "crash" or "timed out"
+    exit: int | str                  # 0, 1, 2, "crash", "timed out" or "cad failed"
     failed: list[str] = field(default_factory=list)       # ids of the failed error checks
     message: str = ""                # exit 2: the one line; a crash: the last lines of stderr
     seconds: float = 0.0
@@ -53,7 +54,7 @@ class Outcome:
 
     @property
     def broken(self) -> bool:
-        return self.exit in ("crash", "timed out") or bool(self.self_faults)
+        return self.exit in ("crash", "timed out", "cad failed") or bool(self.self_faults)
 
 
 def describe(doc: dict) -> str:
@@ -69,7 +70,8 @@ def describe(doc: dict) -> str:
             f"{dk.get('thickness', 0):g}/{dk.get('end_thickness', 0):g} over {bb['length']:g} mm, strip "
             f"{bb['height']:g} × {bb['thickness']:g} + {bb.get('extra_base', '-')}/{bb.get('extra_tip', 0):g}, "
             f"slot ±{dk['slot_clearance']:g}, {doc['process']['material']}, tendons "
-            + ", ".join(f"{n} {k}" for k, n in sorted(kinds.items())))
+            + ", ".join(f"{n} {k}" for k, n in sorted(kinds.items()))
+            + f" on {len(doc['tensioner']['channels'])} channel(s)")
 
 
 def build_one(index: int, doc: dict, root: Path) -> Outcome:
@@ -90,6 +92,8 @@ def build_one(index: int, doc: dict, root: Path) -> Outcome:
         out.exit, out.message = "crash", " | ".join(r.stderr.strip().splitlines()[-3:])
     elif r.returncode == 2:
         out.message = (r.stderr.strip().splitlines() or [""])[-1]
+        if CAD_FAILED in r.stderr:          # a plan the CAD kernel could not make: hwgen's, not the lab's
+            out.exit = "cad failed"
     else:
         report = root / "out" / doc["design"] / "report.json"
         checks = json.loads(report.read_text())["checks"] if report.exists() else []
@@ -103,7 +107,7 @@ def run(robots: int = ROBOTS, seed: int = SEED, jobs: int = 2, keep: Path | None
     """Robots ``first`` to ``robots - 1`` of the seeded draw (the same robots whatever ``first``),
     each outcome appended to ``results`` (JSON lines) as it comes."""
     rng = np.random.default_rng(seed)
-    docs = [random_robot(rng, f"robot{i:03d}") for i in range(robots)]
+    docs = [lab_robot(rng, f"robot{i:03d}") for i in range(robots)]
     with tempfile.TemporaryDirectory() as tmp:
         root = keep or Path(tmp)
         root.mkdir(parents=True, exist_ok=True)
@@ -138,7 +142,7 @@ def table(outcomes: list[Outcome], seed: int = SEED) -> str:
         lines += ["", "| refused (exit 2) at | robots |", "|---|---:|"] + [f"| {k} | {v} |" for k, v in
                                                                           refused.most_common()]
     broken = [o for o in outcomes if o.broken]
-    lines += ["", f"broken by the generator (crash, time-out, {', '.join(SELF_FAULTS)}): {len(broken)}"]
+    lines += ["", f"broken by the generator (crash, time-out, CAD failure, {', '.join(SELF_FAULTS)}): {len(broken)}"]
     lines += [f"  robot {o.index:03d}: {o.exit} {o.self_faults or ''} {o.message}" for o in broken]
     return "\n".join(lines)
 

@@ -21,7 +21,7 @@ from hwgen.params import Design
 from hwgen.pipeline import design_plan, load
 
 from .conftest import PARAMS
-from .robots import BASE, classic_robot, random_robot
+from .robots import BASE, classic_robot, lab_robot, random_robot
 from .stability import SEED, build_one
 
 PLAN_ROBOTS = 100
@@ -205,6 +205,20 @@ def test_the_jig_walls_take_the_disks_rims_clear_of_the_strip_and_hubs(height, o
     else:
         assert lay.z_top > math.sqrt(r**2 - lay.x_inner**2)
     assert (height, od) != (60.0, 72.0) or not lay.low
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("index", [12, 37])
+def test_the_widened_draw_builds_without_breaking_its_own_parts(index, tmp_path):
+    """Two cheap robots (four or five disks) of `make stability`'s widened draw, built whole by the
+    CLI: 12 a table measured with Gaussian noise and FDM walls of 0.9 mm with the gear left to hwgen
+    (its housing once came out in two pieces: exit 2), 37 two mirrored pairs on one channel with
+    1.2 mm walls. Exit 0 or 1, none of the checks that say the generator broke its own parts."""
+    rng = np.random.default_rng(SEED)
+    docs = [lab_robot(rng, f"robot{i:03d}") for i in range(index + 1)]
+    out = build_one(index, docs[index], tmp_path)
+    assert out.exit in (0, 1), (out.exit, out.message)
+    assert not out.self_faults, (out.failed, out.robot)
 
 
 @pytest.mark.slow

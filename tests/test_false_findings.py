@@ -46,6 +46,44 @@ def test_base_disk_axes_are_measured_clear_of_the_seat_plate(tmp_path, end):
         assert mh.diameter == pytest.approx(h.diameter, abs=0.01)
 
 
+TWENTY_TRIAL = """base: {params}/twenty-disks.yaml
+design: twenty-trial
+backbone: {{thickness: 0.7, height: 55.7}}
+disks: {{thickness: 2.95, hub: {{max_tilt_deg: 0.82}}}}
+tendons:
+  - {{name: A1, channel: A, routing: {{function: {{kind: straight, z0: 30}}, mirror: true, mirror_name: A2}}}}
+  - {{name: C1, channel: C1, routing: {{function: {{kind: cosine, a: 25, k: 1, axis: z}}}}}}
+  - {{name: C2, channel: C2, routing: {{function: {{kind: cosine, a: {a}, k: 3, axis: z, x0: 0.0}}}}}}
+  - {{name: H, channel: H, routing: {{function: {{kind: helix, a: 25, k: 3}}}}}}
+"""
+
+
+@pytest.mark.slow                   # builds the base disk with the CAD kernel
+@pytest.mark.parametrize("a", [19.0, 21.0])
+def test_seats_and_chambers_that_meet_the_plate_leave_a_closed_mesh(tmp_path, a):
+    """The twenty-disk tune's trial: C1 and H share their base eyelet, split into two seats 1.70 mm
+    apart joined by a chamber; the chamber's floor and the bore cut short at the plate lie in one
+    plane, once left as five faces (two of no area) whose STL had 12 open edges (part.mesh). The
+    plate's top is one face now, and the file is watertight with the solid's volume."""
+    import trimesh
+
+    from hwgen.cad.disk import build_disk
+    from hwgen.cad.export import write_stl
+    from hwgen.pipeline import design_plan
+
+    spec = design_plan(_load(tmp_path, TWENTY_TRIAL.format(params=PARAMS, a=a))).disks[0]
+    assert spec.seat_chambers and len(spec.seats) > len([h for h in spec.holes])   # seats split under a chamber
+    part = build_disk(spec)
+    stl = tmp_path / "base.stl"
+    write_stl(part.solid, stl)
+    mesh = trimesh.load(stl)
+    assert mesh.is_watertight and mesh.is_winding_consistent
+    assert mesh.volume == pytest.approx(part.solid.Volume(), rel=2e-3)
+    plate = [f for f in part.solid.Faces() if f.geomType() == "PLANE"
+             and abs(f.BoundingBox().zmin - spec.seat_plate) < 1e-6 and abs(f.BoundingBox().zmax - spec.seat_plate) < 1e-6]
+    assert len(plate) == 1 and plate[0].Area() > 0.1
+
+
 def test_the_check_sweeps_what_the_eyelets_are_sized_for(tmp_path):
     d = _load(tmp_path, PROTO.replace("    sweep_deg: 90 ", "    sweep_deg: 60 ")).design
     assert d.check_angle_deg == 60
@@ -163,3 +201,27 @@ def test_step_zeros_lose_their_sign_only_as_whole_values():
     assert unsigned_zeros(b"#5 = DIRECTION('',(1.,-0.,0.));") == b"#5 = DIRECTION('',(1.,0.,0.));"
     for kept in (b"(-0.5,1.)", b"(1.,-0.25)", b"(1.E-0,2.)", b"( -0.,1.)", b"(-10.,1.)", b"'-0.'"):
         assert unsigned_zeros(kept) == kept
+
+
+@pytest.mark.slow                   # builds one disk with the CAD kernel
+def test_an_eyelet_a_hair_off_the_normal_is_chamfered_along_it(tmp_path):
+    """Robot 4 of the widened stability draw: T4's eyelet on disk 23 has an axis 2e-5 rad off the
+    normal, drilled along the normal in the disk's face but chamfered along its own axis: the cones
+    met the bore nearly tangent and the STL's bore face came out open (144 edges, part.mesh). Its
+    chamfers follow the bore it has: the disk is watertight."""
+    import trimesh
+    import yaml
+
+    from hwgen.cad.disk import build_disk
+    from hwgen.cad.export import write_stl
+    from hwgen.pipeline import design_plan
+
+    from .robots import lab_robot
+    from .stability import SEED
+    rng = np.random.default_rng(SEED)
+    doc = [lab_robot(rng, f"robot{i:03d}") for i in range(5)][4]
+    spec = design_plan(_load(tmp_path, yaml.safe_dump(doc, sort_keys=False))).disks[23]
+    assert any(0 < abs(abs(h.axis[1]) - 1) < 1e-9 for h in spec.holes)       # the near-normal eyelet
+    part = build_disk(spec)
+    write_stl(part.solid, tmp_path / "disk.stl")
+    assert trimesh.load(tmp_path / "disk.stl").is_watertight

@@ -89,6 +89,38 @@ def test_a_capstan_slips_when_the_tension_ratio_reaches_e_mu_theta():
     assert free.first_slip_n == 0.0 and free.stiffness == pytest.approx(K0)       # no friction: the line slides
 
 
+def test_the_slipping_eyelets_kept_system_answers_as_a_fresh_solve():
+    """A push through a long robot slips its hundreds of eyelets one phase at a time; the system of
+    those slipping (issue 45: five channels over twenty disks spent minutes re-solving it from
+    scratch each phase) is kept with its inverse as eyelets join and leave, and answers as
+    np.linalg.solve does on the same system, over a random run of joins, leaves and side changes."""
+    rng = np.random.default_rng(45)
+    e = 60                                  # eyelet i between segments i and i + 1, as along a tendon
+    lo_seg, hi_seg = np.arange(e), np.arange(1, e + 1)
+    MD = 0.3 * rng.normal(size=(e + 1, e))  # a slip lengthens its segment above, shortens the one below
+    MD[hi_seg, np.arange(e)] += 5.0
+    MD[lo_seg, np.arange(e)] -= 5.0
+    ratio = np.exp(0.15 * rng.uniform(0, 1, e))
+    m = e + 1
+    Kp = rng.normal(size=m)
+    kept = fr._Slipping(MD, ratio, lo_seg, hi_seg)
+    high = np.zeros(e, int)
+    for step in range(150):
+        k = int(rng.integers(e))
+        high[k] = 0 if high[k] and rng.random() < 0.3 else (1 if rng.random() < 0.5 else -1)
+        S, x = kept.solve(high, Kp)
+        want = np.flatnonzero(high)
+        assert sorted(S.tolist()) == want.tolist()
+        if not len(want):
+            continue
+        hi = np.where(high[want] > 0, hi_seg[want], lo_seg[want])
+        lo = np.where(high[want] > 0, lo_seg[want], hi_seg[want])
+        A = MD[hi][:, want] - ratio[want, None] * MD[lo][:, want]
+        fresh = np.linalg.solve(A, ratio[want] * Kp[lo] - Kp[hi])
+        got = dict(zip(S.tolist(), x))
+        assert np.allclose([got[i] for i in want], fresh, rtol=1e-9, atol=1e-12)
+
+
 def test_the_straight_holding_tension_of_one_offset_tendon_is_the_moment_over_its_offset():
     """The robot hanging from its clamp (gravity along +y) with a tip weight W held off the centre
     line by b: a uniform moment W·b. One straight tendon at offset d holds it straight at T·d = W·b,

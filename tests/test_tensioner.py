@@ -1,8 +1,10 @@
 """The tensioner as shipped: measured from the exported files of the prototype build."""
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -269,6 +271,37 @@ def test_every_tendon_clears_every_other_part(proto):
     d = p.tendon_material.diameter
     for c in clear:
         assert c.passed and c.measured >= d, c.message
+
+
+def test_a_stronger_line_fails_the_default_gear_with_the_face_that_holds_it(proto):
+    """A lab that chose only a 90 N line on the default 8 mm face: the gear checks once crashed
+    writing the fix (they read the face, teeth and module off the tensioner's settings, which hold
+    none); the fix now names the built pair's values, scaled by the safety it lacks."""
+    folder, man, p = proto
+    strong = dataclasses.replace(p, tendon_material=dataclasses.replace(p.tendon_material, break_load=90.0))
+    checks = gear_checks(folder, man["parts"], strong)
+    pair = worm_pair(_design().tensioner)
+    lewis = [c for c in checks if c.id == "gear.lewis" and not c.passed]
+    assert lewis
+    for c in lewis:
+        face = float(re.search(rf"tensioner.face_width from {pair.face_width:g} to about ([0-9.]+) mm", c.fix)[1])
+        assert face == pytest.approx(pair.face_width * c.limit / c.measured, abs=0.06)
+        assert f"tensioner.wheel_teeth from {pair.teeth} " in c.fix and f"module from {pair.module:g} " in c.fix
+
+
+def test_the_gear_process_keeps_what_it_raises_to_itself(monkeypatch, capsys):
+    """The gear checks made beside the build in a process of their own: what they raise is not
+    printed there (the build's own process makes the same measurement and reports it, with its
+    traceback only under HWGEN_DEBUG)."""
+    import hwgen.checks.gear_mesh as gm
+    from hwgen.cache import Store
+    from hwgen.engine.concurrency import gear_checks_in_child
+
+    def broken(*args):
+        raise AttributeError("no such setting")
+    monkeypatch.setattr(gm, "gear_checks", broken)
+    gear_checks_in_child(None, [], None, Store(None))
+    assert capsys.readouterr() == ("", "")
 
 
 def test_tendon_runs_start_at_the_tip_eyelets(proto):

@@ -146,6 +146,67 @@ def test_two_tendons_of_different_x_wind_on_one_drum_in_their_own_grooves(odd_bu
     assert ends == pytest.approx([-24, 22])
 
 
+def _three_channels_on_a_narrow_strip() -> dict:
+    """A drawn robot (issue 45's open-mesh-c): a 23 mm strip, three straight and cosine tendons on
+    channels of their own, one where the cross bar meets the spine foot."""
+    doc = _prototype(design="open-floor")
+    doc["backbone"].update(length=432.6, height=23.1, thickness=1.21, extra_base=15.0)
+    doc["disks"].update(count=7, spacing=72.1, thickness=2.0, end_thickness=4.0, outer_diameter=81.0,
+                        slot_clearance=0.1)
+    doc["disks"]["eyelets"]["edge"] = "none"
+    doc["disks"]["tip_mount"]["positions"] = [[-22.0, 14.0], [22.0, 14.0], [-22.0, -14.0], [22.0, -14.0]]
+    doc["tensioner"].update(channels=["C0", "C1", "C2"], actuating_channel="C1")
+    doc["tendons"] = [
+        {"name": "T0", "channel": "C0", "routing": {"function": {
+            "kind": "cosine", "a": 10.4, "k": 0.5, "axis": "x", "phase_deg": -32.7, "x0": 0.0, "z0": 17.4}}},
+        {"name": "T1", "channel": "C1", "routing": {"function": {"kind": "straight", "x0": 0.6, "z0": 36.1}}},
+        {"name": "T2", "channel": "C2", "routing": {"function": {"kind": "straight", "x0": -28.1, "z0": 1.3}}}]
+    return doc
+
+
+@pytest.mark.slow           # the housing alone with the CAD kernel: about 2 s
+@pytest.mark.parametrize("robot", [_three_channels_on_a_narrow_strip, lambda: _prototype(design="proto")])
+def test_the_housing_floor_meshes_closed(tmp_path, robot):
+    """Its members' coplanar faces merged, the housing's floor came out a face OCCT's mesher left
+    a hole in (part.mesh on three drawn robots); such a housing is cut from the members as fused.
+    The STL written is watertight, one body, with the solid's volume."""
+    from hwgen.cad.export import write_stl
+    from hwgen.cad.housing import closed_when_meshed, housing_solid
+    from hwgen.checks.meshes import load_mesh
+    from hwgen.pipeline import design_plan, load
+    src = tmp_path / "robot.yaml"
+    src.write_text(yaml.safe_dump(robot(), sort_keys=False))
+    body = housing_solid(design_plan(load(src)).tensioner_layout)
+    assert closed_when_meshed(body)
+    write_stl(body, tmp_path / "housing.stl")
+    mesh = load_mesh(tmp_path / "housing.stl")
+    assert mesh.is_watertight and mesh.body_count == 1
+    assert mesh.volume == pytest.approx(body.Volume(), rel=2e-3)
+
+
+def test_the_cross_bar_keeps_a_band_beyond_every_passage_it_meets(tmp_path):
+    """Robot 12 of the widened draw (a 73.7 mm strip, passages 3.7 and 10.7 mm off it): the bar, grown
+    past the first passage, met the second and was cut through; the housing came out in two pieces
+    (exit 2, "expected one solid, got 2"). The bar grows until every passage it meets has FRAME of
+    bar beyond it."""
+    from hwgen.model.tensioner_layout.housing import FRAME
+    from hwgen.pipeline import design_plan, load
+    from .robots import lab_robot
+    from .stability import SEED
+    rng = np.random.default_rng(SEED)
+    doc = [lab_robot(rng, f"robot{i:03d}") for i in range(13)][12]
+    src = tmp_path / "robot012.yaml"
+    src.write_text(yaml.safe_dump(doc, sort_keys=False))
+    lay = design_plan(load(src)).tensioner_layout
+    (bar,) = [m for m in lay.members if m.name == "cross bar"]
+    x0, x1, _, _, z0, z1 = bar.dims
+    met = [(c.dims[3], c.dims[0]) for c in lay.cuts if c.name == "tendon passage"
+           and x0 - c.dims[0] < c.dims[1] < x1 + c.dims[0] and z0 - c.dims[0] < c.dims[3] < z1 + c.dims[0]]
+    assert len(met) >= 2
+    for z, r in met:
+        assert z0 <= z - r - FRAME + 1e-9 and z + r + FRAME <= z1 + 1e-9
+
+
 def test_a_tendon_where_the_strip_clamp_stands_leaves_the_clamp_off_and_says_so(tmp_path):
     """A tendon that leaves the tip in the strip's plane, where the strip's tip would be clamped on
     either side: the tensioner is laid out without the clamp, and the plan's findings name the

@@ -143,12 +143,13 @@ def test_a_weak_gear_tooth_is_fixed_by_the_law_its_check_applies(hertz):
     from types import SimpleNamespace
 
     from hwgen.checks.gear_mesh import _strength_fix, _strength_fixes
-    ts = SimpleNamespace(face_width=8.0, resin_strength=35.0, safety_factor=2.0, wheel_teeth=24, module=1.25)
-    face, resin = _strength_fixes(ts, 1.5, hertz)
+    ts = SimpleNamespace(resin_strength=35.0, safety_factor=2.0)        # the settings hold no gear sizes
+    pair = SimpleNamespace(face_width=8.0, teeth=24, module=1.25)       # the built pair's
+    face, resin = _strength_fixes(ts, pair, 1.5, hertz)
     k = face.set["tensioner.face_width"] / 8.0
     assert face.then["passed"] and face.then["measured"] == pytest.approx(1.5 * (k ** 0.5 if hertz else k))
     assert face.then["measured"] >= 2.0 and (face.set["tensioner.face_width"] - 0.1) / 8.0 < (4 / 2.25 if hertz
                                                                                               else 2 / 1.5)
     assert resin.then["passed"] and resin.set["tensioner.resin_strength"] == 47.0
-    text = _strength_fix(ts, 2.0 / 1.5, hertz)
+    text = _strength_fix(ts, pair, 2.0 / 1.5, hertz)
     assert text.startswith("(1) tensioner.face_width") and "Also (not tried): tensioner.wheel_teeth" in text

@@ -8,6 +8,7 @@ stop at the seat plate on its outer face (Z = 0 to the plate's thickness), which
 tendon."""
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import cadquery as cq
@@ -154,8 +155,10 @@ def blank_and_tools(spec: DiskSpec) -> tuple[cq.Solid, list[cq.Solid]]:
     for h in slanted:
         tool = _eyelet_tool(h, T, spec.edge_size, base_side, True, with_bore=True)
         tools.append(_truncated(tool, spec.seat_plate, spec) if seated and not h.in_slot else tool)
-    for h in normal:
-        tools.extend(_eyelet_tool(h, T, spec.edge_size, base_side, True, with_bore=False))
+    for h in normal:        # drilled along the normal: its chamfers too (an axis 2e-5 rad off it left them
+        #                     meeting the bore nearly tangent, a bore face the STL's mesher left open)
+        square = dataclasses.replace(h, axis=(0.0, math.copysign(1.0, h.axis[1]), 0.0))
+        tools.extend(_eyelet_tool(square, T, spec.edge_size, base_side, True, with_bore=False))
     overlap = seat_overlap(T, spec.seat_plate)
     for s in spec.seats:
         fx, fy = _to_file(s.x, s.z)
@@ -179,6 +182,8 @@ def build_disk(spec: DiskSpec) -> Part:
         body = blank
         for tool in tools:
             body = body.cut(tool)
+    if spec.seat_chambers:
+        body = _one_floor(body, blank)
     solid = body if isinstance(body, cq.Solid) else body.Solids()[0]
     place = disk_placement(spec.y, T)
     if spec.hub is not None and spec.hub.side < 0:
@@ -187,6 +192,16 @@ def build_disk(spec: DiskSpec) -> Part:
         place = place @ flip_about_x(T)
     meta = {"disk_role": spec.role, "thickness_mm": T, "engagement_mm": spec.engagement}
     return Part(spec.name, "disk", solid, place, COLOR, station=spec.index, meta=meta)
+
+
+def _one_floor(body: cq.Shape, blank: cq.Shape) -> cq.Shape:
+    """A seat chamber's floor and the eyelet bores cut short at the seat plate lie in one plane, the
+    plate's top: the cut leaves it as several faces, two outlines that nearly meet (seats 1.7 mm
+    apart) making faces of no area whose edges the STL's tessellation leaves open. Merged into one
+    face (OCCT's unify-same-domain), with the volume checked: the body as cut where that fails."""
+    merged = body.clean()
+    return merged if _sound_cut(merged, blank) and abs(merged.Volume() - body.Volume()) < 1e-6 * blank.Volume() \
+        else body
 
 
 def _sound_cut(body: cq.Shape, blank: cq.Shape) -> bool:

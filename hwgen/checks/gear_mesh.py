@@ -513,8 +513,8 @@ def _strength_checks(measured: dict, of: dict, measurer: _Measurer, pairs: dict,
                          f"{pair.module:g} mm: safety {sf:.2f} against the design's resin_strength "
                          f"{ts.resin_strength:g} MPa (need {ts.safety_factor:g})", sf, ts.safety_factor,
                          {**where, "stress_mpa": sigma, "face_mm": face, "form_factor": y},
-                         fix="" if sf >= ts.safety_factor else _strength_fix(ts, ts.safety_factor / sf, False),
-                         fixes=() if sf >= ts.safety_factor else _strength_fixes(ts, sf, False)))
+                         fix="" if sf >= ts.safety_factor else _strength_fix(ts, pair, ts.safety_factor / sf, False),
+                         fixes=() if sf >= ts.safety_factor else _strength_fixes(ts, pair, sf, False)))
         hz = pair.hertz_line(t2, face, mu, e_mpa, nu)
         sh = allow / hz["p0_mpa"]
         out.append(Check("gear.hertz", "error", sh >= ts.safety_factor,
@@ -526,8 +526,8 @@ def _strength_checks(measured: dict, of: dict, measurer: _Measurer, pairs: dict,
                          f"surface; E = {e_mpa:g} MPa, ν = {nu:g} from the materials table, {proc.material}) "
                          f"(need {ts.safety_factor:g})", sh, ts.safety_factor,
                          {**where, "p0_mpa": hz["p0_mpa"], "allowable_mpa": allow, "elasticity": why},
-                         fix="" if sh >= ts.safety_factor else _strength_fix(ts, ts.safety_factor / sh, True),
-                         fixes=() if sh >= ts.safety_factor else _strength_fixes(ts, sh, True)))
+                         fix="" if sh >= ts.safety_factor else _strength_fix(ts, pair, ts.safety_factor / sh, True),
+                         fixes=() if sh >= ts.safety_factor else _strength_fixes(ts, pair, sh, True)))
         t1 = pair.worm_torque(t2, mu)
         out.append(Check("gear.worm_torque", "info", True,
                          f"channel {channel}: {t1:.1f} N·mm on the worm's hex key to hold the tendon break load "
@@ -535,31 +535,31 @@ def _strength_checks(measured: dict, of: dict, measurer: _Measurer, pairs: dict,
     return out
 
 
-def _strength_fix(ts, k: float, hertz: bool) -> str:
+def _strength_fix(ts, pair, k: float, hertz: bool) -> str:
     """How far the tensioner's settings move a tooth stress whose safety is ``k`` times short. Lewis:
     σ = T / (r2 b m Y) with r2 = m z2 / 2, so face, teeth and module² each by k; Hertz: p0 goes as
     1 / (m z2 √b) (the force as 1 / r2, the flank's radius as r2), so face by k², teeth and module by k.
     The face and the resin are tried (:func:`_strength_fixes`); the teeth and the module, which lay
-    the tensioner out again, are not."""
-    face, teeth, module = (k * k, k, k) if hertz else (k, k, math.sqrt(k))
-    return (f"{fix_text(_strength_fixes(ts, ts.safety_factor / k, hertz))}. Also (not tried): "
-            f"tensioner.wheel_teeth from {ts.wheel_teeth} to about {math.ceil(ts.wheel_teeth * teeth)} (a larger wheel "
-            f"pushes its teeth less for the same tendon pull), or tensioner.module from {ts.module:g} to about "
-            f"{ts.module * module:.2f} mm, each with the tensioner laid out again; the face about "
-            f"{ts.face_width * face:.1f} mm")
+    the tensioner out again, are not. The gear's sizes are the pair's (``pair``, what was built: the
+    settings hold none of them); the strength figures the settings' (``ts``)."""
+    _, teeth, module = (k * k, k, k) if hertz else (k, k, math.sqrt(k))
+    return (f"{fix_text(_strength_fixes(ts, pair, ts.safety_factor / k, hertz))}. Also (not tried): "
+            f"tensioner.wheel_teeth from {pair.teeth} to about {math.ceil(pair.teeth * teeth)} (a larger wheel "
+            f"pushes its teeth less for the same tendon pull), or tensioner.module from {pair.module:g} to about "
+            f"{pair.module * module:.2f} mm, each with the tensioner laid out again")
 
 
-def _strength_fixes(ts, safety: float, hertz: bool) -> tuple[Fix, ...]:
+def _strength_fixes(ts, pair, safety: float, hertz: bool) -> tuple[Fix, ...]:
     """A stronger resin (the safety goes as the strength) and a wider face (Lewis: as the face;
     Hertz: as its square root), each evaluated by the law the check applied to the measured
-    tooth, not by a new build."""
+    tooth, not by a new build; the face is the built pair's."""
     need = ts.safety_factor
     k = need / safety
     out = []
-    face = math.ceil(ts.face_width * (k * k if hertz else k) * 10 + 1e-9) / 10
-    got = safety * (math.sqrt(face / ts.face_width) if hertz else face / ts.face_width)
+    face = math.ceil(pair.face_width * (k * k if hertz else k) * 10 + 1e-9) / 10
+    got = safety * (math.sqrt(face / pair.face_width) if hertz else face / pair.face_width)
     out.append(Fix({"tensioner.face_width": face}, {"measured": got, "passed": got >= need, "limit": need}, (),
-                   f"from {ts.face_width:g} mm: the safety scaled from the measured tooth by the "
+                   f"from {pair.face_width:g} mm: the safety scaled from the measured tooth by the "
                    f"{'Hertz' if hertz else 'Lewis'} law"))
     strength = float(math.ceil(ts.resin_strength * k))
     got = safety * strength / ts.resin_strength

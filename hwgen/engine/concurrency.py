@@ -8,6 +8,7 @@ made ahead is the value the stage would make itself, so the outputs are those of
 one after the other."""
 from __future__ import annotations
 
+import contextlib
 import contextvars
 import os
 import queue
@@ -197,9 +198,13 @@ def gear_checks_in_child(folder: Path, parts: list[dict], plan: Plan, store: cac
     """The gear checks of the worms and wheels among ``parts`` (manifest entries), made and kept in
     ``store`` as the checks remember them (:func:`hwgen.checks.gear_mesh.gear_checks`), run in a
     process of their own (:func:`hwgen.processes.elsewhere`), whose memory (meshes, their copies
-    posed, manifold3d solids) then never adds to the build's while it measures the rest."""
+    posed, manifold3d solids) then never adds to the build's while it measures the rest. What it
+    raises stays here, unprinted (a child's uncaught exception would print its traceback to the
+    user's terminal): the checks make the same measurement in the build's own process and report
+    what it raises there, with its traceback only under HWGEN_DEBUG."""
     from ..checks.gear_mesh import gear_checks
-    with cache.using(store):
+    # what it raises is the checks' to report (in the build's own process, see above)
+    with cache.using(store), contextlib.suppress(Exception):
         gear_checks(folder, parts, plan)
 
 

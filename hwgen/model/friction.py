@@ -47,6 +47,7 @@ from . import statics as st
 
 FRICTIONS = ("none", "stuck")     # the bounds, always reported; "capstan" with a friction coefficient
 SLACK_N = 1e-9                    # N: a tension at or under this is slack
+REFINE_TOL = 1e-11                # the kept inverse's answer, refined once, must hold A x = r to this (relative)
 MAX_PHASES = 2000                 # slips followed before a push gives up (never reached: a slip per eyelet per phase)
 
 
@@ -246,14 +247,12 @@ def capstan_push(b: Bounds, jac: np.ndarray, push_n: float, mu: float) -> Push:
     F = u = 0.0
     first = None
     slack = False
+    slipping = _Slipping(MD, ratio, lo_seg, hi_seg)
     for _ in range(MAX_PHASES):
-        S = np.flatnonzero(high)
         x = np.zeros(e)
+        S, xs = slipping.solve(high, Kp)
         if len(S):
-            hi = np.where(high[S] > 0, hi_seg[S], lo_seg[S])
-            lo = np.where(high[S] > 0, lo_seg[S], hi_seg[S])
-            A = MD[hi][:, S] - ratio[S, None] * MD[lo][:, S]
-            x[S] = np.linalg.solve(A, ratio[S] * Kp[lo] - Kp[hi])
+            x[S] = xs
             bad = S[high[S] * x[S] > 1e-15]                 # would slide back: it holds again
             if len(bad):
                 high[bad] = 0
@@ -284,3 +283,68 @@ def capstan_push(b: Bounds, jac: np.ndarray, push_n: float, mu: float) -> Push:
         high[which] = side
         first = F if first is None else first
     return Push(F / u if u > 0 else math.inf, F, int(np.count_nonzero(high)), e, first, slack)
+
+
+class _Slipping:
+    """The slipping eyelets' system A x = r of :func:`capstan_push` (a row per slipping eyelet: its
+    capstan ratio held; a column per slip), A and its inverse kept as eyelets join and leave it
+    (a bordered inverse: O(n²) a change where a fresh solve is O(n³); a push through a long robot's
+    hundreds of eyelets slips them one phase at a time). Each answer is refined once against A,
+    and solved afresh when the kept inverse no longer answers to REFINE_TOL."""
+
+    def __init__(self, MD: np.ndarray, ratio: np.ndarray, lo_seg: np.ndarray, hi_seg: np.ndarray):
+        self.MD, self.ratio, self.lo_seg, self.hi_seg = MD, ratio, lo_seg, hi_seg
+        self.members: list[int] = []                # the slipping eyelets, in A's order
+        self.sides: list[int] = []
+        self.his: list[int] = []                    # each one's higher and lower segment
+        self.los: list[int] = []
+        self.A = np.zeros((0, 0))
+        self.inv = np.zeros((0, 0))
+
+    def _leave(self, i: int) -> None:
+        M, keep = self.inv, np.arange(len(self.members)) != i
+        self.inv = M[keep][:, keep] - np.outer(M[keep, i], M[i, keep]) / M[i, i]
+        self.A = self.A[keep][:, keep]
+        for seq in (self.members, self.sides, self.his, self.los):
+            del seq[i]
+
+    def _join(self, k: int, side: int) -> None:
+        n, S = len(self.members), self.members
+        hi, lo = (self.hi_seg[k], self.lo_seg[k]) if side > 0 else (self.lo_seg[k], self.hi_seg[k])
+        u = self.MD[self.his, k] - self.ratio[S] * self.MD[self.los, k]     # its column, on the rows there
+        v = self.MD[hi, S] - self.ratio[k] * self.MD[lo, S]                 # its row, on the columns there
+        d = self.MD[hi, k] - self.ratio[k] * self.MD[lo, k]
+        A = np.empty((n + 1, n + 1))
+        A[:n, :n], A[:n, n], A[n, :n], A[n, n] = self.A, u, v, d
+        Au, vA = self.inv @ u, v @ self.inv
+        schur = d - v @ Au
+        inv = np.full((n + 1, n + 1), np.nan)       # singular as bordered: solved afresh
+        if schur != 0:
+            inv[:n, :n] = self.inv + np.outer(Au, vA) / schur
+            inv[:n, n], inv[n, :n], inv[n, n] = -Au / schur, -vA / schur, 1.0 / schur
+        self.A, self.inv = A, inv
+        self.members.append(k)
+        self.sides.append(side)
+        self.his.append(int(hi))
+        self.los.append(int(lo))
+
+    def solve(self, high: np.ndarray, Kp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(the slipping eyelets, their slips per newton of push) for the sides ``high`` gives."""
+        for i in range(len(self.members) - 1, -1, -1):
+            if high[self.members[i]] != self.sides[i]:
+                self._leave(i)
+        known = set(self.members)
+        for k in np.flatnonzero(high):
+            if int(k) not in known:
+                self._join(int(k), int(high[k]))
+        S = np.array(self.members, int)
+        if not len(S):
+            return S, np.zeros(0)
+        r = self.ratio[S] * Kp[self.los] - Kp[self.his]
+        x = self.inv @ r
+        x = x + self.inv @ (r - self.A @ x)
+        if not np.all(np.isfinite(x)) or np.any(np.abs(r - self.A @ x) >
+                                                REFINE_TOL * (np.abs(self.A) @ np.abs(x) + np.abs(r))):
+            x = np.linalg.solve(self.A, r)
+            self.inv = np.linalg.inv(self.A)
+        return S, x

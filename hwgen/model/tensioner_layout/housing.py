@@ -88,13 +88,20 @@ def _passages(fr: Frame, sz: Sizes) -> dict[tuple[float, float], float]:
 def _cross_bar(clamp, passages: dict[tuple[float, float], float], half_x: float) -> tuple[float, float]:
     """The cross bar's z range: the strip clamp's (STRIP_CLAMP_Z without one), reaching FRAME past
     every tendon passage through it, so the bar keeps a whole band beyond them and still joins the
-    columns (passages either side of the strip's slot would cut a bar of the clamp's height)."""
+    columns (passages either side of the strip's slot would cut a bar of the clamp's height). A bar
+    grown past one passage may reach the next one out (a 73.7 mm strip with passages at 3.7 and
+    10.7 mm from it once left no band at all: the housing came out in two pieces): it grows until
+    no passage it reaches is left."""
     z0, z1 = (clamp[4], clamp[5]) if clamp is not None else STRIP_CLAMP_Z
-    through = [(z, dia / 2) for (x, z), dia in passages.items()
-               if abs(x) < half_x + dia / 2 and z0 - dia / 2 < z < z1 + dia / 2]
-    if not through:
-        return z0, z1
-    return min(z0, min(z - r for z, r in through) - FRAME), max(z1, max(z + r for z, r in through) + FRAME)
+    while True:
+        through = [(z, dia / 2) for (x, z), dia in passages.items()
+                   if abs(x) < half_x + dia / 2 and z0 - dia / 2 < z < z1 + dia / 2]
+        if not through:
+            return z0, z1
+        grown = (min(z0, min(z - r for z, r in through) - FRAME), max(z1, max(z + r for z, r in through) + FRAME))
+        if grown == (z0, z1):
+            return grown
+        z0, z1 = grown
 
 
 def _free(lo: float, hi: float, keep: list[tuple[float, float]]) -> list[tuple[float, float]]:

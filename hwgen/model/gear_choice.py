@@ -1,0 +1,175 @@
+"""The tensioner's worm gear where the design's own file leaves it to hwgen (issue 43, item 4).
+
+A design that builds on a base (``base: prototype.yaml``) inherits the base's gear: module, worm
+pitch diameter, worm length and starts. Those were chosen for the base's process; a user who
+switches the process (FDM, ``process.min_wall: 0.9``) and writes nothing about the gear should
+not be refused because the base's 1.25 mm module leaves a 0.894 mm tooth tip. The gear is a part
+hwgen derives, so it follows the process: of the gear's keys the design's own file did not
+write, :func:`follow_process` finds the least change that leaves the pair buildable (every rule
+of :meth:`hwgen.model.gearing.WormPair.problems`, the hex socket in the worm's core), searching
+the module up a quarter-millimetre grid first (the wheel's tooth tip grows with it), then the
+worm's pitch diameter in whole millimetres (self-locking: the lead angle atan(z1 m / d1) falls
+as d1 grows), with no more starts than the base's, and the shortest worm in whole millimetres
+that covers the wheel's reach. A gear that already passes is kept as it is (the prototype's
+own). Where no gear of the schema's range passes, :func:`follow_process` says which process
+value the base's gear prints at, for the refusal to name on the key the user wrote.
+"""
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .gearing import worm_pair
+
+# the keys of the tensioner section this module may derive (the others, teeth, face, pressure
+# angle, friction, are the lab's statements about the parts it buys or prints and are kept)
+GEAR_KEYS = ("module", "worm_pitch_diameter", "worm_length", "worm_starts")
+MODULE_STEP = 0.25          # mm: the grid the module is searched on (ISO 54's series in this range round to it)
+MODULE_MAX = 3.0            # mm: the schema's bound on tensioner.module
+DIAMETER_STEP = 1.0         # mm: the worm's pitch diameter in whole millimetres (a drawing's value)
+DIAMETER_MAX = 40.0         # mm: the schema's bound on tensioner.worm_pitch_diameter
+LENGTH_STEP = 1.0           # mm: the worm's threaded length in whole millimetres
+LENGTH_MAX = 60.0           # mm: the schema's bound on tensioner.worm_length
+HEX_ACROSS_CORNERS = 1 / math.cos(math.pi / 6)     # a hexagon's across-corners over its across-flats
+
+
+@dataclass(frozen=True)
+class GearChoice:
+    """What :func:`follow_process` decided: ``values`` the derived keys (empty when the stated gear
+    passes), ``note`` a sentence saying why, ``refusal`` set when no gear passes."""
+
+    values: dict
+    note: str = ""
+    refusal: str = ""
+
+
+def hex_problem(ts, module: float, d1: float, min_wall: float) -> str | None:
+    """Why the worm's hex socket does not fit in its core with the process's walls, or None."""
+    core = d1 - 2.5 * module
+    if ts.hex_key * HEX_ACROSS_CORNERS + 2 * min_wall >= core:
+        return (f"a {ts.hex_key:g} mm hex socket does not fit in the worm's core ({core:g} mm) "
+                f"with {min_wall:g} mm walls")
+    return None
+
+
+def _problems(ts, values: dict, min_wall: float) -> list[tuple[str, str]]:
+    t = _Tensioner(ts, values)
+    out = list(_pair_problems(worm_pair(t, min_wall), ts.friction_coefficient, min_wall))
+    hexp = hex_problem(ts, t.module, t.worm_pitch_diameter, min_wall)
+    return out + ([("hex_key", hexp)] if hexp else [])
+
+
+@functools.lru_cache(maxsize=512)
+def _pair_problems(pair, mu: float, min_wall: float) -> tuple[tuple[str, str], ...]:
+    return tuple(pair.problems(mu, min_wall))
+
+
+class _Tensioner:
+    """A tensioner section with some of its gear keys replaced (what :func:`worm_pair` reads)."""
+
+    def __init__(self, ts, values: dict):
+        self._ts, self._values = ts, values
+
+    def __getattr__(self, name):
+        return self._values[name] if name in self._values else getattr(self._ts, name)
+
+
+def _thread_tip(ts, module: float) -> float:
+    """The worm thread's tip thickness, mm: a ZA thread's p/2 − 2 m tan α, whatever the worm's diameter."""
+    return math.pi * module / 2 - 2 * module * math.tan(math.radians(ts.pressure_angle_deg))
+
+
+def _grid(start: float, step: float, stop: float) -> np.ndarray:
+    """``start``, then the grid's steps above it up to ``stop``."""
+    above = np.arange(math.floor(start / step + 1e-9) + 1, math.floor(stop / step + 1e-9) + 1) * step
+    return np.concatenate([[start], above])
+
+
+def _length(ts, values: dict, min_wall: float, free: bool) -> float | None:
+    """The worm's length with the rest of the gear at ``values``: the stated one if it covers the
+    wheel's reach, else (when free) the shortest whole millimetre that does."""
+    stated = values.get("worm_length", ts.worm_length)
+    if not any(f == "worm_length" for f, _ in _problems(ts, {**values, "worm_length": stated}, min_wall)):
+        return stated
+    if not free:
+        return None
+    for length in _grid(stated, LENGTH_STEP, LENGTH_MAX)[1:]:
+        if not any(f == "worm_length" for f, _ in _problems(ts, {**values, "worm_length": float(length)}, min_wall)):
+            return float(length)
+    return None
+
+
+def follow_process(ts, min_wall: float, free: set[str] | frozenset[str]) -> GearChoice:
+    """The gear for tensioner section ``ts`` under the process's ``min_wall``, changing only the
+    keys of :data:`GEAR_KEYS` in ``free`` (those the design's own file did not write)."""
+    stated = {k: getattr(ts, k) for k in GEAR_KEYS}
+    before = _problems(ts, {}, min_wall)
+    if not before or not free:
+        return GearChoice({})
+    modules = _grid(ts.module, MODULE_STEP, MODULE_MAX) if "module" in free else [ts.module]
+    diameters = (_grid(ts.worm_pitch_diameter, DIAMETER_STEP, DIAMETER_MAX) if "worm_pitch_diameter" in free
+                 else [ts.worm_pitch_diameter])
+    starts = range(ts.worm_starts, 0, -1) if "worm_starts" in free else [ts.worm_starts]
+    for m in modules:
+        if _thread_tip(ts, float(m)) < min_wall:       # the same for every worm diameter: a finer module is no use
+            continue
+        for d1 in diameters:
+            for z1 in starts:
+                values = {"module": float(m), "worm_pitch_diameter": float(d1), "worm_starts": int(z1)}
+                if any(f != "worm_length" for f, _ in _problems(ts, values, min_wall)):
+                    continue
+                length = _length(ts, values, min_wall, "worm_length" in free)
+                if length is None:
+                    continue
+                values["worm_length"] = length
+                changed = {k: v for k, v in values.items() if v != stated[k]}
+                return GearChoice(changed, _note(stated, changed, before, min_wall))
+    if "module" not in free:            # the module the file states: the rules' faults are its own
+        return GearChoice({})
+    return GearChoice({}, refusal=_refusal(ts, stated, before, min_wall))
+
+
+def _note(stated: dict, changed: dict, before: list, min_wall: float) -> str:
+    said = ", ".join(f"tensioner.{k} {stated[k]:g} → {v:g}" for k, v in changed.items())
+    why = "; ".join(m for _, m in before)
+    return (f"the tensioner's gear follows the process (process.min_wall {min_wall:g} mm): {said}, since the "
+            f"gear this file does not state would not print ({why}); write these keys to choose the gear yourself")
+
+
+WALL_RULES = ("module", "pressure_angle_deg")      # the fields of the pair's rules on the process's wall
+
+
+def _thickest_wall(ts, values: dict, below: float) -> float | None:
+    """The thickest process wall (to 0.01 mm, under ``below``) with which the gear ``values`` has no
+    tooth or thread tip thinner than the wall; None when none has (bisection: thicker walls fail more)."""
+    def prints(w: float) -> bool:
+        return not any(f in WALL_RULES for f, _ in _problems(ts, values, w))
+    if not prints(0.01):
+        return None
+    lo, hi = 1, math.floor(below * 100)          # in hundredths of a millimetre: lo prints, hi does not
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        lo, hi = (mid, hi) if prints(mid / 100) else (lo, mid)
+    return lo / 100
+
+
+def _refusal(ts, stated: dict, before: list, min_wall: float) -> str:
+    """No gear within the schema passes at ``min_wall``: the thickest wall the coarsest gear prints
+    with, and the stated gear's; "" when the stated gear fails at any wall (a fault of its own keys,
+    reported on them)."""
+    own = _thickest_wall(ts, {}, min_wall)
+    if own is None or not any(f in WALL_RULES for f, _ in before):
+        return ""
+    coarse = {"module": MODULE_MAX, "worm_pitch_diameter": DIAMETER_MAX, "worm_starts": 1}
+    most = _thickest_wall(ts, coarse, min_wall)
+    why = "; ".join(m for _, m in before)
+    gear = (f"module {stated['module']:g} mm, worm Ø{stated['worm_pitch_diameter']:g} × {stated['worm_length']:g} mm, "
+            f"{stated['worm_starts']} start(s)")
+    largest = (f"process.min_wall {most:g} mm or less, for which hwgen derives a gear (up to a "
+               f"{MODULE_MAX:g} mm module), or " if most is not None and most > own else "")
+    return (f"{min_wall:g} mm: no worm gear within tensioner.module ≤ {MODULE_MAX:g} mm and worm Ø ≤ {DIAMETER_MAX:g} mm "
+            f"prints with this wall ({why}); {largest}process.min_wall {own:g} mm, with which the stated gear "
+            f"({gear}) prints, or state a gear in tensioner")

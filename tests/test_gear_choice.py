@@ -1,0 +1,68 @@
+"""The tensioner's gear follows the process where the design's own file leaves it to hwgen
+(issue 43, item 4): a lab that switches the prototype to FDM walls and writes nothing about the
+gear gets a gear that prints, not three refusals blamed on the base file."""
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from hwgen.errors import InputError
+from hwgen.model.gear_choice import GEAR_KEYS, follow_process
+from hwgen.model.gearing import worm_pair
+from hwgen.pipeline import design_plan, load
+
+from .conftest import PARAMS
+
+BASE = PARAMS / "prototype.yaml"
+
+
+def _file(tmp_path, text: str):
+    f = tmp_path / "lab.yaml"
+    f.write_text(f"base: {BASE}\ndesign: lab\n{text}")
+    return f
+
+
+def test_fdm_walls_alone_get_a_gear_that_prints(tmp_path):
+    proto = load(BASE).design.tensioner
+    loaded = load(_file(tmp_path, "process:\n  min_wall: 0.9\n"))
+    ts, wall = loaded.design.tensioner, loaded.design.process.min_wall
+    assert worm_pair(proto, wall).problems(proto.friction_coefficient, wall)        # the base's gear would not print
+    assert not worm_pair(ts, wall).problems(ts.friction_coefficient, wall)
+    assert ts.module > proto.module
+    changed = {k for k in GEAR_KEYS if getattr(ts, k) != getattr(proto, k)}
+    note = next(w for w in loaded.warnings if "gear follows the process" in w)
+    assert changed and all(f"tensioner.{k} {getattr(proto, k):g} → {getattr(ts, k):g}" in note for k in changed)
+    for k in ("wheel_teeth", "face_width", "pressure_angle_deg", "friction_coefficient"):
+        assert getattr(ts, k) == getattr(proto, k)                  # the lab's statements are kept
+    design_plan(loaded)                                             # and it lays out
+
+
+def test_a_gear_the_file_states_is_its_own(tmp_path):
+    """The keys the design's own file writes are never derived: a gear that then does not print is
+    refused on that key, in that file, not in the base."""
+    f = _file(tmp_path, "process:\n  min_wall: 0.9\ntensioner:\n  module: 1.25\n")
+    with pytest.raises(InputError) as e:
+        load(f)
+    assert (e.value.file, e.value.path) == (str(f), "tensioner.module")
+    # a module stated that prints: the worm the file leaves to hwgen is derived for it
+    loaded = load(_file(tmp_path, "process:\n  min_wall: 0.9\ntensioner:\n  module: 1.5\n"))
+    ts = loaded.design.tensioner
+    assert ts.module == 1.5 and not worm_pair(ts, 0.9).problems(ts.friction_coefficient, 0.9)
+
+
+def test_a_wall_no_gear_prints_with_is_refused_on_the_wall_with_one_that_works(tmp_path):
+    f = _file(tmp_path, "process:\n  min_wall: 2.5\n")
+    with pytest.raises(InputError) as e:
+        load(f)
+    assert (e.value.file, e.value.path) == (str(f), "process.min_wall")
+    assert not e.value.more
+    works = float(re.search(r"process.min_wall ([0-9.]+) mm or less", e.value.message)[1])
+    assert works < 2.5
+    assert load(_file(tmp_path, f"process:\n  min_wall: {works}\n")).design.tensioner.module > 1.25
+
+
+def test_a_gear_that_prints_is_kept():
+    """The prototype states its gear and it prints: nothing is derived (its files stay the same)."""
+    d = load(BASE).design
+    assert follow_process(d.tensioner, d.process.min_wall, set(GEAR_KEYS)).values == {}
