@@ -554,14 +554,15 @@ def test_robot_xml_has_a_table_at_the_mounts_foot_that_the_disks_hit(simulated, 
 
 @pytest.mark.parametrize("name", DESIGNS)
 def test_robot_xml_weighs_the_bought_metal_the_bill_of_materials_lists(simulated, name):
-    """robot.xml's mass over every printed part's in the manifest is at least 10 g (the tip's dowels,
+    """robot.xml's mass over every printed part's of the robot (not its bench) is at least 10 g (the tip's dowels,
     screws and nuts); and the model's pieces are the bill of materials' lines of the tip's parts."""
     from hwgen.cad.manifest import read_manifest
     from hwgen.model import steel
 
     folder, result, _ = simulated[name]
     manifest = read_manifest(folder)
-    printed = sum(p["mass_g"] for p in manifest.parts if not p.get("fixture"))
+    from hwgen.sim.parts import BENCH_ROLES
+    printed = sum(p["mass_g"] for p in manifest.parts if not p.get("fixture") and p["role"] not in BENCH_ROLES)
     m = mujoco.MjModel.from_xml_path(str(folder / "sim" / "robot.xml"))
     assert m.body_mass.sum() * 1e3 - printed >= 10.0
     listed: dict = {}

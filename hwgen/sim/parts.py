@@ -146,9 +146,13 @@ def _eyelets(report: dict, drep: dict, stations: dict) -> list[Eyelet]:
     return out
 
 
+# the bench the robot stands in and is pushed by (issue 46): not part of the robot the model simulates
+BENCH_ROLES = ("base_frame", "base_frame_gear", "rig")
+
+
 def read_build(folder: Path, manifest: Manifest, report: dict) -> Printed:
     """The printed robot of a build folder (its manifest and check report)."""
-    parts = [p for p in manifest_parts(manifest) if not p.fixture]
+    parts = [p for p in manifest_parts(manifest) if not p.fixture and p.role not in BENCH_ROLES]
     bodies, foot = _bodies(folder, [p for p in parts if p.role != "backbone"])
     drep = manifest.design_report
     mids = {d["station"]: float(d["y_mid_mm"]) for d in report.get("as_built", {}).get("disks", [])
