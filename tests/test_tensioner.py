@@ -284,8 +284,9 @@ def test_a_stronger_line_fails_the_default_gear_with_the_face_that_holds_it(prot
     lewis = [c for c in checks if c.id == "gear.lewis" and not c.passed]
     assert lewis
     for c in lewis:
-        face = c.fixes[0].set["tensioner.face_width"]        # tried: the Lewis law on the measured tooth
-        assert c.fixes[0].then["passed"] and f"from {pair.face_width:g} mm" in c.fixes[0].note
+        first = c.to_json()["fixes"][0]                      # tried: the Lewis law on the measured tooth
+        face = first["set"]["tensioner.face_width"]
+        assert first["then"]["passed"] and f"from {pair.face_width:g} mm" in first["note"]
         assert face == pytest.approx(pair.face_width * c.limit / c.measured, abs=0.1)
         assert f"tensioner.wheel_teeth from {pair.teeth} " in c.fix and f"module from {pair.module:g} " in c.fix
 
