@@ -133,7 +133,8 @@ def test_report_json_has_the_keys_its_type_names(built):
         assert set(rep["sweep"]) == set(get_type_hints(SweepRecord))
         for records, kind in ((rep["checks"], CheckRecord), (rep["tendons"], TendonRecord),
                               (rep["eyelets"], EyeletRecord)):
-            assert records and all(set(r) == set(get_type_hints(kind)) for r in records), (name, kind.__name__)
+            need, may = set(kind.__required_keys__), set(kind.__optional_keys__)     # a check's tried fixes may be absent
+            assert records and all(need <= set(r) <= need | may for r in records), (name, kind.__name__)
 
 
 def test_paper_table2_build_and_check_exit_1(built, tmp_path):

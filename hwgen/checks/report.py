@@ -20,10 +20,7 @@ REPORT = "report.json"
 # The report stays the JSON object it is on disk (what a build hands its outputs in memory is
 # what they read back from the file); these types say which keys it has and what each holds.
 
-class CheckRecord(TypedDict):
-    """One check (:class:`hwgen.checks.base.Check` as JSON). A failing check whose fixes were tried
-    also holds ``fixes``: each :class:`hwgen.checks.base.Fix` as JSON (set, then, breaks, note,
-    relax), best first; ``fix`` is written from them."""
+class _CheckFields(TypedDict):
     id: str
     severity: str                 # "error", "warning" or "info"
     passed: bool
@@ -33,6 +30,13 @@ class CheckRecord(TypedDict):
     where: dict[str, Any]         # part(s), tendon(s), channel, station: what :func:`place` prints
     fix: str                      # when it fails: what to change, which way, how far where computed
     lowered_by: str               # the design setting that states its failure as a warning ("" if none)
+
+
+class CheckRecord(_CheckFields, total=False):
+    """One check (:class:`hwgen.checks.base.Check` as JSON). A failing check whose fixes were tried
+    also holds ``fixes`` (the one key a record may leave out): each :class:`hwgen.checks.base.Fix` as
+    JSON (set, then, breaks, note, relax), best first; ``fix`` is written from them."""
+    fixes: list[dict[str, Any]]
 
 
 class SweepRecord(TypedDict):
