@@ -294,6 +294,11 @@ def kernel_errors(plan: Plan, part: Part | None, doing: str) -> Iterator[None]:
                                           f"{clip(f'{type(e).__name__}: {e}', 160)}") from None
 
 
+# the roles of the bench the robot stands in and is pushed by (issue 46): the base frame's and the rig's
+FRAME_ROLES = ("base_frame", "base_frame_gear")
+BENCH_ROLES = (*FRAME_ROLES, "rig")
+
+
 def _family_of(part: Part) -> str:
     """The family a part comes from, by its role."""
     if part.role == "disk":
@@ -302,7 +307,7 @@ def _family_of(part: Part) -> str:
         return "base mount"
     if part.role == "jig":
         return "jig"
-    if part.role in ("base_frame", "base_frame_gear"):
+    if part.role in FRAME_ROLES:
         return "base frame"
     if part.role == "rig":
         return "rig"

@@ -47,13 +47,18 @@ class Check:
         return out
 
 
+def _failed_as(check: Check | dict) -> str | None:
+    """The severity ``check`` (a record or its JSON) failed with; None when it passed."""
+    if isinstance(check, Check):
+        return None if check.passed else check.severity
+    return None if check.get("passed", True) else check.get("severity")
+
+
 def fails(check: Check | dict) -> bool:
     """Whether ``check`` (a record or its JSON) fails the design: not passed, and an error (a failing
     warning is reported and does not). The one statement of the rule: every verdict, exit code,
     summary, sweep row and tune trial asks it here."""
-    if isinstance(check, Check):
-        return not check.passed and check.severity == "error"
-    return not check.get("passed", True) and check.get("severity") == "error"
+    return _failed_as(check) == "error"
 
 
 def failing(checks) -> list:
@@ -63,8 +68,7 @@ def failing(checks) -> list:
 
 def warned(checks) -> list:
     """The checks among ``checks`` that fail as warnings: reported, the design still passes."""
-    return [c for c in checks or () if not (c.passed if isinstance(c, Check) else c.get("passed", True))
-            and (c.severity if isinstance(c, Check) else c.get("severity")) == "warning"]
+    return [c for c in checks or () if _failed_as(c) == "warning"]
 
 
 # the fix of a check that finds hwgen's own files wrong (a part that is not where the design puts

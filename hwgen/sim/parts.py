@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..cad.families import BENCH_ROLES      # the bench's parts: not the robot the model simulates
 from ..cad.manifest import Manifest, ManifestPart, manifest_parts
 from ..checks.meshes import part_meshes
 from ..model import steel
@@ -144,10 +145,6 @@ def _eyelets(report: dict, drep: dict, stations: dict) -> list[Eyelet]:
         out.append(Eyelet(st_, e["part"], tendons, np.array([x, stations[st_], z], float),
                           np.asarray(axis, float) / np.linalg.norm(axis), float(dia), found))
     return out
-
-
-# the bench the robot stands in and is pushed by (issue 46): not part of the robot the model simulates
-BENCH_ROLES = ("base_frame", "base_frame_gear", "rig")
 
 
 def read_build(folder: Path, manifest: Manifest, report: dict) -> Printed:
