@@ -233,10 +233,36 @@ class Layers:
         return self.files[i if i is not None else 0]
 
 
+class Document(dict):
+    """A merged design document in memory (a sweep's variant, a tune's trial, a tried fix) that
+    remembers which of its keys its own file did not write: ``inherited``, the keys whose values a
+    base wrote. Where hwgen derives a value the file leaves to it (the tensioner's gear,
+    :mod:`hwgen.model.document`), a value from a base is left to it as well, as in a build of the file."""
+
+    def __init__(self, doc: dict, inherited=frozenset()):
+        super().__init__(doc)
+        self.inherited: frozenset[tuple] = frozenset(inherited)
+
+    def written(self, keys) -> "Document":
+        """This document's ``inherited`` without ``keys`` and what lies below it: a value set there
+        is now the document's own."""
+        keys = tuple(keys)
+        return Document(self, {k for k in self.inherited if k[:len(keys)] != keys})
+
+
+def document_of(layers: Layers) -> Document:
+    """The merged document of ``layers``, remembering the keys a base wrote (a copy: the layers' own
+    document is left as it was)."""
+    return Document(copy.deepcopy(layers.doc), {k for k, i in layers.origins.items() if i})
+
+
 def single(doc: dict, file: str | Path) -> Layers:
-    """A document read from one file (or made in memory, as a sweep's variant): every key its own."""
-    origins: dict[tuple, int] = {}
+    """A document read from one file (or made in memory, as a sweep's variant): every key its own,
+    except, for a :class:`Document`, those a base wrote (no file of these layers wrote them)."""
+    origins: dict[tuple, int | None] = {}
     _mark(doc, (), 0, origins)
+    for keys in getattr(doc, "inherited", ()):
+        origins[keys] = None
     return Layers(doc, (Path(file),), (b"",), origins)
 
 

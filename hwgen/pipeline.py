@@ -54,7 +54,7 @@ from .engine.context import STAGE_ENV, Build, Hashes, StageInput, StageResult
 from .engine.stagecache import cached_stage
 from .engine.units import PartFiles
 from .errors import InputError, clip
-from .model import feasibility, gear_choice, materials
+from .model import document, feasibility, materials
 from .model.plan import Plan, make_plan
 from .outputs import bom, guide, pictures, plates as print_plates, webview
 from .outputs.plots import plot_lengths, plot_sag, plot_tolerance
@@ -75,11 +75,7 @@ def load(path: str | Path) -> params.LoadedDesign:
         loaded = params.read(path)
     except InputError as e:
         raise _material_too(e, path) from None
-    loaded = follow_process(loaded)
-    found = feasibility.problems(loaded.design)
-    if found:
-        raise params.refuse(found, loaded.layers)
-    return loaded
+    return document.loaded_buildable(loaded)
 
 
 def _material_too(e: InputError, path: str | Path) -> InputError:
@@ -101,19 +97,6 @@ def _material_too(e: InputError, path: str | Path) -> InputError:
         return e
     return InputError.of([*e.problems, InputError(layers.file_of("process.material"), "process.material", why)],
                          e.notes)
-def follow_process(loaded: params.LoadedDesign) -> params.LoadedDesign:
-    """The design with the tensioner's gear keys its own file did not write derived for its process
-    (:mod:`hwgen.model.gear_choice`), saying so among its warnings; a gear no process value of the
-    schema lets print is refused on ``process.min_wall`` with the wall that works."""
-    layers, d = loaded.layers, loaded.design
-    free = {k for k in gear_choice.GEAR_KEYS if layers.origin(("tensioner", k)) != 0}
-    choice = gear_choice.follow_process(d.tensioner, d.process.min_wall, free)
-    if choice.refusal:
-        raise params.refuse([(("process.min_wall", "tensioner.module"), choice.refusal)], layers)
-    if not choice.values:
-        return loaded
-    design = d.model_copy(update={"tensioner": d.tensioner.model_copy(update=choice.values)})
-    return loaded.model_copy(update={"design": design, "warnings": (*loaded.warnings, choice.note)})
 
 
 def design_plan(loaded: params.LoadedDesign, tensioner_record: dict | None = None) -> Plan:

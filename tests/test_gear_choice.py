@@ -66,3 +66,44 @@ def test_a_gear_that_prints_is_kept():
     """The prototype states its gear and it prints: nothing is derived (its files stay the same)."""
     d = load(BASE).design
     assert follow_process(d.tensioner, d.process.min_wall, set(GEAR_KEYS)).values == {}
+
+
+# ---------------------------------------------------------------- one way from a document to a design
+
+def _pair(ts) -> tuple:
+    return tuple(getattr(ts, k) for k in GEAR_KEYS)
+
+
+def _laid_out_pair(plan) -> tuple:
+    p = plan.tensioner_layout.pair
+    return p.module, p.worm_pitch_diameter, p.worm_length, p.starts
+
+
+def test_a_sweeps_variant_gets_the_gear_its_build_gets(tmp_path):
+    """A sweep over an FDM lab's file: each variant is the design a build of the same document
+    makes, the gear derived where the file (or the variant) leaves it to hwgen."""
+    from hwgen.sweep import spec as sweep_spec
+    lab = _file(tmp_path, "process:\n  min_wall: 0.9\n")
+    built = load(lab).design.tensioner
+    (tmp_path / "s.yaml").write_text(f"sweep: s\nbase: {lab}\nlevel: lengths\naxes:\n"
+                                     "  - path: tensioner.module\n    values: [null, 1.5]\n")
+    loaded = sweep_spec.load(tmp_path / "s.yaml")
+    # no module set: the base's file leaves the gear to hwgen, as in its build
+    same = sweep_spec.resolve(loaded.base, (), sweep_spec.Variant(0, ()))
+    assert same.design is not None and _pair(same.design.tensioner) == _pair(built) != _pair(load(BASE).design.tensioner)
+    # the module the variant sets is its own; the worm it leaves is derived for it, as a file saying so builds
+    own = sweep_spec.resolve(loaded.base, ("tensioner.module",), sweep_spec.Variant(1, (1.5,)))
+    stated = load(_file(tmp_path, "process:\n  min_wall: 0.9\ntensioner:\n  module: 1.5\n")).design.tensioner
+    assert own.design is not None and _pair(own.design.tensioner) == _pair(stated)
+
+
+def test_a_tried_fix_gets_the_gear_its_build_gets(tmp_path):
+    """A tried fix's trial of an FDM lab's file is planned with the gear a build of the changed file
+    derives (a thicker wall still: the gear a build of it derives), not the base's."""
+    from hwgen.tried.trial import Trial
+    loaded = load(_file(tmp_path, "process:\n  min_wall: 0.9\n"))
+    trial = Trial(loaded, design_plan(loaded), {"checks": []}, {})
+    plan = trial.plan_with({"process.min_wall": 1.0})
+    changed = load(_file(tmp_path, "process:\n  min_wall: 1.0\n")).design.tensioner
+    assert plan is not None and _laid_out_pair(plan) == _pair(changed)
+    assert _pair(changed) != _pair(load(BASE).design.tensioner)           # the base gear would not print

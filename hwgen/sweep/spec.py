@@ -30,7 +30,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from .. import designfile, params
 from ..errors import DesignError, InputError, echo, nearest
-from ..model import feasibility
+from ..model.document import design_from
 
 LEVELS = ("lengths", "robust", "coupling", "build")
 MAX_VARIANTS = 5_000_000     # a grid larger than this is a mistake in the sweep file, not a sweep
@@ -179,8 +179,9 @@ def check_path(keys: list[str | int], base: dict) -> str | None:
 
 def set_path(doc: dict, keys, value) -> dict:
     """A document with ``value`` at ``keys``: the mappings and lists on the way there are copies
-    (missing mappings made), everything else is shared with ``doc``, which is left as it was."""
-    root = dict(doc)
+    (missing mappings made), everything else is shared with ``doc``, which is left as it was; a
+    :class:`hwgen.designfile.Document` stays one, the value at ``keys`` now its own."""
+    root = doc.written(keys) if isinstance(doc, designfile.Document) else dict(doc)
     node = root
     for k, nxt in zip(keys, keys[1:]):
         child = node[k] if isinstance(k, int) else node.get(k)
@@ -222,7 +223,7 @@ def load(path: str | Path) -> Loaded:
     """Read and check a sweep file and its base design; raise InputError naming the file and field."""
     path = Path(path)
     spec, base_path, layers = read_with_base(path, Sweep, "sweep", Sweep)
-    base = layers.doc
+    base = designfile.document_of(layers)          # which keys a base wrote: a variant's gear follows its process
     names, columns = [], {}
     for i, ax in enumerate(spec.axes):
         try:
@@ -354,8 +355,7 @@ def _parsed(path: str) -> tuple[str | int, ...]:
 
 def resolve_doc(doc: dict, index: int, values: tuple, where: str) -> Resolved:
     try:
-        design = params.validate(doc, where)
-        feasibility.check(design, where)
+        design, _ = design_from(doc, where)            # as a build of this document makes it
     except (InputError, DesignError) as e:
         found = e.problems if isinstance(e, InputError) else [e]
         return Resolved(index, values, doc, digest({"bad": doc}), None,

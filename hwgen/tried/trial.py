@@ -15,13 +15,14 @@ from dataclasses import replace
 
 import numpy as np
 
-from .. import cache, params
+from .. import cache, designfile, params
 from ..checks import purpose
 from ..checks.base import Check
 from ..checks.tension import sweeps, tension_checks, working_tensions
 from ..designfile import keys_of
 from ..errors import DesignError, InputError
 from ..model import feasibility
+from ..model.document import design_from
 from ..model import statics as st
 from ..model import stiffness as sf
 from ..model.plan import make_plan
@@ -62,7 +63,7 @@ class Trial:
 
     def __init__(self, loaded: params.LoadedDesign, plan, report: dict, study: dict):
         self.loaded, self.plan, self.report = loaded, plan, report
-        self.doc = loaded.layers.doc
+        self.doc = designfile.document_of(loaded.layers)      # which keys a base wrote, for the gear
         self.gravity = report.get("gravity")
         self.taut = (report.get("as_built") or {}).get("taut") or {}
         self.centre = {t["name"]: t["max_abs_delta_mm"] for t in report.get("tendons", [])}
@@ -108,10 +109,9 @@ class Trial:
         doc = copy.deepcopy(self.doc)
         for path, value in changes.items():
             put(doc, path, value)
+            doc = doc.written(keys_of(path))
         try:
-            d = params.validate(doc, self.loaded.source)
-            if feasibility.problems(d):
-                return None
+            d, _ = design_from(doc, self.loaded.source)       # as a build of the changed file makes it
             plan = make_plan(d, self.record)       # the build's tensioner arrangement, laid out again
             feasibility.check_plan(plan, d)
         except (InputError, DesignError, *MODEL_ERRORS):

@@ -144,7 +144,7 @@ def load(path: str | Path, kind: str, budget: int | None = None, seed: int = 0,
     t = tune_spec.Tune(tune=name, base=str(path), level="coupling", free=free, goal=goal(kind),
                        set=fixed_terminations(design, free),
                        budget=budget or DEFAULT_BUDGET, seed=seed, sampler=sampler, robust_samples=ROBUST_SAMPLES)
-    return tune_spec.resolve(path, t, path, layers.doc)
+    return tune_spec.resolve(path, t, path, designfile.document_of(layers))
 
 
 def is_design(path: str | Path) -> bool:

@@ -177,7 +177,7 @@ def load(path: str | Path) -> Loaded:
     """Read and check a tune file and its base design; raise InputError naming the file and field."""
     path = Path(path)
     spec, base_path, layers = sweep_spec.read_with_base(path, Tune, "tune", Tune)
-    return resolve(path, spec, base_path, layers.doc)
+    return resolve(path, spec, base_path, designfile.document_of(layers))
 
 
 def resolve(path: Path, spec: Tune, base_path: Path, base: dict) -> Loaded:
