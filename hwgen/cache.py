@@ -64,12 +64,6 @@ def parse_size(text: str) -> int:
     return int(number * _UNITS[unit])
 
 
-def size_limit() -> int:
-    """How large the cache may grow: ``$HWGEN_CACHE_SIZE`` (``2G``, ``500M``), else :data:`DEFAULT_SIZE`."""
-    v = os.environ.get(ENV_SIZE, "").strip()
-    return parse_size(v) if v else DEFAULT_SIZE
-
-
 # ---------------------------------------------------------------- keys
 
 def canonical(obj) -> object:

@@ -50,12 +50,13 @@ from .checks.meshes import reading_early
 from .checks.purpose import stiffening_checks
 from .checks.report import REPORT, Report, read_report, write_report, write_summary
 from .engine.concurrency import Ahead, Beside, default_jobs, start_beside
-from .engine.context import STAGE_ENV, Build, Hashes, StageInput, StageResult
+from .engine.context import Build, Hashes, StageInput, StageResult
 from .engine.stagecache import cached_stage
 from .engine.units import PartFiles
 from .errors import InputError, clip
 from .model import document, feasibility, materials
 from .model.plan import Plan, make_plan
+from .options import BuildOptions
 from .outputs import bom, guide, pictures, plates as print_plates, webview
 from .outputs.plots import plot_lengths, plot_sag, plot_tolerance
 from .outputs.stiffness import plot_gravity, plot_stiffness
@@ -210,13 +211,13 @@ def pictures_stage(s: StageInput) -> StageResult:
     backend is recorded, not raised."""
     return StageResult(pictures.draw(s.folder, s.manifest, s.plan.render,
                                      bom.family_table(s.manifest, s.plan.process.name),
-                                     guide.picture_jobs(s.folder, s.manifest, s.plan)))
+                                     guide.picture_jobs(s.folder, s.manifest, s.plan), enabled=s.options.pictures))
 
 
 def marks_stage(s: StageInput) -> StageResult:
     """exploded.png and bent.png drawn again with what fails marked (the pictures stage ran beside
     the checks, before their verdict); nothing when every check passes."""
-    return StageResult(pictures.mark_failures(s.folder, s.manifest, s.plan.render))
+    return StageResult(pictures.mark_failures(s.folder, s.manifest, s.plan.render, enabled=s.options.pictures))
 
 
 def guide_stage(s: StageInput) -> StageResult:
@@ -232,7 +233,7 @@ def view_stage(s: StageInput) -> StageResult:
     except (OSError, ValueError):
         study = None
     return StageResult(webview.write_view(s.folder, s.manifest, s.report, study, s.plan.render.explode_mm,
-                                          s.plan.check.max_angle_deg))
+                                          s.plan.check.max_angle_deg, viewer=s.options.viewer))
 
 
 # (name, stage) in the order a build runs them on its fresh files; each is given the files so far,
@@ -248,14 +249,23 @@ AFTER_MEASURED = ("plates",)        # ... once the checks' measurement is over: 
 #                                     the same files, would be in memory at once
 
 
-def draw(plan: Plan, folder: Path, manifest: Manifest) -> Manifest:
+def draw(plan: Plan, folder: Path, manifest: Manifest, options: BuildOptions) -> Manifest:
     """The drawing stages (bill of materials, pictures, guide) on a folder that has its files and
     report; the manifest with what they added."""
     report = read_report(folder)
     for name, stage in AFTER_FILES:
         if name in DRAWING_STAGES:
-            manifest = manifest.adding(stage(StageInput(plan, folder, manifest, report)).added)
+            manifest = manifest.adding(stage(StageInput(plan, folder, manifest, report, options=options)).added)
     return manifest
+
+
+def sampled(plan: Plan, options: BuildOptions) -> Plan:
+    """The plan with the as-built samples the build's options ask for (``--check-samples``,
+    ``$HWGEN_CHECK_SAMPLES``) in place of the design's ``check.samples``: what the checks draw, and
+    what every key that holds the plan is made with."""
+    if options.check_samples is None or options.check_samples == plan.check.samples:
+        return plan
+    return replace(plan, check=replace(plan.check, samples=options.check_samples))
 
 
 # ---------------------------------------------------------------- build
@@ -273,7 +283,7 @@ class BuildResult:
 
 def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, int, int], None] | None = None,
           post_build: bool = True, cache_dir: Path | None | bool = True, parts: str | None = None,
-          jobs: int = 0) -> BuildResult:
+          jobs: int | None = None, options: BuildOptions | None = None) -> BuildResult:
     """Build every part and file of the design into ``out_root/<design>/``, then (``post_build``)
     run the stages after the files. ``progress(part_name, done, total)`` follows each part.
     ``cache_dir``: the part cache's folder (True: :func:`hwgen.cache.default_dir`; None or False:
@@ -285,14 +295,17 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
     the files describe the whole robot and are left out, so ``hwgen check`` sees the folder as
     incomplete and builds it whole first. A pattern that matches no part is bad input.
 
-    ``jobs``: worker processes that build the parts not in the cache and the assembly (0: all in
-    this process, which then holds the CAD kernel's memory through the checks)."""
+    ``options``: how the build is run (None: as the environment says,
+    :meth:`hwgen.options.BuildOptions.from_environment`; bad input before anything is written);
+    ``jobs``, when given, in place of its worker processes that build the parts not in the cache
+    and the assembly (0: all in this process, which then holds the CAD kernel's memory through the
+    checks)."""
+    options = (options or BuildOptions.from_environment()).with_jobs(jobs)
     store = _store(cache_dir)
     layout_key = cache.entry_key("tensioner layout", loaded.design)
-    plan = design_plan(loaded, _kept_layout(store, layout_key))
+    plan = sampled(design_plan(loaded, _kept_layout(store, layout_key)), options)
     out_root = Path(out_root)
     target = out_root / loaded.name
-    limit = _limit()                    # bad input before anything is written
     select = None if parts is None else (lambda name: fnmatch.fnmatchcase(name, parts))
     with output_errors(out_root), new_folder(target) as tmp, ExitStack() as stack:
         # without a cache, the build's processes and threads hand each other what they make (the
@@ -300,7 +313,7 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
         # the build's own that goes with it (it starts empty: every value is made afresh)
         scratch = store if store.enabled else cache.Store(
             Path(stack.enter_context(tempfile.TemporaryDirectory(prefix="hwgen-scratch-"))))
-        b = Build(loaded, plan, tmp, target, store, scratch, stack, select, jobs, progress)
+        b = Build(loaded, plan, tmp, target, store, scratch, stack, select=select, options=options, progress=progress)
         if post_build and b.whole:
             b.ahead = Ahead(scratch, plan, b.measured, b.hashes)
         manifest, built, side = _files_stage(b)
@@ -322,7 +335,7 @@ def build(loaded: params.LoadedDesign, out_root: Path, progress: Callable[[str, 
     chosen = tensioner_record(manifest)
     if chosen is not None:
         store.put_record(layout_key, {"search": chosen})
-    store.trim(limit)
+    store.trim(options.cache_size)
     notes = [f"part cache: damaged entries rebuilt: {', '.join(store.corrupt)}"] if store.corrupt else []
     notes += [f"part cache: not written, so not used: {store.unwritable}"] if store.unwritable else []
     notes += [f"work done ahead of the checks failed, and the checks did it again: {f}"
@@ -398,7 +411,7 @@ def _after_files(b: Build, manifest: Manifest, side: dict[str, Beside], reused: 
             reused += beside.reused
             continue
         given = StageInput(b.plan, b.folder, manifest, report, b.ahead if name == "checks" else None,
-                           b.loaded if name == "checks" else None)
+                           b.loaded if name == "checks" else None, options=b.options)
         done = cached_stage(b.store, b.hashes, name, stage, given, reused)
         manifest = manifest.adding(done.added)
         if name == "checks":
@@ -417,16 +430,6 @@ def _kept_layout(store: cache.Store, key: str) -> dict | None:
     manifest; the same layout and record)."""
     rec = store.get_record(key)
     return rec["search"] if isinstance(rec, dict) and isinstance(rec.get("search"), dict) else None
-
-
-def _limit() -> int:
-    """How large the cache may grow (:func:`hwgen.cache.size_limit`): bad input when the
-    environment names no size."""
-    try:
-        return cache.size_limit()
-    except ValueError:
-        raise InputError("environment", cache.ENV_SIZE, f"{clip(os.environ.get(cache.ENV_SIZE, ''))} is not a size "
-                                                        f"(2G, 500M, bytes)") from None
 
 
 # ---------------------------------------------------------------- on existing outputs
@@ -457,25 +460,26 @@ def stale_reason(folder: Path, loaded) -> str | None:
 
 
 def check(loaded: params.LoadedDesign, out_root: Path, progress=None,
-          cache_dir: Path | None | bool = True) -> tuple[Report, Path, str | None]:
+          cache_dir: Path | None | bool = True, options: BuildOptions | None = None) -> tuple[Report, Path, str | None]:
     """`hwgen check`: build if needed, then measure. Returns (report, folder, why it was rebuilt or None).
 
     Outputs measured before, with every file as it was then (same bytes, same manifest, plan,
-    environment and code), get that report back from the cache instead of being measured again."""
+    sample count and code), get that report back from the cache instead of being measured again.
+    ``options``: as :func:`build`'s."""
     folder = Path(out_root) / loaded.name
-    limit = _limit()
+    options = options or BuildOptions.from_environment()
     with output_errors(Path(out_root)), snapshot(folder) as view:
         why = stale_reason(view, loaded)
         if why is None:
             manifest = read_manifest(view)
             # these files were built from these very parameters: their tensioner is laid out again
             # in the arrangement the build chose (its manifest says which), not searched for again
-            plan = design_plan(loaded, tensioner_record(manifest))
+            plan = sampled(design_plan(loaded, tensioner_record(manifest)), options)
             store = _store(cache_dir)
             report = _measured(store, view, manifest, plan, loaded)
-            store.trim(limit)
+            store.trim(options.cache_size)
             return report, folder, None
-    return build(loaded, Path(out_root), progress, cache_dir=cache_dir).report, folder, why
+    return build(loaded, Path(out_root), progress, cache_dir=cache_dir, options=options).report, folder, why
 
 
 def tensioner_record(manifest: Manifest) -> dict | None:
@@ -491,8 +495,7 @@ def _measured(store: cache.Store, folder: Path, manifest: Manifest, plan: Plan,
     """run_checks on the folder, or its report from the last time these very files were measured."""
     if not store.enabled:
         return run_checks(folder, manifest, plan, loaded)
-    key = cache.entry_key("check", (Hashes().files(folder), manifest, plan,
-                                    {e: os.environ.get(e) for e in STAGE_ENV["checks"]}), libraries=cache.LIBRARIES)
+    key = cache.entry_key("check", (Hashes().files(folder), manifest, plan), libraries=cache.LIBRARIES)
     rec = store.get_record(key)
     data = store.get_bytes(rec["report"]) if isinstance(rec, dict) and isinstance(rec.get("report"), str) else None
     if data is not None:
@@ -504,22 +507,24 @@ def _measured(store: cache.Store, folder: Path, manifest: Manifest, plan: Plan,
     return report
 
 
-def render(loaded: params.LoadedDesign, out_root: Path,
-           cache_dir: Path | None | bool = True) -> tuple[dict, Path, str | None]:
+def render(loaded: params.LoadedDesign, out_root: Path, cache_dir: Path | None | bool = True,
+           options: BuildOptions | None = None) -> tuple[dict, Path, str | None]:
     """`hwgen render`: the bill of materials, pictures and drawing of ``out_root/<design>/``.
 
     Builds first (which draws) when the outputs are missing or stale; otherwise draws into the
     existing folder and rewrites its manifest. Returns (the manifest's render entry, the
-    folder, why it was rebuilt or None).
+    folder, why it was rebuilt or None). ``options``: as :func:`build`'s.
     """
     folder = Path(out_root) / loaded.name
+    options = options or BuildOptions.from_environment()
     why = stale_reason(folder, loaded)
     if why is not None:
-        result = build(loaded, Path(out_root), cache_dir=cache_dir)
+        result = build(loaded, Path(out_root), cache_dir=cache_dir, options=options)
         return result.manifest.render or {}, folder, why
     with output_errors(Path(out_root)), new_folder(folder, copy_current=True) as tmp:
         manifest = read_manifest(tmp)
-        manifest = draw(design_plan(loaded, tensioner_record(manifest)), tmp, manifest)    # current files: as check does
+        plan = sampled(design_plan(loaded, tensioner_record(manifest)), options)     # current files: as check does
+        manifest = draw(plan, tmp, manifest, options)
         write_manifest(tmp, manifest)
     return manifest.render, folder, None
 

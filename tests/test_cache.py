@@ -281,10 +281,11 @@ def test_the_stages_after_the_files_are_reused_with_the_same_bytes(built, tmp_pa
     assert again.report == json.loads((again.folder / "report.json").read_text())
 
 
-def test_a_stage_is_reused_only_for_the_same_files_manifest_plan_and_environment(tmp_path, monkeypatch):
+def test_a_stage_is_reused_only_for_the_same_files_manifest_plan_and_options(tmp_path):
     """The stage memo on a stand-in stage: what it wrote and set comes back without running it;
-    another input file, manifest, plan (a setting the stages read) or $HWGEN_CHECK_SAMPLES runs it
-    again."""
+    another input file, manifest, plan (a setting the stages read) or build option the stage reads
+    (the checks' sample count) runs it again; an option it does not read (the pictures) does not."""
+    from hwgen.options import BuildOptions
     from hwgen.cad.manifest import Added, Manifest
     from hwgen.engine.context import Hashes, StageInput, StageResult
     from hwgen.engine.stagecache import cached_stage
@@ -303,14 +304,14 @@ def test_a_stage_is_reused_only_for_the_same_files_manifest_plan_and_environment
 
     store = cache.Store(tmp_path / "cache")
 
-    def run(files: dict, name: str, plan=P):
+    def run(files: dict, name: str, plan=P, options=BuildOptions()):
         folder = tmp_path / f"f{len(list(tmp_path.iterdir()))}"
         folder.mkdir()
         for path, text in files.items():
             (folder / path).write_text(text)
         reused = []
         manifest = Manifest(name, "0", "", "", [], {}, {}, [], {})
-        out = cached_stage(store, Hashes(), "checks", stage, StageInput(plan, folder, manifest), reused)
+        out = cached_stage(store, Hashes(), "checks", stage, StageInput(plan, folder, manifest, options=options), reused)
         return out, manifest.adding(out.added), (folder / "report.json").read_text(), reused
 
     first = run({"a.stl": "x"}, "d")
@@ -322,8 +323,9 @@ def test_a_stage_is_reused_only_for_the_same_files_manifest_plan_and_environment
 
     Q = make_plan(design.model_copy(update={"bom": design.bom.model_copy(update={"spool_mm": 151.0})}))
     run({"a.stl": "x"}, "d", Q)
-    monkeypatch.setenv("HWGEN_CHECK_SAMPLES", "32")
-    run({"a.stl": "x"}, "d")
+    run({"a.stl": "x"}, "d", options=BuildOptions(check_samples=32))
+    assert len(runs) == 5
+    run({"a.stl": "x"}, "d", options=BuildOptions(pictures=False))
     assert len(runs) == 5
 
 
@@ -455,10 +457,12 @@ def test_the_cache_keeps_to_its_size_dropping_the_least_recently_used(tmp_path, 
     assert store.trim(10 ** 9) == (0, 0) and cache.Store(None).trim(0) == (0, 0)
     assert [cache.parse_size(t) for t in ("2G", "500M", "1.5GB", "300000", "64KiB")] == \
         [2 * 1024 ** 3, 500 * 1024 ** 2, int(1.5 * 1024 ** 3), 300000, 64 * 1024]
+    from hwgen.options import BuildOptions
     monkeypatch.setenv(cache.ENV_SIZE, "100M")
-    assert cache.size_limit() == 100 * 1024 ** 2
+    assert BuildOptions.from_environment().cache_size == 100 * 1024 ** 2
+    assert BuildOptions.from_environment(cache_size=5).cache_size == 5        # the command line's, over it
     monkeypatch.delenv(cache.ENV_SIZE)
-    assert cache.size_limit() == cache.DEFAULT_SIZE
+    assert BuildOptions.from_environment().cache_size == cache.DEFAULT_SIZE
     from .test_hostile import run_cli
     code, _, stderr, escaped = run_cli("build", str(PARAMS / "prototype.yaml"), "--out", str(tmp_path / "o"),
                                        "--cache-size", "lots")

@@ -12,8 +12,8 @@ import pytest
 PKG = Path(__file__).resolve().parents[1] / "hwgen"
 
 # The stages in the order data flows; a module may import its own stage and those before it.
-STAGES = ["errors", "atomic", "heap", "processes", "cache", "yamlfile", "designfile", "fasteners", "params_base", "params_experiment", "params_bench", "params", "model", "cad", "checks", "tried", "outputs", "sim", "engine", "pipeline", "sweep", "tune", "fix", "cli", "bench"]
-NO_CAD_KERNEL = ("yamlfile", "designfile", "params_base", "params_experiment", "params_bench", "params", "model")         # plain data and numpy: never CadQuery or OCP
+STAGES = ["errors", "atomic", "heap", "processes", "cache", "yamlfile", "designfile", "fasteners", "params_base", "params_experiment", "params_bench", "params", "options", "model", "cad", "checks", "tried", "outputs", "sim", "engine", "pipeline", "sweep", "tune", "fix", "cli", "bench"]
+NO_CAD_KERNEL = ("yamlfile", "designfile", "params_base", "params_experiment", "params_bench", "params", "options", "model")         # plain data and numpy: never CadQuery or OCP
 
 
 @functools.cache

@@ -210,17 +210,17 @@ def test_groups_follow_the_families():
         == ["disk", "backbone", "tensioner", "base", "jig", "frame"]
 
 
-def test_the_view_stage_is_kept_under_its_viewer(tmp_path, monkeypatch):
+def test_the_view_stage_is_kept_under_its_viewer(tmp_path):
     """The page inlines the viewer's bundle, which is no .py file of hwgen's: the stage's key holds
     its bytes, so a page from the cache never carries another viewer."""
     from hwgen.engine.context import Hashes, StageInput
     from hwgen.engine.stagecache import stage_key
+    from hwgen.options import BuildOptions
     folder = tmp_path / "little"
-    given = StageInput(None, folder, _robot(folder))
+    given = StageInput(None, folder, _robot(folder), options=BuildOptions(viewer=str(tmp_path / "viewer.js")))
     keys = []
     for text in ("/* hwgen viewer: one */", "/* hwgen viewer: one */", "/* hwgen viewer: two */"):
         (tmp_path / "viewer.js").write_text(text)
-        monkeypatch.setenv(webview.VIEWER_ENV, str(tmp_path / "viewer.js"))
         keys.append(stage_key(Hashes(), "view", given))
     assert keys[0] == keys[1] != keys[2]
     assert stage_key(Hashes(), "guide", given) != keys[0]

@@ -14,20 +14,17 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import os
 from collections.abc import Callable
 
 import numpy as np
 
 from ..cad.manifest import Manifest
 from .. import cache
-from ..errors import InputError, clip
 from ..model import scatter as mc
 from ..model import taut as tp
 from .base import REBUILD, Check
 from .eyelets import EyeletMap
 
-SAMPLES_ENV = "HWGEN_CHECK_SAMPLES"   # a count: overrides check.samples (smoke runs, the test suite)
 HIST_BINS = 60        # the report's histogram of each tendon's largest |ΔL| per sample
 HIST_SPAN = 1.08      # over 0 .. this × the largest of it, the budget and the centre-line value
 END_RUN_MM = 20.0     # without a tensioner run: the tendon leaves the tip straight along the backbone this far
@@ -81,16 +78,6 @@ def process_scatter(n_disks: int, position_sigma: float, diameter_sigma: float, 
     return mc.Scatter(position_sigma, diameter_sigma, station_tolerance, tilt, play)
 
 
-def samples(stated: int) -> int:
-    """check.samples, or the count in $HWGEN_CHECK_SAMPLES."""
-    v = os.environ.get(SAMPLES_ENV, "").strip()
-    if not v:
-        return stated
-    if not v.isdigit() or int(v) > 100_000:
-        raise InputError("environment", SAMPLES_ENV, f"{clip(v)} is not a count of samples (0 to 100000)")
-    return int(v)
-
-
 def _play(n: int, fits: list[dict]) -> tuple[np.ndarray, np.ndarray]:
     """Per disk (n, 3) tilt half ranges about x, y, z (deg) and (n, 2) offset half ranges in x, z (mm),
     from the fits measured in the STLs (as in report.json); a disk not measured has none."""
@@ -111,7 +98,7 @@ def as_built(emap: EyeletMap, rep: dict, manifest: Manifest, plan, fits, angles:
     names = [t["name"] for t in rep["tendons"]]
     act = [k for k, t in enumerate(rep["tendons"]) if t["channel"] == channel]
     budgets = [t["budget_mm"] for t in rep["tendons"]]
-    res = monte_carlo(rb, sc, angles, samples(s.samples), s, tuple(act) if len(act) == 2 else None, budgets)
+    res = monte_carlo(rb, sc, angles, s.samples, s, tuple(act) if len(act) == 2 else None, budgets)
     checks, rows = [], []
     for k, t in enumerate(rep["tendons"]):
         budget = t["budget_mm"]
@@ -130,14 +117,14 @@ def as_built(emap: EyeletMap, rep: dict, manifest: Manifest, plan, fits, angles:
             row.update(robust_mm=at, passed=at <= budget)
             if len(worst) and s.robust != "max":
                 row["robust_interval_mm"] = list(mc.quantile_interval(
-                    worst, _quantile(s.robust), _look_confidence(s, len(mc.looks(samples(s.samples))))))
+                    worst, _quantile(s.robust), _look_confidence(s, len(mc.looks(s.samples)))))
             checks.append(_verdict(row, s, len(worst), deviations.get(t["name"], [])))
         rows.append(row)
     out = {"about": "taut path through each measured hole's free aperture ((D - d)/2 in its own plane), from the "
                     "tendon's seat to its drum's tangent point; as built: print scatter, disk slip within the jig's "
                     "tolerance, tilt and offset within the play measured in each disk's STL",
            "samples": len(res.worst), "seed": s.seed, "tendon_diameter_mm": rb.tendon_diameter,
-           "stop": stop_rule(s, samples(s.samples), len(res.worst)),
+           "stop": stop_rule(s, s.samples, len(res.worst)),
            "length_mm": rb.length, "robust": s.robust,
            "unconverged_solves": res.unconverged,
            "process": {"position_sigma_mm": sc.sigma_pos, "diameter_sigma_mm": sc.sigma_dia,

@@ -59,18 +59,24 @@ CACHE_SIZE = typer.Option(None, "--cache-size", show_default=False,
                                "(default $HWGEN_CACHE_SIZE, else 2G)")
 
 
-def _cache(cache_dir: Path | None, no_cache: bool, cache_size: str | None = None):
-    """The pipeline's ``cache_dir``: False for none, True for the default folder, else the folder.
-    ``cache_size`` (--cache-size) becomes $HWGEN_CACHE_SIZE, which the pipeline trims the cache to."""
+def _cache(cache_dir: Path | None, no_cache: bool):
+    """The pipeline's ``cache_dir``: False for none, True for the default folder, else the folder."""
+    return False if no_cache else (cache_dir if cache_dir is not None else True)
+
+
+def _options(cache_size: str | None = None, jobs: int | None = None):
+    """How the build is run (:class:`hwgen.options.BuildOptions`): ``--cache-size`` and ``--jobs``
+    where given, the rest as the environment says (read here, at the edge, and nowhere deeper)."""
+    from ..cache import parse_size
+    from ..options import BuildOptions
+    size = None
     if cache_size is not None:
-        from ..cache import ENV_SIZE, parse_size
         try:
-            parse_size(cache_size)
+            size = parse_size(cache_size)
         except ValueError:
             raise InputError("command line", "--cache-size", f"{clip(cache_size)} is not a size (2G, 500M, bytes)") \
                 from None
-        os.environ[ENV_SIZE] = cache_size
-    return False if no_cache else (cache_dir if cache_dir is not None else True)
+    return BuildOptions.from_environment(cache_size=size, jobs=jobs)
 
 
 def _file_label(file) -> str:

@@ -13,7 +13,7 @@ from rich.text import Text
 from ..checks.base import failing
 from ..errors import InputError, printable
 from ..sim import limits
-from .common import (CACHE_DIR, CACHE_SIZE, EXIT_FINDINGS, NO_CACHE, OUT, PARAMS, _cache, _command, _load,
+from .common import (CACHE_DIR, CACHE_SIZE, EXIT_FINDINGS, NO_CACHE, OUT, PARAMS, _cache, _command, _load, _options,
                      _mm, _on_outputs, _write_side_file, err, out, say)
 
 
@@ -46,8 +46,9 @@ def build(params: Path = PARAMS, out_dir: Path = OUT,
         def progress(name: str, done: int, total: int) -> None:
             bar.update(task, total=total, completed=done, description=f"built {name}")
 
-        result = run_build(loaded, out_dir, progress, cache_dir=_cache(cache_dir, no_cache, cache_size), parts=parts,
-                           jobs=default_jobs() if jobs is None else jobs)
+        options = _options(cache_size, default_jobs() if jobs is None else jobs)
+        result = run_build(loaded, out_dir, progress, cache_dir=_cache(cache_dir, no_cache), parts=parts,
+                           options=options)
     n = len(result.manifest.parts)
     for note in result.notes:
         say("warning:", "yellow", note)
@@ -181,7 +182,8 @@ def check(params: Path = PARAMS, out_dir: Path = OUT,
     from ..pipeline import check as check_design
 
     rep, folder = _on_outputs(f"checking {loaded.name}", quiet,
-                              lambda: check_design(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache, cache_size)))
+                              lambda: check_design(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache),
+                                                   options=_options(cache_size)))
     print_report(rep, out, verbose=verbose)
     _verdict(rep, folder, loaded)
     if report is not None:
@@ -204,7 +206,8 @@ def render(params: Path = PARAMS, out_dir: Path = OUT,
     from ..pipeline import render as render_design
 
     entry, folder = _on_outputs(f"drawing {loaded.name}", quiet,
-                                lambda: render_design(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache, cache_size)))
+                                lambda: render_design(loaded, out_dir, cache_dir=_cache(cache_dir, no_cache),
+                                                     options=_options(cache_size)))
     out.print(f"{loaded.name}: bom.csv, bom.md written to {printable(folder)}")
     if entry.get("status") != "ok":
         say("warning:", "yellow", entry.get("message", "pictures not drawn"))

@@ -25,7 +25,7 @@ from ..cad.manifest import Added, Manifest, ManifestPart
 from ..checks.meshes import reading_early
 from ..model.plan import Plan
 from . import WORKER_PRELOAD
-from .context import STAGE_ENV, Build, Hashes, StageInput
+from .context import Build, Hashes, StageInput
 from .stagecache import cached_stage
 
 MAX_DEFAULT_JOBS = 4     # workers a build starts unless told: each holds the CAD kernel (0.4-0.8 GB)
@@ -119,7 +119,7 @@ class Ahead:
         measurement (:meth:`measured`) when their files and manifest give the same key."""
         if self.thread is None:
             return
-        key = measure_key(self.hashes, folder, manifest)
+        key = measure_key(self.hashes, folder, manifest, self.plan.check.samples)
         self.measuring = threading.Thread(target=self._measure, args=(folder, manifest.copy(), key),
                                           name="hwgen-measure", daemon=True)
         self.jobs.put(("measure", folder, None))
@@ -150,7 +150,8 @@ class Ahead:
         self.measuring.join()
         self.taken.set()
         found, self.found = self.found, None       # let go of it with the report (its measured disks are large)
-        return found[1] if found is not None and found[0] == measure_key(self.hashes, folder, manifest) else None
+        key = measure_key(self.hashes, folder, manifest, self.plan.check.samples)
+        return found[1] if found is not None and found[0] == key else None
 
     def _run(self) -> None:
         from ..checks import run as _      # the checks' modules and libraries, imported while this process waits
@@ -221,14 +222,14 @@ def gears_remembered(folder: Path, parts: list[dict], plan: Plan) -> bool:
     return True
 
 
-def measure_key(hashes: Hashes, folder: Path, manifest: Manifest) -> str:
+def measure_key(hashes: Hashes, folder: Path, manifest: Manifest, samples: int) -> str:
     """What :func:`hwgen.checks.run.measure` reads: every file in the folder but assembly.step (which
     only the files' own checks read), the manifest but its ``files`` (of which it reads only the
-    strip template's path) and the environment the checks read."""
+    strip template's path) and the as-built samples the checks draw (``samples``: the plan's
+    ``check.samples``, as the build's options set it)."""
     from ..checks.run import backbone_template
     return cache.key("measured", {p: sha for p, sha in hashes.files(folder).items() if p != "assembly.step"},
-                     replace(manifest, files={}), backbone_template(manifest),
-                     {e: os.environ.get(e) for e in STAGE_ENV["checks"]})
+                     replace(manifest, files={}), backbone_template(manifest), samples)
 
 
 # ---------------------------------------------------------------- stages beside the others

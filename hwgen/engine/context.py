@@ -10,16 +10,10 @@ from pathlib import Path
 from typing import Protocol
 
 from .. import cache, params
+from ..options import BuildOptions
 from ..cad.manifest import Added, Manifest, sha256
 from ..checks.report import Report
 from ..model.plan import Plan
-
-# the stages after the files the cache keeps, and the environment variables each reads besides
-# the folder, the manifest and the plan
-STAGE_ENV = {"checks": ("HWGEN_CHECK_SAMPLES",), "bom": (), "plates": (), "guide": (),
-             "pictures": ("HWGEN_RENDER_BACKEND", "DISPLAY"), "marks": ("HWGEN_RENDER_BACKEND", "DISPLAY"),
-             "view": ("HWGEN_VIEWER_JS",)}
-
 
 class WorkAhead(Protocol):
     """What a build's stages see of the checks' work ahead (:class:`hwgen.engine.concurrency.Ahead`)."""
@@ -71,7 +65,7 @@ class Build:
     #                                 values: the cache, or without one a store of the build's own that starts empty
     stack: ExitStack                # what lives as long as the build's staging folder (side folders, threads)
     select: Callable[[str], bool] | None = None     # --parts: the parts whose files are written (None: all)
-    jobs: int = 0                   # worker processes for the parts and the assembly (0: this process)
+    options: BuildOptions = field(default_factory=BuildOptions)     # how the build is run (its jobs among them)
     progress: Callable[[str, int, int], None] | None = None    # (part name, done, total) as each part is in
     ahead: WorkAhead | None = None      # the checks' work ahead (None: no checks will run)
     measured: threading.Event = field(default_factory=threading.Event)    # the checks' measurement is over
@@ -81,6 +75,11 @@ class Build:
     def whole(self) -> bool:
         """Every part's files are written (no ``--parts``): the assembly and the template too."""
         return self.select is None
+
+    @property
+    def jobs(self) -> int:
+        """Worker processes for the parts and the assembly (0: this process)."""
+        return self.options.jobs
 
 
 @dataclass(frozen=True)
@@ -93,6 +92,8 @@ class StageInput:
     report: Report | None = None    # the checks' report (None for the checks and the stages beside them)
     ahead: WorkAhead | None = None      # what the build measured ahead for the checks (None: measure here)
     loaded: params.LoadedDesign | None = None   # the checks: the design, to try their fixes on (None: untried)
+    options: BuildOptions = field(default_factory=BuildOptions)     # how the build is run (what a stage reads of
+    #                                                                 it: hwgen.options.STAGE_FIELDS)
 
 
 @dataclass(frozen=True)

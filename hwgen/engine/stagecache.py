@@ -2,7 +2,6 @@
 it wrote last time (its files' bytes and what it added to the manifest) instead of running."""
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
 
 from .. import cache
@@ -10,7 +9,8 @@ from ..cad.manifest import Added
 from ..checks.report import REPORT, read_report
 from ..outputs import webview
 from ..outputs.pictures import MARKED
-from .context import STAGE_ENV, Hashes, StageInput, StageResult
+from ..options import STAGE_FIELDS
+from .context import Hashes, StageInput, StageResult
 
 STAGE_REWRITES = {"marks": MARKED}   # files a stage draws again over an earlier stage's (kept in the cache)
 STAGE_RESULT = {"checks": REPORT}    # a stage whose report is this file of its outputs (read back by read_report)
@@ -20,11 +20,12 @@ STAGE_ASSETS = {"view": webview.assets}     # what a stage reads besides the fol
 
 def stage_key(hashes: Hashes, name: str, given: StageInput) -> str:
     """What a stage after the files is kept under: every file in the folder, the manifest, the plan
-    (the design's values as the stages read them), the environment it reads, the files besides
-    hwgen's code it reads (:data:`STAGE_ASSETS`) and hwgen's code."""
-    inputs = (hashes.files(given.folder), given.manifest, given.plan, {e: os.environ.get(e) for e in STAGE_ENV[name]})
+    (the design's values as the stages read them), the build's options it reads
+    (:meth:`hwgen.options.BuildOptions.stage_fields`), the files besides hwgen's code it reads
+    (:data:`STAGE_ASSETS`) and hwgen's code."""
+    inputs = (hashes.files(given.folder), given.manifest, given.plan, given.options.stage_fields(name))
     if name in STAGE_ASSETS:
-        inputs += (STAGE_ASSETS[name](),)
+        inputs += (STAGE_ASSETS[name](given.options.viewer),)
     return cache.entry_key("stage " + name, inputs, libraries=cache.LIBRARIES)
 
 
@@ -33,7 +34,7 @@ def cached_stage(store: cache.Store, hashes: Hashes, name: str, stage: Callable[
     """Run a stage after the files, or take what it wrote last time from the cache (:func:`stage_key`):
     the files it added to the folder and what it added to the manifest (``reused`` then gets its
     name). Pictures that could not be drawn are not kept (another try may find a renderer)."""
-    if not store.enabled or name not in STAGE_ENV:
+    if not store.enabled or name not in STAGE_FIELDS:
         return stage(given)
     folder = given.folder
     before = hashes.files(folder)

@@ -321,10 +321,10 @@ def reachable_note(manifest: Manifest) -> str:
 # --------------------------------------------------------------------------- in a child process
 
 def run_child(folder: Path, manifest: Manifest, settings: Settings, svg_table: list[dict] | None,
-              steps: list[dict] | None = None, only: tuple[str, ...] | None = None) -> dict:
+              steps: list[dict] | None = None, only: tuple[str, ...] | None = None, enabled: bool = True) -> dict:
     """Draw the pictures (``only``: just these) in a fresh Python process; raise RenderUnavailable
-    if it cannot."""
-    if os.environ.get(BACKEND_ENV, "").lower() == "none":
+    if it cannot, or when the build's options switch the pictures off (``enabled``)."""
+    if not enabled:
         raise RenderUnavailable(f"{BACKEND_ENV}=none: offscreen rendering switched off")
     store = cache.active()
     job = json.dumps({"folder": str(folder), "manifest": manifest.to_json(), "settings": settings.__dict__,
@@ -373,11 +373,13 @@ def _child_main() -> int:
     return 0
 
 
-def draw(folder: Path, manifest: Manifest, render, svg_table: list[dict], steps: list[dict] | None = None) -> Added:
+def draw(folder: Path, manifest: Manifest, render, svg_table: list[dict], steps: list[dict] | None = None,
+         enabled: bool = True) -> Added:
     """The pictures and the drawing as the plan's ``render`` settings say (width, explode, bend;
     ``svg_table``: the parts table of the bill of materials),
     and the assembly guide's step pictures (``steps``); the manifest's ``render`` section, which
-    records a missing or crashing backend (never raised)."""
+    records a missing or crashing backend, or pictures the build's options switched off
+    (``enabled``), never raised."""
     folder = Path(folder)
     settings = Settings(render.width_px, render.explode_mm, render.bend_deg)
     entry: dict = {"settings": settings.__dict__}
@@ -386,7 +388,7 @@ def draw(folder: Path, manifest: Manifest, render, svg_table: list[dict], steps:
     for job in steps or []:
         (folder / job["file"]).unlink(missing_ok=True)
     try:
-        result = run_child(folder, manifest, settings, svg_table, steps)
+        result = run_child(folder, manifest, settings, svg_table, steps, enabled=enabled)
     except RenderUnavailable as e:
         entry |= {"status": "unavailable", "message": f"pictures not drawn: {e}. {INSTALL_HINT}"}
     except RenderFailed as e:
@@ -402,12 +404,12 @@ def draw(folder: Path, manifest: Manifest, render, svg_table: list[dict], steps:
     return Added({"render": entry})
 
 
-def mark_failures(folder: Path, manifest: Manifest, render) -> Added:
+def mark_failures(folder: Path, manifest: Manifest, render, enabled: bool = True) -> Added:
     """exploded.png and bent.png drawn again with every part and tendon of a failing check in the
     warning colour, once the checks are in the manifest (a build draws its pictures beside the
     checks, before their verdict); the manifest's ``render`` section as it then stands. Nothing is
     drawn (and nothing added) when no check fails, when they were drawn with these marks already,
-    or when the pictures could not be drawn; a renderer that fails now leaves the unmarked
+    or when the pictures could not be drawn (or were switched off: ``enabled``); a renderer that fails now leaves the unmarked
     pictures and says so in the section's ``failing``."""
     entry = json.loads(json.dumps(manifest.render or {}))
     parts, tendons = failing_marks(manifest.checks)
@@ -418,7 +420,7 @@ def mark_failures(folder: Path, manifest: Manifest, render) -> Added:
     folder = Path(folder)
     settings = Settings(render.width_px, render.explode_mm, render.bend_deg)
     try:
-        result = run_child(folder, manifest, settings, None, only=MARKED)
+        result = run_child(folder, manifest, settings, None, only=MARKED, enabled=enabled)
     except (RenderUnavailable, RenderFailed) as e:
         entry["failing"] = {"parts": parts, "tendons": tendons, "message": f"not marked in the pictures: {e}"}
         return Added({"render": entry})

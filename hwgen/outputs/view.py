@@ -10,9 +10,9 @@ from typing import NamedTuple
 import numpy as np
 
 from .. import heap
+from ..options import BACKEND_ENV
 from .scene import Posed, transform
 
-BACKEND_ENV = "HWGEN_RENDER_BACKEND"   # "none": behave as if no OpenGL backend worked (tests, CI)
 SMOOTH_ANGLE_DEG = 20.0     # shading is smooth across edges flatter than this (STL facets are 11.5°)
 TENDON_TUBE_MM = 0.7        # drawn radius of a tendon (the real 0.075 mm would be invisible)
 BACKGROUND = (1.0, 1.0, 1.0)

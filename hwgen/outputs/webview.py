@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import __version__
+from ..options import VIEWER_ENV
 from ..cad.manifest import Added, Manifest, ManifestPart, manifest_parts, sha256
 from ..checks.meshes import part_mesh, sharing_meshes
 from ..checks.report import named, place, status
@@ -48,7 +49,6 @@ from .scene import (ScenePart, bend_points, bent_placement, exploded_placements,
 from .view import ISOMETRIC, TENDON_TUBE_MM
 
 PAGE = "view.html"
-VIEWER_ENV = "HWGEN_VIEWER_JS"      # the viewer's bundle, if not where `make viewer` puts it; "none": no viewer
 BUNDLE = Path(sys.prefix) / "share" / "hwgen" / "webview.js"     # `make viewer` writes it here
 STYLE = Path(__file__).with_name("webview.css")
 BANNER = re.compile(r"/\* hwgen viewer: ([^*]*) \*/")            # the bundle's first line: what it holds
@@ -65,20 +65,21 @@ NO_VIEWER = ("The 3D view is not in this page: its viewer (three.js, bundled wit
              "and stiffness are listed below; run `make viewer`, then `hwgen render`, for the 3D view.")
 
 
-def viewer_bundle() -> Path | None:
-    """The viewer's bundle (``HWGEN_VIEWER_JS`` names another file; "none": as if there were none);
-    None when there is none."""
-    given = os.environ.get(VIEWER_ENV, "")
+def viewer_bundle(given: str | None = None) -> Path | None:
+    """The viewer's bundle (``given``, the build's option: "" where `make viewer` puts it, another
+    file, or "none": as if there were none; None: as ``$HWGEN_VIEWER_JS`` says); None when there is none."""
+    given = os.environ.get(VIEWER_ENV, "") if given is None else given
     if given.lower() == "none":
         return None
     path = Path(given) if given else BUNDLE
     return path if path.is_file() else None
 
 
-def assets() -> dict[str, str | None]:
-    """What the page inlines besides the build's files (the viewer's bundle, the style), by their
-    sha256: the view stage is kept in the cache under these too (hwgen's .py code is keyed already)."""
-    bundle = viewer_bundle()
+def assets(viewer: str | None = None) -> dict[str, str | None]:
+    """What the page inlines besides the build's files (the viewer's bundle, as ``viewer`` names it:
+    :func:`viewer_bundle`; the style), by their sha256: the view stage is kept in the cache under
+    these too (hwgen's .py code is keyed already)."""
+    bundle = viewer_bundle(viewer)
     return {"bundle": None if bundle is None else sha256(bundle), "style": sha256(STYLE)}
 
 
@@ -391,14 +392,16 @@ def render_page(data: dict, ok: bool | None, glb_bytes: bytes | None = None, bun
 
 
 def write_view(folder: Path, manifest: Manifest, report: dict | None, study: dict | None, explode_mm: float,
-               sweep_deg: float) -> Added:
+               sweep_deg: float, viewer: str | None = None) -> Added:
     """view.html into the folder; the manifest's ``view`` section (what the page holds, what it
-    could not draw) and the file's entry. Without the viewer, no mesh is read: the page lists."""
+    could not draw) and the file's entry. Without the viewer (``viewer``: :func:`viewer_bundle`),
+    no mesh is read: the page lists."""
     folder = Path(folder)
     data = listed(manifest, report, study)
-    bundle, glb_bytes = viewer_bundle(), None
+    given = os.environ.get(VIEWER_ENV, "") if viewer is None else viewer
+    bundle, glb_bytes = viewer_bundle(given), None
     if bundle is None:
-        where = "" if os.environ.get(VIEWER_ENV, "").lower() == "none" else f" ({BUNDLE} is missing)"
+        where = "" if given.lower() == "none" else f" ({BUNDLE} is missing)"
         data["messages"].insert(0, NO_VIEWER.format(where=where))
     elif not manifest.parts:
         data["messages"].insert(0, "The 3D view is empty: the manifest lists no part.")

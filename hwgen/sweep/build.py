@@ -7,15 +7,14 @@ go to ``OUT/sweeps/<name>/kept/<variant>-<hash>/<design>/``, with their pictures
 """
 from __future__ import annotations
 
-import os
 import shutil
 import tempfile
+from dataclasses import replace
 from pathlib import Path
 
 from .. import pipeline
 from ..checks.base import failing
-from ..outputs.view import BACKEND_ENV
-from ..outputs.webview import VIEWER_ENV
+from ..options import BuildOptions
 from ..params import LoadedDesign
 from .spec import Resolved
 
@@ -31,18 +30,12 @@ def build_and_check(r: Resolved, options: dict) -> tuple[list[dict], str | None]
         kept = str(result.folder)
     else:
         # pictures and view.html's 3D view of files about to be removed would be wasted
-        saved = {name: os.environ.get(name) for name in (BACKEND_ENV, VIEWER_ENV)}
-        os.environ.update({name: "none" for name in saved})
+        bare = replace(BuildOptions.from_environment(), pictures=False, viewer="none")
         tmp = tempfile.mkdtemp(prefix="hwgen-sweep-")
         try:
-            result = pipeline.build(loaded, Path(tmp), cache_dir=cache)
+            result = pipeline.build(loaded, Path(tmp), cache_dir=cache, options=bare)
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
-            for name, value in saved.items():
-                if value is None:
-                    os.environ.pop(name, None)
-                else:
-                    os.environ[name] = value
         kept = None
     checks = (result.report or {}).get("checks", [])
     failed = failing(checks)
