@@ -370,7 +370,7 @@ def test_the_full_plan_screens_what_hwgen_check_fails():
 
     def screens(values: dict) -> dict:
         d = resolve(loaded.base, loaded.names, Variant(0, tuple(values[n] for n in loaded.names))).design
-        return {f["id"]: f for f in levels._plan_screens(make_plan(d), d.process.min_wall)}
+        return {f["id"]: f for f in levels._plan_screens(make_plan(d))}
 
     prototype = dict(zip(loaded.names, loaded.base_values))
     assert screens({**prototype, **{f"tendons[{i}].pretension_n": 6.0 for i in (1, 2, 3)}}) == {}

@@ -202,13 +202,13 @@ def test_the_plan_screens_tendons_that_rub_between_disks():
 
     from hwgen.model.plan import make_plan
     from hwgen.params import Design
-    from hwgen.sweep import levels
+    from hwgen.checks.clearances import rubbing_screen
     doc = yaml.safe_load(PROTOTYPE.read_text())
-    assert levels._rubbing(make_plan(Design.model_validate(doc))) is None
+    assert rubbing_screen(make_plan(Design.model_validate(doc))) == []
     from hwgen import designfile
     doc = copy.deepcopy(designfile.read_layers(Path(__file__).parent / "labs" / "lab-fdm.yaml").doc)
-    assert levels._rubbing(make_plan(Design.model_validate(doc))) is None
+    assert rubbing_screen(make_plan(Design.model_validate(doc))) == []
     doc["tendons"][1]["routing"]["function"].update(a=20.2, x0=-1.8)          # the lab tune's trial 579
     doc["tendons"][2]["routing"]["function"].update(a=16.8, k=6, phase_deg=65)
-    f = levels._rubbing(make_plan(Design.model_validate(doc)))
-    assert f is not None and f["id"] == "tendon.clearance" and f["measured"] < f["limit"] == 0.15
+    [f] = rubbing_screen(make_plan(Design.model_validate(doc)))
+    assert f.id == "tendon.clearance" and f.measured < f.limit == 0.15

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..cad.export import STL_TOLERANCE_MM
 from ..model.settings import Termination
-from .base import REBUILD, Check
+from .base import REBUILD, Check, Screen
 from .eyelets import DiskSections
 from .polygons import area_centroid, inside, inside_many, loop_gap, points_to_polyline
 from .sections import chain_loops, section_robot
@@ -135,3 +135,14 @@ def seat_checks(disk: DiskSections, mesh, placement, design_disk: dict, ends: di
         rows.append({"tendon": name, "part": disk.part, "opening_mm": opening, "termination_mm": term.diameter,
                      "termination": term.kind, "plate_mm": plate, "wall_mm": wall, "ok": ok})
     return out, rows
+
+
+# ---------------------------------------------------------------- on the plan alone
+
+def seat_screen(plan) -> list[Screen]:
+    """``tendon.seat`` foreseen on the plan: a seat on the base disk as wide as its knot or crimp
+    (a steep tendon's slanted seat), so the termination pulls through."""
+    return [Screen("tendon.seat", f"{seat.tendon}'s seat on the base disk opens to Ø{seat.diameter:.2f} "
+                                  f"mm: its Ø{seat.termination:g} mm termination pulls through", "error",
+                   seat.diameter, seat.termination, seat.tendon)
+            for seat in plan.disks[0].seats if seat.termination and seat.diameter >= seat.termination]

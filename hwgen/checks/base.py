@@ -8,6 +8,21 @@ Severity = Literal["error", "warning", "info"]
 
 
 @dataclass(frozen=True)
+class Screen:
+    """A check's failure foreseen on the plan alone, before any file is written (the plan's circles
+    for the measured sections): what a sweep's deeper levels and a tune read of a check without
+    building. ``id`` is the check's (or its family's: ``eyelet.wall``); each screen lives beside
+    the check that owns its id, and :mod:`hwgen.checks.screens` lists them."""
+
+    id: str
+    message: str
+    severity: str = "error"
+    measured: float | None = None
+    limit: float | None = None
+    tendon: str | None = None            # the tendon it is about, where it is about one
+
+
+@dataclass(frozen=True)
 class Fix:
     """One change to the design that fixes a failing check, tried: applied to the design and the
     check evaluated again by the model that failed it (issue 43). Printed as a fix only where

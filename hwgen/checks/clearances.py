@@ -22,8 +22,9 @@ from ..model import kinematics as kin
 from ..model.crossings import crossing_angles, strip_crossings
 from ..model.holes import hole_diameter
 from ..model.plan import STRIP_HOLE_SHARE
-from .base import REBUILD, Check
+from .base import REBUILD, Check, Screen
 from .eyelets import EyeletMap, joined_holes
+from .lengths import sweep_angles
 from .polygons import inside, loop_gap, num, points_to_polyline
 
 SAG_MM = STL_TOLERANCE_MM      # chordal deviation of the STL: section polygons sit this far inside holes
@@ -382,3 +383,69 @@ def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendo
                                              "beyond the strip's half thickness and disks.slot_clearance), or across "
                                              "the strip at a station"))
     return out
+
+
+# ---------------------------------------------------------------- on the plan alone
+
+def wall_screen(plan) -> list[Screen]:
+    """``eyelet.wall`` (between holes) foreseen on the plan: the thinnest wall between two of the tip
+    disk's eyelets, turned toward the drums, their circles on the mid-plane, under the process's
+    minimum wall."""
+    holes = plan.disks[-1].holes
+    walls = [(math.hypot(a.x - b.x, a.z - b.z) - (a.diameter + b.diameter) / 2, a, b)
+             for i, a in enumerate(holes) for b in holes[i + 1:]]
+    if not walls:
+        return []
+    w, a, b = min(walls, key=lambda t: t[0])
+    if w >= plan.min_wall:
+        return []
+    return [Screen("eyelet.wall", f"wall {w:.2f} mm between the tip disk's eyelets for {'+'.join(a.tendons)} and "
+                                  f"{'+'.join(b.tendons)} (turned toward the drums), under process.min_wall "
+                                  f"{plan.min_wall:g} mm", "error", w, plan.min_wall)]
+
+
+def crossing_screen(plan) -> list[Screen]:
+    """``backbone.crossing`` foreseen on the plan: the first hole for a crossing that breaks through
+    the strip's edge or end (the helix of 30 mm at 5 half turns lies on the 60 mm strip's edge at the
+    middle disk)."""
+    bb = plan.backbone
+    for h in bb.holes:
+        r = h.diameter / 2
+        over = max(abs(h.x) + r - bb.height / 2, bb.y_start - (h.y - r), h.y + r - bb.y_end)   # mm past the outline
+        if over >= 0:
+            return [Screen("backbone.crossing", f"{h.tendon} crosses the strip at x = {h.x:.2f}, y = {h.y:.2f} mm, "
+                                                f"where its Ø{h.diameter:.2f} hole breaks through the strip's "
+                                                f"outline (a notch, not a hole)", "error",
+                           bb.height / 2 + over, bb.height / 2, h.tendon)]
+    return []
+
+
+def rubbing_screen(plan) -> list[Screen]:
+    """``tendon.clearance`` foreseen on the plan's eyelet positions: the closest two tendons come
+    between two disks over the check's sweep, bay by bay, leaving out the bays that end in an eyelet
+    they share by design; a screen when it is under the tendon's diameter."""
+    ang = sweep_angles(plan.check.max_angle_deg, plan.check.step_deg)
+    kappa = kin.kappas_for_angles(ang, plan.backbone.length)
+    st = np.asarray(plan.stations, float)
+    pts = {p.name: kin.points_in_space(st, p.points, kappa) for p in plan.paths}
+    shared: dict[tuple[str, str], set[int]] = {}
+    for m in plan.merges:
+        if m.kind == "shared":
+            for a, b in combinations(m.tendons, 2):
+                shared.setdefault(tuple(sorted((a, b))), set()).add(m.station)
+    d = plan.tendon_material.diameter
+    worst = None
+    for a, b in combinations(pts, 2):
+        sh = shared.get(tuple(sorted((a, b))), set())
+        keep = np.array([j for j in range(len(st) - 1) if j not in sh and j + 1 not in sh], int)
+        if keep.size == 0:
+            continue
+        P, Q = pts[a], pts[b]
+        gap = float(segment_distance(P[:, keep], P[:, keep + 1], Q[:, keep], Q[:, keep + 1]).min())
+        if worst is None or gap < worst[0]:
+            worst = (gap, a, b)
+    if worst is None or worst[0] >= d:
+        return []
+    gap, a, b = worst
+    return [Screen("tendon.clearance", f"{a} and {b} rub between two disks: {gap:.3f} mm apart over the sweep, "
+                                       f"less than the tendon diameter {d:g} mm", "error", gap, d)]

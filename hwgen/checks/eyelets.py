@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..model.holes import AXIS_CUT_FRACTION
-from .base import REBUILD, Check
+from .base import REBUILD, Check, Screen
 from .meshes import load_mesh
 from .polygons import area_centroid, inside, num
 from .sections import Loop, chain_loops, disk_slab, section_loops
@@ -383,3 +383,17 @@ def _position_checks(report: dict, eyelets: list[Eyelet], tol: float) -> list[Ch
                              f"{part}: {len(mine)} eyelet(s) found within {tol:g} mm of design intent "
                              f"(largest offset {worst * 1000:.1f} µm)", worst, tol, where))
     return out
+
+
+# ---------------------------------------------------------------- on the plan alone
+
+def overlap_screen(plan) -> list[Screen]:
+    """``eyelet.overlap`` foreseen on the plan: tendons whose holes run into one opening on the tip
+    disk, its eyelets turned toward the drums (the plan's "overlap" merges there)."""
+    tip = plan.disks[-1]
+    hit = [m for m in plan.merges if m.kind == "overlap" and m.station == tip.index]
+    if not hit:
+        return []
+    return [Screen("eyelet.overlap", "tendons routed into each other share one opening on the tip disk "
+                                     "(its eyelets turned toward the drums): "
+                   + "; ".join(" and ".join(m.tendons) for m in hit))]

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Check
+from .base import Check, Screen
 from .eyelets import EyeletMap
 
 SCALE_STEP = 0.005          # the tried fix's radial scale, in these steps down from 1
@@ -118,3 +118,18 @@ def sliding_checks(emap: EyeletMap, report: dict, actuating_channel: str, min_wa
                          {"part": part, "station": station, "tendons": [d, o]}, fix=fix,
                          lowered_by="check.shared_sliding" if severity == "warning" else ""))
     return out
+
+
+# ---------------------------------------------------------------- on the plan alone
+
+def sliding_screen(plan) -> list[Screen]:
+    """``eyelet.shared_sliding`` foreseen on the plan: a driven tendon through one opening with
+    another on the tip disk (its eyelets turned toward the drums), at the check's severity."""
+    tip = plan.disks[-1]
+    driven = {p.name for p in plan.paths if p.channel == plan.tensioner.actuating_channel}
+    slide = [m for m in plan.merges if m.station == tip.index and driven & set(m.tendons) and len(m.tendons) > 1]
+    if not slide:
+        return []
+    return [Screen("eyelet.shared_sliding", "a driven tendon slides through one opening with another on the "
+                                            "tip disk (its eyelets turned toward the drums): "
+                   + "; ".join("+".join(m.tendons) for m in slide), plan.check.shared_sliding, 2, 1)]

@@ -65,6 +65,7 @@ class Plan:
     experiment: ExperimentSettings                    # the push test (hwgen experiment, compare)
     tensioner_layout: TensionerLayout | None = None   # where the worm drives go, when they can be laid out
     tensioner_error: str | None = None                # why not, otherwise
+    slot_clearance: float = 0.0                       # disks.slot_clearance: the strip's play in each slot, each side, mm
     frame: FrameLayout | None = None                  # the rotating base frame (base_frame.enabled)
     rig: RigLayout | None = None                      # the stiffness rig (rig.enabled)
 
@@ -280,7 +281,7 @@ def make_plan(design: Design, tensioner_record: dict | None = None) -> Plan:
                  check=check_settings(d), process=process_settings(d), tendon_material=tendon_material_settings(d),
                  tensioner=tensioner_settings(d), hub=hub_settings(d), anchors=anchors_settings(d),
                  render=render_settings(d), bom=bom_settings(d), plates=plates_settings(d),
-                 experiment=experiment_settings(d))
+                 experiment=experiment_settings(d), slot_clearance=d.disks.slot_clearance)
     try:
         lay = layout(d, paths, disks[-1], tensioner_record)
     except ValueError as e:

@@ -3,7 +3,7 @@
 ``lengths`` (:mod:`.lengths`): the plan's eyelets, eq. (2) and the nominal taut path, many
 variants at once. ``robust``: the full plan (:func:`hwgen.model.plan.make_plan`: its tip disk's
 eyelets turned toward the drums and the base disk's seats, which the lengths level cannot see;
-:func:`_plan_screens`) and the as-built Monte Carlo of :mod:`hwgen.model.scatter` on the plan's holes, seats and tensioner runs, judged at
+:func:`hwgen.checks.screens.plan_screens`, each beside its check) and the as-built Monte Carlo of :mod:`hwgen.model.scatter` on the plan's holes, seats and tensioner runs, judged at
 ``check.robust`` like ``hwgen check``'s ``tendon.robust``. ``coupling``: the tendon statics of
 :mod:`hwgen.checks.tension` on that plan (tautness, overload, the actuating tension's rise).
 ``build``: the whole pipeline (:mod:`.build`), with ``hwgen check``'s report. Each level includes
@@ -29,15 +29,12 @@ from __future__ import annotations
 import json
 import math
 import time
-from itertools import combinations
 
 import numpy as np
 
+from ..checks.screens import plan_screens
 from ..errors import DesignError, InputError
 from ..model import feasibility, scatter as mc
-from ..checks.clearances import segment_distance
-from ..checks.lengths import sweep_angles
-from ..model import kinematics as kin
 from ..model.plan import Plan, make_plan
 from . import lengths
 from .lengths import failure
@@ -151,21 +148,21 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
         row["screened"] = True         # a tune's trial its figures already rule out: the checks after them not run
         return
     centre = {t["name"]: t["centre_mm"] for t in json.loads(row["per_tendon"])}
-    taut_rows = robust(plan, d.disks.slot_clearance, options.get("robust_samples", 200))
+    taut_rows = robust(plan, plan.slot_clearance, options.get("robust_samples", 200))
     fails = [row["message"]] if row["message"] else []
     warns = []
     budgeted = [t for t in taut_rows if t["budget_mm"] is not None]
     failures = list(row["failures"])
-    for f in _plan_screens(plan, d.process.min_wall):
+    for f in _plan_screens(plan):
         if not any(g["id"] == f["id"] for g in failures):
             (fails if f["severity"] == "error" else warns).append(f["message"])
             failures.append(f)
     for t in budgeted:
         if t["robust_mm"] > t["budget_mm"]:
-            text = (f"{t['name']} changes {t['robust_mm']:.3f} mm at {d.check.robust} as built, "
+            text = (f"{t['name']} changes {t['robust_mm']:.3f} mm at {plan.check.robust} as built, "
                     f"budget {t['budget_mm']:g} mm")
-            (fails if d.check.robust_severity == "error" else warns).append(text)
-            failures.append(failure("tendon.robust", text, d.check.robust_severity, t["robust_mm"], t["budget_mm"],
+            (fails if plan.check.robust_severity == "error" else warns).append(text)
+            failures.append(failure("tendon.robust", text, plan.check.robust_severity, t["robust_mm"], t["budget_mm"],
                                      t["name"]))
     tendons = json.loads(row["per_tendon"])
     for t in tendons:
@@ -203,88 +200,10 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
     row["message"] = "; ".join([f for f in fails if f] + [f"warning: {w}" for w in warns])[:2000]
 
 
-def _rubbing(plan: Plan) -> dict | None:
-    """``tendon.clearance`` as ``hwgen check`` judges it, from the plan's eyelet positions: the closest
-    two tendons come between two disks over the check's sweep, bay by bay, leaving out the bays that
-    end in an eyelet they share by design; a failure record when it is under the tendon's diameter."""
-    ang = sweep_angles(plan.check.max_angle_deg, plan.check.step_deg)
-    kappa = kin.kappas_for_angles(ang, plan.backbone.length)
-    st = np.asarray(plan.stations, float)
-    pts = {p.name: kin.points_in_space(st, p.points, kappa) for p in plan.paths}
-    shared: dict[tuple[str, str], set[int]] = {}
-    for m in plan.merges:
-        if m.kind == "shared":
-            for a, b in combinations(m.tendons, 2):
-                shared.setdefault(tuple(sorted((a, b))), set()).add(m.station)
-    d = plan.tendon_material.diameter
-    worst = None
-    for a, b in combinations(pts, 2):
-        sh = shared.get(tuple(sorted((a, b))), set())
-        keep = np.array([j for j in range(len(st) - 1) if j not in sh and j + 1 not in sh], int)
-        if keep.size == 0:
-            continue
-        P, Q = pts[a], pts[b]
-        gap = float(segment_distance(P[:, keep], P[:, keep + 1], Q[:, keep], Q[:, keep + 1]).min())
-        if worst is None or gap < worst[0]:
-            worst = (gap, a, b)
-    if worst is None or worst[0] >= d:
-        return None
-    gap, a, b = worst
-    return failure("tendon.clearance", f"{a} and {b} rub between two disks: {gap:.3f} mm apart over the sweep, "
-                                       f"less than the tendon diameter {d:g} mm", "error", gap, d)
-
-
-def _plan_screens(plan: Plan, min_wall: float) -> list[dict]:
-    """What the full plan says that the lengths level cannot (``hwgen check`` fails each): on the tip
-    disk, its eyelets turned toward the drums (sized there without the turn), tendons whose holes run
-    into one opening (the plan's "overlap" merges: ``eyelet.overlap``; one with a driven tendon:
-    ``eyelet.shared_sliding``) or a wall between two holes
-    under ``process.min_wall`` (their circles on the mid-plane: ``eyelet.wall``); on the base disk, a
-    seat as wide as its knot or crimp (a steep tendon's slanted seat: ``tendon.seat``); between the
-    disks, two tendons closer than a line's diameter over the sweep (``tendon.clearance``); in the strip,
-    a hole for a crossing that breaks through its edge or end (``backbone.crossing``: the helix of 30
-    mm at 5 half turns lies on the 60 mm strip's edge at the middle disk)."""
-    out = []
-    tip = plan.disks[-1]
-    hit = [m for m in plan.merges if m.kind == "overlap" and m.station == tip.index]
-    if hit:
-        out.append(failure("eyelet.overlap", "tendons routed into each other share one opening on the tip disk "
-                                              "(its eyelets turned toward the drums): "
-                            + "; ".join(" and ".join(m.tendons) for m in hit)))
-    holes = tip.holes
-    walls = [(math.hypot(a.x - b.x, a.z - b.z) - (a.diameter + b.diameter) / 2, a, b)
-             for i, a in enumerate(holes) for b in holes[i + 1:]]
-    if walls:
-        w, a, b = min(walls, key=lambda t: t[0])
-        if w < min_wall:
-            out.append(failure("eyelet.wall", f"wall {w:.2f} mm between the tip disk's eyelets for "
-                                               f"{'+'.join(a.tendons)} and {'+'.join(b.tendons)} (turned toward the "
-                                               f"drums), under process.min_wall {min_wall:g} mm", "error", w, min_wall))
-    bb = plan.backbone
-    for h in bb.holes:
-        r = h.diameter / 2
-        over = max(abs(h.x) + r - bb.height / 2, bb.y_start - (h.y - r), h.y + r - bb.y_end)   # mm past the outline
-        if over >= 0:
-            out.append(failure("backbone.crossing", f"{h.tendon} crosses the strip at x = {h.x:.2f}, y = {h.y:.2f} mm, "
-                                                     f"where its Ø{h.diameter:.2f} hole breaks through the strip's "
-                                                     f"outline (a notch, not a hole)", "error",
-                                bb.height / 2 + over, bb.height / 2, h.tendon))
-            break
-    driven = {p.name for p in plan.paths if p.channel == plan.tensioner.actuating_channel}
-    slide = [m for m in plan.merges if m.station == tip.index and driven & set(m.tendons) and len(m.tendons) > 1]
-    if slide:
-        out.append(failure("eyelet.shared_sliding", "a driven tendon slides through one opening with another on the "
-                                                     "tip disk (its eyelets turned toward the drums): "
-                            + "; ".join("+".join(m.tendons) for m in slide), plan.check.shared_sliding, 2, 1))
-    rub = _rubbing(plan)
-    if rub is not None:
-        out.append(rub)
-    for seat in plan.disks[0].seats:
-        if seat.termination and seat.diameter >= seat.termination:
-            out.append(failure("tendon.seat", f"{seat.tendon}'s seat on the base disk opens to Ø{seat.diameter:.2f} "
-                                               f"mm: its Ø{seat.termination:g} mm termination pulls through", "error",
-                                seat.diameter, seat.termination, seat.tendon))
-    return out
+def _plan_screens(plan: Plan) -> list[dict]:
+    """What the full plan says that the lengths level cannot (``hwgen check`` fails each): the
+    checks' own screens (:func:`hwgen.checks.screens.plan_screens`), as a row's failure records."""
+    return [failure(s.id, s.message, s.severity, s.measured, s.limit, s.tendon) for s in plan_screens(plan)]
 
 
 def robot(plan: Plan) -> mc.Robot:
