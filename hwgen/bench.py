@@ -274,14 +274,14 @@ def disk_scad(spec) -> str:
     from :func:`hwgen.cad.disk.eyelet_profiles`), seat, seat chamber and glue port cut at once. Left
     out: turning the tip disk over for printing (orientation only). OpenSCAD writes meshes only:
     no STEP or exact BREP, which hwgen's disks also write."""
-    from hwgen.cad.disk import NORMAL_AXIS_TOL, TOOL_OVERRUN, _to_file, eyelet_profiles
+    from hwgen.cad.disk import NORMAL_AXIS_TOL, TOOL_OVERRUN, sketch_xy, eyelet_profiles
     from hwgen.model.fixing import seat_overlap
     T, seated = spec.thickness, bool(spec.seats)
     normal = [h for h in spec.holes if abs(abs(h.axis[1]) - 1) < NORMAL_AXIS_TOL and not seated]
     slanted = [h for h in spec.holes if h not in normal]
     cut2d = [f"square([{spec.slot_width:.6f}, {spec.slot_height:.6f}], center=true);"]
-    cut2d += [f"translate({_v(_to_file(h.x, h.z))}) circle(d={h.diameter:.6f});" for h in normal]
-    cut2d += [f"translate({_v(_to_file(x, z))}) circle(d={d:.6f});" for x, z, d in spec.mount_holes]
+    cut2d += [f"translate({_v(sketch_xy(h.x, h.z))}) circle(d={h.diameter:.6f});" for h in normal]
+    cut2d += [f"translate({_v(sketch_xy(x, z))}) circle(d={d:.6f});" for x, z, d in spec.mount_holes]
     body = [f"linear_extrude({T:.6f}) difference() {{ circle(d={spec.outer_diameter:.6f}); {' '.join(cut2d)} }}"]
     hub = spec.hub
     if hub is not None:
@@ -311,10 +311,10 @@ def disk_scad(spec) -> str:
     for h in normal:
         tools += revolved(h, False)
     for st in spec.seats:
-        tools.append(f"translate({_v((*_to_file(st.x, st.z), -TOOL_OVERRUN))}) "
+        tools.append(f"translate({_v((*sketch_xy(st.x, st.z), -TOOL_OVERRUN))}) "
                      f"cylinder(d={st.diameter:.6f}, h={spec.seat_plate + seat_overlap(T, spec.seat_plate) + TOOL_OVERRUN:.6f});")
     for x, z, dia, height in spec.seat_chambers:
-        tools.append(f"translate({_v((*_to_file(x, z), spec.seat_plate))}) cylinder(d={dia:.6f}, h={height:.6f});")
+        tools.append(f"translate({_v((*sketch_xy(x, z), spec.seat_plate))}) cylinder(d={dia:.6f}, h={height:.6f});")
     if hub is not None and hub.port is not None:
         x, off, dia = hub.port
         z = T + off if hub.side > 0 else -off

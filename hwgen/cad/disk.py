@@ -28,7 +28,8 @@ CONE_MIN_DEG = 10.0                 # narrower than this, a slanted eyelet gets 
 MIN_EDGE = 0.05                     # a chamfer smaller than this (mm) is left off
 
 
-def _to_file(x: float, z: float) -> tuple[float, float]:
+def sketch_xy(x: float, z: float) -> tuple[float, float]:
+    """A point of the disk's plane (x, z) in its sketch's coordinates (the bench's OpenSCAD disks use them too)."""
     return x, -z
 
 
@@ -83,7 +84,7 @@ def eyelet_profiles(h: Hole, thickness: float, edge: float, base_side: bool, tip
             r_end = r + (u_end - u_cone) * math.tan(math.radians(half))
     prof_top = [(r, u_cone), (r_end, u_end)] if (tip_side and edge > 0) else [(r, u_end)]
     prof_bot = [(r_end, -u_end), (r, -u_cone)] if (base_side and edge > 0) else [(r, -u_end)]
-    x, y = _to_file(h.x, h.z)
+    x, y = sketch_xy(h.x, h.z)
     origin = (x, y, thickness / 2)
     if with_bore:
         return origin, ax, [[(0, -u_end)] + prof_bot + prof_top + [(0, u_end)]]
@@ -142,9 +143,9 @@ def blank_and_tools(spec: DiskSpec) -> tuple[cq.Solid, list[cq.Solid]]:
     normal = [h for h in spec.holes if abs(abs(h.axis[1]) - 1) < NORMAL_AXIS_TOL and not seated]
     slanted = [h for h in spec.holes if h not in normal]
     for h in normal:
-        sk = sk.push([_to_file(h.x, h.z)]).circle(h.diameter / 2, mode="s")
+        sk = sk.push([sketch_xy(h.x, h.z)]).circle(h.diameter / 2, mode="s")
     for x, z, dia in spec.mount_holes:
-        sk = sk.push([_to_file(x, z)]).circle(dia / 2, mode="s")
+        sk = sk.push([sketch_xy(x, z)]).circle(dia / 2, mode="s")
     blank = cq.Workplane("XY").placeSketch(sk.reset().clean()).extrude(T).val()
     if spec.hub is not None:
         blank = blank.fuse(_hub_solid(spec, spec.hub)).clean()
@@ -161,11 +162,11 @@ def blank_and_tools(spec: DiskSpec) -> tuple[cq.Solid, list[cq.Solid]]:
         tools.extend(_eyelet_tool(square, T, spec.edge_size, base_side, True, with_bore=False))
     overlap = seat_overlap(T, spec.seat_plate)
     for s in spec.seats:
-        fx, fy = _to_file(s.x, s.z)
+        fx, fy = sketch_xy(s.x, s.z)
         tools.append(cq.Solid.makeCylinder(s.diameter / 2, spec.seat_plate + overlap + TOOL_OVERRUN,
                                            cq.Vector(fx, fy, -TOOL_OVERRUN)))
     for x, z, dia, height in spec.seat_chambers:
-        fx, fy = _to_file(x, z)
+        fx, fy = sketch_xy(x, z)
         tools.append(cq.Solid.makeCylinder(dia / 2, height, cq.Vector(fx, fy, spec.seat_plate)))
     if spec.hub is not None and spec.hub.port is not None:
         tools.append(_port_tool(spec, spec.hub))

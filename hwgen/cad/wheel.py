@@ -317,11 +317,13 @@ class WheelSpec:
         def mm(x):
             return round(float(x), 6) + 0.0
 
-        return WheelSpec(self.pair, self.fastening, mm(self.hub_radius), mm(self.flange_radius),
-                         mm(self.spool_radius), mm(self.pin_bore), mm(self.height), mm(self.gear_at),
-                         tuple((mm(a), mm(b)) for a, b in self.flanges), tuple((mm(a), mm(b)) for a, b in self.caps),
-                         tuple((mm(z), s, cap, (mm(a), mm(b))) for z, s, cap, (a, b) in self.clamps),
-                         self.gear_on_top)
+        return WheelSpec(pair=self.pair, fastening=self.fastening, hub_radius=mm(self.hub_radius),
+                         flange_radius=mm(self.flange_radius), spool_radius=mm(self.spool_radius),
+                         pin_bore=mm(self.pin_bore), height=mm(self.height), gear_at=mm(self.gear_at),
+                         flanges=tuple((mm(a), mm(b)) for a, b in self.flanges),
+                         caps=tuple((mm(a), mm(b)) for a, b in self.caps),
+                         clamps=tuple((mm(z), s, cap, (mm(a), mm(b))) for z, s, cap, (a, b) in self.clamps),
+                         gear_on_top=self.gear_on_top)
 
 
 def wheel_spec(lay: TensionerLayout, unit: Unit, pin_bore: float) -> WheelSpec:
@@ -336,9 +338,11 @@ def wheel_spec(lay: TensionerLayout, unit: Unit, pin_bore: float) -> WheelSpec:
         anchor = caps[cap] if cap is not None else \
             flanges[min(range(len(unit.flanges)), key=lambda k: abs((unit.flanges[k][0] + unit.flanges[k][1]) / 2 - zc))]
         clamps.append((float(zc - z_lo), int(s), cap is not None, anchor))
-    return WheelSpec(lay.pair, lay.fastening, float(lay.hub_radius), float(lay.flange_radius),
-                     float(lay.spool_radius), float(pin_bore), float(unit.z_part[1] - z_lo),
-                     float(unit.z_gear[0] - z_lo), flanges, caps, tuple(clamps), bool(unit.gear_on_top))
+    return WheelSpec(pair=lay.pair, fastening=lay.fastening, hub_radius=float(lay.hub_radius),
+                     flange_radius=float(lay.flange_radius), spool_radius=float(lay.spool_radius),
+                     pin_bore=float(pin_bore), height=float(unit.z_part[1] - z_lo),
+                     gear_at=float(unit.z_gear[0] - z_lo), flanges=flanges, caps=caps, clamps=tuple(clamps),
+                     gear_on_top=bool(unit.gear_on_top))
 
 
 def wheel_solid(spec: WheelSpec, gear: cq.Solid) -> cq.Solid:

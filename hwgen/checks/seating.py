@@ -154,8 +154,9 @@ def measure_fit(disk: DiskSections, mesh, placement, strip_h: float, strip_t: fl
     held = np.flatnonzero(hi - lo <= strip_t + 2 * ENGAGED_MM)
     engaged = (float(grid[held[0]]), float(grid[held[-1]] + Y_STEP_MM)) if len(held) else (disk.y_mid, disk.y_mid)
     slab = (disk.y_mid - disk.thickness / 2, disk.y_mid + disk.thickness / 2)
-    fit = SlotFit(disk.part, disk.station, disk.y_mid, tx[:2], tz[:2], ty[:2], tz[2], tx[2], tz[3], tx[3],
-                  engaged, slab)
+    fit = SlotFit(part=disk.part, station=disk.station, y_mid=disk.y_mid, tilt_x=tx[:2], tilt_z=tz[:2],
+                  tilt_y=ty[:2], play_x=tz[2], play_z=tx[2], centre_x=tz[3], centre_z=tx[3], engaged=engaged,
+                  slab=slab)
     beyond = [(max(engaged[0], slab[1]), engaged[1]), (engaged[0], min(engaged[1], slab[0]))]
     a, b = max(beyond, key=lambda ab: ab[1] - ab[0])
     if b - a > 2 * FACE_OFFSET_MM:

@@ -66,9 +66,10 @@ def robot(emap: EyeletMap, rep: dict, manifest: Manifest, tendon_d: float, lengt
         else:
             x, z = xz[chain[k, -1]]
             end.append([x, tip["thickness_mm"] / 2 + END_RUN_MM, z])
-    return mc.Robot(np.asarray(emap.stations_y, float), np.asarray(disk), np.asarray(xz, float),
-                    np.asarray(axis, float), np.asarray(dia, float), chain, np.asarray(anchor, float),
-                    np.asarray(end, float), tendon_d, length)
+    return mc.Robot(stations=np.asarray(emap.stations_y, float), hole_disk=np.asarray(disk),
+                    hole_xz=np.asarray(xz, float), hole_axis=np.asarray(axis, float),
+                    hole_diameter=np.asarray(dia, float), chain=chain, anchor=np.asarray(anchor, float),
+                    end=np.asarray(end, float), tendon_diameter=tendon_d, length=length)
 
 
 def process_scatter(n_disks: int, position_sigma: float, diameter_sigma: float, station_tolerance: float,
@@ -262,11 +263,12 @@ def from_report(report: dict) -> tuple[mc.Robot, mc.Scatter]:
     tb, fits = report["as_built"]["taut"], report["as_built"]["disks"]
     rb, p = tb["robot"], tb["process"]
     h = rb["holes"]
-    robot_ = mc.Robot(np.asarray(rb["stations_mm"], float), np.array([x["disk"] for x in h]),
-                      np.array([x["xz_mm"] for x in h], float), np.array([x["axis"] for x in h], float),
-                      np.array([x["diameter_mm"] for x in h], float), np.asarray(rb["chains"]),
-                      np.asarray(rb["anchors_mm"], float), np.asarray(rb["ends_mm"], float),
-                      tb["tendon_diameter_mm"], tb["length_mm"])
+    robot_ = mc.Robot(stations=np.asarray(rb["stations_mm"], float), hole_disk=np.array([x["disk"] for x in h]),
+                      hole_xz=np.array([x["xz_mm"] for x in h], float),
+                      hole_axis=np.array([x["axis"] for x in h], float),
+                      hole_diameter=np.array([x["diameter_mm"] for x in h], float), chain=np.asarray(rb["chains"]),
+                      anchor=np.asarray(rb["anchors_mm"], float), end=np.asarray(rb["ends_mm"], float),
+                      tendon_diameter=tb["tendon_diameter_mm"], length=tb["length_mm"])
     tilt, play = _play(len(robot_.stations), fits)
     return robot_, mc.Scatter(p["position_sigma_mm"], p["diameter_sigma_mm"], p["station_tolerance_mm"], tilt, play)
 

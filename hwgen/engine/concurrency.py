@@ -157,8 +157,8 @@ class Ahead:
         from ..checks import run as _      # the checks' modules and libraries, imported while this process waits
         from ..checks.meshes import read_early
         from ..checks.tension import sweeps
-        from ..outputs.plots import _pyplot
-        _pyplot()                           # and the checks' plots'
+        from ..outputs.plots import pyplot
+        pyplot()                           # and the checks' plots'
         with cache.using(self.store):
             if self.store.enabled:
                 try:

@@ -216,9 +216,10 @@ def fix(loaded: LoadedDesign, out_root: Path, keep: tuple[str, ...] = (), relax:
         failing = _errors(report)
         paths = {p for c in failing for o in choose.options(c) for p in o.set}
         _, left = choose.pick(failing, fx.current(changes, paths), keep, relax, spent)
-    out = Fixed(fx.folder, list(changes.values()), before, _failing(report), not _errors(report), folder, left,
-                rounds, fx.builds, time.monotonic() - start, [fx.folder / FIXED, fx.folder / SUMMARY],
-                _stiffening(first, report))
+    out = Fixed(folder=fx.folder, changes=list(changes.values()), before=before, after=_failing(report),
+                passed=not _errors(report), build_folder=folder, left=left, rounds=rounds, builds=fx.builds,
+                seconds=time.monotonic() - start, files=[fx.folder / FIXED, fx.folder / SUMMARY],
+                stiffening=_stiffening(first, report))
     write_text(fx.folder / SUMMARY, summary(fx, out))
     return out
 

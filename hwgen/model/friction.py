@@ -190,8 +190,9 @@ def bounds(eq: st.Equilibrium) -> Bounds:
             turns.append(c.exit_turn)
     H = 0.5 * (H + H.T)
     factors = {"none": _factor(eq.hessian), "stuck": _factor(H)}
-    return Bounds(eq, tuple(locked), np.array(rows).reshape(-1, model.n_dof), np.array(springs), np.array(tension),
-                  tuple(owner), np.array(eyelets, int).reshape(-1, 2), np.array(turns), factors)
+    return Bounds(eq=eq, tendons=tuple(locked), rows=np.array(rows).reshape(-1, model.n_dof),
+                  springs=np.array(springs), tension=np.array(tension), owner=tuple(owner),
+                  eyelets=np.array(eyelets, int).reshape(-1, 2), turns=np.array(turns), factors=factors)
 
 
 def _factor(H: np.ndarray):

@@ -27,9 +27,11 @@ class Material:
 def table() -> dict[str, Material]:
     """Every material of data/materials.csv by name."""
     text = resources.files("hwgen").joinpath("data/materials.csv").read_text(encoding="utf-8")
-    return {r["material"]: Material(r["material"], r["technology"], float(r["density_g_cm3"]), r["reason"],
-                                    float(r["modulus_gpa"]), r["modulus_reason"], float(r["contact_modulus_gpa"]),
-                                    float(r["poisson"]), r["contact_reason"])
+    return {r["material"]: Material(name=r["material"], technology=r["technology"],
+                                    density_g_cm3=float(r["density_g_cm3"]), reason=r["reason"],
+                                    modulus_gpa=float(r["modulus_gpa"]), modulus_reason=r["modulus_reason"],
+                                    contact_modulus_gpa=float(r["contact_modulus_gpa"]), poisson=float(r["poisson"]),
+                                    contact_reason=r["contact_reason"])
             for r in csv.DictReader(text.splitlines())}
 
 

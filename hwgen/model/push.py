@@ -100,8 +100,8 @@ def lines(b: fr.Bounds, mu: float, jacs: np.ndarray) -> Lines:
         Z = cho_solve(factor, np.column_stack([jacs.T, G.T]))
     k = len(jacs)
     c = np.einsum("kn,nk->k", jacs, Z[:, :k])
-    return Lines(b.springs[keep], b.tension[keep], tendon, names, eyelets, b.turns, np.exp(mu * b.turns),
-                 D, G @ Z[:, k:], c, (G @ Z[:, :k]).T)
+    return Lines(springs=b.springs[keep], tension=b.tension[keep], tendon=tendon, names=names, eyelets=eyelets,
+                 turns=b.turns, ratio=np.exp(mu * b.turns), D=D, P=G @ Z[:, k:], c=c, p=(G @ Z[:, :k]).T)
 
 
 def with_friction(ln: Lines, mu: float) -> Lines:

@@ -60,7 +60,7 @@ class Scatter:
                        play=None if self.play is None else f * self.play)
 
 
-def _basis(axis: np.ndarray) -> np.ndarray:
+def basis(axis: np.ndarray) -> np.ndarray:
     """(..., 3, 2): two unit vectors across each axis: the first toward +x, the second n × the first."""
     n = axis / np.linalg.norm(axis, axis=-1, keepdims=True)
     e1 = np.array([1.0, 0.0, 0.0]) - n[..., :1] * n
@@ -98,7 +98,7 @@ def chains(rb: Robot, sc: Scatter, n: int, seed: int) -> taut.Chains:
     play = np.zeros((ND, 2)) if sc.play is None else np.asarray(sc.play, float)
     R = _rotation(*np.radians([pitch * tilt[:, 0], roll * tilt[:, 1], yaw * tilt[:, 2]]))   # (n, ND, 3, 3)
     shift = np.stack([dx * play[:, 0], np.zeros_like(dx), dz * play[:, 1]], axis=-1)      # (n, ND, 3)
-    E0 = _basis(rb.hole_axis)                                                                # (H, 3, 2)
+    E0 = basis(rb.hole_axis)                                                                # (H, 3, 2)
     c0 = np.column_stack([rb.hole_xz[:, 0], np.zeros(H), rb.hole_xz[:, 1]])
     c = c0 + sc.sigma_pos * np.einsum("hij,shj->shi", E0, n_pos)
     if sc.hole_play is None:
@@ -189,8 +189,9 @@ def run(rb: Robot, sc: Scatter, angles_deg, n: int, seed: int, pair: tuple[int, 
         i, j = pair
         take_up = -(dL[:, i] + dL[:, j]).min(axis=1)[:n]
         pair_nominal = (float(-(dc[i] + dc[j]).min()), float(-(dn[i] + dn[j]).min()))
-    return Result(ang, dc, dn, Ln0[0], band, np.stack([dL.min(axis=0), dL.max(axis=0)]),
-                  np.abs(dL).max(axis=2)[:n], take_up, pair_nominal, bad0 + bad)
+    return Result(angles=ang, centreline=dc, nominal=dn, rest=Ln0[0], band=band,
+                  envelope=np.stack([dL.min(axis=0), dL.max(axis=0)]), worst=np.abs(dL).max(axis=2)[:n],
+                  take_up=take_up, pair_nominal=pair_nominal, unconverged=bad0 + bad)
 
 
 def to_json(res: Result) -> dict:

@@ -699,9 +699,11 @@ def solve(model: Model, loads: Loads, q0: np.ndarray | None = None, gtol: float 
         Vt, g, lengths, tensions = at(x, "energy")
         P, R = at(x, "kinematics")[:2]
         H = at(x, "hessian")
-    return Equilibrium(model, loads, x, model.nodes_s.copy(), P[0], R[0],
-                       {k: float(v[0]) for k, v in lengths.items()}, {k: float(v[0]) for k, v in tensions.items()},
-                       float(Vt[0]), H, float(np.abs(g).max()) if n else 0.0, its, time.perf_counter() - t0)
+    return Equilibrium(model=model, loads=loads, q=x, s=model.nodes_s.copy(), p=P[0], frames=R[0],
+                       lengths={k: float(v[0]) for k, v in lengths.items()},
+                       tensions={k: float(v[0]) for k, v in tensions.items()}, energy=float(Vt[0]), hessian=H,
+                       residual=float(np.abs(g).max()) if n else 0.0, iterations=its,
+                       solve_time=time.perf_counter() - t0)
 
 
 def straight_lengths(model: Model) -> dict:

@@ -279,10 +279,11 @@ def describe(plan, measured: dict | None = None) -> Described:
               "strip_g_per_mm": lam, "printed_density_g_mm3": rho, "how": how}
     chk = plan.check
     rules = protocol.Rules(act, chk.taut_floor_n, tm.break_load / chk.tendon_safety_factor, chk.straight_within_mm)
-    return Described(robot, pre, tuple(p.name for p in plan.paths if p.channel == act),
-                     tuple(p.name for p in plan.paths if p.budget_mm is not None),
-                     {p.name: p.channel for p in plan.paths}, stations, masses, rules, tm.eyelet_friction,
-                     chk.stiffness_push_n, _channels(plan))
+    return Described(robot=robot, pretension=pre, actuating=tuple(p.name for p in plan.paths if p.channel == act),
+                     stiffening=tuple(p.name for p in plan.paths if p.budget_mm is not None),
+                     channel_of={p.name: p.channel for p in plan.paths}, stations=stations, masses=masses,
+                     rules=rules, eyelet_friction=tm.eyelet_friction, push_n=chk.stiffness_push_n,
+                     channels=_channels(plan))
 
 
 def _channels(plan) -> tuple[str, ...]:

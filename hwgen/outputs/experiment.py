@@ -11,7 +11,7 @@ import numpy as np
 
 from ..model import protocol
 from ..model.calibration import COLUMNS as MEASURED_COLUMNS
-from .plots import _pyplot, _save
+from .plots import pyplot, save
 
 PREDICTED_COLUMNS = ("state", "disk", "s_mm", "push_mm", "beta_n_per_mm", "beta_low_n_per_mm", "beta_high_n_per_mm")
 
@@ -129,14 +129,14 @@ def write_protocol(result: dict, path: Path) -> None:
 
 def plot_experiment(result: dict, path: Path, measured: dict | None = None) -> None:
     """experiment.png (and compare.png, with ``measured``): :func:`experiment_figure` written."""
-    _save(_pyplot(), experiment_figure(result, measured), path)
+    save(pyplot(), experiment_figure(result, measured), path)
 
 
 def experiment_figure(result: dict, measured: dict | None = None):
     """Bars grouped by disk, a colour per state (the paper's Fig. 8), each up to the predicted β
     with the band as an error bar; with ``measured`` (compare.json), the measured β and its
     interval as black markers."""
-    plt = _pyplot()
+    plt = pyplot()
     from matplotlib.patches import Patch
     rows = result["rows"]
     states = list(dict.fromkeys(r["state"] for r in rows))

@@ -97,6 +97,50 @@ def take_up(manifest: Manifest) -> dict | None:
     return out or None
 
 
+def _tension_step(manifest: Manifest, plan, tendon_rows: list[dict], shown: list[str], tensioner: list[str],
+                  names) -> Step | None:
+    """The tensioning step: each channel's take-up per worm turn and the tension it adds (None
+    without a tensioner that takes up)."""
+    tm = plan.tendon_material
+    ups = take_up(manifest)
+    if not ups:
+        return None
+    ea, comp = tm.axial_stiffness_n, tm.tie_off_compliance_mm_per_n
+    rest = {r["part"].removeprefix("tendon "): (float(r["rest_length_mm"]), r) for r in tendon_rows}
+    lines = [f"Turn each channel's worm with a {next(iter(ups.values()))['hex_key_mm']:g} mm hex key. One worm "
+             f"turn turns the wheel by starts/teeth of a turn, and its drum winds that share of its "
+             f"circumference: take-up per worm turn = 2π × winding radius × starts / teeth (the winding "
+             f"radius is the drum's radius plus half the line)."]
+    for ch, u in ups.items():
+        per_n = [(t, rest[t][0] / ea + comp) for t in u["tendons"] if t in rest]
+        tension = "; ".join(f"{t} about {u['take_up_mm'] / s:.1f} N per turn once taut "
+                            f"(rest {rest[t][1]['rest_length_mm']} mm [BOM #{rest[t][1]['item']}] / EA {ea:g} N + "
+                            f"{comp:g} mm/N at its ends)" for t, s in per_n)
+        lines.append(f"Channel {ch} ({u['worm']}): 2π × {u['winding_radius_mm']:.3f} mm × {u['starts']} / "
+                     f"{u['teeth']} = **{u['take_up_mm']:.3f} mm per worm turn**; {tension}.")
+    lines.append(f"Take up the slack of every channel, then tension the stiffening channels and the actuating "
+                 f"channel ({plan.tensioner.actuating_channel}) last, a quarter turn at a time; the worm "
+                 f"self-locks, so the tension stays when the key comes off.")
+    inside = [n for n in tensioner if n not in names(lambda p: p["role"] == "tensioner_housing")]
+    return Step("tension", "Tensioning", lines, shown + inside,   # the housing hides the worms
+                names(lambda p: p["role"] in ("tensioner_worm", "tensioner_drive")), tendons=True,
+                extra={"take_up": ups})
+
+
+def _rig_step(rig: list[str], rows: dict, bom: list[dict], shown: list[str]) -> Step:
+    """The stiffness rig's step (Sect. III-C's push test)."""
+    hw = _hardware_for(bom, set(rig))
+    lines = ["For the push test (Sect. III-C): screw the load cell's fixed end under the bracket's arm and the "
+             "push block under its free end, bolt the bracket to the arm's flange (its spigot in the flange's "
+             "recess, the pin in its hole), and stand the base frame on the support: "
+             + "; ".join(cite(rows[n]) for n in rig if n in rows) + "."]
+    if hw:
+        lines.append("Hardware: " + "; ".join(cite(r) for r in hw) + ".")
+    lines.append("Jog the arm until the pad stands just above the first disk's rim, then push down at a constant "
+                 "speed; the pad meets the rim above every eyelet, so no tendon is touched.")
+    return Step("rig", "The stiffness rig", lines, shown, rig)
+
+
 def steps(folder: Path, manifest: Manifest, plan, bom: list[dict] | None = None) -> list[Step]:
     """The assembly in order, each step's words (numbers from bom.csv, or the rows in ``bom``, and
     the plan's tendon material and actuating channel) and what its picture shows (from the manifest
@@ -176,39 +220,11 @@ def steps(folder: Path, manifest: Manifest, plan, bom: list[dict] | None = None)
         out.append(Step("wind", "Lines wound", lines, shown, clamps + names(lambda p: p["role"] == "tensioner_wheel"),
                         tendons=True))
 
-    ups = take_up(manifest)
-    if ups:
-        ea, comp = tm.axial_stiffness_n, tm.tie_off_compliance_mm_per_n
-        rest = {r["part"].removeprefix("tendon "): (float(r["rest_length_mm"]), r) for r in tendon_rows}
-        lines = [f"Turn each channel's worm with a {next(iter(ups.values()))['hex_key_mm']:g} mm hex key. One worm "
-                 f"turn turns the wheel by starts/teeth of a turn, and its drum winds that share of its "
-                 f"circumference: take-up per worm turn = 2π × winding radius × starts / teeth (the winding "
-                 f"radius is the drum's radius plus half the line)."]
-        for ch, u in ups.items():
-            per_n = [(t, rest[t][0] / ea + comp) for t in u["tendons"] if t in rest]
-            tension = "; ".join(f"{t} about {u['take_up_mm'] / s:.1f} N per turn once taut "
-                                f"(rest {rest[t][1]['rest_length_mm']} mm [BOM #{rest[t][1]['item']}] / EA {ea:g} N + "
-                                f"{comp:g} mm/N at its ends)" for t, s in per_n)
-            lines.append(f"Channel {ch} ({u['worm']}): 2π × {u['winding_radius_mm']:.3f} mm × {u['starts']} / "
-                         f"{u['teeth']} = **{u['take_up_mm']:.3f} mm per worm turn**; {tension}.")
-        lines.append(f"Take up the slack of every channel, then tension the stiffening channels and the actuating "
-                     f"channel ({plan.tensioner.actuating_channel}) last, a quarter turn at a time; the worm "
-                     f"self-locks, so the tension stays when the key comes off.")
-        inside = [n for n in tensioner if n not in names(lambda p: p["role"] == "tensioner_housing")]
-        out.append(Step("tension", "Tensioning", lines, strip + disks[-1:] + inside,   # the housing hides the worms
-                        names(lambda p: p["role"] in ("tensioner_worm", "tensioner_drive")), tendons=True,
-                        extra={"take_up": ups}))
+    tension = _tension_step(manifest, plan, tendon_rows, strip + disks[-1:], tensioner, names)
+    if tension is not None:
+        out.append(tension)
     if rig:
-        hw = _hardware_for(bom, set(rig))
-        lines = ["For the push test (Sect. III-C): screw the load cell's fixed end under the bracket's arm and the "
-                 "push block under its free end, bolt the bracket to the arm's flange (its spigot in the flange's "
-                 "recess, the pin in its hole), and stand the base frame on the support: "
-                 + "; ".join(cite(rows[n]) for n in rig if n in rows) + "."]
-        if hw:
-            lines.append("Hardware: " + "; ".join(cite(r) for r in hw) + ".")
-        lines.append("Jog the arm until the pad stands just above the first disk's rim, then push down at a constant "
-                     "speed; the pad meets the rim above every eyelet, so no tendon is touched.")
-        out.append(Step("rig", "The stiffness rig", lines, strip + disks + base + frame + rig, rig))
+        out.append(_rig_step(rig, rows, bom, strip + disks + base + frame + rig))
     for i, s in enumerate(out, start=1):
         s.picture = f"{FOLDER}/step_{i:02d}.png"
     return out

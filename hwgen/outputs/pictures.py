@@ -156,6 +156,19 @@ def _warning_legend(parts: dict, tendons: dict) -> list[tuple[str, tuple]]:
     return [(f"failing check: {' and '.join(what)} (summary.md)", WARNING_COLOUR)] if what else []
 
 
+def _jig(r: Renderer, parts: list, aids: list, placed: dict, manifest: Manifest, path: Path) -> dict:
+    """jig.png: the disks and the strip the assembly jig holds, in it; its size."""
+    holds = {n for a in aids for n in a.meta.get("holds", [])}
+    shown = [p for p in parts if p.name in holds] + aids
+    jig_colours = family_colours(manifest, fixtures=True)
+    posed = [placed[p.name] for p in shown]
+    roles = [role for role in jig_colours if any(p.role == role for p in shown)]
+    legend = [(f"{family_label(role)} ({sum(p.role == role for p in shown)})", jig_colours[role]) for role in roles]
+    _, W, H = r.draw(posed, jig_colours, ISOMETRIC, path,
+                     texts=_legend(legend, f"{manifest.name}: the disks and the strip in the assembly jig"))
+    return {"width": W, "height": H}
+
+
 def render_pictures(folder: Path, manifest: Manifest, settings: Settings, svg_table: list[dict] | None = None,
                     renderer: Renderer | None = None, steps: list[dict] | None = None,
                     only: tuple[str, ...] | None = None) -> dict:
@@ -229,15 +242,7 @@ def render_pictures(folder: Path, manifest: Manifest, settings: Settings, svg_ta
 
     if aids and "jig.png" in wanted:
         t = time.perf_counter()
-        holds = {n for a in aids for n in a.meta.get("holds", [])}
-        shown = [p for p in parts if p.name in holds] + aids
-        jig_colours = family_colours(manifest, fixtures=True)
-        posed = [placed[p.name] for p in shown]
-        roles = [role for role in jig_colours if any(p.role == role for p in shown)]
-        legend = [(f"{family_label(role)} ({sum(p.role == role for p in shown)})", jig_colours[role]) for role in roles]
-        _, W, H = r.draw(posed, jig_colours, ISOMETRIC, folder / "jig.png",
-                         texts=_legend(legend, f"{manifest.name}: the disks and the strip in the assembly jig"))
-        images["jig.png"] = {"width": W, "height": H}
+        images["jig.png"] = _jig(r, parts, aids, placed, manifest, folder / "jig.png")
         timings["jig_s"] = time.perf_counter() - t
 
     result = {"backend": r.backend, "images": images, "timings_s": timings, "bent_note": reachable_note(manifest),

@@ -127,9 +127,11 @@ def oriented(name: str, role: str, vertices: np.ndarray, faces: np.ndarray, volu
     """The part as :func:`decide` (``decision``) has it print: its vertices turned and moved so."""
     v = _to_corner(np.asarray(vertices, float))
     if decision["how"] == "tilted":
-        return Oriented(name, role, _tilted(v, decision["axis"], settings), faces, "tilted", decision["reason"],
-                        volume, (decision["axis"], float(settings.sla_tilt_deg)), sha)
-    return Oriented(name, role, v, faces, decision["how"], decision["reason"], volume, None, sha)
+        return Oriented(name=name, role=role, vertices=_tilted(v, decision["axis"], settings), faces=faces,
+                        how="tilted", reason=decision["reason"], volume_mm3=volume,
+                        tilt=(decision["axis"], float(settings.sla_tilt_deg)), sha256=sha)
+    return Oriented(name=name, role=role, vertices=v, faces=faces, how=decision["how"], reason=decision["reason"],
+                    volume_mm3=volume, tilt=None, sha256=sha)
 
 
 def orient(name: str, role: str, vertices: np.ndarray, faces: np.ndarray, volume: float, technology: str,

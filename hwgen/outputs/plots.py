@@ -9,7 +9,7 @@ import numpy as np
 from ..atomic import atomic_path
 
 
-def _pyplot():
+def pyplot():
     """matplotlib's pyplot on the Agg backend (no display), imported when a plot is drawn."""
     import matplotlib
     matplotlib.use("Agg")
@@ -17,7 +17,7 @@ def _pyplot():
     return plt
 
 
-def _save(plt, fig, path: Path) -> None:
+def save(plt, fig, path: Path) -> None:
     """Write the figure as a PNG whole or not at all, and free it."""
     # the figures lay themselves out once (tight_layout), which leaves a placeholder layout engine
     # behind; with one, savefig draws the whole figure an extra time first. Without it the pixels
@@ -32,13 +32,13 @@ def _save(plt, fig, path: Path) -> None:
 
 def plot_lengths(report: dict, path: Path) -> None:
     """lengths.png: :func:`lengths_figure` written."""
-    _save(_pyplot(), lengths_figure(report), path)
+    save(pyplot(), lengths_figure(report), path)
 
 
 def lengths_figure(report: dict):
     """The matplotlib Figure of lengths.png: every tendon's ΔL over the sweep on top (one line
     each, labelled by name); the budgeted ones below with ±budget lines."""
-    plt = _pyplot()
+    plt = pyplot()
 
     ang = np.asarray(report["sweep"]["angles_deg"])
     tendons = report["tendons"]
@@ -78,7 +78,7 @@ def plot_sag(report: dict, design_report: dict, path: Path) -> bool:
     fig = sag_figure(report, design_report)
     if fig is None:
         return False
-    _save(_pyplot(), fig, path)
+    save(pyplot(), fig, path)
     return True
 
 
@@ -90,7 +90,7 @@ def sag_figure(report: dict, design_report: dict):
     g = report.get("gravity") or {}
     if not g.get("curve"):
         return None
-    plt = _pyplot()
+    plt = pyplot()
     from matplotlib.patches import Polygon, Rectangle
 
     c = g["curve"]
@@ -156,7 +156,7 @@ def plot_tolerance(report: dict, path: Path) -> bool:
     fig = tolerance_figure(report)
     if fig is None:
         return False
-    _save(_pyplot(), fig, path)
+    save(pyplot(), fig, path)
     return True
 
 
@@ -172,7 +172,7 @@ def tolerance_figure(report: dict):
     rows = [(k, r) for k, r in enumerate(tb["tendons"]) if r["budget_mm"] is not None]
     if not rows:
         return None
-    plt = _pyplot()
+    plt = pyplot()
 
     ang = np.asarray(tb["angles_deg"], float)
     band, env = np.asarray(tb["band_mm"], float), np.asarray(tb["envelope_mm"], float)
@@ -220,3 +220,6 @@ def tolerance_figure(report: dict):
                  f"tilt and play as measured)", fontsize=9)
     fig.tight_layout(rect=(0, 0, 1, 0.95))
     return fig
+
+
+_pyplot, _save = pyplot, save      # the old private names, for hwgen/tune/report.py until its split lands

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .plots import _pyplot, _save
+from .plots import pyplot, save
 
 BAND_ALPHA = 0.35          # the part of a bar between the frictionless and the stuck stiffness
 
@@ -24,14 +24,14 @@ def _by(report: dict, friction: str, push: str | None = None) -> dict:
 
 def plot_stiffness(report: dict, path: Path) -> None:
     """stiffness.png: :func:`stiffness_figure` written."""
-    _save(_pyplot(), stiffness_figure(report), path)
+    save(pyplot(), stiffness_figure(report), path)
 
 
 def stiffness_figure(report: dict):
     """The Figure of stiffness.png: per orientation a panel, in it a bar per disk and state up to the
     frictionless stiffness (a colour per state, log scale), continued lighter up to the stuck one;
     the capstan stiffness at the tip as markers (▲ pushed toward +z, ▼ toward −z)."""
-    plt = _pyplot()
+    plt = pyplot()
     from matplotlib.patches import Patch
     none, stuck = _by(report, "none"), _by(report, "stuck")
     caps = {k: _by(report, "capstan", k) for k in ("+z", "-z")}
@@ -84,12 +84,12 @@ def stiffness_figure(report: dict):
 
 def plot_gravity(report: dict, path: Path) -> None:
     """gravity.png: :func:`gravity_figure` written."""
-    _save(_pyplot(), gravity_figure(report), path)
+    save(pyplot(), gravity_figure(report), path)
 
 
 def gravity_figure(report: dict):
     """The Figure of gravity.png: per orientation a panel, in it the strip's shape per state."""
-    plt = _pyplot()
+    plt = pyplot()
     none = _by(report, "none")
     orientations = list(none)
     fig, axes = plt.subplots(len(orientations), 1, figsize=(9, 3.4 * len(orientations) + 0.4), squeeze=False)

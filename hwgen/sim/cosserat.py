@@ -284,4 +284,4 @@ def solve(rod: Rod, loads: Loads, steps=LOAD_STEPS) -> Solution:
     prob.shoot(x[None], 1.0, curve, starts)
     s = np.array([c[0] for c in curve])
     p = np.array([c[1] for c in curve])
-    return Solution(rod, loads, x[:3], x[3:6], starts, s, p, its, left)
+    return Solution(rod=rod, loads=loads, n0=x[:3], m0=x[3:6], starts=starts, s=s, p=p, iterations=its, residual=left)

@@ -122,10 +122,11 @@ def _bodies(folder: Path, parts: list[ManifestPart]) -> tuple[dict[str, Body], t
             foot = _foot(mesh, part.placement)
         e = part.entry
         lo, hi = _box(part)
-        out[part.name] = Body(part.name, part.role, part.stl, part.files["stl"].sha256, part.placement,
-                              tuple(e.get("color", (0.7, 0.7, 0.7, 1.0))), float(e["mass_g"]),
-                              np.asarray(e["center_of_mass_mm"], float),
-                              _inertia(mesh, part.placement, float(e["density_g_cm3"]) * 1e-3), lo, hi, dict(e))
+        out[part.name] = Body(name=part.name, role=part.role, stl=part.stl, sha256=part.files["stl"].sha256,
+                              placement=part.placement, color=tuple(e.get("color", (0.7, 0.7, 0.7, 1.0))),
+                              mass_g=float(e["mass_g"]), com_mm=np.asarray(e["center_of_mass_mm"], float),
+                              inertia_g_mm2=_inertia(mesh, part.placement, float(e["density_g_cm3"]) * 1e-3),
+                              box_min=lo, box_max=hi, entry=dict(e))
     return out, foot
 
 
@@ -173,9 +174,10 @@ def read_build(folder: Path, manifest: Manifest, report: dict) -> Printed:
             runs[r["tendon"]] = Run(r["tendon"], p.entry.get("channel", ""), np.asarray(r["start"], float),
                                     np.asarray(r["end"], float), int(r.get("sense", 1)), p.name,
                                     p.entry.get("winding", "same"))
-    return Printed(disks, [b for b in bodies.values() if b.role in TIP_ROLES],
-                   [b for b in bodies.values() if b.role in BASE_ROLES], strip, stations, thick,
-                   _eyelets(report, drep, stations), seats, runs, radius, foot)
+    return Printed(disks=disks, tip=[b for b in bodies.values() if b.role in TIP_ROLES],
+                   base=[b for b in bodies.values() if b.role in BASE_ROLES], strip=strip, stations_mm=stations,
+                   disk_thickness_mm=thick, eyelets=_eyelets(report, drep, stations), seats=seats, runs=runs,
+                   winding_radius_mm=radius, table=foot)
 
 
 def tip_masses(printed: Printed) -> list:

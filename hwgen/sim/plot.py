@@ -7,12 +7,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..outputs.plots import _pyplot, _save
+from ..outputs.plots import pyplot, save
 
 
 def sim_figure(result: dict):
     """The Figure of sim.png."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 4.8), gridspec_kw={"width_ratios": [1.6, 1]})
     cmap = plt.get_cmap("viridis")
     cases = [(s["state"], s["mujoco_curve"], s["statics_curve"]) for s in result["states"]]
@@ -57,4 +57,4 @@ def sim_figure(result: dict):
 
 def plot_sim(result: dict, path: Path) -> None:
     """sim.png: :func:`sim_figure` written."""
-    _save(_pyplot(), sim_figure(result), path)
+    save(pyplot(), sim_figure(result), path)

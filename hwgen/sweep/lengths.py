@@ -37,7 +37,7 @@ from ..model import taut
 from ..model.fixing import disk_thicknesses
 from ..model.materials import printed_density
 from ..model.routing import TendonPath, tendon_paths
-from ..model.scatter import _basis
+from ..model.scatter import basis
 from ..model.specs import slot_size
 from ..model.holes import hole_diameter
 from ..model.plan import SAME_POSITION_MM, SWEEP_STEP_DEG as SIZING_STEP_DEG, eyelet_holes
@@ -274,7 +274,8 @@ def _group(ds: list[Design]) -> list[dict]:
     r = np.maximum(0.0, (udia - ud[:, None]) / 2)
     anchor = np.stack([uxz_[:, 0, 0], np.full(S, -thick[0] / 2), uxz_[:, 0, 1]], axis=-1)[:, None]
     end = np.stack([uxz_[:, -1, 0], np.full(S, thick[-1] / 2 + END_RUN_MM), uxz_[:, -1, 1]], axis=-1)[:, None]
-    ch = taut.Chains(stations, C, _basis(uax), r, np.arange(N), np.zeros((S, N)), np.arange(N)[None], anchor, end)
+    ch = taut.Chains(stations=stations, C=C, E=basis(uax), r=r, hole_disk=np.arange(N), dy=np.zeros((S, N)),
+                     chain=np.arange(N)[None], anchor=anchor, end=end)
     L, L0, _ = taut.sweep(ch, ang, d0.backbone.length)
     tautd = np.abs(L[:, 0] - L0[:, 0, None]).max(axis=-1)[cinv].reshape(V, T)
     L0 = L0[:, 0][cinv].reshape(V, T)

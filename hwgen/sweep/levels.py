@@ -238,9 +238,11 @@ def robot(plan: Plan) -> mc.Robot:
         else:
             x, z = xz[chain[k, -1]]
             end.append([x, tip.thickness / 2 + lengths.END_RUN_MM, z])
-    return mc.Robot(np.asarray(plan.stations, float), np.asarray(disk), np.asarray(xz, float),
-                    np.asarray(axis, float), np.asarray(dia, float), chain, np.asarray(anchor, float),
-                    np.asarray(end, float), plan.tendon_material.diameter, plan.backbone.length)
+    return mc.Robot(stations=np.asarray(plan.stations, float), hole_disk=np.asarray(disk),
+                    hole_xz=np.asarray(xz, float), hole_axis=np.asarray(axis, float),
+                    hole_diameter=np.asarray(dia, float), chain=chain, anchor=np.asarray(anchor, float),
+                    end=np.asarray(end, float), tendon_diameter=plan.tendon_material.diameter,
+                    length=plan.backbone.length)
 
 
 def slot_scatter(plan: Plan, c: float) -> mc.Scatter:

@@ -259,4 +259,5 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
                 bar.join(timeout=5)
                 print()
         seconds = time.perf_counter() - t0
-    return Outcome(folder, total, len(done), len(written) - len(done), seconds, p.workers, p.start_seconds, cpu, verdicts)
+    return Outcome(folder=folder, total=total, done_before=len(done), evaluated=len(written) - len(done),
+                   seconds=seconds, workers=p.workers, start_seconds=p.start_seconds, cpu_s=cpu, verdicts=verdicts)

@@ -21,7 +21,7 @@ import numpy as np
 import pyarrow as pa
 
 from ..atomic import write_text
-from ..outputs.plots import _pyplot, _save
+from ..outputs.plots import pyplot, save
 from .spec import Loaded
 
 ORDER = {"pass": 0, "fail": 1, "error": 2, "bad input": 3}
@@ -90,7 +90,7 @@ def _values(t: pa.Table, col: str) -> np.ndarray:
 
 
 def _tradeoff(loaded: Loaded, t: pa.Table, path: Path) -> None:
-    plt = _pyplot()
+    plt = pyplot()
     col, label = figure_column(t)
     y, x, m = _values(t, col), _values(t, "clearance_mm"), _values(t, "mass_g")
     ok = np.isfinite(x) & np.isfinite(y)
@@ -104,7 +104,7 @@ def _tradeoff(loaded: Loaded, t: pa.Table, path: Path) -> None:
     ax.set_ylabel(label)
     ax.set_title(f"sweep {loaded.spec.sweep}: coupling against clearance against mass ({int(ok.sum())} variants)")
     ax.grid(True, alpha=0.3)
-    _save(plt, fig, path)
+    save(plt, fig, path)
 
 
 def _region(loaded: Loaded, t: pa.Table, path: Path) -> bool:
@@ -112,7 +112,7 @@ def _region(loaded: Loaded, t: pa.Table, path: Path) -> bool:
     axes = list(loaded.spec.summary.axes or numeric[:2])
     if not axes:
         return False
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(7, 5))
     dec = np.array([bool(v) for v in t.column("decoupled").to_pylist()])
     known = np.array([v is not None for v in t.column("decoupled").to_pylist()])
@@ -149,7 +149,7 @@ def _region(loaded: Loaded, t: pa.Table, path: Path) -> bool:
         ax.legend(fontsize="small")
     ax.set_title(f"sweep {loaded.spec.sweep}: the decoupled region")
     ax.grid(True, alpha=0.3)
-    _save(plt, fig, path)
+    save(plt, fig, path)
     return True
 
 

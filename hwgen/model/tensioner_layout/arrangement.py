@@ -142,7 +142,8 @@ def unit_stack(zs: list[float], pair: WormPair, gear_rule: str) -> Stack:
     upper = (hi + GAP, hi + GAP + SHELF)
     lower = (lo - GAP - SHELF, lo - GAP)
     pins = (pin_length(z_part[0] - GAP - lower[0]), pin_length(upper[1] - (z_part[1] + GAP)))
-    return Stack(zones, flanges, caps, gear, clamps, z_part, zw, upper, lower, pins)
+    return Stack(zones=zones, flanges=flanges, caps=caps, gear=gear, clamps=clamps, z_part=z_part, z_wheel=zw,
+                 upper=upper, lower=lower, pins=pins)
 
 
 GEAR_RULES = ("toward-high", "toward-low", "away-high", "away-low")
