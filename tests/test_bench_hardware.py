@@ -1,6 +1,6 @@
 """The paper's bench as printable hardware (issue 46): the rotating base frame (``base_frame:``) and
 the stiffness rig (``rig:``). Fast tests check the layout and the statics against textbook results
-and the checks' tried fixes; slow ones measure the built files of the prototype in its bench (params/prototype-bench.yaml)."""
+and the checks' tried fixes; slow ones measure the built files of the prototype, which stands in its bench (params/prototype.yaml)."""
 from __future__ import annotations
 
 import csv
@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 @functools.cache
 def _design():
-    return params.read(ROOT / "params" / "prototype-bench.yaml").design
+    return params.read(ROOT / "params" / "prototype.yaml").design
 
 
 @functools.cache
@@ -140,7 +140,7 @@ def test_the_rig_bolts_to_the_ur5e_flange():
 @pytest.mark.slow
 def test_the_prototype_builds_its_frame_and_rig(built):
     import trimesh
-    folder = built("prototype-bench")
+    folder = built("prototype")
     manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
     parts = {p["name"]: p for p in manifest["parts"]}
     frame = [n for n in parts if n.startswith("base_frame_")]
@@ -183,7 +183,7 @@ def test_a_heavier_tensioner_is_laid_out_with_a_larger_wheel():
 def test_a_bad_bench_value_names_its_field(tmp_path):
     from hwgen.errors import InputError
     f = tmp_path / "mine.yaml"
-    f.write_text(f"base: {ROOT / 'params' / 'prototype-bench.yaml'}\ndesign: mine\nbase_frame:\n  pulley_teeth: 25\n"
+    f.write_text(f"base: {ROOT / 'params' / 'prototype.yaml'}\ndesign: mine\nbase_frame:\n  pulley_teeth: 25\n"
                  f"rig:\n  load_cell:\n    length: -3\n", encoding="utf-8")
     with pytest.raises(InputError) as e:
         params.read(f)
