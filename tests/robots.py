@@ -23,6 +23,9 @@ from hwgen.model.materials import table as material_table
 from .conftest import PARAMS
 
 BASE = yaml.safe_load((PARAMS / "prototype.yaml").read_text())
+# without the prototype's bench (its base frame and rig): the draws test the robot a lab writes;
+# tests/test_bench_hardware.py tests the bench
+BASE.update(base_frame={"enabled": False}, rig={"enabled": False})
 
 # ---- the stability draw: the ranges a lab writes its own robot in --------------------------------
 LENGTH_MM = (150.0, 450.0)        # backbone.length, rounded to 5 mm

@@ -1,6 +1,6 @@
 """The paper's bench as printable hardware (issue 46): the rotating base frame (``base_frame:``) and
 the stiffness rig (``rig:``). Fast tests check the layout and the statics against textbook results
-and the checks' tried fixes; slow ones measure the built files of the prototype in its bench (params/prototype-bench.yaml)."""
+and the checks' tried fixes; slow ones measure the built files of the prototype, which stands in its bench (params/prototype.yaml)."""
 from __future__ import annotations
 
 import csv
@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 @functools.cache
 def _design():
-    return params.read(ROOT / "params" / "prototype-bench.yaml").design
+    return params.read(ROOT / "params" / "prototype.yaml").design
 
 
 @functools.cache
@@ -140,7 +140,7 @@ def test_the_rig_bolts_to_the_ur5e_flange():
 @pytest.mark.slow
 def test_the_prototype_builds_its_frame_and_rig(built):
     import trimesh
-    folder = built("prototype-bench")
+    folder = built("prototype")
     manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
     parts = {p["name"]: p for p in manifest["parts"]}
     frame = [n for n in parts if n.startswith("base_frame_")]
@@ -183,9 +183,51 @@ def test_a_heavier_tensioner_is_laid_out_with_a_larger_wheel():
 def test_a_bad_bench_value_names_its_field(tmp_path):
     from hwgen.errors import InputError
     f = tmp_path / "mine.yaml"
-    f.write_text(f"base: {ROOT / 'params' / 'prototype-bench.yaml'}\ndesign: mine\nbase_frame:\n  pulley_teeth: 25\n"
+    f.write_text(f"base: {ROOT / 'params' / 'prototype.yaml'}\ndesign: mine\nbase_frame:\n  pulley_teeth: 25\n"
                  f"rig:\n  load_cell:\n    length: -3\n", encoding="utf-8")
     with pytest.raises(InputError) as e:
         params.read(f)
     paths = {p.path for p in e.value.problems}
     assert "base_frame.pulley_teeth" in paths and "rig.load_cell.length" in paths
+
+
+def _robot(tmp_path, body: str):
+    f = tmp_path / "mine.yaml"
+    f.write_text(f"base: {ROOT / 'params' / 'prototype.yaml'}\ndesign: mine\n{body}", encoding="utf-8")
+    d = params.read(f).design
+    return d, make_plan(d)
+
+
+def _torque(d, plan) -> float:
+    from hwgen.model import steel
+    return bf.torque_estimate(d, plan.tensioner_layout, steel.total(steel.tip_pieces(plan))[:2],
+                              plan.process.density_g_cm3)
+
+
+def test_a_robot_that_loads_the_frame_more_gets_a_larger_wheel_or_a_failing_check_with_a_tried_fix(tmp_path):
+    """Issue 46's done-when, from a design file: a robot whose frame carries more torque about the
+    shaft gets a larger worm wheel; with its wheel fixed in the file, the tooth check fails and its
+    tried fix is that wheel. The tensioner's weight is in the torque (it grows with the tensioner's
+    density), but the prototype's tensioner hangs nearly on the axis: the push at a disk's rim is most
+    of the torque, so the robot here is the prototype pushed with a 50 N cell."""
+    d0, p0 = _design(), _plan()
+    # a heavier tensioner (the same parts, denser) turns the frame harder under gravity
+    d1, p1 = _robot(tmp_path, "process:\n  density_g_cm3: 2.3\n")
+    push0 = d0.experiment.load_cell_range_n * d0.disks.outer_diameter / 2
+    assert _torque(d1, p1) - push0 > _torque(d0, p0) - push0 > 0
+    # a robot pushed harder: the wheel that carries it, and no smaller one does
+    d2, p2 = _robot(tmp_path, "experiment:\n  load_cell_range_n: 50\n")
+    torque = _torque(d2, p2)
+    strength = d2.tensioner.resin_strength
+    lay = p2.frame
+    assert lay.pair.teeth > p0.frame.pair.teeth
+    assert bf.lewis_factor(lay.pair, torque, strength) >= lay.safety_factor
+    assert bf.lewis_factor(replace(lay.pair, teeth=lay.pair.teeth - 1), torque, strength) < lay.safety_factor
+    # the same robot with the prototype's wheel written in its file: the check fails, and its tried
+    # fix is the wheel the layout chose
+    from hwgen.checks.bench import _teeth
+    d3, p3 = _robot(tmp_path, f"experiment:\n  load_cell_range_n: 50\nbase_frame:\n  wheel_teeth: {p0.frame.pair.teeth}\n")
+    assert p3.frame.pair.teeth == p0.frame.pair.teeth
+    c = _teeth(p3.frame, _torque(d3, p3), strength)
+    assert not c.passed and c.fixes and c.fixes[0].then["passed"]
+    assert c.fixes[0].set["base_frame.wheel_teeth"] == lay.pair.teeth

@@ -128,8 +128,7 @@ class PartFiles:
             data = _result(job.result())
         else:
             with kept_in(b.scratch):
-                assemble(b.loaded.name, b.plan, b.folder / "assembly.step", b.store,
-                         [(u.record, None if u.parts is None else [p.solid for p in u.parts]) for u in self.todo])
+                assemble(b.loaded.name, b.plan, b.folder / "assembly.step", b.store, [u.record for u in self.todo])
             data = (b.folder / "assembly.step").read_bytes()
         b.store.put_record(self.asm_key, {"step": b.store.put_bytes(data)})
         return data
@@ -347,18 +346,21 @@ def _assembly_from_cache(store: cache.Store, key: str) -> bytes | None:
     return store.get_bytes(rec["step"]) if isinstance(rec, dict) and isinstance(rec.get("step"), str) else None
 
 
-def assemble(name: str, plan: Plan, path: Path, store: cache.Store, made: list[tuple[dict, list | None]]) -> None:
+def assemble(name: str, plan: Plan, path: Path, store: cache.Store, made: list[dict]) -> None:
     """assembly.step put together from the units' solids (``made``: per unit in build order, its
-    record and its solids when built in this process; otherwise read back from the cache's BREP,
-    or built again if that is gone). Parts of one solid (a unit's parts sharing one; solids kept
+    record), each read back from its BREP (the bytes the unit's record carries in this process,
+    else the cache's; built again and read back from its BREP if that is gone): never the solid a
+    unit made in memory, which may write a last digit differently from the same solid read back
+    (:mod:`hwgen.cad.memo`), so a fresh build, a cached one and one whose assembly entry is gone
+    write the same bytes. Parts of one solid (a unit's parts sharing one; solids kept
     under one key, :func:`hwgen.cad.memo.made_as`: the tensioner's worms, drive shafts, clamps,
     its wheels of one spool layout, in whichever unit or process they were made) are given one
     solid, which the file holds once and places once per part."""
     parts, one = [], {}         # one: kept key -> the solid every part of that key is given
-    for (family, first, spec), (rec, solids) in zip(units(plan), made):
-        solids = solids if solids is not None else _solids(store, rec)
+    for (family, first, spec), rec in zip(units(plan), made):
+        solids = _solids(store, rec)
         if solids is None:
-            solids = [p.solid for p in build_unit(plan, family, first, spec)]
+            solids = [export.read_brep(export.write_brep(p.solid)) for p in build_unit(plan, family, first, spec)]
         mine = []
         for p, s in zip(rec["parts"], solids):
             if p.get("same_solid_as") is not None:
@@ -388,13 +390,9 @@ def backbone_dxf(store: cache.Store, plan: Plan, path: Path) -> None:
 
 # ---------------------------------------------------------------- in a worker process
 
-_BUILT_HERE: dict[str, list] = {}     # in a worker process: the solids of the units it built, by unit key
-
-
 def unit_in_worker(plan: Plan, index: int, key: str, store: cache.Store, wait: bool,
                    solids: cache.Store) -> tuple[str, object]:
-    """Build and export the ``index``-th unit of the plan in a worker process (its solids stay
-    there for :func:`assembly_in_worker`) and keep it in the cache, under the unit's lock: ("ok",
+    """Build and export the ``index``-th unit of the plan in a worker process and keep it in the cache, under the unit's lock: ("ok",
     its record with its bytes, as :func:`keep_unit` gives it); ("busy", None), unless ``wait``, when
     another build holds it or a solid it needs (it is making that now); ("kept", None) when another
     build has kept it meanwhile. A DesignError or InputError comes back as its fields (they do not
@@ -409,7 +407,6 @@ def unit_in_worker(plan: Plan, index: int, key: str, store: cache.Store, wait: b
             family, first, spec = list(units(plan))[index]
             with kept_in(solids), (nullcontext() if wait else setting_aside()):
                 parts = list(build_unit(plan, family, first, spec))
-            _BUILT_HERE[key] = [p.solid for p in parts]
             with tempfile.TemporaryDirectory(prefix="hwgen-unit-") as tmp:
                 (Path(tmp) / "stl").mkdir()
                 (Path(tmp) / "step").mkdir()
@@ -428,13 +425,12 @@ def unit_in_worker(plan: Plan, index: int, key: str, store: cache.Store, wait: b
 def assembly_in_worker(name: str, plan: Plan, done: list[tuple[str, dict]], breps: dict[str, bytes],
                        store: cache.Store, solids: cache.Store) -> tuple[str, object]:
     """assembly.step's bytes, written in a worker from the units ``done`` ((key, record) in build
-    order): the solids this worker built, else read back from their BREP (``breps`` or the
-    cache), else built again."""
+    order): their solids read back from their BREP (``breps`` or the cache), else built again."""
     try:
         with tempfile.TemporaryDirectory(prefix="hwgen-assembly-") as tmp:
             path = Path(tmp) / "assembly.step"
             with kept_in(solids):
-                assemble(name, plan, path, store, [({**r, "breps": breps}, _BUILT_HERE.get(k)) for k, r in done])
+                assemble(name, plan, path, store, [{**r, "breps": breps} for _, r in done])
             return "ok", path.read_bytes()
     except DesignError as e:
         return "design", (e.path, e.message)
