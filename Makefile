@@ -85,9 +85,11 @@ bench: $(STAMP) bytecode viewer
 	  echo "openscad not installed: the benchmark's OpenSCAD row says so"
 	$(BIN)/python -m hwgen.bench
 
-# 100 robots drawn as a lab writes them, each built whole: a table of exit codes and failed checks
+# 100 robots drawn as a lab writes them, each built whole: a table of exit codes and failed checks;
+# then the schema-wide Hypothesis draw of tests/test_any_design.py to 5 000 designs (make test: 1 500)
 stability: $(STAMP) bytecode
 	$(BIN)/python -m tests.stability --robots 100
+	HWGEN_ANY_DESIGN_EXAMPLES=5000 $(BIN)/python -m pytest -q -p no:xdist tests/test_any_design.py -k many_more
 
 # the pictures of the README and the site (docs/images/), from fresh builds of the prototype (with
 # its MuJoCo model) and of the twenty-disk robot, which fails checks (exit 1) and marks them in its
