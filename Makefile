@@ -21,9 +21,13 @@ $(STAMP): pyproject.toml
 # hwgen's modules compiled ahead (as pip compiles an installed package): every process a build
 # starts (the command, the workers' server, the renderer, the gear checks) then reads them compiled,
 # also where Python is told not to write bytecode (PYTHONDONTWRITEBYTECODE), which would compile
-# them again in each process (about a tenth of a second each); stale ones are compiled again here
+# them again in each process (about a tenth of a second each); stale ones are compiled again here.
+# The numba kernels too (hwgen/sim/kernels.py: about 22 s of CPU on a fresh checkout, a second once
+# on disk), which the first build or test worker to call them would otherwise compile, and each
+# xdist worker that gets there before the other has written them
 bytecode: $(STAMP)
 	@$(BIN)/python -m compileall -q hwgen
+	@$(BIN)/python -m hwgen.sim.kernels
 
 build: $(STAMP) bytecode viewer
 	$(BIN)/hwgen build params/prototype.yaml --out out
