@@ -21,9 +21,13 @@ $(STAMP): pyproject.toml
 # hwgen's modules compiled ahead (as pip compiles an installed package): every process a build
 # starts (the command, the workers' server, the renderer, the gear checks) then reads them compiled,
 # also where Python is told not to write bytecode (PYTHONDONTWRITEBYTECODE), which would compile
-# them again in each process (about a tenth of a second each); stale ones are compiled again here
+# them again in each process (about a tenth of a second each); stale ones are compiled again here.
+# The numba kernels too (hwgen/sim/kernels.py: about 22 s of CPU on a fresh checkout, a second once
+# on disk), which the first build or test worker to call them would otherwise compile, and each
+# xdist worker that gets there before the other has written them
 bytecode: $(STAMP)
 	@$(BIN)/python -m compileall -q hwgen
+	@$(BIN)/python -m hwgen.sim.kernels
 
 build: $(STAMP) bytecode viewer
 	$(BIN)/hwgen build params/prototype.yaml --out out
@@ -85,9 +89,11 @@ bench: $(STAMP) bytecode viewer
 	  echo "openscad not installed: the benchmark's OpenSCAD row says so"
 	$(BIN)/python -m hwgen.bench
 
-# 100 robots drawn as a lab writes them, each built whole: a table of exit codes and failed checks
+# 100 robots drawn as a lab writes them, each built whole: a table of exit codes and failed checks;
+# then the schema-wide Hypothesis draw of tests/test_any_design.py to 5 000 designs (make test: 1 500)
 stability: $(STAMP) bytecode
 	$(BIN)/python -m tests.stability --robots 100
+	HWGEN_ANY_DESIGN_EXAMPLES=5000 $(BIN)/python -m pytest -q -p no:xdist tests/test_any_design.py -k many_more
 
 # the pictures of the README and the site (docs/images/), from fresh builds of the prototype (with
 # its MuJoCo model) and of the twenty-disk robot, which fails checks (exit 1) and marks them in its

@@ -198,11 +198,23 @@ def blas_threads():
 # ------------------------------------------------------------------ rotations
 
 def _hat(v: np.ndarray) -> np.ndarray:
-    """(..., 3) -> (..., 3, 3) cross-product matrices."""
-    z = np.zeros(v.shape[:-1])
-    return np.stack([np.stack([z, -v[..., 2], v[..., 1]], -1),
-                     np.stack([v[..., 2], z, -v[..., 0]], -1),
-                     np.stack([-v[..., 1], v[..., 0], z], -1)], -2)
+    """(..., 3) -> (..., 3, 3) cross-product matrices (written into one array: the statics makes
+    thousands of small ones, where nine stacked copies cost more than the arithmetic)."""
+    out = np.zeros(v.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -v[..., 2], v[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = v[..., 2], -v[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -v[..., 1], v[..., 0]
+    return out
+
+
+def _cross(a, b) -> np.ndarray:
+    """np.cross of (..., 3) vectors, the same products and differences in the same order (so the
+    same bits) without np.cross's axis handling, which costs more than the arithmetic on the
+    statics' small arrays."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
 
 
 def _exp_and_jr(th: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -412,25 +424,25 @@ class Model:
             gp[:, 1:] += u
             gp *= tau[:, None, None]
             A[:, nodes] += gp                         # a tendon's nodes are distinct (checked when built)
-            C[:, nodes] += np.cross(pts, gp)
+            C[:, nodes] += _cross(pts, gp)
         kg = 1e-3 * robot.g
         if loads.gravity is not None:
             gdir = np.asarray(loads.gravity, float)
             f = -kg * self.node_mass[None, :, None] * gdir            # dV/dp = -F
             A += f
-            C += np.cross(P, f)
+            C += _cross(P, f)
             V += -np.einsum("bn,n->b", P @ gdir, kg * self.node_mass)
             if robot.tip_mass > 0:
                 pt = P[:, -1] + R[:, -1] @ self.tip_local
                 ft = -kg * robot.tip_mass * gdir
                 A[:, -1] += ft
-                C[:, -1] += np.cross(pt, ft)
+                C[:, -1] += _cross(pt, ft)
                 V += -kg * robot.tip_mass * (pt @ gdir)
         for s, F in loads.forces:
             k = self.node_at(s)
             f = -np.asarray(F, float)
             A[:, k] += f
-            C[:, k] += np.cross(P[:, k], f)
+            C[:, k] += _cross(P[:, k], f)
             V += P[:, k] @ f
         return A, C, V, lengths, tensions
 
@@ -449,7 +461,7 @@ class Model:
         SA = np.cumsum(A[:, ::-1], axis=1)[:, ::-1]
         SC = np.cumsum(C[:, ::-1], axis=1)[:, ::-1]
         beyond = self.joint_seg + 1
-        mom = SC[:, beyond] - np.cross(O, SA[:, beyond])            # (B, J, 3) about each joint
+        mom = SC[:, beyond] - _cross(O, SA[:, beyond])            # (B, J, 3) about each joint
         gen = np.einsum("bjia,bji->bja", W, mom)                    # W^T m
         grad = gen[:, self.dof_joint, self.dof_axis] + self.dof_stiff * q
         V = V + 0.5 * np.sum(self.dof_stiff * q * q, axis=1)
@@ -469,7 +481,7 @@ class Model:
         P, R, O, W, th = (x[0] for x in kinematics)
         jd, ax, reach = self.dof_joint, self.dof_axis, self.dof_reach
         omega = W[jd, :, ax]                                      # (n, 3): each DOF's world rotation axis
-        xi = np.concatenate([omega, np.cross(O[jd], omega)], axis=1)      # (n, 6): dx/dq_a = [−x^, I] ξ_a
+        xi = np.concatenate([omega, _cross(O[jd], omega)], axis=1)      # (n, 6): dx/dq_a = [−x^, I] ξ_a
         nn = len(self.nodes_s)
         A = np.zeros((nn, 3))                                     # per node Σ f, f = dV/dx at a point x
         M = np.zeros((nn, 3, 3))                                  # per node Σ x fᵀ
@@ -593,7 +605,7 @@ class Model:
         P, R, O, W, _ = self.forward(q)
         k = self.node_at(s)
         u = np.asarray(direction, float)
-        lever = np.cross(P[0, k] - O[0], u)                        # (J, 3): r × u about each joint
+        lever = _cross(P[0, k] - O[0], u)                        # (J, 3): r × u about each joint
         J = np.einsum("jia,ji->ja", W[0], lever)
         J[self.joint_seg + 1 > k] = 0.0
         return J[self.dof_joint, self.dof_axis]
