@@ -9,6 +9,7 @@ tendon."""
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 
 import cadquery as cq
@@ -26,6 +27,7 @@ CONE_HALF_ANGLE_DEG = 45.0          # the chamfer cones around the eyelet axes
 CONE_FLOOR_DEG = 5.0                # ... are narrowed on axes steeper than 90° - this - 45°, so their lowest line rises
 CONE_MIN_DEG = 10.0                 # narrower than this, a slanted eyelet gets no chamfer
 MIN_EDGE = 0.05                     # a chamfer smaller than this (mm) is left off
+MEET_VOLUME = 1e-6                  # two eyelets' tools sharing more than this (mm³) inside the disk meet
 
 
 def sketch_xy(x: float, z: float) -> tuple[float, float]:
@@ -105,6 +107,34 @@ def _eyelet_tool(h: Hole, thickness: float, edge: float, base_side: bool, tip_si
     return solids[0] if with_bore else solids
 
 
+def chamfer_edges(holes: list[Hole], thickness: float, edge: float, base_side: bool,
+                  blank: cq.Shape) -> list[float]:
+    """Each eyelet's chamfer: ``edge``, or none on two eyelets whose bores and chamfers meet inside
+    the disk. Steep eyelets close together (a mirrored pair converging on a face) have chamfer
+    cones that run into each other: the ridge left between them is a knife edge no printer makes
+    and no tendon is eased over, and the cut leaves slivers of face, bounded by the cones' meeting
+    curve, that the STL's mesher leaves open. Both are drilled plain; the wall between them is
+    the ``eyelet.wall`` checks' to judge."""
+    if edge <= 0 or len(holes) < 2:
+        return [edge] * len(holes)
+    # no tool reaches further from its eyelet's centre than its far rim: a pair further apart is not tried
+    reach = []
+    for h in holes:
+        _, _, (profile,) = eyelet_profiles(h, thickness, edge, base_side, True, with_bore=True)
+        reach.append(max(math.hypot(r, u) for r, u in profile))
+    tools: dict[int, cq.Solid] = {}
+    plain = set()
+    for i, j in itertools.combinations(range(len(holes)), 2):
+        if math.hypot(holes[i].x - holes[j].x, holes[i].z - holes[j].z) > reach[i] + reach[j]:
+            continue
+        a, b = (tools.setdefault(k, _eyelet_tool(holes[k], thickness, edge, base_side, True, with_bore=True))
+                for k in (i, j))
+        met = a.intersect(b)
+        if met.Volume() > MEET_VOLUME and met.intersect(blank).Volume() > MEET_VOLUME:
+            plain |= {i, j}
+    return [0.0 if i in plain else edge for i in range(len(holes))]
+
+
 def _hub_solid(spec: DiskSpec, hub: HubSpec) -> cq.Solid:
     """The sleeve around the slot, in file coordinates of the unflipped disk (Z = robot y - y0):
     from the tip-side face up (side +1) or from the base-side face down (side -1); cut away over
@@ -152,14 +182,18 @@ def blank_and_tools(spec: DiskSpec) -> tuple[cq.Solid, list[cq.Solid]]:
 
     # The base disk's outer face (file Z = 0) is the seat plate: no bore or chamfer reaches it.
     base_side = not seated
+    # drilled along the normal: its chamfers too (an axis 2e-5 rad off it left them meeting the bore
+    # nearly tangent, a bore face the STL's mesher left open)
+    drilled = [h if h in slanted else dataclasses.replace(h, axis=(0.0, math.copysign(1.0, h.axis[1]), 0.0))
+               for h in spec.holes]
+    edges = chamfer_edges(drilled, T, spec.edge_size, base_side, blank)
     tools: list[cq.Solid] = []
-    for h in slanted:
-        tool = _eyelet_tool(h, T, spec.edge_size, base_side, True, with_bore=True)
-        tools.append(_truncated(tool, spec.seat_plate, spec) if seated and not h.in_slot else tool)
-    for h in normal:        # drilled along the normal: its chamfers too (an axis 2e-5 rad off it left them
-        #                     meeting the bore nearly tangent, a bore face the STL's mesher left open)
-        square = dataclasses.replace(h, axis=(0.0, math.copysign(1.0, h.axis[1]), 0.0))
-        tools.extend(_eyelet_tool(square, T, spec.edge_size, base_side, True, with_bore=False))
+    for h, drill, edge in zip(spec.holes, drilled, edges):
+        if h in slanted:
+            tool = _eyelet_tool(h, T, edge, base_side, True, with_bore=True)
+            tools.append(_truncated(tool, spec.seat_plate, spec) if seated and not h.in_slot else tool)
+        else:
+            tools.extend(_eyelet_tool(drill, T, edge, base_side, True, with_bore=False))
     overlap = seat_overlap(T, spec.seat_plate)
     for s in spec.seats:
         fx, fy = sketch_xy(s.x, s.z)
