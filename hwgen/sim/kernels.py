@@ -38,9 +38,9 @@ def _push() -> None:
     from ..model import friction, push
     k0, ka, kb, tension = 2.0, 30.0, 10.0, 5.0
     stuck, free = np.array([[k0 + ka + kb]]), np.array([[k0]])
-    b = friction.Bounds(None, ("T",), np.array([[1.0], [-1.0]]), np.array([ka, kb]), np.array([tension, tension]),
-                        ("T", "T"), np.array([[0, 1]]), np.array([0.8]),
-                        {"stuck": cho_factor(stuck), "none": cho_factor(free)})
+    b = friction.Bounds(eq=None, tendons=("T",), rows=np.array([[1.0], [-1.0]]), springs=np.array([ka, kb]),
+                        tension=np.array([tension, tension]), owner=("T", "T"), eyelets=np.array([[0, 1]]),
+                        turns=np.array([0.8]), factors={"stuck": cho_factor(stuck), "none": cho_factor(free)})
     push.repeat(push.lines(b, 0.2, np.array([[1.0]])), 0, 1.0, 1)
 
 
