@@ -218,8 +218,10 @@ def segment_distance(p0, p1, q0, q1) -> np.ndarray:
 
 
 def tendon_pair_checks(emap: EyeletMap, report: dict, tendon_d: float, angles_deg: np.ndarray,
-                       length: float) -> list[Check]:
+                       length: float, driven: set[str] = frozenset()) -> list[Check]:
     """Closest approach of every two tendons over the sweep, away from the eyelets they share.
+    ``driven``: the tendons the drive slides; a pair with one of them is never offered a shared
+    eyelet as a fix (the driven line would rub the other there: eyelet.shared_sliding).
 
     Segments are compared bay by bay (between the same two disks): lines in different bays
     have a disk between them. A segment that ends in an eyelet both tendons share touches the
@@ -260,14 +262,19 @@ def tendon_pair_checks(emap: EyeletMap, report: dict, tendon_d: float, angles_de
         msg = (f"{a} and {b}: closest {dmin:.3f} mm {span} at {ang:+g}° (tendon Ø{tendon_d:g} mm)" if ok else
                f"{a} and {b} rub: {dmin:.3f} mm apart {span} at {ang:+g}° bending, less than the tendon "
                f"diameter {tendon_d:g} mm")
-        fix = "" if ok else (
-            f"route {a} and {b} at least {tendon_d - dmin:.2f} mm further apart between stations {seg} and {seg + 1} "
-            f"(their tendons[].routing: amplitude, phase or an x or z offset), or route them to meet at a disk, where "
-            f"they share one eyelet; the stations decide where the lines between eyelets run (disks.count, "
-            f"disks.spacing)")
+        fix = "" if ok else clearance_fix(a, b, tendon_d - dmin, seg, driven)
         out.append(Check("tendon.clearance", "error", ok, msg, dmin, tendon_d,
                          {**where, "segment": [seg, seg + 1], "angle_deg": ang}, fix=fix))
     return out
+
+
+def clearance_fix(a: str, b: str, short: float, seg: int, driven: set[str] = frozenset()) -> str:
+    """What parts two tendons that rub ``short`` mm too close between stations ``seg`` and ``seg + 1``;
+    meeting in one eyelet is offered only when neither is driven (eyelet.shared_sliding fails it)."""
+    meet = "" if {a, b} & set(driven) else ", or route them to meet at a disk, where they share one eyelet"
+    return (f"route {a} and {b} at least {short:.2f} mm further apart between stations {seg} and {seg + 1} "
+            f"(their tendons[].routing: amplitude, phase or an x or z offset){meet}; the stations decide where the "
+            f"lines between eyelets run (disks.count, disks.spacing)")
 
 
 def dxf_holes(path: Path) -> list[tuple[float, float, float]]:
