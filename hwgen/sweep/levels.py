@@ -19,7 +19,8 @@ constraints; the sweep's Parquet keeps the message).
 further than ``with_plan``'s figures (its row says ``screened``): a tune's trial that cannot be
 feasible costs no more than its statics;
 ``options["stop"]``, called with the row once ``with_plan``'s figures are in, does the same for
-a trial those figures rule out (a tune's bound on the statics).
+a trial those figures rule out (a tune's bound on the statics), and so does a plan that fails its
+screens (:func:`_plan_screens`: the Monte Carlo and the tensions' statics are not run for it).
 ``options["with_plan"]``, when given, is called with each valid variant's plan (made for it at the
 lengths level too) and returns more figures for its row: a tune's objectives
 (:mod:`hwgen.tune.results`).
@@ -35,9 +36,10 @@ import numpy as np
 
 from ..errors import DesignError, InputError
 from ..model import feasibility, scatter as mc
-from ..checks.clearances import segment_distance
+from ..checks.clearances import SAG_MM, segment_distance
 from ..checks.lengths import sweep_angles
 from ..model import kinematics as kin
+from ..model.holes import AXIS_CUT_FRACTION
 from ..model.plan import Plan, make_plan
 from . import lengths
 from .lengths import failure
@@ -151,15 +153,20 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
         row["screened"] = True         # a tune's trial its figures already rule out: the checks after them not run
         return
     centre = {t["name"]: t["centre_mm"] for t in json.loads(row["per_tendon"])}
-    taut_rows = robust(plan, d.disks.slot_clearance, options.get("robust_samples", 200))
     fails = [row["message"]] if row["message"] else []
     warns = []
-    budgeted = [t for t in taut_rows if t["budget_mm"] is not None]
     failures = list(row["failures"])
     for f in _plan_screens(plan, d.process.min_wall):
         if not any(g["id"] == f["id"] for g in failures):
             (fails if f["severity"] == "error" else warns).append(f["message"])
             failures.append(f)
+    if options.get("screen") and any(f["severity"] == "error" for f in failures):
+        # a tune's trial the plan already fails: the Monte Carlo and the statics of the tensions not run
+        row.update(screened=True, failures=failures, verdict="fail",
+                   message="; ".join([f for f in fails if f] + [f"warning: {w}" for w in warns])[:2000])
+        return
+    taut_rows = robust(plan, d.disks.slot_clearance, options.get("robust_samples", 200))
+    budgeted = [t for t in taut_rows if t["budget_mm"] is not None]
     for t in budgeted:
         if t["robust_mm"] > t["budget_mm"]:
             text = (f"{t['name']} changes {t['robust_mm']:.3f} mm at {d.check.robust} as built, "
@@ -251,15 +258,13 @@ def _plan_screens(plan: Plan, min_wall: float) -> list[dict]:
         out.append(failure("eyelet.overlap", "tendons routed into each other share one opening on the tip disk "
                                               "(its eyelets turned toward the drums): "
                             + "; ".join(" and ".join(m.tendons) for m in hit)))
-    holes = tip.holes
-    walls = [(math.hypot(a.x - b.x, a.z - b.z) - (a.diameter + b.diameter) / 2, a, b)
-             for i, a in enumerate(holes) for b in holes[i + 1:]]
-    if walls:
-        w, a, b = min(walls, key=lambda t: t[0])
-        if w < min_wall:
-            out.append(failure("eyelet.wall", f"wall {w:.2f} mm between the tip disk's eyelets for "
-                                               f"{'+'.join(a.tendons)} and {'+'.join(b.tendons)} (turned toward the "
-                                               f"drums), under process.min_wall {min_wall:g} mm", "error", w, min_wall))
+    thin = _thinnest_wall(plan, min_wall)
+    if thin is not None:
+        w, a, b, disk = thin
+        out.append(failure("eyelet.wall", f"wall {w:.2f} mm between disk {disk.index}'s eyelets for "
+                                           f"{'+'.join(a.tendons)} and {'+'.join(b.tendons)} (on its axis cuts, "
+                                           f"where a slanted bore drifts), under process.min_wall {min_wall:g} mm",
+                           "error", w, min_wall))
     bb = plan.backbone
     for h in bb.holes:
         r = h.diameter / 2
@@ -285,6 +290,61 @@ def _plan_screens(plan: Plan, min_wall: float) -> list[dict]:
                                                f"mm: its Ø{seat.termination:g} mm termination pulls through", "error",
                                 seat.diameter, seat.termination, seat.tendon))
     return out
+
+
+ELLIPSE_POINTS = 90         # points on each hole's section for the wall between two: 2° apart, within 0.02 mm on
+                            # a Ø3 mm hole's polygon of the files (the checks' chordal tolerance is taken off as they do)
+
+
+def _section(h, y: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The bore of a plan hole on the plane ``y`` mm off the disk's mid-plane: its centre drifted along
+    the slanted axis, an ellipse 1/cos θ longer along the slant; (outline (ELLIPSE_POINTS, 2), centre,
+    the map taking a point's offset from the centre to the unit circle)."""
+    ax = np.asarray(h.axis, float)
+    ay = max(abs(ax[1]), 1e-6)
+    c = np.array([h.x, h.z]) + y * ax[[0, 2]] / ay
+    r = h.diameter / 2
+    lean = ax[[0, 2]]
+    n = np.linalg.norm(lean)
+    u = lean / n if n > 1e-12 else np.array([1.0, 0.0])
+    v = np.array([-u[1], u[0]])
+    t = np.linspace(0, 2 * np.pi, ELLIPSE_POINTS, endpoint=False)
+    outline = c + np.outer(np.cos(t) * r / ay, u) + np.outer(np.sin(t) * r, v)
+    return outline, c, np.stack([u * ay / r, v / r])
+
+
+def _gap(a: tuple, b: tuple) -> float:
+    """The least distance between two sections' outlines (0 where they overlap)."""
+    (p, cp, mp), (q, cq, mq) = a, b
+    inside = (np.linalg.norm((p - cq) @ mq.T, axis=1) <= 1).any() or (np.linalg.norm((q - cp) @ mp.T, axis=1) <= 1).any()
+    if inside:
+        return 0.0
+    return float(np.sqrt(((p[:, None] - q[None]) ** 2).sum(-1)).min())
+
+
+def _thinnest_wall(plan: Plan, min_wall: float):
+    """(wall, hole, hole, disk) of the thinnest wall under ``min_wall`` between two eyelet holes of
+    any disk, as ``eyelet.wall.eyelet`` measures it from the files: on the mid-plane and on the two
+    cuts :data:`hwgen.model.holes.AXIS_CUT_FRACTION` of the thickness either side, where a slanted
+    bore's section has drifted along its axis and is an ellipse (the holes' circles on the mid-plane
+    alone missed walls of 0.45 mm the build then failed), less the files' chordal tolerance; None
+    when every wall is thick enough."""
+    worst = None
+    for disk in plan.disks:
+        holes = disk.holes
+        h = disk.thickness * AXIS_CUT_FRACTION
+        for i, a in enumerate(holes):
+            for b in holes[i + 1:]:
+                ra = a.diameter / 2 / max(abs(a.axis[1]), 1e-6)
+                rb = b.diameter / 2 / max(abs(b.axis[1]), 1e-6)
+                drift = h * (math.hypot(a.axis[0], a.axis[2]) / max(abs(a.axis[1]), 1e-6)
+                             + math.hypot(b.axis[0], b.axis[2]) / max(abs(b.axis[1]), 1e-6))
+                if math.hypot(a.x - b.x, a.z - b.z) - ra - rb - drift >= min_wall + 2 * SAG_MM:
+                    continue            # thick enough wherever the cuts fall
+                w = min(_gap(_section(a, y), _section(b, y)) for y in (0.0, -h, h)) - 2 * SAG_MM
+                if w < min_wall and (worst is None or w < worst[0]):
+                    worst = (max(w, 0.0), a, b, disk)
+    return worst
 
 
 def robot(plan: Plan) -> mc.Robot:
