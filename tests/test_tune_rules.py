@@ -266,3 +266,24 @@ def test_the_wall_screen_measures_what_the_check_measures_on_the_built_disk(tmp_
     w = levels._thinnest_wall(plan, 0.8)
     assert not c.passed and w is not None and w[3].index == station
     assert abs(w[0] - c.measured) < 0.01, (w[0], c.measured)
+
+
+def test_a_helix_is_given_the_half_turns_whose_length_holds_at_every_phase():
+    """eq. (2) in the bending plane: the helix's part across the strip, ∫ a·cos(kπs/L + φ) ds, vanishes at
+    every phase only at even k; the derived space offers those (and the base's own k, a trial), and an odd k
+    off 0 and 180° fails eq. (2) at the lengths level while an even one at the same phase keeps its length."""
+    from hwgen.sweep import lengths
+    from hwgen.sweep.spec import Variant, resolve
+    from hwgen.tune import derive
+    loaded = derive.load(PROTOTYPE, "stiffness")
+    (k,) = [f for f in loaded.free if f.path == "tendons[3].routing.function.k"]
+    assert set(k.choices) == {2, 4, 6, 3}
+    base = list(loaded.base_values)
+    at = {n: i for i, n in enumerate(loaded.names)}
+    rows = []
+    for half_turns in (3, 4):
+        v = list(base)
+        v[at["tendons[3].routing.function.k"]], v[at["tendons[3].routing.function.phase_deg"]] = half_turns, 45.0
+        rows.append(lengths.evaluate([resolve(loaded.base, loaded.names, Variant(0, tuple(v))).design])[0])
+    h = [{t["name"]: t["centre_mm"] for t in r["tendons"]}["H"] for r in rows]
+    assert h[0] > 1.0 and h[1] < 0.2, h
