@@ -76,3 +76,15 @@ def test_the_check_reads_a_shared_opening_from_the_exported_disks(tmp_path, buil
     rep = json.loads((built("prototype") / "report.json").read_text())
     (p,) = [c for c in rep["checks"] if c["id"] == "eyelet.shared_sliding"]
     assert p["passed"]
+
+
+def test_no_fix_routes_a_driven_tendon_into_a_shared_eyelet():
+    """tendon.clearance's and eyelet.wall.eyelet's fixes offer one shared eyelet only to two tendons
+    neither of which the drive slides (eyelet.shared_sliding fails the other case)."""
+    from hwgen.checks.clearances import _wall_fix, clearance_fix
+
+    driven = {"A1", "A2"}
+    assert "share one eyelet" in clearance_fix("C1", "H", 0.2, 4, driven)
+    assert "share one eyelet" not in clearance_fix("A1", "H", 0.2, 4, driven)
+    assert "shared eyelet" in _wall_fix("eyelet.wall.eyelet", "eyelet C1 and eyelet H", 0.2, 4, 50.0, driven)
+    assert "shared eyelet" not in _wall_fix("eyelet.wall.eyelet", "eyelet A2 and eyelet H", 0.2, 4, 50.0, driven)

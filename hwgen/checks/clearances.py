@@ -20,7 +20,7 @@ import numpy as np
 from ..cad.export import STL_TOLERANCE_MM
 from ..model import kinematics as kin
 from ..model.crossings import crossing_angles, strip_crossings
-from ..model.holes import hole_diameter
+from ..model.holes import AXIS_CUT_FRACTION, hole_diameter
 from ..model.plan import STRIP_HOLE_SHARE
 from .base import REBUILD, Check, Screen
 from .eyelets import EyeletMap, joined_holes
@@ -219,8 +219,10 @@ def segment_distance(p0, p1, q0, q1) -> np.ndarray:
 
 
 def tendon_pair_checks(emap: EyeletMap, report: dict, tendon_d: float, angles_deg: np.ndarray,
-                       length: float) -> list[Check]:
+                       length: float, driven: set[str] = frozenset()) -> list[Check]:
     """Closest approach of every two tendons over the sweep, away from the eyelets they share.
+    ``driven``: the tendons the drive slides; a pair with one of them is never offered a shared
+    eyelet as a fix (the driven line would rub the other there: eyelet.shared_sliding).
 
     Segments are compared bay by bay (between the same two disks): lines in different bays
     have a disk between them. A segment that ends in an eyelet both tendons share touches the
@@ -261,14 +263,19 @@ def tendon_pair_checks(emap: EyeletMap, report: dict, tendon_d: float, angles_de
         msg = (f"{a} and {b}: closest {dmin:.3f} mm {span} at {ang:+g}° (tendon Ø{tendon_d:g} mm)" if ok else
                f"{a} and {b} rub: {dmin:.3f} mm apart {span} at {ang:+g}° bending, less than the tendon "
                f"diameter {tendon_d:g} mm")
-        fix = "" if ok else (
-            f"route {a} and {b} at least {tendon_d - dmin:.2f} mm further apart between stations {seg} and {seg + 1} "
-            f"(their tendons[].routing: amplitude, phase or an x or z offset), or route them to meet at a disk, where "
-            f"they share one eyelet; the stations decide where the lines between eyelets run (disks.count, "
-            f"disks.spacing)")
+        fix = "" if ok else clearance_fix(a, b, tendon_d - dmin, seg, driven)
         out.append(Check("tendon.clearance", "error", ok, msg, dmin, tendon_d,
                          {**where, "segment": [seg, seg + 1], "angle_deg": ang}, fix=fix))
     return out
+
+
+def clearance_fix(a: str, b: str, short: float, seg: int, driven: set[str] = frozenset()) -> str:
+    """What parts two tendons that rub ``short`` mm too close between stations ``seg`` and ``seg + 1``;
+    meeting in one eyelet is offered only when neither is driven (eyelet.shared_sliding fails it)."""
+    meet = "" if {a, b} & set(driven) else ", or route them to meet at a disk, where they share one eyelet"
+    return (f"route {a} and {b} at least {short:.2f} mm further apart between stations {seg} and {seg + 1} "
+            f"(their tendons[].routing: amplitude, phase or an x or z offset){meet}; the stations decide where the "
+            f"lines between eyelets run (disks.count, disks.spacing)")
 
 
 def dxf_holes(path: Path) -> list[tuple[float, float, float]]:
@@ -387,21 +394,71 @@ def backbone_checks(emap: EyeletMap, dxf_path: Path, bb_outline, bb_holes, tendo
 
 # ---------------------------------------------------------------- on the plan alone
 
+ELLIPSE_POINTS = 90         # points on each hole's section for the wall between two: 2° apart, within 0.02 mm on
+                            # a Ø3 mm hole's polygon of the files (the checks' chordal tolerance is taken off as they do)
+
+
+def _section(h, y: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The bore of a plan hole on the plane ``y`` mm off the disk's mid-plane: its centre drifted along
+    the slanted axis, an ellipse 1/cos θ longer along the slant; (outline (ELLIPSE_POINTS, 2), centre,
+    the map taking a point's offset from the centre to the unit circle)."""
+    ax = np.asarray(h.axis, float)
+    ay = max(abs(ax[1]), 1e-6)
+    c = np.array([h.x, h.z]) + y * ax[[0, 2]] / ay
+    r = h.diameter / 2
+    lean = ax[[0, 2]]
+    n = np.linalg.norm(lean)
+    u = lean / n if n > 1e-12 else np.array([1.0, 0.0])
+    v = np.array([-u[1], u[0]])
+    t = np.linspace(0, 2 * np.pi, ELLIPSE_POINTS, endpoint=False)
+    outline = c + np.outer(np.cos(t) * r / ay, u) + np.outer(np.sin(t) * r, v)
+    return outline, c, np.stack([u * ay / r, v / r])
+
+
+def _gap(a: tuple, b: tuple) -> float:
+    """The least distance between two sections' outlines (0 where they overlap)."""
+    (p, cp, mp), (q, cq, mq) = a, b
+    inside = (np.linalg.norm((p - cq) @ mq.T, axis=1) <= 1).any() or (np.linalg.norm((q - cp) @ mp.T, axis=1) <= 1).any()
+    if inside:
+        return 0.0
+    return float(np.sqrt(((p[:, None] - q[None]) ** 2).sum(-1)).min())
+
+
+def thinnest_wall(plan, min_wall: float):
+    """(wall, hole, hole, disk) of the thinnest wall under ``min_wall`` between two eyelet holes of
+    any disk, as ``eyelet.wall.eyelet`` measures it from the files: on the mid-plane and on the two
+    cuts :data:`hwgen.model.holes.AXIS_CUT_FRACTION` of the thickness either side, where a slanted
+    bore's section has drifted along its axis and is an ellipse (the holes' circles on the mid-plane
+    alone missed walls of 0.45 mm the build then failed), less the files' chordal tolerance; None
+    when every wall is thick enough."""
+    worst = None
+    for disk in plan.disks:
+        holes = disk.holes
+        h = disk.thickness * AXIS_CUT_FRACTION
+        for i, a in enumerate(holes):
+            for b in holes[i + 1:]:
+                ra = a.diameter / 2 / max(abs(a.axis[1]), 1e-6)
+                rb = b.diameter / 2 / max(abs(b.axis[1]), 1e-6)
+                drift = h * (math.hypot(a.axis[0], a.axis[2]) / max(abs(a.axis[1]), 1e-6)
+                             + math.hypot(b.axis[0], b.axis[2]) / max(abs(b.axis[1]), 1e-6))
+                if math.hypot(a.x - b.x, a.z - b.z) - ra - rb - drift >= min_wall + 2 * SAG_MM:
+                    continue            # thick enough wherever the cuts fall
+                w = min(_gap(_section(a, y), _section(b, y)) for y in (0.0, -h, h)) - 2 * SAG_MM
+                if w < min_wall and (worst is None or w < worst[0]):
+                    worst = (max(w, 0.0), a, b, disk)
+    return worst
+
+
 def wall_screen(plan) -> list[Screen]:
-    """``eyelet.wall`` (between holes) foreseen on the plan: the thinnest wall between two of the tip
-    disk's eyelets, turned toward the drums, their circles on the mid-plane, under the process's
-    minimum wall."""
-    holes = plan.disks[-1].holes
-    walls = [(math.hypot(a.x - b.x, a.z - b.z) - (a.diameter + b.diameter) / 2, a, b)
-             for i, a in enumerate(holes) for b in holes[i + 1:]]
-    if not walls:
+    """``eyelet.wall`` (between holes) foreseen on the plan: the thinnest wall between two eyelets of
+    any disk, on the cuts the check measures (:func:`thinnest_wall`), under the process's minimum wall."""
+    thin = thinnest_wall(plan, plan.min_wall)
+    if thin is None:
         return []
-    w, a, b = min(walls, key=lambda t: t[0])
-    if w >= plan.min_wall:
-        return []
-    return [Screen("eyelet.wall", f"wall {w:.2f} mm between the tip disk's eyelets for {'+'.join(a.tendons)} and "
-                                  f"{'+'.join(b.tendons)} (turned toward the drums), under process.min_wall "
-                                  f"{plan.min_wall:g} mm", "error", w, plan.min_wall)]
+    w, a, b, disk = thin
+    return [Screen("eyelet.wall", f"wall {w:.2f} mm between disk {disk.index}'s eyelets for {'+'.join(a.tendons)} "
+                                  f"and {'+'.join(b.tendons)} (on its axis cuts, where a slanted bore drifts), under "
+                                  f"process.min_wall {plan.min_wall:g} mm", "error", w, plan.min_wall)]
 
 
 def crossing_screen(plan) -> list[Screen]:

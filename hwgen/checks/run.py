@@ -161,7 +161,7 @@ def _measure(folder: Path, manifest: Manifest, plan) -> Measured:
     checks += wall_checks(emap, rep_in, proc.min_wall, driven)
     checks += sliding_checks(emap, rep_in, plan.tensioner.actuating_channel, proc.min_wall, s.shared_sliding)
     checks += hole_checks(emap, proc.min_hole, td, angles, L, tip_exits(manifest))
-    checks += tendon_pair_checks(emap, rep_in, td, angles, L)
+    checks += tendon_pair_checks(emap, rep_in, td, angles, L, driven)
     checks += backbone_checks(emap, folder / backbone_template(manifest), bb_outline, bb_holes, td,
                               s.position_tol_mm, rep_in.get("findings", []), StripBend(strip_t, angles, L))
     checks += mesh_checks(parts)

@@ -222,4 +222,3 @@ def tolerance_figure(report: dict):
     return fig
 
 
-_pyplot, _save = pyplot, save      # the old private names, for hwgen/tune/report.py until its split lands

@@ -19,7 +19,8 @@ constraints; the sweep's Parquet keeps the message).
 further than ``with_plan``'s figures (its row says ``screened``): a tune's trial that cannot be
 feasible costs no more than its statics;
 ``options["stop"]``, called with the row once ``with_plan``'s figures are in, does the same for
-a trial those figures rule out (a tune's bound on the statics).
+a trial those figures rule out (a tune's bound on the statics), and so does a plan that fails its
+screens (:func:`_plan_screens`: the Monte Carlo and the tensions' statics are not run for it).
 ``options["with_plan"]``, when given, is called with each valid variant's plan (made for it at the
 lengths level too) and returns more figures for its row: a tune's objectives
 (:mod:`hwgen.tune.results`).
@@ -148,15 +149,20 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
         row["screened"] = True         # a tune's trial its figures already rule out: the checks after them not run
         return
     centre = {t["name"]: t["centre_mm"] for t in json.loads(row["per_tendon"])}
-    taut_rows = robust(plan, plan.slot_clearance, options.get("robust_samples", 200))
     fails = [row["message"]] if row["message"] else []
     warns = []
-    budgeted = [t for t in taut_rows if t["budget_mm"] is not None]
     failures = list(row["failures"])
     for f in _plan_screens(plan):
         if not any(g["id"] == f["id"] for g in failures):
             (fails if f["severity"] == "error" else warns).append(f["message"])
             failures.append(f)
+    if options.get("screen") and any(f["severity"] == "error" for f in failures):
+        # a tune's trial the plan already fails: the Monte Carlo and the statics of the tensions not run
+        row.update(screened=True, failures=failures, verdict="fail",
+                   message="; ".join([f for f in fails if f] + [f"warning: {w}" for w in warns])[:2000])
+        return
+    taut_rows = robust(plan, plan.slot_clearance, options.get("robust_samples", 200))
+    budgeted = [t for t in taut_rows if t["budget_mm"] is not None]
     for t in budgeted:
         if t["robust_mm"] > t["budget_mm"]:
             text = (f"{t['name']} changes {t['robust_mm']:.3f} mm at {plan.check.robust} as built, "

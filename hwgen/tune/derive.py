@@ -19,8 +19,14 @@ from an earlier search's answers.
     stiffness); its phase 0 or 180° (eq. (2): at odd k, ∫ a·cos(kπs/L + φ) ds = -2aL·sin φ/(kπ)
     vanishes only there); its offset (``x0`` across the strip, within it less the crossing's hole and
     a wall; ``z0`` for a cosine along x, within the disk's rim), on the same grid;
-  - a helix's half turns ``k``: whole numbers 1 to :data:`K_MAX` (eq. (2)); its phase over the whole
-    circle, on a :data:`PHASE_STEP_DEG` grid;
+  - a helix's half turns ``k``: even whole numbers up to :data:`K_MAX`, and its phase over the whole
+    circle, on a :data:`PHASE_STEP_DEG` grid (eq. (2) in the plane the robot bends: the helix's part
+    across the strip, ∫ a·cos(kπs/L + φ) ds = aL[sin(kπ + φ) - sin φ]/(kπ), vanishes at every phase only
+    at even k, at odd k at 0 and 180° alone: over the whole circle of phases, an odd k draws 2 of the 72
+    phases that keep the tendon's length, and the first derived tune lost four trials in five to eq. (2),
+    most of them such; a push at the tip then has the lever ∫ a·cos(kπs/L + φ)(L - s) ds = -aL² sin φ/(kπ)
+    at even k, largest across the circle's quarter turns, where odd k and a phase of 0 or 180° give
+    2aL²/(kπ)²);
   - its pre-tension ``pretension_n``, from :data:`LEAST_TENSION_N` up to the allowable load
     (``tendon_material.break_load`` / ``check.tendon_safety_factor``), on a :data:`TENSION_STEP_N` grid;
   - its termination's size ``termination.diameter``, from the material's up to :data:`BEAD_MM` more
@@ -102,9 +108,8 @@ def free_space(design: params.Design) -> list[tune_spec.Free]:
                 out.append(tune_spec.Free(path=f"{at}.routing.function.{'x0' if fn.axis == 'z' else 'z0'}",
                                           low=-off, high=off, step=LENGTH_STEP))
         else:
-            whole = float(fn.k).is_integer() and 1 <= fn.k
-            out.append(tune_spec.Free(path=f"{at}.routing.function.k", low=1, high=max(K_MAX, int(fn.k) if whole
-                                                                                         else K_MAX), integer=True))
+            out.append(tune_spec.Free(path=f"{at}.routing.function.k",
+                                      choices=sorted({*range(2, K_MAX + 1, 2), fn.k})))
             out.append(tune_spec.Free(path=f"{at}.routing.function.phase_deg", low=0, high=360 - PHASE_STEP_DEG,
                                       step=PHASE_STEP_DEG))
         hi = _grid(allowable, TENSION_STEP_N, False)

@@ -26,7 +26,7 @@ import pyarrow.parquet as pq
 
 from .. import designfile
 from ..atomic import atomic_path, write_text
-from ..outputs.plots import _pyplot, _save
+from ..outputs.plots import pyplot, save
 from ..params import SAFE_NAME
 from ..sweep import spec as sweep_spec
 from . import results
@@ -416,7 +416,7 @@ def binding(loaded: Loaded, rows: list[dict]) -> str:
 # ---------------------------------------------------------------- convergence.png
 
 def convergence(loaded: Loaded, rows: list[dict], path: Path) -> None:
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(7, 4.5))
     rows = sorted(rows, key=lambda r: r["trial"])
     names = [n for n, _ in loaded.objectives]
@@ -453,7 +453,7 @@ def convergence(loaded: Loaded, rows: list[dict], path: Path) -> None:
     ax.legend(fontsize="small")
     ax.grid(True, alpha=0.3)
     ax.set_title(f"tune {loaded.spec.tune}: {len(rows)} trials, {len(ok)} feasible")
-    _save(plt, fig, path)
+    save(plt, fig, path)
 
 
 def write(loaded: Loaded, study, folder: Path, outcome=None, built=None, stiffness=None) -> dict:

@@ -323,27 +323,139 @@ def base_row(loaded: Loaded, study, p, options: dict) -> dict:
     return row
 
 
-def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: int | None = None,
-        budget: int | None = None, cache=True, on_trial=None) -> tuple[Outcome, object]:
-    """Run the tune up to ``budget`` trials told in all (default: the tune file's); returns the
-    outcome and the study. ``on_trial(done, budget)`` is called as each trial is told."""
-    from optuna.trial import TrialState
-
+def _folder(loaded: Loaded, out_root: Path) -> tuple[Path, Path | None]:
+    """The tune's folder, made here, and the outermost folder this made (None: it was there)."""
     folder = folder_of(loaded, out_root)
-    made = None if folder.exists() else folder          # the outermost folder this run makes
+    made = None if folder.exists() else folder
     while made is not None and not made.parent.exists():
         made = made.parent
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise InputError(out_root, "--out", f"cannot write the results here ({e.strerror or e})") from None
+    return folder, made
+
+
+class _Search:
+    """One run's ask-evaluate-tell loop: trials asked in batches onto the pool's workers, a new batch
+    whenever one finishes; a design already evaluated (by hash) is told that result, and one asked
+    while its twin is in flight waits for it."""
+
+    def __init__(self, loaded: Loaded, study, p, options: dict, base: dict, out: Outcome, by_hash: dict,
+                 on_trial=None):
+        self.loaded, self.study, self.p, self.options, self.base, self.out = loaded, study, p, options, base, out
+        self.by_hash, self.on_trial = by_hash, on_trial
+        self.dists = distributions(loaded)
+        self.told = out.done_before
+        self.doc = p.scatter(loaded.base)
+        self.per_task = TRIALS_PER_TASK[loaded.spec.level]
+        self.cap = loaded.spec.batch or 2 * p.workers
+        self.ac = p.completed()
+        self.flying: dict[str, list] = {}            # task key -> [(trial, values, hash)]
+        self.waiting: dict[str, list] = {}           # hash in flight -> trials of the same design asked meanwhile
+        self.best = None
+        self.t0 = time.perf_counter()
+
+    def tell(self, trial, row: dict, same_as: int | None = None) -> None:
+        loaded, out = self.loaded, self.out
+        values, cons, ok = score(loaded, row, self.base)
+        trial.set_user_attr("row", row)
+        trial.set_user_attr("constraints", cons)
+        for label, c in zip(constraint_names(loaded), score(loaded, row, self.base, SEARCH_MARGIN)[1]):
+            trial.set_constraint(label, c)           # the sampler's: each bound a margin further
+        trial.set_user_attr("feasible", ok)
+        if same_as is not None:
+            trial.set_user_attr("same_as", same_as)
+        self.study.tell(trial, values)
+        self.told += 1
+        out.verdicts[row["verdict"]] = out.verdicts.get(row["verdict"], 0) + 1
+        if ok and len(values) == 1:
+            sign = 1 if loaded.objectives[0][1] == "maximize" else -1
+            if self.best is None or sign * values[0] > sign * self.best:
+                self.best = values[0]
+                out.first_best_s = time.perf_counter() - self.t0
+        if self.on_trial:
+            self.on_trial(self.told, out.budget)
+
+    def in_flight(self) -> int:
+        return sum(len(b) for b in self.flying.values()) + sum(len(w) for w in self.waiting.values())
+
+    def room(self) -> bool:
+        return self.told + self.in_flight() < self.out.budget
+
+    def launch(self) -> None:
+        """Ask a batch of trials and send it to a worker (those of a design known or in flight told or
+        queued instead)."""
+        loaded, batch = self.loaded, []
+        while len(batch) < self.per_task and self.told + self.in_flight() + len(batch) < self.out.budget:
+            trial = self.study.ask(self.dists)
+            values = tuple(trial.params[n] for n in loaded.names)
+            h = resolve(loaded.base, loaded.names, Variant(trial.number, values)).hash
+            if h in self.by_hash:
+                self.out.repeated += 1
+                row = dict(self.by_hash[h], values=list(values), distance=distance(loaded, values))
+                self.tell(trial, row, self.by_hash[h].get("trial"))
+            elif h in self.waiting or any(h == b[2] for b in batch):
+                self.waiting.setdefault(h, []).append((trial, values))
+            else:
+                batch.append((trial, values, h))
+        if not batch:
+            return
+        key = f"tune-{loaded.spec.tune}-{batch[0][0].number}-{uuid.uuid4().hex[:6]}"
+        for _, _, h in batch:
+            self.waiting.setdefault(h, [])
+        self.flying[key] = batch
+        self.ac.add(self.p.submit(levels.evaluate_batch, [(t.number, v) for t, v, _ in batch], self.doc,
+                                  loaded.names, loaded.spec.level, frozenset(), self.options, key=key))
+
+    def fill(self) -> None:
+        """Launch batches until the workers are full or the budget is asked."""
+        while len(self.flying) < self.cap and self.room():
+            n = len(self.flying)
+            self.launch()
+            if len(self.flying) == n:
+                break
+
+    def collect(self, fut) -> None:
+        """Tell the trials of a finished batch (and their twins that waited)."""
+        batch = self.flying.pop(fut.key)
+        rows = {r["variant"]: r for r in fut.result()}
+        fut.release()
+        out = self.out
+        for trial, values, h in batch:
+            row = _finish(self.loaded, rows[trial.number], values)
+            row["trial"] = trial.number
+            out.evaluated += 1
+            out.cpu_s += row.get("cpu_s") or 0.0
+            if row["verdict"] in ("pass", "fail") and not row.get("screened"):
+                out.whole += 1
+                out.whole_cpu_s += row.get("cpu_s") or 0.0
+            self.by_hash[h] = row
+            self.tell(trial, row)
+            for twin, v in self.waiting.pop(h, []):
+                out.repeated += 1
+                self.tell(twin, dict(row, values=list(v), distance=distance(self.loaded, v)), trial.number)
+
+    def run(self) -> None:
+        self.fill()
+        for fut in self.ac:
+            self.collect(fut)
+            self.fill()
+
+
+def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: int | None = None,
+        budget: int | None = None, cache=True, on_trial=None) -> tuple[Outcome, object]:
+    """Run the tune up to ``budget`` trials told in all (default: the tune file's); returns the
+    outcome and the study. ``on_trial(done, budget)`` is called as each trial is told."""
+    from optuna.trial import TrialState
+
+    folder, made = _folder(loaded, out_root)
     budget = budget or loaded.spec.budget
     study = open_study(loaded, folder)
-    dists = distributions(loaded)
     complete = study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,))
     by_hash = {t.user_attrs["row"]["hash"]: t.user_attrs["row"] for t in complete if "row" in t.user_attrs}
-    out = Outcome(folder, budget, len(complete), 0, 0, 0.0, 1, 0.0, 0.0)
-    told = len(complete)
+    out = Outcome(folder=folder, budget=budget, done_before=len(complete), evaluated=0, repeated=0, seconds=0.0,
+                  workers=1, start_seconds=0.0, cpu_s=0.0)
     with pool(scheduler, workers) as p:
         out.workers, out.start_seconds = p.workers, p.start_seconds
         options = _options(loaded, folder, cache, p)
@@ -355,89 +467,8 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
             if limits:
                 options = dict(options, stop=partial(short_of_bounds, limits))
         by_hash.setdefault(base["hash"], base)
-        doc = p.scatter(loaded.base)
-        per_task = TRIALS_PER_TASK[loaded.spec.level]
-        cap = loaded.spec.batch or 2 * p.workers
-        ac = p.completed()
-        flying: dict[str, list] = {}            # task key -> [(trial, values, hash)]
-        waiting: dict[str, list] = {}           # hash in flight -> trials of the same design asked meanwhile
-        best = None
-
-        def tell(trial, row: dict, same_as: int | None = None) -> None:
-            nonlocal told, best
-            values, cons, ok = score(loaded, row, base)
-            trial.set_user_attr("row", row)
-            trial.set_user_attr("constraints", cons)
-            for label, c in zip(constraint_names(loaded), score(loaded, row, base, SEARCH_MARGIN)[1]):
-                trial.set_constraint(label, c)           # the sampler's: each bound a margin further
-            trial.set_user_attr("feasible", ok)
-            if same_as is not None:
-                trial.set_user_attr("same_as", same_as)
-            study.tell(trial, values)
-            told += 1
-            out.verdicts[row["verdict"]] = out.verdicts.get(row["verdict"], 0) + 1
-            if ok and len(values) == 1:
-                sign = 1 if loaded.objectives[0][1] == "maximize" else -1
-                if best is None or sign * values[0] > sign * best:
-                    best = values[0]
-                    out.first_best_s = time.perf_counter() - t0
-            if on_trial:
-                on_trial(told, budget)
-
-        def launch() -> None:
-            batch = []
-            while len(batch) < per_task and told + _in_flight() + len(batch) < budget:
-                trial = study.ask(dists)
-                values = tuple(trial.params[n] for n in loaded.names)
-                h = resolve(loaded.base, loaded.names, Variant(trial.number, values)).hash
-                if h in by_hash:
-                    out.repeated += 1
-                    row = dict(by_hash[h], values=list(values), distance=distance(loaded, values))
-                    tell(trial, row, by_hash[h].get("trial"))
-                elif h in waiting:
-                    waiting[h].append((trial, values))
-                elif any(h == b[2] for b in batch):
-                    waiting.setdefault(h, []).append((trial, values))
-                else:
-                    batch.append((trial, values, h))
-            if not batch:
-                return
-            key = f"tune-{loaded.spec.tune}-{batch[0][0].number}-{uuid.uuid4().hex[:6]}"
-            for _, _, h in batch:
-                waiting.setdefault(h, [])
-            flying[key] = batch
-            ac.add(p.submit(levels.evaluate_batch, [(t.number, v) for t, v, _ in batch], doc, loaded.names,
-                            loaded.spec.level, frozenset(), options, key=key))
-
-        def _in_flight() -> int:
-            return sum(len(b) for b in flying.values()) + sum(len(w) for w in waiting.values())
-
-        while len(flying) < cap and told + _in_flight() < budget:
-            n = len(flying)
-            launch()
-            if len(flying) == n:
-                break
-        for fut in ac:
-            batch = flying.pop(fut.key)
-            rows = {r["variant"]: r for r in fut.result()}
-            fut.release()
-            for trial, values, h in batch:
-                row = _finish(loaded, rows[trial.number], values)
-                row["trial"] = trial.number
-                out.evaluated += 1
-                out.cpu_s += row.get("cpu_s") or 0.0
-                if row["verdict"] in ("pass", "fail") and not row.get("screened"):
-                    out.whole += 1
-                    out.whole_cpu_s += row.get("cpu_s") or 0.0
-                by_hash[h] = row
-                tell(trial, row)
-                for twin, v in waiting.pop(h, []):
-                    out.repeated += 1
-                    tell(twin, dict(row, values=list(v), distance=distance(loaded, v)), trial.number)
-            while len(flying) < cap and told + _in_flight() < budget:
-                n = len(flying)
-                launch()
-                if len(flying) == n:
-                    break
+        search = _Search(loaded, study, p, options, base, out, by_hash, on_trial)
+        search.t0 = t0
+        search.run()
         out.seconds = time.perf_counter() - t0
     return out, study

@@ -212,7 +212,8 @@ def resolve(path: Path, spec: Tune, base_path: Path, base: dict) -> Loaded:
     digest = sweep_spec.digest({"base": base, "free": [f.model_dump() for f in spec.free],
                                 "goal": spec.goal.model_dump(by_alias=True), "level": spec.level,
                                 "robust_samples": spec.robust_samples})
-    return Loaded(spec, path, base_path, base, tuple(names), values, objectives, states, state, digest)
+    return Loaded(spec=spec, source=path, base_path=base_path, base=base, names=tuple(names), base_values=values,
+                  objectives=objectives, states=states, state=state, digest=digest)
 
 
 def _base_value(dump: dict, name: str):
