@@ -84,9 +84,14 @@ class EyeletRecord(TypedDict):
 _Named = TypedDict("_Named", {"design": str})
 
 
-class Report(_Named):
+class _BenchSection(TypedDict, total=False):
+    bench: dict[str, Any]         # checks.bench: the base frame's and the rig's figures (a design with either)
+
+
+class Report(_Named, _BenchSection):
     """report.json. The sections from ``mass`` on are the studies' own documents, each stating
-    its model and assumptions (see the checks that write them)."""
+    its model and assumptions (see the checks that write them); ``bench`` only where the design
+    has its base frame or rig."""
     ok: bool                      # no failing error-severity check
     hwgen_version: str
     sweep: SweepRecord

@@ -268,7 +268,7 @@ def start_beside(b: Build, manifest: Manifest, stages: list[tuple[str, Callable]
         with cache.using(b.store):
             job = contextvars.copy_context().run
         gate = b.measured if name in after_measured else None
-        given = StageInput(b.plan, where, manifest.copy())
+        given = StageInput(b.plan, where, manifest.copy(), options=b.options)
         out[name] = Beside(where, b.hashes, b.hashes.files(where), reused,
                            pool.submit(job, _gated, gate, cached_stage, b.store, b.hashes, name, stage, given, reused))
     return out
