@@ -58,13 +58,9 @@ def _tuned(**changed) -> Design:
     fires on one of its variants), with ``changed`` values."""
     from hwgen.sweep.spec import Variant, resolve
     from hwgen.tune import spec
+    from .test_tune import screened_trial
     loaded = spec.load(PARAMS / "tune-stiffness.yaml")
-    c1, c2, h = (f"tendons[{i}].routing.function." for i in (1, 2, 3))
-    values = {"tendons[1].pretension_n": 10.5, c1 + "a": 31.6, c1 + "k": 1, c1 + "x0": -4.3,
-              "tendons[2].pretension_n": 8.2, c2 + "a": 29.1, c2 + "k": 1, c2 + "x0": 9.3,
-              "tendons[3].pretension_n": 4.0, h + "a": 26, h + "k": 5, h + "phase_deg": 0,
-              c1 + "phase_deg": 0, c2 + "phase_deg": 0,
-              **{f"tendons[{i}].termination.diameter": 1.5 for i in (1, 2, 3)}, **changed}
+    values = {**screened_trial(), **changed}
     r = resolve(loaded.base, loaded.names, Variant(0, tuple(values[n] for n in loaded.names)))
     assert r.design is not None, r.message
     return r.design

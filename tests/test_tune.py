@@ -351,6 +351,17 @@ def test_the_shipped_twenty_disk_tune_builds_every_trial(tmp_path):
     assert all(i in summary for i in failed), (failed, summary)
 
 
+def screened_trial() -> dict:
+    """A trial of the shipped stiffness tune (its free parameters' values by path) that the full
+    plan's screens judge, here and in tests/test_screens.py: steep helices of 5 half turns."""
+    c1, c2, h = (f"tendons[{i}].routing.function." for i in (1, 2, 3))
+    return {"tendons[1].pretension_n": 10.5, c1 + "a": 31.6, c1 + "k": 1, c1 + "x0": -4.3,
+            "tendons[2].pretension_n": 8.2, c2 + "a": 29.1, c2 + "k": 1, c2 + "x0": 9.3,
+            "tendons[3].pretension_n": 4.0, h + "a": 26, h + "k": 5, h + "phase_deg": 0,
+            c1 + "phase_deg": 0, c2 + "phase_deg": 0,
+            **{f"tendons[{i}].termination.diameter": 1.5 for i in (1, 2, 3)}}
+
+
 def test_the_full_plan_screens_what_hwgen_check_fails():
     """The robust level and above screen the full plan for what the lengths level cannot see: the
     prototype passes; a helix steep at the base disk (a 26 mm, 5 half turns) has a seat wider than
@@ -360,12 +371,7 @@ def test_the_full_plan_screens_what_hwgen_check_fails():
     from hwgen.model.plan import make_plan
     from hwgen.sweep.spec import Variant, resolve
     loaded = spec.load(PARAMS / "tune-stiffness.yaml")
-    c1, c2, h = (f"tendons[{i}].routing.function." for i in (1, 2, 3))
-    tuned = {"tendons[1].pretension_n": 10.5, c1 + "a": 31.6, c1 + "k": 1, c1 + "x0": -4.3,
-             "tendons[2].pretension_n": 8.2, c2 + "a": 29.1, c2 + "k": 1, c2 + "x0": 9.3,
-             "tendons[3].pretension_n": 4.0, h + "a": 26, h + "k": 5, h + "phase_deg": 0,
-             c1 + "phase_deg": 0, c2 + "phase_deg": 0,
-             **{f"tendons[{i}].termination.diameter": 1.5 for i in (1, 2, 3)}}
+    tuned = screened_trial()
     assert set(tuned) == set(loaded.names)
 
     def screens(values: dict) -> dict:
