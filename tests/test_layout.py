@@ -32,6 +32,14 @@ def _modules() -> dict[str, Path]:
     return mods
 
 
+def _source(pkg: str, node: ast.ImportFrom) -> str:
+    """The module a ``from ... import`` in package ``pkg`` reads, its dots resolved."""
+    if not node.level:
+        return node.module or ""
+    base = pkg.split(".")[: len(pkg.split(".")) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
 def _imports(mods: dict[str, Path]) -> dict[str, set[str]]:
     """module -> the hwgen modules it imports, wherever the import statement stands."""
     graph: dict[str, set[str]] = {m: set() for m in mods}
@@ -39,11 +47,7 @@ def _imports(mods: dict[str, Path]) -> dict[str, set[str]]:
         pkg = m if f.name == "__init__.py" else m.rpartition(".")[0]
         for node in ast.walk(_tree(f)):
             if isinstance(node, ast.ImportFrom):
-                if node.level:
-                    base = pkg.split(".")[: len(pkg.split(".")) - (node.level - 1)]
-                    target = ".".join(base + ([node.module] if node.module else []))
-                else:
-                    target = node.module or ""
+                target = _source(pkg, node)
                 candidates = [target] + [f"{target}.{a.name}" for a in node.names]
             elif isinstance(node, ast.Import):
                 candidates = [a.name for a in node.names]
@@ -252,8 +256,6 @@ MAX_POSITIONAL = 8
 # calls that may pass more positional arguments: a table's row, a pool's job, numpy's and the
 # compiled kernels' arrays, a digest of many arrays (what each is, not a record)
 MANY_POSITIONAL = {"add_row", "submit", "broadcast_arrays", "sweep_kernel", "newton", "_digest"}
-# hwgen/tune/ is left out until the tune helper's split of tune/run.py:run lands (issue 49, item 5)
-NOT_YET: tuple[str, ...] = ()
 ENV_WRITES = {"update", "setdefault", "pop", "clear", "popitem", "putenv", "unsetenv"}
 
 
@@ -263,8 +265,6 @@ def _house_faults(mods: dict[str, Path]) -> list[str]:
     name imported from another package, and every write to ``os.environ``, in the modules ``mods``."""
     out = []
     for m, f in mods.items():
-        if _stage(m) in NOT_YET:
-            continue
         pkg = m if f.name == "__init__.py" else m.rpartition(".")[0]
         for node in ast.walk(_tree(f)):
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
@@ -285,11 +285,7 @@ def _house_faults(mods: dict[str, Path]) -> list[str]:
                 if any(isinstance(t, ast.Subscript) and ast.unparse(t.value) == "os.environ" for t in targets):
                     out.append(f"{m}:{node.lineno} os.environ[...]: writes the environment")
             elif isinstance(node, ast.ImportFrom):
-                if node.level:
-                    base = pkg.split(".")[: len(pkg.split(".")) - (node.level - 1)]
-                    source = ".".join(base + ([node.module] if node.module else []))
-                else:
-                    source = node.module or ""
+                source = _source(pkg, node)
                 src_file = mods.get(source)
                 src_pkg = source if src_file is not None and src_file.name == "__init__.py" else source.rpartition(".")[0]
                 other = src_pkg != pkg
