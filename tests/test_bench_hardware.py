@@ -166,6 +166,47 @@ def test_the_prototype_builds_its_frame_and_rig(built):
     assert "rotating base frame" in guide.lower() and "stiffness rig" in guide.lower()
 
 
+def _round_axes(shape) -> dict:
+    """The cylindrical faces' area per axis direction (|x|, |y|, |z|), read from a STEP solid."""
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
+    area: dict = {}
+    for face in shape.Faces():
+        if face.geomType() == "CYLINDER":
+            d = BRepAdaptor_Surface(face.wrapped).Cylinder().Axis().Direction()
+            key = tuple(round(abs(c), 6) for c in (d.X(), d.Y(), d.Z()))
+            area[key] = area.get(key, 0.0) + face.Area()
+    return area
+
+
+def test_the_bench_parts_print_their_bearing_seats_and_bores_upright(built):
+    """Each of the bench's printed parts lies in its file on a flat face with its round features
+    (the uprights' bearing seats, the cradle's shaft bore, the rig's screw holes) upright, where a
+    face square to them can rest; read from the STEP files."""
+    import cadquery as cq
+    folder = built("prototype")
+    manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
+    parts = {p["name"]: p for p in manifest["parts"] if p.get("bench") and p["role"] != "base_frame_gear"}
+    upright = 0
+    for name, part in parts.items():
+        shape = cq.importers.importStep(str(folder / part["files"]["step"]["path"])).val()
+        axes = _round_axes(shape)
+        main = max(axes, key=axes.get)
+        bb = shape.BoundingBox()
+        assert bb.zmin == pytest.approx(0, abs=1e-6), name
+        if main == (0.0, 0.0, 1.0):
+            upright += 1
+            continue
+        # not upright: then no flat face square to the main axis can carry the part
+        points = np.array([v.toTuple() for v in shape.tessellate(0.05)[0]])
+        for face in shape.Faces():
+            n = np.array(face.normalAt().toTuple())
+            if face.geomType() == "PLANE" and abs(abs(n @ np.array(main)) - 1) < 1e-9:
+                assert (points @ n).max() > np.dot(face.Center().toTuple(), n) + 1e-6, (name, main)
+    # the uprights' four bearing seats, the cradle's bore and the rig's screws among them
+    assert {"base_frame_front", "base_frame_back", "base_frame_cradle", "rig_bracket"} <= set(parts)
+    assert upright >= 6, upright
+
+
 def test_a_heavier_tensioner_is_laid_out_with_a_larger_wheel():
     d, plan = _design(), _plan()
     lay = plan.frame

@@ -95,9 +95,8 @@ def test_meshes_watertight_and_print_oriented(built, name):
             to_robot = np.asarray(part["placement"])
             assert np.allclose(to_robot[:3, 2], [0, 1, 0])                  # file +Z is robot +y: away from the tip
         elif part.get("bench"):
-            # the base frame's and the rig's parts are filed standing as they stand on the bench (only
-            # turned about Z to lie along the printer's X): a flat face on the plate, not yet the largest
-            # one they could rest on (their bearing seats and bores print horizontal)
+            # the bench's parts rest on a face square to their bearing seats and bores
+            # (test_bench_hardware), which need not be their largest
             continue
         else:
             # every larger face has the part standing out beyond its plane

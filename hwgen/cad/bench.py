@@ -3,8 +3,9 @@ front and back uprights, base plate, worm wheel, worm and its drive shaft) and t
 (``rig_*``: the load cell's bracket, the push block, the support), built in robot coordinates from
 :class:`hwgen.model.bench_frame.FrameLayout` and :class:`hwgen.model.bench_rig.RigLayout`.
 
-Each part's file is its solid moved so its lowest point is on Z = 0 (the gear's wheel, worm and
-drive shaft keep the tensioner's file frames: axis on Z); the placement maps it back. The worm
+Each part's file is its solid set on the largest flat face it can rest on, its lowest point on
+Z = 0 (the gear's wheel, worm and drive shaft keep the tensioner's file frames: axis on Z); the
+placement maps it back. The worm
 pair's solids are the tensioner's, kept under the same keys (:mod:`hwgen.cad.memo`), so a frame
 whose pair is the tensioner's makes no gear again.
 """
@@ -15,6 +16,9 @@ from collections.abc import Iterator
 
 import cadquery as cq
 import numpy as np
+from OCP.BRepAdaptor import BRepAdaptor_Surface
+from OCP.BRepBuilderAPI import BRepBuilderAPI_Transform
+from OCP.gp import gp_Trsf
 
 from ..model import bench_frame as bf
 from ..model import bench_parts as bp
@@ -44,20 +48,79 @@ UPRIGHT_TOP = 8.0           # resin above the upper bearing's seat, mm
 R_Y = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]])   # gear mesh frame -> robot (see _mesh_to_robot)
 
 
+def _resting(solid: cq.Solid) -> np.ndarray:
+    """The rotation (robot -> file) that sets the solid on a flat face it can rest on (nothing of the
+    part beyond the face's plane: a flange with a hub standing out of it cannot rest), its outward
+    normal turned to -Z: the largest such face square to the part's round features (:func:`_round_axis`:
+    bearing seats, bores, bosses print round with their axis upright), else the largest such face."""
+    points = np.array([v.toTuple() for v in solid.tessellate(0.05)[0]])
+    resting = []
+    for face in solid.Faces():
+        if face.geomType() != "PLANE":
+            continue
+        n = np.array(face.normalAt().toTuple())
+        if (points @ n).max() <= np.dot(face.Center().toTuple(), n) + 1e-6:
+            resting.append((round(face.Area(), 6), tuple(np.round(n, 9)), n))
+    if not resting:
+        return np.eye(3)
+    axis = _round_axis(solid)
+    square = [f for f in resting if axis is not None and abs(f[2] @ axis) > 1 - 1e-9]
+    _, _, n = max(square or resting, key=lambda f: f[:2])
+    return _turning(n, np.array([0.0, 0.0, -1.0]))
+
+
+def _round_axis(solid: cq.Solid) -> np.ndarray | None:
+    """The direction the part's cylindrical faces (holes, seats, bosses) run along, weighted by their
+    area; None for a part with none."""
+    area: dict[tuple, float] = {}
+    for face in solid.Faces():
+        if face.geomType() == "CYLINDER":
+            d = BRepAdaptor_Surface(face.wrapped).Cylinder().Axis().Direction()
+            key = tuple(np.round(np.abs([d.X(), d.Y(), d.Z()]), 9))
+            area[key] = area.get(key, 0.0) + face.Area()
+    if not area:
+        return None
+    key = max(area, key=lambda k: (round(area[k], 6), k))
+    return np.array(key) / np.linalg.norm(key)
+
+
+def _turning(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The rotation taking unit vector a to b (a half turn about x where they are opposite), with
+    entries that are whole numbers kept exact."""
+    c, axis = float(a @ b), np.cross(a, b)
+    if c < -1 + 1e-12:
+        r = np.diag([1.0, -1.0, -1.0])
+    else:
+        k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+        r = np.eye(3) + k + k @ k / (1 + c)
+    snapped = np.round(r)
+    return np.where(np.abs(r - snapped) < 1e-12, snapped, r)
+
+
+QUARTER = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])     # a quarter turn about Z: (x, y) -> (y, -x)
+
+
 def _file(solid: cq.Solid) -> tuple[cq.Solid, np.ndarray]:
-    """A robot-frame solid moved so its box's lowest corner is at the origin, and turned a quarter
-    about Z where it is longer along y than x (the printer's long axis is X; slicers place a part
-    as its file has it): (file solid, placement file -> robot)."""
-    bb = solid.BoundingBox()
+    """A robot-frame solid set on the largest flat face it can rest on (:func:`_resting`), turned a
+    quarter about Z where it is then longer along Y than X (the printer's long axis is X; slicers
+    place a part as its file has it), and moved so its box's lowest corner is at the origin:
+    (file solid, placement file -> robot)."""
+    r = _resting(solid)
+    turned = _turned(solid, r)
+    bb = turned.BoundingBox()
     if bb.ylen > bb.xlen + 1e-6:
-        # file (X, Y) = robot (y, -x): the placement turns it back
-        turned = solid.rotate(cq.Vector(0, 0, 0), cq.Vector(0, 0, 1), -90)
-        tb = turned.BoundingBox()
-        shift = np.array([tb.xmin, tb.ymin, tb.zmin])
-        rot = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])    # file -> robot
-        return turned.translate(cq.Vector(*(-shift))), placement(rot, rot @ shift)
+        r = QUARTER @ r
+        turned = _turned(solid, r)
+        bb = turned.BoundingBox()
     shift = np.array([bb.xmin, bb.ymin, bb.zmin])
-    return solid.translate(cq.Vector(*(-shift))), placement(np.eye(3), shift)
+    return turned.translate(cq.Vector(*(-shift))), placement(r.T, r.T @ shift)
+
+
+def _turned(solid: cq.Solid, r: np.ndarray) -> cq.Solid:
+    """The solid turned by the rotation r about the origin."""
+    t = gp_Trsf()
+    t.SetValues(*r[0], 0.0, *r[1], 0.0, *r[2], 0.0)
+    return cq.Solid(BRepBuilderAPI_Transform(solid.wrapped, t, True).Shape())
 
 
 def _mesh_to_robot(lay: FrameLayout) -> np.ndarray:
