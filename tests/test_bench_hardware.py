@@ -180,7 +180,7 @@ def _round_axes(shape) -> dict:
 
 def test_the_bench_parts_print_their_bearing_seats_and_bores_upright(built):
     """Each of the bench's printed parts lies in its file on a flat face with its round features
-    (the uprights' bearing seats, the cradle's shaft bore, the rig's screw holes) upright, where a
+    (the uprights' bearing seats, the rig's screw holes) upright, where a
     face square to them can rest; read from the STEP files."""
     import cadquery as cq
     folder = built("prototype")
@@ -189,6 +189,8 @@ def test_the_bench_parts_print_their_bearing_seats_and_bores_upright(built):
     upright = 0
     for name, part in parts.items():
         shape = cq.importers.importStep(str(folder / part["files"]["step"]["path"])).val()
+        if name == "base_frame_cradle":
+            continue        # stands on its foot: its flange's marks would face up as resin cups (cad/bench.py)
         axes = _round_axes(shape)
         main = max(axes, key=axes.get)
         bb = shape.BoundingBox()
@@ -202,9 +204,9 @@ def test_the_bench_parts_print_their_bearing_seats_and_bores_upright(built):
             n = np.array(face.normalAt().toTuple())
             if face.geomType() == "PLANE" and abs(abs(n @ np.array(main)) - 1) < 1e-9:
                 assert (points @ n).max() > np.dot(face.Center().toTuple(), n) + 1e-6, (name, main)
-    # the uprights' four bearing seats, the cradle's bore and the rig's screws among them
-    assert {"base_frame_front", "base_frame_back", "base_frame_cradle", "rig_bracket"} <= set(parts)
-    assert upright >= 6, upright
+    # the uprights' four bearing seats and the rig's screws among them
+    assert {"base_frame_front", "base_frame_back", "rig_bracket"} <= set(parts)
+    assert upright >= 5, upright
 
 
 def test_a_heavier_tensioner_is_laid_out_with_a_larger_wheel():

@@ -100,12 +100,13 @@ def _turning(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 QUARTER = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])     # a quarter turn about Z: (x, y) -> (y, -x)
 
 
-def _file(solid: cq.Solid) -> tuple[cq.Solid, np.ndarray]:
-    """A robot-frame solid set on the largest flat face it can rest on (:func:`_resting`), turned a
+def _file(solid: cq.Solid, upright: bool = True) -> tuple[cq.Solid, np.ndarray]:
+    """A robot-frame solid set on a flat face it can rest on (:func:`_resting`; with ``upright``
+    False, on the part's own base, robot -z, as it stands on the bench), turned a
     quarter about Z where it is then longer along Y than X (the printer's long axis is X; slicers
     place a part as its file has it), and moved so its box's lowest corner is at the origin:
     (file solid, placement file -> robot)."""
-    r = _resting(solid)
+    r = _resting(solid) if upright else np.eye(3)
     turned = _turned(solid, r)
     bb = turned.BoundingBox()
     if bb.ylen > bb.xlen + 1e-6:
@@ -267,7 +268,9 @@ def frame_parts(lay: FrameLayout) -> Iterator[Part]:
         bought.append(hardware("G-clamp", "75 mm throat", 2, notes="the base plate at the table's edge"))
     common = {"grounded": True, "bench": "base_frame"}
 
-    solid, place = _file(cradle_solid(lay))
+    # the cradle stands on its foot: on its flange's outer face (square to its bore) the index
+    # marks on the face toward the pointer would open upward, cups that hold resin (print.cup)
+    solid, place = _file(cradle_solid(lay), upright=False)
     yield Part("base_frame_cradle", "base_frame", solid, place, CRADLE_COLOR,
                meta={**common, "turns": True, "hardware": bought, "mark_step_deg": lay.mark_step_deg,
                      "index_deg": list(bf.INDEX_ANGLES), "axis": [0.0, 1.0, 0.0]})
