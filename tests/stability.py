@@ -18,6 +18,7 @@ import dataclasses
 import functools
 import json
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -47,6 +48,7 @@ class Outcome:
     message: str = ""                # exit 2: the one line; a crash: the last lines of stderr
     seconds: float = 0.0
     robot: str = ""                  # what the robot is, in a few words
+    cpu_seconds: float | None = None     # CPU of the build and the processes it waited for (exact with --jobs 1)
 
     @property
     def self_faults(self) -> list[str]:
@@ -74,20 +76,27 @@ def describe(doc: dict) -> str:
             + f" on {len(doc['tensioner']['channels'])} channel(s)")
 
 
+def _children_cpu() -> float:
+    """User and system CPU of this process's children that have ended (with more than one robot at a
+    time, the robots ending meanwhile are counted in each other's)."""
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return ru.ru_utime + ru.ru_stime
+
+
 def build_one(index: int, doc: dict, root: Path) -> Outcome:
     """Build one robot with the CLI in a child process and read what it says."""
     src = root / f"{doc['design']}.yaml"
     src.write_text(yaml.safe_dump(doc, sort_keys=False))
     env = {**os.environ, "HWGEN_RENDER_BACKEND": "none", "HWGEN_CHECK_SAMPLES": os.environ.get(
         "HWGEN_CHECK_SAMPLES", "64")}
-    t0 = time.monotonic()
+    t0, cpu0 = time.monotonic(), _children_cpu()
     try:
         r = subprocess.run([str(HWGEN), "build", str(src), "--out", str(root / "out"), "-q"], env=env,
                            capture_output=True, text=True, timeout=TIME_LIMIT_S)
     except subprocess.TimeoutExpired:
         return Outcome(index, "timed out", seconds=TIME_LIMIT_S, robot=describe(doc))
     dt = time.monotonic() - t0
-    out = Outcome(index, r.returncode, seconds=dt, robot=describe(doc))
+    out = Outcome(index, r.returncode, seconds=dt, robot=describe(doc), cpu_seconds=_children_cpu() - cpu0)
     if r.returncode not in (0, 1, 2) or "Traceback" in r.stderr:
         out.exit, out.message = "crash", " | ".join(r.stderr.strip().splitlines()[-3:])
     elif r.returncode == 2:
@@ -121,7 +130,7 @@ def run(robots: int = ROBOTS, seed: int = SEED, jobs: int = 2, keep: Path | None
                 if results:
                     with open(results, "a") as fh:
                         fh.write(json.dumps(dataclasses.asdict(o)) + "\n")
-                echo(f"  {o.index:3d}  exit {o.exit!s:9}  {o.seconds:5.0f} s  {o.robot}"
+                echo(f"  {o.index:3d}  exit {o.exit!s:9}  {o.seconds:5.0f} s ({o.cpu_seconds or 0:.0f} s CPU)  {o.robot}"
                      + (f"\n        failed: {', '.join(o.failed)}" if o.failed else "")
                      + (f"\n        {o.message}" if o.message else ""))
     return outcomes
