@@ -41,6 +41,9 @@ def test_a_tip_thinner_than_the_wall_is_not_a_refusal():
                                                                                           "module"]
     # the outside radius is cut where the tip is the wall thick; a module too fine leaves 90 % of the throat's
     assert _pair(min_tip=0.8).thinnest_tip() == pytest.approx(0.8, abs=1e-6)
+    # a wall the mid-face tip (0.894 mm) reaches but 90 % of it does not: the gear derived for it prints
+    assert not _pair(min_tip=0.85).wall_problems(0.85)
+    assert _pair(min_tip=0.85).thinnest_tip() == pytest.approx(0.85, abs=1e-6)
     assert _pair(min_tip=0.9).thinnest_tip() == pytest.approx(0.9 * pair.tip_thickness(), abs=1e-6)
     assert _pair().thread_tip == pytest.approx(math.pi * 1.25 / 2 - 2 * 1.25 * math.tan(math.radians(20)))
 
