@@ -70,6 +70,8 @@ def test_the_tip_checks_fix_is_tried_and_applies(tmp_path):
     assert first.then["passed"] and not first.relax and first.set["tensioner.module"] > 1.25
     assert relax.relax and relax.set["process.min_wall"] < 0.9 and relax.then["passed"]
     assert "tensioner.module" in tooth.fix and "tried" in tooth.fix
+    lost = tip_checks({"wheel": {"tip_mm": math.inf, "plane_mm": None}, "worm": measured["worm"]}, pair, lay, 0.9, "A")
+    assert not lost[0].passed and "could not be cut" in lost[0].message and lost[0].fix    # never a pass unmeasured
     data = yaml.safe_load(fdm_copy(tmp_path).read_text())
     data["tensioner"].update({k.split(".")[1]: v for k, v in first.set.items()})
     fixed = tmp_path / "fixed.yaml"

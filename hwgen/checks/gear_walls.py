@@ -24,7 +24,7 @@ import numpy as np
 
 from ..model import gear_choice
 from ..model.gearing import WormPair
-from .base import Check, Fix, fix_text
+from .base import REBUILD, Check, Fix, fix_text
 
 TIP_TOL_MM = 0.02             # each flank of a tip tessellated up to 0.01 mm inside the solid
 TIP_DEPTHS_MM = (0.05, 0.1, 0.15, 0.2)   # under the tip, where the width is cut, then extrapolated to it
@@ -44,7 +44,7 @@ def _extrapolated(widths: dict[float, float]) -> float:
     """The width at the tip (depth 0) of a straight line through (depth, width)."""
     d = np.array(list(widths), dtype=float)
     w = np.array(list(widths.values()), dtype=float)
-    slope, at_tip = np.polyfit(d, w, 1)
+    _, at_tip = np.polyfit(d, w, 1)
     return float(at_tip)
 
 
@@ -93,6 +93,8 @@ def thread_tip(mesh, axis, pitch: float) -> dict:
     swap = np.array([[0.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
     cs = _manifold(mesh, swap @ axis.frame()).slice(0.0)
     polys = [np.asarray(p) for p in cs.to_polygons()]
+    if not polys:
+        return {"tip_mm": math.nan}
     lo, hi = axis.crest[0] + pitch, axis.crest[1] - pitch
     r_tip = max(float(np.abs(p[:, 1]).max()) for p in polys)
     widths = {}
@@ -126,6 +128,10 @@ def tip_checks(tips: dict, pair: WormPair, lay, min_wall: float, on: str) -> lis
     for cid, part, got, why in (("gear.tooth_tip", "wheel", tips["wheel"], "module"),
                                 ("gear.thread_tip", "worm", tips["worm"], "module and pressure angle")):
         tip, model = got["tip_mm"], _model_tip(cid, pair)
+        if not math.isfinite(tip):          # no section met a tooth: the file is not the gear the plan made
+            out.append(Check(cid, "error", False, f"measured on channel {on}'s files: the {part}'s tips could not "
+                                                  f"be cut from its file", None, floor, dict(common), fix=REBUILD))
+            continue
         ok = bool(tip >= floor)
         where = "" if got.get("plane_mm") is None else f", {got['plane_mm']:+.2f} mm from mid-face"
         fixes = () if ok else _tip_fixes(cid, pair, lay, min_wall, tip)
