@@ -10,6 +10,7 @@ import pytest
 import yaml
 
 from hwgen.checks.gear_walls import TIP_TOL_MM, thread_tip, tip_checks, tip_planes, wheel_tip
+from hwgen.checks.screens import plan_screens
 from hwgen.model.gearing import WormPair, worm_pair
 from hwgen.pipeline import design_plan, load
 
@@ -54,6 +55,8 @@ def test_the_fdm_copy_loads_and_lays_out(tmp_path):
     assert (ts.module, ts.worm_pitch_diameter) == (1.25, 14)             # the file's own gear, honoured
     plan = design_plan(loaded)
     assert plan.tensioner_layout.pair.wall_problems(0.9)
+    # a sweep or a tune foresees the check on the plan (the build's check: measured 0.806 mm, fails)
+    assert [s.id for s in plan_screens(plan)] == ["gear.tooth_tip"]
 
 
 def test_the_tip_checks_fix_is_tried_and_applies(tmp_path):

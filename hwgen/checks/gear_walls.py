@@ -24,7 +24,7 @@ import numpy as np
 
 from ..model import gear_choice
 from ..model.gearing import WormPair
-from .base import REBUILD, Check, Fix, fix_text
+from .base import REBUILD, Check, Fix, Screen, fix_text
 
 TIP_TOL_MM = 0.02             # each flank of a tip tessellated up to 0.01 mm inside the solid
 TIP_DEPTHS_MM = (0.05, 0.1, 0.15, 0.2)   # under the tip, where the width is cut, then extrapolated to it
@@ -188,3 +188,26 @@ def _renamed(values: dict) -> dict:
 def _fields(pair: WormPair) -> dict:
     return {k: getattr(pair, k) for k in ("module", "starts", "teeth", "worm_pitch_diameter", "pressure_angle_deg",
                                           "face_width", "worm_length", "center_offset")}
+
+
+# ---------------------------------------------------------------- on the plan alone
+
+def _tip_screen(plan, cid: str) -> list[Screen]:
+    lay = plan.tensioner_layout
+    if lay is None:
+        return []
+    pair, floor = lay.pair, plan.min_wall - TIP_TOL_MM
+    tip = _model_tip(cid, pair)
+    part = "wheel's tooth" if cid == "gear.tooth_tip" else "worm's thread"
+    return [Screen(cid, f"the {part} tip is {tip:.3f} mm as generated, under process.min_wall {plan.min_wall:g} mm",
+                   "error", tip, floor)] if tip < floor else []
+
+
+def tooth_tip_screen(plan) -> list[Screen]:
+    """``gear.tooth_tip`` foreseen on the plan: the generated wheel's thinnest tip under the wall."""
+    return _tip_screen(plan, "gear.tooth_tip")
+
+
+def thread_tip_screen(plan) -> list[Screen]:
+    """``gear.thread_tip`` foreseen on the plan: the generated worm's thread tip under the wall."""
+    return _tip_screen(plan, "gear.thread_tip")
