@@ -32,12 +32,10 @@ BAND_MM = 0.002               # the ring's (band's) width
 RING_SEGMENTS = 4096
 
 
-def tip_planes(pair: WormPair, planes: int = 7) -> tuple[float, ...]:
-    """Where the wheel is cut, mm from mid-face along its axis: as :meth:`WormPair.thinnest_tip`
-    looks, on both sides of mid-face."""
-    z_end = max(min(pair.face_width / 2 - pair.rim_chamfer, 0.999 * pair.throat_torus_radius), 0.0)
-    zs = [*np.linspace(0.0, z_end, planes), *([pair.z_outside] if pair.z_outside < z_end else [])]
-    return tuple(sorted({round(s * float(z), 6) for z in zs for s in (1.0, -1.0)}))
+def tip_planes(pair: WormPair) -> tuple[float, ...]:
+    """Where the wheel is cut, mm from mid-face along its axis: the model's planes
+    (:meth:`WormPair.tip_planes`) on both sides of mid-face."""
+    return tuple(sorted({round(s * z, 6) for z in pair.tip_planes() for s in (1.0, -1.0)}))
 
 
 def _extrapolated(widths: dict[float, float]) -> float:

@@ -47,6 +47,7 @@ MAX_OUTSIDE_EXTRA = 1.0   # the wheel's outside radius is at most ra2 + this, mo
 RIM_CHAMFER = 0.3         # 45° chamfer on the outside rim at each face, modules
 MIN_TIP = 0.8             # mm: the thinnest wheel tooth tip unless the process says (its minimum wall)
 HOB_SECTION_SAMPLES = 600  # points per flank of the hob's section in one plane
+TIP_PLANES = 7             # planes from mid-face to the rim's chamfer where the wheel's tips are judged
 # Hertz allowable: under a line contact the first yield starts below the surface when the
 # peak pressure p0 reaches about 1.67 σ_y (Tresca; Johnson, Contact Mechanics §4.2: τ_max =
 # 0.30 p0 at depth 0.78 b). σ_y is taken as the tensile strength (conservative: acrylate
@@ -297,15 +298,19 @@ class WormPair:
         r = self.ra2 if z == 0 else float(self.tip_radius(z))     # mid-face: the throat, no search needed
         return float(2 * r * math.sin(self.tooth_half_angles(z, [r])[1][0]))
 
-    def thinnest_tip(self, planes: int = 13) -> float:
-        """The thinnest tooth tip across the face, mm: the chordal thickness at the blank's tip
-        radius in ``planes`` planes from mid-face to where the rim's chamfer begins (the outside
-        radius is cut where the tip is ``min_tip`` thick; a module too fine leaves 90 % of the
-        throat's there), and in the plane where the throat meets the outside radius. What
-        ``gear.tooth_tip`` measures in the wheel's file."""
+    def tip_planes(self, planes: int = TIP_PLANES) -> tuple[float, ...]:
+        """Heights (≥ 0, mm from mid-face) where the wheel's tips are judged: ``planes`` from mid-face
+        to where the rim's chamfer begins, and the plane where the throat meets the outside radius."""
         z_end = max(min(self.face_width / 2 - self.rim_chamfer, 0.999 * self.throat_torus_radius), 0.0)
         zs = [*np.linspace(0.0, z_end, planes), *([self.z_outside] if self.z_outside < z_end else [])]
-        return min(self.tip_thickness(float(z)) for z in zs)
+        return tuple(sorted(float(z) for z in zs))
+
+    def thinnest_tip(self) -> float:
+        """The thinnest tooth tip across the face, mm: the chordal thickness at the blank's tip
+        radius in the :meth:`tip_planes` (the outside radius is cut where the tip is ``min_tip``
+        thick; a module too fine leaves 90 % of the throat's there). What ``gear.tooth_tip``
+        measures in the wheel's file."""
+        return min(self.tip_thickness(z) for z in self.tip_planes())
 
     @property
     def min_teeth_no_undercut(self) -> float:
