@@ -271,10 +271,11 @@ def disk_scad(spec) -> str:
     """One disk as OpenSCAD source, from the same plan and the same tool profiles as
     :func:`hwgen.cad.disk.blank_and_tools`: the plate with its slot, straight eyelets and screw holes
     extruded, the hub with its tendon windows, then every slanted bore and chamfer cone (revolved
-    from :func:`hwgen.cad.disk.eyelet_profiles`), seat, seat chamber and glue port cut at once. Left
+    from :func:`hwgen.cad.disk.eyelet_profiles`, each eyelet chamfered or drilled plain as hwgen's disk
+    has it: :func:`hwgen.cad.disk.eyelet_edges`), seat, seat chamber and glue port cut at once. Left
     out: turning the tip disk over for printing (orientation only). OpenSCAD writes meshes only:
     no STEP or exact BREP, which hwgen's disks also write."""
-    from hwgen.cad.disk import NORMAL_AXIS_TOL, TOOL_OVERRUN, sketch_xy, eyelet_profiles
+    from hwgen.cad.disk import NORMAL_AXIS_TOL, TOOL_OVERRUN, eyelet_edges, eyelet_profiles, sketch_xy
     from hwgen.model.fixing import seat_overlap
     T, seated = spec.thickness, bool(spec.seats)
     normal = [h for h in spec.holes if abs(abs(h.axis[1]) - 1) < NORMAL_AXIS_TOL and not seated]
@@ -293,8 +294,10 @@ def disk_scad(spec) -> str:
                     f"square([{w:.6f}, {h:.6f}], center=true); square([{spec.slot_width:.6f}, {spec.slot_height:.6f}], "
                     f"center=true); {win} }}")
 
+    edge = {id(h): e for h, e in zip(spec.holes, eyelet_edges(spec))}
+
     def revolved(h, with_bore):
-        origin, ax, profiles = eyelet_profiles(h, T, spec.edge_size, not seated, True, with_bore)
+        origin, ax, profiles = eyelet_profiles(h, T, edge[id(h)], not seated, True, with_bore)
         m = _onto(ax)
         for r in range(3):
             m[r][3] = origin[r]

@@ -18,6 +18,7 @@ import dataclasses
 import functools
 import json
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -47,6 +48,7 @@ class Outcome:
     message: str = ""                # exit 2: the one line; a crash: the last lines of stderr
     seconds: float = 0.0
     robot: str = ""                  # what the robot is, in a few words
+    cpu_seconds: float | None = None     # CPU of the build and every process it started (--jobs 1; else None)
 
     @property
     def self_faults(self) -> list[str]:
@@ -74,20 +76,53 @@ def describe(doc: dict) -> str:
             + f" on {len(doc['tensioner']['channels'])} channel(s)")
 
 
-def build_one(index: int, doc: dict, root: Path) -> Outcome:
-    """Build one robot with the CLI in a child process and read what it says."""
+def _children_cpu() -> float:
+    """User and system CPU of this process's children that have ended and been waited for."""
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return ru.ru_utime + ru.ru_stime
+
+
+def _reaping() -> bool:
+    """Make this process the reaper of what its children leave behind (Linux's PR_SET_CHILD_SUBREAPER):
+    the fork server a build starts, and its part workers, outlive the build's own process, and their CPU
+    counts in this one's children once reaped. False where that cannot be done."""
+    import ctypes
+    try:
+        return ctypes.CDLL(None, use_errno=True).prctl(36, 1, 0, 0, 0) == 0
+    except (OSError, AttributeError):
+        return False
+
+
+def _reap() -> None:
+    """Wait for every process a build left behind (one robot at a time: nothing else is a child then)."""
+    while True:
+        try:
+            os.wait4(-1, 0)
+        except ChildProcessError:
+            return
+
+
+def build_one(index: int, doc: dict, root: Path, reap: bool = False) -> Outcome:
+    """Build one robot with the CLI in a child process and read what it says; ``reap``: this process
+    reaps what the build leaves behind (:func:`_reaping`), and the robot's CPU is counted."""
     src = root / f"{doc['design']}.yaml"
     src.write_text(yaml.safe_dump(doc, sort_keys=False))
     env = {**os.environ, "HWGEN_RENDER_BACKEND": "none", "HWGEN_CHECK_SAMPLES": os.environ.get(
         "HWGEN_CHECK_SAMPLES", "64")}
-    t0 = time.monotonic()
+    t0, cpu0 = time.monotonic(), _children_cpu()
     try:
         r = subprocess.run([str(HWGEN), "build", str(src), "--out", str(root / "out"), "-q"], env=env,
                            capture_output=True, text=True, timeout=TIME_LIMIT_S)
     except subprocess.TimeoutExpired:
-        return Outcome(index, "timed out", seconds=TIME_LIMIT_S, robot=describe(doc))
+        if reap:
+            _reap()
+        return Outcome(index, "timed out", seconds=TIME_LIMIT_S, robot=describe(doc),
+                       cpu_seconds=_children_cpu() - cpu0 if reap else None)
     dt = time.monotonic() - t0
-    out = Outcome(index, r.returncode, seconds=dt, robot=describe(doc))
+    if reap:
+        _reap()
+    out = Outcome(index, r.returncode, seconds=dt, robot=describe(doc),
+                  cpu_seconds=_children_cpu() - cpu0 if reap else None)
     if r.returncode not in (0, 1, 2) or "Traceback" in r.stderr:
         out.exit, out.message = "crash", " | ".join(r.stderr.strip().splitlines()[-3:])
     elif r.returncode == 2:
@@ -111,8 +146,9 @@ def run(robots: int = ROBOTS, seed: int = SEED, jobs: int = 2, keep: Path | None
     with tempfile.TemporaryDirectory() as tmp:
         root = keep or Path(tmp)
         root.mkdir(parents=True, exist_ok=True)
+        reap = jobs == 1 and _reaping()
         with ThreadPoolExecutor(max_workers=jobs) as pool:
-            futures = [pool.submit(build_one, i, d, root) for i, d in enumerate(docs)
+            futures = [pool.submit(build_one, i, d, root, reap) for i, d in enumerate(docs)
                        if i >= first and (only is None or i in only)]
             outcomes = []
             for f in futures:
@@ -121,7 +157,7 @@ def run(robots: int = ROBOTS, seed: int = SEED, jobs: int = 2, keep: Path | None
                 if results:
                     with open(results, "a") as fh:
                         fh.write(json.dumps(dataclasses.asdict(o)) + "\n")
-                echo(f"  {o.index:3d}  exit {o.exit!s:9}  {o.seconds:5.0f} s  {o.robot}"
+                echo(f"  {o.index:3d}  exit {o.exit!s:9}  {o.seconds:5.0f} s{f' ({o.cpu_seconds:.0f} s CPU)' if o.cpu_seconds is not None else ''}  {o.robot}"
                      + (f"\n        failed: {', '.join(o.failed)}" if o.failed else "")
                      + (f"\n        {o.message}" if o.message else ""))
     return outcomes

@@ -363,3 +363,22 @@ def test_steep_eyelets_whose_chamfers_meet_are_drilled_plain_in_a_closed_disk(tm
             assert chamfered == pytest.approx(plain, abs=0.05)
         else:
             assert chamfered < plain - 0.05
+
+
+@pytest.mark.slow
+def test_the_benchs_openscad_disk_drills_plain_where_hwgens_does():
+    """`make bench` times the disks against OpenSCAD from .scad files it writes from the same plan:
+    a converging pair whose chamfers meet is drilled plain there too, a pair further apart chamfered."""
+    import dataclasses
+
+    from hwgen.bench import disk_scad
+    from hwgen.cad.disk import eyelet_profiles
+
+    proto = make_plan(load(PARAMS / "prototype.yaml").design).disks[5]
+    near = dataclasses.replace(proto, thickness=4.9, holes=_steep_pair(proto, 5.0))
+    far = dataclasses.replace(near, holes=_steep_pair(proto, 10.0))
+    for spec, edge in ((near, 0.0), (far, near.edge_size)):
+        scad = disk_scad(spec)
+        for h in spec.holes:
+            (profile,) = eyelet_profiles(h, spec.thickness, edge, True, True, True)[2]
+            assert f"polygon({[list(p) for p in profile]})" in scad, (spec.holes, edge)

@@ -5,9 +5,6 @@ from __future__ import annotations
 
 import re
 
-import pytest
-
-from hwgen.errors import InputError
 from hwgen.model.gear_choice import GEAR_KEYS, follow_process
 from hwgen.model.gearing import worm_pair
 from hwgen.pipeline import design_plan, load
@@ -39,25 +36,28 @@ def test_fdm_walls_alone_get_a_gear_that_prints(tmp_path):
 
 
 def test_a_gear_the_file_states_is_its_own(tmp_path):
-    """The keys the design's own file writes are never derived: a gear that then does not print is
-    refused on that key, in that file, not in the base."""
-    f = _file(tmp_path, "process:\n  min_wall: 0.9\ntensioner:\n  module: 1.25\n")
-    with pytest.raises(InputError) as e:
-        load(f)
-    assert (e.value.file, e.value.path) == (str(f), "tensioner.module")
+    """The keys the design's own file writes are never derived: a gear that then prints thinner
+    than the wall is built as stated (its tip checks fail, gear.tooth_tip), not refused."""
+    loaded = load(_file(tmp_path, "process:\n  min_wall: 0.9\ntensioner:\n  module: 1.25\n"))
+    ts = loaded.design.tensioner
+    pair = worm_pair(ts, 0.9)
+    assert ts.module == 1.25 and [f for f, _ in pair.wall_problems(0.9)] == ["module"]
+    assert not pair.refusals(ts.friction_coefficient)
+    design_plan(loaded)                                             # and it lays out
     # a module stated that prints: the worm the file leaves to hwgen is derived for it
     loaded = load(_file(tmp_path, "process:\n  min_wall: 0.9\ntensioner:\n  module: 1.5\n"))
     ts = loaded.design.tensioner
     assert ts.module == 1.5 and not worm_pair(ts, 0.9).problems(ts.friction_coefficient, 0.9)
 
 
-def test_a_wall_no_gear_prints_with_is_refused_on_the_wall_with_one_that_works(tmp_path):
-    f = _file(tmp_path, "process:\n  min_wall: 2.5\n")
-    with pytest.raises(InputError) as e:
-        load(f)
-    assert (e.value.file, e.value.path) == (str(f), "process.min_wall")
-    assert not e.value.more
-    works = float(re.search(r"process.min_wall ([0-9.]+) mm or less", e.value.message)[1])
+def test_a_wall_no_gear_prints_with_keeps_the_gear_and_names_a_wall_that_works(tmp_path):
+    """No gear within the schema prints with 2.5 mm walls: the base's gear is built (its tip checks
+    fail) and the warning names the wall with which hwgen derives one that prints."""
+    loaded = load(_file(tmp_path, "process:\n  min_wall: 2.5\n"))
+    ts, proto = loaded.design.tensioner, load(BASE).design.tensioner
+    assert _pair(ts) == _pair(proto)
+    note = next(w for w in loaded.warnings if "no worm gear" in w)
+    works = float(re.search(r"process.min_wall ([0-9.]+) mm or less", note)[1])
     assert works < 2.5
     assert load(_file(tmp_path, f"process:\n  min_wall: {works}\n")).design.tensioner.module > 1.25
 

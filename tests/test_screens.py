@@ -21,7 +21,8 @@ from .stability import SEED
 # each screen's id -> (the id of the check that owns it, whether only the tip disk's records count)
 OWNER = {"eyelet.overlap": ("eyelet.overlap", True), "eyelet.wall": ("eyelet.wall.eyelet", False),
          "backbone.crossing": ("backbone.crossing", False), "eyelet.shared_sliding": ("eyelet.shared_sliding", False),
-         "tendon.clearance": ("tendon.clearance", False), "tendon.seat": ("tendon.seat", False)}
+         "tendon.clearance": ("tendon.clearance", False), "tendon.seat": ("tendon.seat", False),
+         "gear.tooth_tip": ("gear.tooth_tip", False), "gear.thread_tip": ("gear.thread_tip", False)}
 
 
 def _failed(report: dict, tip: int) -> set[str]:

@@ -163,29 +163,52 @@ def _truncated(tool: cq.Solid, z_from: float, spec: DiskSpec) -> cq.Solid:
     return tool.intersect(box)
 
 
+def _blank(spec: DiskSpec, normal: list[Hole]) -> cq.Solid:
+    """The disk body: outline, slot, the ``normal`` holes and bolt holes extruded, the hub fused on."""
+    sk = cq.Sketch().circle(spec.outer_diameter / 2)
+    sk = sk.push([(0, 0)]).rect(spec.slot_width, spec.slot_height, mode="s")
+    for h in normal:
+        sk = sk.push([sketch_xy(h.x, h.z)]).circle(h.diameter / 2, mode="s")
+    for x, z, dia in spec.mount_holes:
+        sk = sk.push([sketch_xy(x, z)]).circle(dia / 2, mode="s")
+    blank = cq.Workplane("XY").placeSketch(sk.reset().clean()).extrude(spec.thickness).val()
+    if spec.hub is not None:
+        blank = blank.fuse(_hub_solid(spec, spec.hub)).clean()
+    return blank
+
+
+def _normal_holes(spec: DiskSpec) -> list[Hole]:
+    """The eyelets drilled along the disk's normal (extruded with the plate): none on the base disk."""
+    return [h for h in spec.holes if abs(abs(h.axis[1]) - 1) < NORMAL_AXIS_TOL and not spec.seats]
+
+
+def _drilled(spec: DiskSpec, normal: list[Hole]) -> list[Hole]:
+    """Every eyelet as drilled: the normal ones along the normal exactly, their chamfers too (an axis
+    2e-5 rad off it left them meeting the bore nearly tangent, a bore face the STL's mesher left open)."""
+    return [dataclasses.replace(h, axis=(0.0, math.copysign(1.0, h.axis[1]), 0.0)) if h in normal else h
+            for h in spec.holes]
+
+
+def eyelet_edges(spec: DiskSpec) -> list[float]:
+    """Each eyelet's chamfer as the disk is cut (:func:`chamfer_edges`), in the order of ``spec.holes``:
+    what another writer of the same disk (the bench's OpenSCAD) needs to make the same eyelets."""
+    normal = _normal_holes(spec)
+    return chamfer_edges(_drilled(spec, normal), spec.thickness, spec.edge_size, not spec.seats,
+                         _blank(spec, normal))
+
+
 def blank_and_tools(spec: DiskSpec) -> tuple[cq.Solid, list[cq.Solid]]:
     """The disk body (outline, slot, normal holes and bolt holes extruded, the hub fused on) and
     every solid still to cut."""
     T = spec.thickness
     seated = bool(spec.seats)               # the base disk: bores stop at the seat plate
-    sk = cq.Sketch().circle(spec.outer_diameter / 2)
-    sk = sk.push([(0, 0)]).rect(spec.slot_width, spec.slot_height, mode="s")
-    normal = [h for h in spec.holes if abs(abs(h.axis[1]) - 1) < NORMAL_AXIS_TOL and not seated]
+    normal = _normal_holes(spec)
     slanted = [h for h in spec.holes if h not in normal]
-    for h in normal:
-        sk = sk.push([sketch_xy(h.x, h.z)]).circle(h.diameter / 2, mode="s")
-    for x, z, dia in spec.mount_holes:
-        sk = sk.push([sketch_xy(x, z)]).circle(dia / 2, mode="s")
-    blank = cq.Workplane("XY").placeSketch(sk.reset().clean()).extrude(T).val()
-    if spec.hub is not None:
-        blank = blank.fuse(_hub_solid(spec, spec.hub)).clean()
+    blank = _blank(spec, normal)
 
     # The base disk's outer face (file Z = 0) is the seat plate: no bore or chamfer reaches it.
     base_side = not seated
-    # drilled along the normal: its chamfers too (an axis 2e-5 rad off it left them meeting the bore
-    # nearly tangent, a bore face the STL's mesher left open)
-    drilled = [h if h in slanted else dataclasses.replace(h, axis=(0.0, math.copysign(1.0, h.axis[1]), 0.0))
-               for h in spec.holes]
+    drilled = _drilled(spec, normal)
     edges = chamfer_edges(drilled, T, spec.edge_size, base_side, blank)
     tools: list[cq.Solid] = []
     for h, drill, edge in zip(spec.holes, drilled, edges):

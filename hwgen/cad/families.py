@@ -39,7 +39,7 @@ def _backbone(plan: Plan) -> Iterator[Part]:
 def _tensioner(plan: Plan) -> Iterator[Part]:
     from .tensioner_parts import build_tensioner
     tip = plan.disks[-1]
-    yield from build_tensioner(plan.require_tensioner_layout(), min_wall=plan.min_wall,
+    yield from build_tensioner(plan.require_tensioner_layout(),
                                tendon_diameter=plan.tendon_diameter, tip_screws=len(tip.mount_holes),
                                tip_thickness=tip.thickness)
 
@@ -100,10 +100,10 @@ def _tensioner_units(plan: Plan) -> list[Unit]:
     def channel(u):
         def run():
             from .tensioner_parts import channel_parts
-            yield from channel_parts(lay, u, min_wall=plan.min_wall, tendon_diameter=plan.tendon_diameter)
-        # what channel_parts reads: the layout (with the tensioner section's values it needs), the
-        # printer's wall and the tendon; and which channel
-        return Unit((lay, plan.min_wall, plan.tendon_diameter, "channel", u.channel), 3 + len(u.clamps), run)
+            yield from channel_parts(lay, u, tendon_diameter=plan.tendon_diameter)
+        # what channel_parts reads: the layout (with the tensioner section's values it needs; its pair
+        # carries the printer's wall) and the tendon; and which channel
+        return Unit((lay, plan.tendon_diameter, "channel", u.channel), 3 + len(u.clamps), run)
 
     def housing():
         from .tensioner_parts import housing_part

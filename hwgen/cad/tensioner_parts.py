@@ -44,19 +44,19 @@ DRIVE_COLOR = (0.80, 0.40, 0.60, 1.0)
 STEEL, BRASS = "steel", "brass"
 
 
-def build_tensioner(lay: TensionerLayout, *, min_wall: float, tendon_diameter: float, tip_screws: int,
+def build_tensioner(lay: TensionerLayout, *, tendon_diameter: float, tip_screws: int,
                     tip_thickness: float) -> Iterator[Part]:
-    """The tensioner's parts as ``lay`` places them: the process's ``min_wall`` (the gears'
-    thinnest tip), the tendon's diameter, and the tip disk's screw count and thickness (the
+    """The tensioner's parts as ``lay`` places them (its pair carries the process's wall, the
+    wheel's thinnest tip), the tendon's diameter, and the tip disk's screw count and thickness (the
     screws' grip). Channel by channel (:func:`channel_parts`, sharing their solids), then the
     housing (:func:`housing_part`)."""
     shared: dict = {}
     for u in lay.units:
-        yield from channel_parts(lay, u, min_wall=min_wall, tendon_diameter=tendon_diameter, shared=shared)
+        yield from channel_parts(lay, u, tendon_diameter=tendon_diameter, shared=shared)
     yield housing_part(lay, tip_screws=tip_screws, tip_thickness=tip_thickness)
 
 
-def channel_parts(lay: TensionerLayout, u: Unit, *, min_wall: float, tendon_diameter: float,
+def channel_parts(lay: TensionerLayout, u: Unit, *, tendon_diameter: float,
                   shared: dict | None = None) -> Iterator[Part]:
     """One channel's worm, drive shaft, wheel and clamp plate(s), as ``lay`` places them. Every
     solid is kept between builds and between the processes of one (:func:`hwgen.cad.memo.kept`:
@@ -66,7 +66,7 @@ def channel_parts(lay: TensionerLayout, u: Unit, *, min_wall: float, tendon_diam
     shared = {} if shared is None else shared
     pair = lay.pair
     if "worm" not in shared:
-        problems = pair.problems(lay.friction_coefficient, min_wall)
+        problems = pair.refusals(lay.friction_coefficient)
         if problems:
             raise GearDesignError("; ".join(f"tensioner.{f}: {m}" for f, m in problems))
         # the drive's hex goes into the worm's line to line: the resin's own scatter (±0.05 mm) makes

@@ -45,6 +45,7 @@ from ..cad.manifest import ManifestPart
 from ..model.gearing import hertz_allowable
 from .axes import Axis, axes_angle, axes_distance, fit_axis
 from .base import REBUILD, Check, Fix, fix_text
+from .gear_walls import thread_tip, tip_checks, tip_planes, wheel_tip
 from .meshes import placed_mesh, to_manifold
 from .surface import SurfaceDistance, sample_surface
 
@@ -385,6 +386,17 @@ class _Measurer:
         return remembered("gear contact", (d.files, d.pose, module),
                           lambda: measure_contact(self._measured(d), module))
 
+    def tips(self, d: DistinctPair, pair) -> dict:
+        """The wheel's thinnest tooth tip in the planes the model looks at, the worm's thread tip
+        (:mod:`hwgen.checks.gear_walls`)."""
+        planes = tip_planes(pair)
+
+        def measure():
+            m = self._measured(d)
+            return {"wheel": wheel_tip(m["wheel"], m["wheel_axis"], planes),
+                    "worm": thread_tip(m["worm"], m["worm_axis"], pair.pitch)}
+        return remembered("gear tips", (d.files, d.pose, planes, pair.pitch), measure)
+
 
 def measure_distinct_pair(m: dict, search: float) -> dict:
     """The numbers the per-channel checks read, of a pair measured by :func:`measure_pair`."""
@@ -496,6 +508,7 @@ def _strength_checks(measured: dict, of: dict, measurer: _Measurer, pairs: dict,
                      f"lead angle {gamma:.3f}° (design: d1 = {pair.worm_pitch_diameter:g} mm, m = {pair.module:g} mm), "
                      f"{phi - gamma:.2f}° below the friction angle atan(μ / cos α_n) = {phi:.3f}° (design μ = {mu:g}; "
                      f"loading refuses a pair that is not self-locking)", gamma, phi, common))
+    out += tip_checks(measurer.tips(of[rep], pair), pair, lay, plan.min_wall, on)
     e_mpa, nu, why = proc.contact_modulus_mpa, proc.poisson, proc.contact_reason
     allow = hertz_allowable(ts.resin_strength)
     for channel in sorted(measured):

@@ -19,15 +19,13 @@ from . import feasibility, gear_choice
 
 def follow_process(design: params.Design, layers: designfile.Layers) -> tuple[params.Design, str]:
     """``design`` with the tensioner's gear keys its own file did not write (``layers``) derived for
-    its process, and the sentence saying so ("" when the stated gear is kept); a gear no process
-    value of the schema lets print is refused (:class:`hwgen.errors.InputError`) on
-    ``process.min_wall`` with the wall that works."""
+    its process, and the sentence saying so ("" when the stated gear is kept and prints); where no
+    gear of the schema's range prints with the process's wall, the stated gear is kept (it is built
+    and fails its tip checks) and the sentence names the wall that works."""
     free = {k for k in gear_choice.GEAR_KEYS if layers.origin(("tensioner", k)) != 0}
     choice = gear_choice.follow_process(design.tensioner, design.process.min_wall, free)
-    if choice.refusal:
-        raise params.refuse([(("process.min_wall", "tensioner.module"), choice.refusal)], layers)
     if not choice.values:
-        return design, ""
+        return design, choice.note
     return design.model_copy(update={"tensioner": design.tensioner.model_copy(update=choice.values)}), choice.note
 
 
@@ -55,6 +53,6 @@ def loaded_buildable(loaded: params.LoadedDesign) -> params.LoadedDesign:
     """A design read from its file (:func:`hwgen.params.read`) made buildable the same way, the
     note on its gear among its warnings."""
     design, note = buildable(loaded.design, loaded.layers)
-    if design is loaded.design:
+    if not note:
         return loaded
     return loaded.model_copy(update={"design": design, "warnings": (*loaded.warnings, note)})

@@ -39,7 +39,7 @@ def problems(d: Design) -> list[tuple[str | tuple[str, ...], str] | Problem]:
     out += _slot_problems(d) + _tendon_size_problems(d) + _mount_problems(d)
     ts = d.tensioner
     out += [(f"tensioner.{f}", m) for f, m in _gear_problems(worm_pair(ts, d.process.min_wall),
-                                                             ts.friction_coefficient, d.process.min_wall)]
+                                                             ts.friction_coefficient)]
     wall = spool_wall_problem(ts, d.process.min_wall)
     if wall:
         out.append(("tensioner.spool_diameter", wall))
@@ -55,10 +55,11 @@ def problems(d: Design) -> list[tuple[str | tuple[str, ...], str] | Problem]:
 
 
 @functools.lru_cache(maxsize=256)
-def _gear_problems(pair, mu: float, min_wall: float) -> tuple[tuple[str, str], ...]:
-    """The worm pair's problems, remembered per pair: they take most of :func:`problems`' time
-    (the wheel's tooth-space sweep), and a design sweep asks them of the same pair thousands of times."""
-    return tuple(pair.problems(mu, min_wall))
+def _gear_problems(pair, mu: float) -> tuple[tuple[str, str], ...]:
+    """What the worm pair must not be built with, remembered per pair (a design sweep asks it of the
+    same pair thousands of times). Tips thinner than the process's wall are not among them: that gear
+    is built and its checks (``gear.tooth_tip``, ``gear.thread_tip``) fail."""
+    return tuple(pair.refusals(mu))
 
 
 def _spacing_problems(d: Design) -> list[tuple[str, str]]:

@@ -11,8 +11,10 @@ the module up a quarter-millimetre grid first (the wheel's tooth tip grows with 
 worm's pitch diameter in whole millimetres (self-locking: the lead angle atan(z1 m / d1) falls
 as d1 grows), with no more starts than the base's, and the shortest worm in whole millimetres
 that covers the wheel's reach. A gear that already passes is kept as it is (the prototype's
-own). Where no gear of the schema's range passes, :func:`follow_process` says which process
-value the base's gear prints at, for the refusal to name on the key the user wrote.
+own). Where no gear of the schema's range passes, :func:`follow_process` keeps the stated gear and
+says which process wall it prints with: the gear is built and its checks (``gear.tooth_tip``,
+``gear.thread_tip``) fail, naming that wall. The same search is those checks' tried fix
+(:func:`least_change`, from the gear as built).
 """
 from __future__ import annotations
 
@@ -39,11 +41,10 @@ HEX_ACROSS_CORNERS = 1 / math.cos(math.pi / 6)     # a hexagon's across-corners 
 @dataclass(frozen=True)
 class GearChoice:
     """What :func:`follow_process` decided: ``values`` the derived keys (empty when the stated gear
-    passes), ``note`` a sentence saying why, ``refusal`` set when no gear passes."""
+    passes), ``note`` a sentence saying why (also when no gear passes and the stated one is kept)."""
 
     values: dict
     note: str = ""
-    refusal: str = ""
 
 
 def hex_problem(ts, module: float, d1: float, min_wall: float) -> str | None:
@@ -129,7 +130,30 @@ def follow_process(ts, min_wall: float, free: set[str] | frozenset[str]) -> Gear
                 return GearChoice(changed, _note(stated, changed, before, min_wall))
     if "module" not in free:            # the module the file states: the rules' faults are its own
         return GearChoice({})
-    return GearChoice({}, refusal=_refusal(ts, stated, before, min_wall))
+    return GearChoice({}, note=_none_prints(ts, stated, before, min_wall))
+
+
+class _Section:
+    """The tensioner section's gear keys as a built pair has them (what :func:`follow_process` reads)."""
+
+    def __init__(self, pair, mu: float, hex_key: float):
+        self.module, self.worm_starts, self.wheel_teeth = pair.module, pair.starts, pair.teeth
+        self.worm_pitch_diameter, self.pressure_angle_deg = pair.worm_pitch_diameter, pair.pressure_angle_deg
+        self.face_width, self.worm_length, self.center_offset = pair.face_width, pair.worm_length, pair.center_offset
+        self.friction_coefficient, self.hex_key = mu, hex_key
+
+
+def least_change(pair, mu: float, hex_key: float, min_wall: float) -> GearChoice:
+    """The least change of the built ``pair``'s module, worm diameter, length and starts that passes
+    every rule of the pair at ``min_wall`` (the search of :func:`follow_process`, every gear key free):
+    the tried fix of a tip thinner than the wall. Empty ``values`` when none within the schema's bounds does."""
+    return follow_process(_Section(pair, mu, hex_key), min_wall, frozenset(GEAR_KEYS))
+
+
+def thickest_wall(pair, mu: float, hex_key: float, below: float) -> float | None:
+    """The thickest process wall (to 0.01 mm, under ``below``) the built ``pair``'s tips are not
+    thinner than; None when none is."""
+    return _thickest_wall(_Section(pair, mu, hex_key), {}, below)
 
 
 def _note(stated: dict, changed: dict, before: list, min_wall: float) -> str:
@@ -156,10 +180,10 @@ def _thickest_wall(ts, values: dict, below: float) -> float | None:
     return lo / 100
 
 
-def _refusal(ts, stated: dict, before: list, min_wall: float) -> str:
-    """No gear within the schema passes at ``min_wall``: the thickest wall the coarsest gear prints
-    with, and the stated gear's; "" when the stated gear fails at any wall (a fault of its own keys,
-    reported on them)."""
+def _none_prints(ts, stated: dict, before: list, min_wall: float) -> str:
+    """No gear within the schema passes at ``min_wall``: the stated gear is kept (built, its checks
+    fail); the thickest wall the coarsest gear prints with, and the stated gear's; "" when the stated
+    gear fails at any wall (a fault of its own keys, reported on them)."""
     own = _thickest_wall(ts, {}, min_wall)
     if own is None or not any(f in WALL_RULES for f, _ in before):
         return ""
@@ -170,6 +194,7 @@ def _refusal(ts, stated: dict, before: list, min_wall: float) -> str:
             f"{stated['worm_starts']} start(s)")
     largest = (f"process.min_wall {most:g} mm or less, for which hwgen derives a gear (up to a "
                f"{MODULE_MAX:g} mm module), or " if most is not None and most > own else "")
-    return (f"{min_wall:g} mm: no worm gear within tensioner.module ≤ {MODULE_MAX:g} mm and worm Ø ≤ {DIAMETER_MAX:g} mm "
-            f"prints with this wall ({why}); {largest}process.min_wall {own:g} mm, with which the stated gear "
-            f"({gear}) prints, or state a gear in tensioner")
+    return (f"process.min_wall {min_wall:g} mm: no worm gear within tensioner.module ≤ {MODULE_MAX:g} mm and "
+            f"worm Ø ≤ {DIAMETER_MAX:g} mm prints with this wall ({why}), so the stated gear ({gear}) is built as it "
+            f"is and its tip checks fail; {largest}process.min_wall {own:g} mm, with which the stated gear "
+            f"prints, or state a gear in tensioner")

@@ -47,6 +47,7 @@ MAX_OUTSIDE_EXTRA = 1.0   # the wheel's outside radius is at most ra2 + this, mo
 RIM_CHAMFER = 0.3         # 45° chamfer on the outside rim at each face, modules
 MIN_TIP = 0.8             # mm: the thinnest wheel tooth tip unless the process says (its minimum wall)
 HOB_SECTION_SAMPLES = 600  # points per flank of the hob's section in one plane
+TIP_PLANES = 7             # planes from mid-face to the rim's chamfer where the wheel's tips are judged
 # Hertz allowable: under a line contact the first yield starts below the surface when the
 # peak pressure p0 reaches about 1.67 σ_y (Tresca; Johnson, Contact Mechanics §4.2: τ_max =
 # 0.30 p0 at depth 0.78 b). σ_y is taken as the tensile strength (conservative: acrylate
@@ -197,14 +198,16 @@ class WormPair:
     def outside_radius(self) -> float:
         """The wheel's largest radius, mm: where the tooth, followed up the throat, is
         ``min_tip`` thick (bisection along the face), at most ra2 + MAX_OUTSIDE_EXTRA·m. A
-        module too fine for min_tip (loading refuses it) gets 90 % of its mid-plane tip."""
+        module too fine for min_tip (its tip at mid-face already thinner: ``gear.tooth_tip`` fails
+        it) gets 90 % of its mid-plane tip."""
         r_max = self.ra2 + MAX_OUTSIDE_EXTRA * self.module
 
         def thick(z):
             r = float(self._torus(z))
             return 2 * r * math.sin(self.tooth_half_angles(z, [r])[1][0])
         z_end = min(self.face_width / 2, 0.999 * self.throat_torus_radius)
-        least = min(self.min_tip, 0.9 * thick(0.0))
+        mid = thick(0.0)
+        least = self.min_tip if mid >= self.min_tip else 0.9 * mid
         if thick(z_end) >= least:
             return min(r_max, max(float(self._torus(z_end)), self.ra2))
         lo, hi = 0.0, z_end
@@ -295,6 +298,20 @@ class WormPair:
         r = self.ra2 if z == 0 else float(self.tip_radius(z))     # mid-face: the throat, no search needed
         return float(2 * r * math.sin(self.tooth_half_angles(z, [r])[1][0]))
 
+    def tip_planes(self, planes: int = TIP_PLANES) -> tuple[float, ...]:
+        """Heights (≥ 0, mm from mid-face) where the wheel's tips are judged: ``planes`` from mid-face
+        to where the rim's chamfer begins, and the plane where the throat meets the outside radius."""
+        z_end = max(min(self.face_width / 2 - self.rim_chamfer, 0.999 * self.throat_torus_radius), 0.0)
+        zs = [*np.linspace(0.0, z_end, planes), *([self.z_outside] if self.z_outside < z_end else [])]
+        return tuple(sorted(float(z) for z in zs))
+
+    def thinnest_tip(self) -> float:
+        """The thinnest tooth tip across the face, mm: the chordal thickness at the blank's tip
+        radius in the :meth:`tip_planes` (the outside radius is cut where the tip is ``min_tip``
+        thick; a module too fine leaves 90 % of the throat's there). What ``gear.tooth_tip``
+        measures in the wheel's file."""
+        return min(self.tip_thickness(z) for z in self.tip_planes())
+
     @property
     def min_teeth_no_undercut(self) -> float:
         """Fewest teeth a rack of addendum 1·m generates without undercut: 2 / sin²α."""
@@ -372,9 +389,17 @@ class WormPair:
         return {"circumferential_mm": jt, "normal_mm": jt * math.cos(self.alpha_n) * math.cos(self.lead_angle),
                 "wheel_deg": math.degrees(jt / self.r2), "worm_deg": 360.0 * jt / self.lead}
 
-    # ---- what must not be built --------------------------------------------------------
+    # ---- what must not be built, and what prints thinner than the process's wall -------
     def problems(self, mu: float, min_wall: float = 0.0) -> list[tuple[str, str]]:
-        """(field, message) for every reason this pair must not be built; empty when fine."""
+        """(field, message) for every reason this pair is not the gear to build: what must not be
+        built (:meth:`refusals`) and the tips thinner than ``min_wall`` (:meth:`wall_problems`);
+        empty when fine. What :mod:`hwgen.model.gear_choice` derives a gear against."""
+        return self.refusals(mu) + self.wall_problems(min_wall)
+
+    def refusals(self, mu: float) -> list[tuple[str, str]]:
+        """(field, message) for every reason this pair must not be built at all: a worm the tendon
+        turns back, an undercut wheel, a worm without a core, a thread shorter than the wheel's
+        reach. (A tip thinner than the process's wall is built and fails its check.)"""
         out = []
         if not self.self_locking(mu):
             out.append(("worm_pitch_diameter",
@@ -389,18 +414,30 @@ class WormPair:
         if self.rf1 <= 0 or self.rf1 < 1.5 * self.module:
             out.append(("worm_pitch_diameter",
                         f"worm root radius {self.rf1:.2f} mm leaves no core for a {self.module:g} mm module"))
-        if self.thread_half_width(self.ra1) * 2 < min_wall:
-            out.append(("pressure_angle_deg",
-                        f"worm thread tip {2 * self.thread_half_width(self.ra1):.3f} mm is thinner than the "
-                        f"process minimum wall {min_wall:g} mm"))
-        if self.tip_thickness() < min_wall:
-            out.append(("module", f"wheel tooth tip {self.tip_thickness():.3f} mm is thinner than the process "
-                                  f"minimum wall {min_wall:g} mm; use a larger module"))
         need = max(2 * self.pitch, meshing_length(self) + self.pitch)
         if self.worm_length < need:
             out.append(("worm_length", f"{self.worm_length:g} mm of thread does not cover the "
                                        f"{meshing_length(self):.1f} mm the wheel's teeth reach plus a pitch "
                                        f"({need:.1f} mm needed)"))
+        return out
+
+    @property
+    def thread_tip(self) -> float:
+        """The worm thread's axial thickness at its tip, mm: p/2 − 2 m tan α."""
+        return 2 * float(self.thread_half_width(self.ra1))
+
+    def wall_problems(self, min_wall: float) -> list[tuple[str, str]]:
+        """(field, message) for a worm thread tip (the pressure angle sets it) or a wheel tooth tip
+        (the module) thinner than the process's minimum wall: a gear that prints, badly; the checks
+        ``gear.thread_tip`` and ``gear.tooth_tip`` measure them from the files."""
+        out = []
+        if self.thread_tip < min_wall:
+            out.append(("pressure_angle_deg",
+                        f"worm thread tip {self.thread_tip:.3f} mm is thinner than the "
+                        f"process minimum wall {min_wall:g} mm"))
+        if self.tip_thickness() < min_wall:
+            out.append(("module", f"wheel tooth tip {self.tip_thickness():.3f} mm is thinner than the process "
+                                  f"minimum wall {min_wall:g} mm; use a larger module"))
         return out
 
     def summary(self) -> dict:
