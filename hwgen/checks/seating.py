@@ -172,6 +172,12 @@ def tilt_checks(fits: list[SlotFit], max_tilt_deg: float, radius: dict[int, floa
     and how far it moves the disk's outermost eyelet (at ``radius[station]``) along the backbone;
     ``clearance``: the design's slot clearance a side, which a tighter slot's fix starts from."""
     out = []
+    # the two settings a disk's fix changes are the design's, one for every disk: each failing disk
+    # is offered the value that holds them all (the tightest slot, the largest allowed pitch), so a
+    # fix a user follows on one disk's advice does not leave the next disk failing
+    failing = [(f, max(abs(v) for v in f.tilt_x)) for f in fits if f.play_z >= 0]
+    failing = [(f, t) for f, t in failing if t > max_tilt_deg + ANGLE_TOL_DEG]
+    shared = _shared_tilt_fix(failing, max_tilt_deg, clearance)
     for f in fits:
         where = {"part": f.part, "station": f.station}
         if f.play_z < 0:
@@ -195,38 +201,55 @@ def tilt_checks(fits: list[SlotFit], max_tilt_deg: float, radius: dict[int, floa
                f"{max(abs(v) for v in f.tilt_z):.3f}°, roll ±{max(abs(v) for v in f.tilt_y):.3f}°, slide "
                f"{f.play_x:.3f} mm across the strip")
         out.append(Check("disk.tilt", "error", ok, msg, tilt, max_tilt_deg, where,
-                         fix="" if ok else _tilt_fix(f, tilt, max_tilt_deg, clearance),
-                         fixes=() if ok else _tilt_fixes(f, tilt, max_tilt_deg, clearance)))
+                         fix="" if ok else _tilt_fix(f, tilt, max_tilt_deg, clearance, shared),
+                         fixes=() if ok else _tilt_fixes(f, tilt, max_tilt_deg, clearance, shared)))
     return out
 
 
-def _tilt_fix(f: SlotFit, tilt: float, limit: float, clearance: float) -> str:
+def _own_clearance(f: SlotFit, limit: float, clearance: float) -> float:
+    """The slot clearance a side under which this disk's pitch over its engagement holds the limit."""
+    tan = math.tan(math.radians(limit))
+    return math.floor((clearance - (f.play_z - 0.98 * f.engagement * tan) / 2) * 1000) / 1000
+
+
+def _shared_tilt_fix(failing: list[tuple[SlotFit, float]], limit: float, clearance: float
+                     ) -> tuple[float | None, float, int]:
+    """(the clearance that holds every failing disk that a clearance can hold, or None; the pitch
+    to allow that covers them all; how many disks fail)."""
+    own = [c for c in (_own_clearance(f, limit, clearance) for f, _ in failing) if c >= 0]
+    allow = max((math.ceil(t * 100) / 100 for _, t in failing), default=limit)
+    return (min(own) if own else None), allow, len(failing)
+
+
+def _tilt_fix(f: SlotFit, tilt: float, limit: float, clearance: float, shared) -> str:
     """How far each of the three settings that hold a disk's pitch must move for this disk: the
     clearance and the allowed tilt tried (:func:`_tilt_fixes`), the engagement in words."""
     need = f.play_z / math.tan(math.radians(limit))
-    return (f"{fix_text(_tilt_fixes(f, tilt, limit, clearance))}. Also (not tried): {need:.1f} mm of engagement, "
-            f"for which the hubs need more room between the disks (a larger disks.spacing, or fewer disks: "
-            f"disks.count)")
+    return (f"{fix_text(_tilt_fixes(f, tilt, limit, clearance, shared))}. Also (not tried): {need:.1f} mm of "
+            f"engagement, for which the hubs need more room between the disks (a larger disks.spacing, or fewer "
+            f"disks: disks.count)")
 
 
-def _tilt_fixes(f: SlotFit, tilt: float, limit: float, clearance: float) -> tuple[Fix, ...]:
+def _tilt_fixes(f: SlotFit, tilt: float, limit: float, clearance: float, shared) -> tuple[Fix, ...]:
     """A tighter slot, its pitch worked out again from the measured play less the clearance taken
     off both sides, over the measured engagement (the slot's own model of the pitch, not a new
-    build); and (a relaxation) the tilt it has, allowed."""
+    build); and (a relaxation) the tilt it has, allowed. Both at the values ``shared`` holds for
+    every failing disk (:func:`_shared_tilt_fix`)."""
     out = []
-    tan = math.tan(math.radians(limit))
-    new = math.floor((clearance - (f.play_z - 0.98 * f.engagement * tan) / 2) * 1000) / 1000
-    if new >= 0:
+    new, allow, count = shared
+    every = f" (the slot that holds all {count} disks that pitch too far)" if count > 1 else ""
+    if new is not None and _own_clearance(f, limit, clearance) >= 0:
         play = f.play_z - 2 * (clearance - new)
         got = math.degrees(math.atan2(max(play, 0.0), f.engagement))
         out.append(Fix({"disks.slot_clearance": new}, {"measured": got, "passed": got <= limit + ANGLE_TOL_DEG,
                                                        "limit": limit}, (),
                        f"from {clearance:g} mm a side: {max(play, 0.0):.3f} mm of play over the {f.engagement:.2f} mm "
-                       f"the slot holds the strip"))
-    allow = math.ceil(tilt * 100) / 100
+                       f"the slot holds the strip{every}"))
     out.append(Fix({"disks.hub.max_tilt_deg": allow}, {"measured": tilt, "passed": tilt <= allow + ANGLE_TOL_DEG,
                                                          "limit": allow}, (),
-                   f"allow the {tilt:.2f}° this disk can pitch", relax=True))
+                   (f"allow the {allow:.2f}° the {count} disks pitch at most" if count > 1
+                    else f"allow the {tilt:.2f}° this disk can pitch"),
+                   relax=True))
     return tuple(out)
 
 
