@@ -32,6 +32,7 @@ import math
 import shutil
 import time
 import uuid
+from collections import deque
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -42,7 +43,7 @@ from ..errors import InputError
 from ..sweep import levels
 from ..sweep.run import pool
 from ..sweep.spec import Variant, resolve
-from . import results
+from . import local, results
 from .spec import Loaded, distance
 
 TRIALS_PER_TASK = {"lengths": 8, "robust": 1, "coupling": 1, "build": 1}
@@ -56,6 +57,7 @@ MIN_EXCESS = 1e-3
 # and the best are judged by the goal's own bounds. (Not measured apart from the changes beside it.)
 SEARCH_MARGIN = 0.01
 UNMEASURED = 1.0
+LOCAL_SHARE = 0.5           # of the trials, moves from the incumbent (:class:`_Moves`); measured in docs/sweeps.md
 JOURNAL = "journal.log"
 
 
@@ -108,7 +110,7 @@ def distributions(loaded: Loaded) -> dict:
             out[fr.path] = optuna.distributions.CategoricalDistribution(fr.choices)
             continue
         low = grid_low(fr, b)
-        high = fr.high if fr.step is None else low + math.floor((fr.high - low) / fr.step + 1e-9) * fr.step
+        high = fr.high if fr.step is None else round(low + math.floor((fr.high - low) / fr.step + 1e-9) * fr.step, 9)
         if fr.integer:
             out[fr.path] = optuna.distributions.IntDistribution(int(low), int(round(high)), log=fr.log,
                                                                 step=int(fr.step or 1))
@@ -337,9 +339,14 @@ def _folder(loaded: Loaded, out_root: Path) -> tuple[Path, Path | None]:
 
 
 class _Search:
-    """One run's ask-evaluate-tell loop: trials asked in batches onto the pool's workers, a new batch
-    whenever one finishes; a design already evaluated (by hash) is told that result, and one asked
-    while its twin is in flight waits for it."""
+    """One run's ask-evaluate-tell loop. Trials are asked ahead of the last told by a fixed lag (the
+    pool's tasks in flight times the trials a task) and told in the order they were asked, whatever
+    order the workers finish them in: the trial asked n-th is asked right after the (n - lag)-th is
+    told, so the sampler sees the same trials at every ask and a seed draws the same trials however
+    the workers' timing falls (with two workers and constant liar, telling in completion order made
+    two runs of one seed part at trial 21). A design already evaluated (by hash) takes that result,
+    and one asked while its twin is in flight waits for it. A share of the trials (:data:`LOCAL_SHARE`)
+    is a move from the incumbent (:mod:`hwgen.tune.local`) instead of the sampler's draw."""
 
     def __init__(self, loaded: Loaded, study, p, options: dict, base: dict, out: Outcome, by_hash: dict,
                  on_trial=None):
@@ -350,10 +357,15 @@ class _Search:
         self.doc = p.scatter(loaded.base)
         self.per_task = TRIALS_PER_TASK[loaded.spec.level]
         self.cap = loaded.spec.batch or 2 * p.workers
+        self.lag = self.cap * self.per_task
         self.ac = p.completed()
+        self.asked: deque = deque()                  # trials asked and not yet told, in the order asked
+        self.ready: dict[int, tuple] = {}            # trial number -> (row, same as) to tell in its turn
+        self.unsent: list = []                       # [(trial, values, hash)] asked, not yet on a worker
         self.flying: dict[str, list] = {}            # task key -> [(trial, values, hash)]
         self.waiting: dict[str, list] = {}           # hash in flight -> trials of the same design asked meanwhile
         self.best = None
+        self.moves = _Moves(loaded, study, self.dists)
         self.t0 = time.perf_counter()
 
     def tell(self, trial, row: dict, same_as: int | None = None) -> None:
@@ -368,6 +380,7 @@ class _Search:
             trial.set_user_attr("same_as", same_as)
         self.study.tell(trial, values)
         self.told += 1
+        self.moves.saw(trial.params, values, cons, ok)
         out.verdicts[row["verdict"]] = out.verdicts.get(row["verdict"], 0) + 1
         if ok and len(values) == 1:
             sign = 1 if loaded.objectives[0][1] == "maximize" else -1
@@ -377,47 +390,50 @@ class _Search:
         if self.on_trial:
             self.on_trial(self.told, out.budget)
 
-    def in_flight(self) -> int:
-        return sum(len(b) for b in self.flying.values()) + sum(len(w) for w in self.waiting.values())
+    def ask(self) -> None:
+        """Ask one trial: told at once where its design is known, queued behind its twin in flight, or
+        kept to be sent."""
+        loaded = self.loaded
+        trial = self.moves.ask()
+        values = tuple(trial.params[n] for n in loaded.names)
+        h = resolve(loaded.base, loaded.names, Variant(trial.number, values)).hash
+        self.asked.append(trial)
+        if h in self.by_hash:
+            self.out.repeated += 1
+            known = self.by_hash[h]
+            self.ready[trial.number] = (dict(known, values=list(values), distance=distance(loaded, values)),
+                                        known.get("trial"))
+        elif h in self.waiting:
+            self.waiting[h].append((trial, values))
+        else:
+            self.waiting[h] = []
+            self.unsent.append((trial, values, h))
 
-    def room(self) -> bool:
-        return self.told + self.in_flight() < self.out.budget
-
-    def launch(self) -> None:
-        """Ask a batch of trials and send it to a worker (those of a design known or in flight told or
-        queued instead)."""
-        loaded, batch = self.loaded, []
-        while len(batch) < self.per_task and self.told + self.in_flight() + len(batch) < self.out.budget:
-            trial = self.study.ask(self.dists)
-            values = tuple(trial.params[n] for n in loaded.names)
-            h = resolve(loaded.base, loaded.names, Variant(trial.number, values)).hash
-            if h in self.by_hash:
-                self.out.repeated += 1
-                row = dict(self.by_hash[h], values=list(values), distance=distance(loaded, values))
-                self.tell(trial, row, self.by_hash[h].get("trial"))
-            elif h in self.waiting or any(h == b[2] for b in batch):
-                self.waiting.setdefault(h, []).append((trial, values))
+    def advance(self) -> None:
+        """Ask up to the lag ahead, and tell the oldest trial whenever its result is in; an ask first,
+        so that each ask follows the same tells whatever the timing."""
+        while True:
+            if len(self.asked) < self.lag and self.told + len(self.asked) < self.out.budget:
+                self.ask()
+            elif self.asked and self.asked[0].number in self.ready:
+                trial = self.asked.popleft()
+                self.tell(trial, *self.ready.pop(trial.number))
             else:
-                batch.append((trial, values, h))
-        if not batch:
-            return
-        key = f"tune-{loaded.spec.tune}-{batch[0][0].number}-{uuid.uuid4().hex[:6]}"
-        for _, _, h in batch:
-            self.waiting.setdefault(h, [])
-        self.flying[key] = batch
-        self.ac.add(self.p.submit(levels.evaluate_batch, [(t.number, v) for t, v, _ in batch], self.doc,
-                                  loaded.names, loaded.spec.level, frozenset(), self.options, key=key))
+                return
 
-    def fill(self) -> None:
-        """Launch batches until the workers are full or the budget is asked."""
-        while len(self.flying) < self.cap and self.room():
-            n = len(self.flying)
-            self.launch()
-            if len(self.flying) == n:
-                break
+    def send(self) -> None:
+        """Send the trials asked to the workers, a task of at most ``per_task`` trials at a time, while
+        fewer than ``cap`` tasks are in flight."""
+        loaded = self.loaded
+        while self.unsent and len(self.flying) < self.cap:
+            batch, self.unsent = self.unsent[:self.per_task], self.unsent[self.per_task:]
+            key = f"tune-{loaded.spec.tune}-{batch[0][0].number}-{uuid.uuid4().hex[:6]}"
+            self.flying[key] = batch
+            self.ac.add(self.p.submit(levels.evaluate_batch, [(t.number, v) for t, v, _ in batch], self.doc,
+                                      loaded.names, loaded.spec.level, frozenset(), self.options, key=key))
 
     def collect(self, fut) -> None:
-        """Tell the trials of a finished batch (and their twins that waited)."""
+        """The rows of a finished task (and of their twins that waited), each to be told in its turn."""
         batch = self.flying.pop(fut.key)
         rows = {r["variant"]: r for r in fut.result()}
         fut.release()
@@ -431,16 +447,52 @@ class _Search:
                 out.whole += 1
                 out.whole_cpu_s += row.get("cpu_s") or 0.0
             self.by_hash[h] = row
-            self.tell(trial, row)
+            self.ready[trial.number] = (row, None)
             for twin, v in self.waiting.pop(h, []):
                 out.repeated += 1
-                self.tell(twin, dict(row, values=list(v), distance=distance(self.loaded, v)), trial.number)
+                self.ready[twin.number] = (dict(row, values=list(v), distance=distance(self.loaded, v)), trial.number)
 
     def run(self) -> None:
-        self.fill()
+        self.advance()
+        self.send()
         for fut in self.ac:
             self.collect(fut)
-            self.fill()
+            self.advance()
+            self.send()
+
+
+class _Moves:
+    """Where each trial comes from: the trials an interrupted run left (queued in the study) first,
+    then a move from the incumbent (:func:`hwgen.tune.local.neighbour`) for a :data:`LOCAL_SHARE`
+    of them (drawn with the tune's seed), the sampler's draw for the rest. The incumbent is the best
+    feasible trial told (the base first); while none is feasible, the one nearest feasibility (the
+    least sum of its constraints). No moves for a front or for the random baseline."""
+
+    def __init__(self, loaded: Loaded, study, dists: dict):
+        from optuna.trial import TrialState
+        self.study, self.dists = study, dists
+        self.queued = len(study.get_trials(deepcopy=False, states=(TrialState.WAITING,)))
+        multi = len(loaded.objectives) > 1
+        self.share = 0.0 if multi or loaded.spec.sampler in ("random", "nsga2") else LOCAL_SHARE
+        self.sign = 1.0 if loaded.objectives[0][1] == "maximize" else -1.0
+        told = len(study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)))
+        self.rng = np.random.default_rng([loaded.spec.seed, told, 44])
+        self.incumbent: tuple | None = None          # (feasible, rank, params)
+        for t in study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)):
+            self.saw(t.params, t.values, t.user_attrs.get("constraints") or [BAD], bool(t.user_attrs.get("feasible")))
+
+    def saw(self, params: dict, values, cons, ok: bool) -> None:
+        rank = self.sign * values[0] if ok else -sum(cons)
+        if len(params) == len(self.dists) and (self.incumbent is None or (ok, rank) > self.incumbent[:2]):
+            self.incumbent = (ok, rank, dict(params))
+
+    def ask(self):
+        if self.queued > 0:
+            self.queued -= 1
+        elif self.share > 0 and self.incumbent is not None and self.rng.random() < self.share:
+            self.study.enqueue_trial(local.neighbour(self.dists, self.incumbent[2], self.rng),
+                                     user_attrs={"move": True}, skip_if_exists=False)
+        return self.study.ask(self.dists)
 
 
 def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: int | None = None,
