@@ -57,8 +57,11 @@ MIN_EXCESS = 1e-3
 # and the best are judged by the goal's own bounds. (Not measured apart from the changes beside it.)
 SEARCH_MARGIN = 0.01
 UNMEASURED = 1.0
-LOCAL_SHARE = 0.5           # of the trials, moves from the incumbent (:class:`_Moves`); measured in docs/sweeps.md
+LOCAL_SHARE = 0.8           # of the trials, moves from the incumbent (:class:`_Moves`); measured in docs/sweeps.md
 JOURNAL = "journal.log"
+# tasks in flight at least (2 a worker beyond): the lag a trial is asked ahead by (:class:`_Search`) is then
+# the same inline, on 1 worker or on 2, and so are the trials a seed draws
+LEAST_IN_FLIGHT = 4
 
 
 @dataclass
@@ -166,18 +169,41 @@ def open_study(loaded: Loaded, folder: Path):
     else:
         study = optuna.create_study(study_name=name, storage=storage, directions=directions)
         study.set_user_attr("digest", loaded.digest)
-        dists = distributions(loaded)
-        start = {n: v for n, v in zip(loaded.names, loaded.base_values) if _within(dists[n], v)}
-        if start:
-            # the base is the first trial (told the base's own evaluation): the search starts from what works;
-            # a value the base leaves unset (pretension_n: the protocol's) or outside the bounds is drawn
-            study.enqueue_trial(start)
     told = len(study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)))
     study.sampler = sampler(loaded, told)
     for t in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
         study.tell(t.number, state=TrialState.FAIL)
         study.enqueue_trial(t.params, skip_if_exists=False)
     return study
+
+
+def enqueue_base(loaded: Loaded, study, base: dict) -> None:
+    """The base as the first trial of a new study: the search starts from what works. A pre-tension
+    the base leaves to the protocol takes the tension the protocol sets it to in the goal's state
+    (the base row's ``set_n``), the nearest on its grid; any other value the base leaves unset or
+    has outside the bounds is drawn."""
+    if study.get_trials(deepcopy=False):
+        return
+    dists = distributions(loaded)
+    set_n = (base.get("set_n") or {}).get(loaded.state) or {}
+    start = {}
+    for n, v in zip(loaded.names, loaded.base_values):
+        if v is None and n.endswith(".pretension_n"):
+            i = int(n.split("[")[1].split("]")[0])
+            v = _on_grid(dists[n], set_n.get(loaded.base["tendons"][i].get("name")))
+        if _within(dists[n], v):
+            start[n] = v
+    if start:
+        study.enqueue_trial(start)
+
+
+def _on_grid(dist, v):
+    """The value of a number distribution nearest ``v`` (None for None)."""
+    if v is None or getattr(dist, "choices", None) is not None:
+        return None
+    v = min(max(float(v), dist.low), dist.high)
+    step = getattr(dist, "step", None)
+    return v if step is None else round(dist.low + round((v - dist.low) / step) * step, 9)
 
 
 def constraint_names(loaded: Loaded) -> list[str]:
@@ -283,10 +309,17 @@ def _options(loaded: Loaded, folder: Path, cache, p) -> dict:
     if loaded.states:
         g = loaded.spec.goal
         opts["with_plan"] = partial(results.statics, states=loaded.states, orientation=g.orientation,
-                                    friction=g.friction)
+                                    friction=g.friction, judge=judges_stiffening(g))
     if p.client is not None:
         opts["numba_threads"] = 1           # a worker has a core of its own
     return opts
+
+
+def judges_stiffening(goal) -> bool:
+    """Whether a goal's trials must pass what the stiffening tendons are for (``stiffening.tip``,
+    ``.torsion``: errors ``hwgen check`` fails a build by), screened with the statics: every check
+    passing, or either under ``require``."""
+    return goal.checks == "all" or any(c.startswith("stiffening.") for c in goal.require)
 
 
 def _finish(loaded: Loaded, row: dict, values: tuple) -> dict:
@@ -356,7 +389,7 @@ class _Search:
         self.told = out.done_before
         self.doc = p.scatter(loaded.base)
         self.per_task = TRIALS_PER_TASK[loaded.spec.level]
-        self.cap = loaded.spec.batch or 2 * p.workers
+        self.cap = loaded.spec.batch or max(LEAST_IN_FLIGHT, 2 * p.workers)
         self.lag = self.cap * self.per_task
         self.ac = p.completed()
         self.asked: deque = deque()                  # trials asked and not yet told, in the order asked
@@ -519,6 +552,7 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
             if limits:
                 options = dict(options, stop=partial(short_of_bounds, limits))
         by_hash.setdefault(base["hash"], base)
+        enqueue_base(loaded, study, base)
         search = _Search(loaded, study, p, options, base, out, by_hash, on_trial)
         search.t0 = t0
         search.run()
