@@ -57,6 +57,11 @@ MIN_EXCESS = 1e-3
 # and the best are judged by the goal's own bounds. (Not measured apart from the changes beside it.)
 SEARCH_MARGIN = 0.01
 UNMEASURED = 1.0
+# the moves are the feasible-first phase: while this share of the trials told passes, TPE's model of the
+# good trials is informed and it draws every trial (on the known answer, where every trial passes, moves
+# from the start left the best farther from the answer than random search's, TPE's model then fitted
+# to the base's neighbourhood)
+FEASIBLE_ENOUGH = 0.25
 LOCAL_SHARE = 0.8           # of the trials, moves from the incumbent (:class:`_Moves`); measured in docs/sweeps.md
 JOURNAL = "journal.log"
 
@@ -501,7 +506,8 @@ class _Moves:
     leaves unset (a pre-tension the protocol sets) drawn by the sampler at each move (the prototype's
     base sits on its own torsion bound, and trial 0, its protocol tensions on the grid, 0.3 % under
     it: 109 moves from trial 0 found nothing that passes); while none is feasible, the trial nearest
-    feasibility (the least sum of its constraints). No moves for a front or for the random baseline."""
+    feasibility (the least sum of its constraints). No moves for a front or for the random baseline,
+    nor once feasible trials are no longer scarce (:meth:`scarce`)."""
 
     def __init__(self, loaded: Loaded, study, dists: dict, base: dict):
         from optuna.trial import TrialState
@@ -513,6 +519,7 @@ class _Moves:
         told = len(study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)))
         self.rng = np.random.default_rng([loaded.spec.seed, told, 44])
         self.incumbent: tuple | None = None          # (feasible, rank, params)
+        self.told = self.passed = 0
         values, cons, ok = score(loaded, base, base)
         if ok:
             self.incumbent = (True, self.sign * values[0],
@@ -521,14 +528,20 @@ class _Moves:
             self.saw(t.params, t.values, t.user_attrs.get("constraints") or [BAD], bool(t.user_attrs.get("feasible")))
 
     def saw(self, params: dict, values, cons, ok: bool) -> None:
+        self.told += 1
+        self.passed += ok
         rank = self.sign * values[0] if ok else -sum(cons)
         if len(params) == len(self.dists) and (self.incumbent is None or (ok, rank) > self.incumbent[:2]):
             self.incumbent = (ok, rank, dict(params))
 
+    def scarce(self) -> bool:
+        """Whether feasible trials are still scarce (:data:`FEASIBLE_ENOUGH`): moves while they are."""
+        return 0 < self.told and self.passed < FEASIBLE_ENOUGH * self.told      # none before the first result
+
     def ask(self):
         if self.queued > 0:
             self.queued -= 1
-        elif self.share > 0 and self.incumbent is not None and self.rng.random() < self.share:
+        elif self.share > 0 and self.incumbent is not None and self.scarce() and self.rng.random() < self.share:
             most = local.MOST_CHANGED if self.incumbent[0] else 1      # toward feasibility: one change at a time
             self.study.enqueue_trial(local.neighbour(self.dists, self.incumbent[2], self.rng, most),
                                      user_attrs={"move": True}, skip_if_exists=False)
