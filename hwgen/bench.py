@@ -6,7 +6,8 @@ Run: python -m hwgen.bench [PARAMS]          each command as a whole process: wa
                                              against the same 2 built one after the other (minutes)
      python -m hwgen.bench --fix             hwgen fix on the FDM lab robot of tests/labs/ alone
      python -m hwgen.bench --tune            hwgen tune's stiffness example on a small budget alone, and the
-                                             tune's sampler against random on a known answer, three seeds
+                                             tune's search against random on a known answer and on the
+                                             prototype's derived stiffness space, three seeds each
      python -m hwgen.bench --view [PARAMS]   view.html's stage on a fresh build, step by step
      python -m hwgen.bench --sim [PARAMS]    hwgen sim alone, on a build made first (not timed)
 """
@@ -211,6 +212,7 @@ def processes(params_path: Path) -> None:
         rows += tune_rows(tmp)
         rows += fix_rows(tmp)
         rows += sampler_rows(tmp)
+        rows += derived_rows(tmp)
     t = Table(title=f"hwgen benchmark: {params_path} (whole processes, {os.cpu_count()} cores, "
                     f"load {os.getloadavg()[0]:.1f})")
     for col, right in (("command", False), ("wall s", True), ("CPU s", True), ("peak MB", True), ("note", False)):
@@ -506,12 +508,41 @@ def sampler_rows(tmp: Path, budget: int = 150) -> list[tuple]:
             p.write_text(yaml.safe_dump(doc))
             t = tune_best.tune(tune_spec.load(p), tmp / "known", "inline", build=False)
             found.append(t.best["objectives"][0])
-        name = "TPE (the tune's)" if sampler == "auto" else "random"
+        name = "the tune's search (TPE, moves from the incumbent)" if sampler == "auto" else "random"
         rows.append((f"hwgen tune, known answer, {name}, {budget} trials × {len(SAMPLER_SEEDS)} seeds",
                      time.perf_counter() - t0, time.process_time() - c0,
                      resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,      # this process's peak so far
                      "best worst-tendon eq. (2) change by seed: " + ", ".join(f"{v:.3f}" for v in found)
                      + " mm (whole k: about 0.19 mm)"))
+    return rows
+
+
+DERIVED_BUDGET = 100
+
+
+def derived_rows(tmp: Path, budget: int = DERIVED_BUDGET) -> list[tuple]:
+    """``hwgen tune params/prototype.yaml --goal stiffness`` (the space derived from the design) by the
+    tune's search and by random sampling, at the same budget and seeds, on 2 workers: the best tip
+    stiffness over the base's (the base itself when nothing else passes) and the trials that pass."""
+    from .tune import derive, results, run as tune_run
+    rows = []
+    for sampler in ("auto", "random"):
+        found = []
+        t0, c0 = time.perf_counter(), time.process_time()
+        cpu = 0.0
+        for seed in SAMPLER_SEEDS:
+            loaded = derive.load("params/prototype.yaml", "stiffness", budget, seed, sampler)
+            out, study = tune_run.run(loaded, tmp / f"derived-{sampler}-{seed}", workers=2)
+            cpu += out.cpu_s
+            base = results.value("tip_stiffness", study.user_attrs["base_row"], loaded.state)
+            passing = [t.values[0] for t in study.get_trials(deepcopy=False) if t.user_attrs.get("feasible")]
+            found.append((max(passing, default=base) / base, len(passing)))
+        name = "the tune's search (TPE, moves from the incumbent)" if sampler == "auto" else "random"
+        rows.append((f"hwgen tune prototype --goal stiffness, {name}, {budget} trials × {len(SAMPLER_SEEDS)} seeds",
+                     time.perf_counter() - t0, time.process_time() - c0 + cpu,
+                     resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                     "best tip stiffness over the base's by seed (trials that pass): "
+                     + ", ".join(f"{x:.2f}× ({n})" for x, n in found)))
     return rows
 
 
@@ -611,7 +642,7 @@ def _print_rows(title: str, rows: list[tuple]) -> None:
 def main(argv: list[str]) -> None:
     if "--tune" in argv:
         with tempfile.TemporaryDirectory(prefix="hwgen-bench-") as tmp:
-            rows = tune_rows(Path(tmp)) + sampler_rows(Path(tmp))
+            rows = tune_rows(Path(tmp)) + sampler_rows(Path(tmp)) + derived_rows(Path(tmp))
         _print_rows("hwgen tune", rows)
         return
     if "--fix" in argv:

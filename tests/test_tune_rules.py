@@ -158,7 +158,7 @@ def test_the_sampler_beats_random_search_on_a_known_answer(tmp_path):
     tendon's eq. (2) length change minimised: the answer is whole k for all three (a cosine keeps its
     length over the bend for whole k only). At the same budget and seed the tune's sampler gets
     nearer it than random sampling (`make bench` has three seeds)."""
-    found = {}
+    found, moves = {}, {}
     for sampler in ("auto", "random"):
         doc = {"tune": sampler, "base": str(PROTOTYPE), "level": "lengths", "budget": 60, "seed": 0,
                "sampler": sampler, "set": {f"tendons[{i}].routing.function.k": k for i, k in ((1, 2.4), (2, 2.6),
@@ -167,8 +167,11 @@ def test_the_sampler_beats_random_search_on_a_known_answer(tmp_path):
                "goal": {"minimize": "centre_mm", "checks": "required"}}
         p = tmp_path / f"{sampler}.yaml"
         p.write_text(yaml.safe_dump(doc))
-        found[sampler] = tune_best.tune(spec.load(p), tmp_path / "out", "inline", build=False).best["objectives"][0]
+        t = tune_best.tune(spec.load(p), tmp_path / "out", "inline", build=False)
+        found[sampler] = t.best["objectives"][0]
+        moves[sampler] = sum(bool(r.get("move")) for r in pq.read_table(t.outcome.folder / "trials.parquet").to_pylist())
     assert found["auto"] < 0.9 * found["random"], found
+    assert moves["random"] == 0, moves
 
 
 def test_the_shipped_stiffness_tune_is_the_space_the_design_derives():

@@ -1,6 +1,8 @@
 """The commands over many designs: sweep and tune, on Dask, and fix, which builds design after design."""
 from __future__ import annotations
 
+import dataclasses
+
 import sys
 from pathlib import Path
 
@@ -77,6 +79,9 @@ def tune(tune_file: Path = typer.Argument(..., help="tune YAML (a base design, f
          budget: int = typer.Option(None, "--budget", min=1, show_default=False,
                                     help="trials in all, those of an earlier run included (default: the tune "
                                          "file's budget)"),
+         seed: int = typer.Option(None, "--seed", min=0, max=2**32 - 1, show_default=False,
+                                  help="the search's seed (default: the tune file's, 0 for a design file); one seed "
+                                       "draws the same trials whatever the workers' timing"),
          no_build: bool = typer.Option(False, "--no-build", help="do not build the best design"),
          quiet: bool = typer.Option(False, "--quiet", "-q", help="no progress bar"),
          cache_dir: Path = CACHE_DIR, no_cache: bool = NO_CACHE) -> None:
@@ -97,11 +102,13 @@ def tune(tune_file: Path = typer.Argument(..., help="tune YAML (a base design, f
         if goal is None:
             raise InputError(tune_file, "--goal", f"a design file is tuned toward a goal: give --goal "
                                                   f"{'|'.join(derive.GOALS)} (or write a tune file)")
-        loaded = derive.load(tune_file, goal, budget)
+        loaded = derive.load(tune_file, goal, budget, seed=seed or 0)
     elif goal is not None:
         raise InputError(tune_file, "--goal", "--goal is for a design file; a tune file states its own goal")
     else:
         loaded = tune_spec.load(tune_file)
+        if seed is not None:
+            loaded = dataclasses.replace(loaded, spec=loaded.spec.model_copy(update={"seed": seed}))
     with Progress(TextColumn("{task.description}", markup=False), BarColumn(), MofNCompleteColumn(),
                   TimeElapsedColumn(), console=err, disable=quiet or not err.is_terminal, transient=True) as bar:
         task = bar.add_task(f"tuning {loaded.spec.tune}", total=budget or loaded.spec.budget)

@@ -23,7 +23,8 @@ a trial those figures rule out (a tune's bound on the statics), and so does a pl
 screens (:func:`_plan_screens`: the Monte Carlo and the tensions' statics are not run for it).
 ``options["with_plan"]``, when given, is called with each valid variant's plan (made for it at the
 lengths level too) and returns more figures for its row: a tune's objectives
-(:mod:`hwgen.tune.results`).
+(:mod:`hwgen.tune.results`), and, as ``statics_failures``, the failure records of the checks those
+figures judge (``stiffening.tip``): added to the row's failures, so they screen as the plan's do.
 """
 from __future__ import annotations
 
@@ -134,7 +135,20 @@ def _figures_only(r: Resolved, row: dict, options: dict) -> None:
         plan = make_plan(r.design)
     except (InputError, DesignError):
         return
-    row.update(options["with_plan"](plan))
+    _with_plan(row, plan, options)
+
+
+def _with_plan(row: dict, plan: Plan, options: dict) -> None:
+    """``with_plan``'s figures into the row, and its ``statics_failures`` into the row's failures
+    (an error among them fails the row, its message added to the row's)."""
+    got = dict(options["with_plan"](plan))
+    more = got.pop("statics_failures", [])
+    row.update(got)
+    row["failures"] = list(row["failures"]) + more
+    errors = [f["message"] for f in more if f["severity"] == "error"]
+    if errors:
+        row["verdict"] = "fail"
+        row["message"] = "; ".join(([row["message"]] if row["message"] else []) + errors)[:2000]
 
 
 def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
@@ -142,7 +156,7 @@ def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
     plan = make_plan(d)
     feasibility.check_plan(plan, d)
     if options.get("with_plan"):
-        row.update(options["with_plan"](plan))
+        _with_plan(row, plan, options)
     if level == "lengths":
         return
     if options.get("stop") and options["stop"](row):

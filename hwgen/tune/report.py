@@ -4,7 +4,8 @@
   parameter, ``verdict``, ``feasible``, ``violation`` (the sum of its constraint values), one
   column per objective and per bound, ``distance`` (from the base), ``failed_checks`` (JSON: each
   failing or warning check's id, severity, measured value and limit), ``same_as`` (the trial whose
-  evaluation of the same design it was told), ``message``, ``cpu_s``. Trial -1 is the base.
+  evaluation of the same design it was told), ``move`` (a move from the incumbent, not the sampler's
+  draw: :mod:`hwgen.tune.local`), ``message``, ``cpu_s``. Trial -1 is the base.
 - ``best.yaml``: the base design's file with only the tuned values (and the tune file's ``set``)
   changed, its comments kept (ruamel.yaml's round trip), and its ``design`` named
   ``<design>-<tune>`` so that its build does not replace the base's.
@@ -42,7 +43,8 @@ def trials(study) -> list[dict]:
     for t in study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)):
         row = dict(t.user_attrs.get("row") or {})
         row.update(trial=t.number, objectives=list(t.values), constraints=t.user_attrs.get("constraints", []),
-                   feasible=bool(t.user_attrs.get("feasible")), same_as=t.user_attrs.get("same_as"))
+                   feasible=bool(t.user_attrs.get("feasible")), same_as=t.user_attrs.get("same_as"),
+                   move=bool(t.user_attrs.get("move")))
         out.append(row)
     return out
 
@@ -90,7 +92,7 @@ def table(loaded: Loaded, rows: list[dict]) -> pa.Table:
         cols[n] = []
     objectives = [n for n, _ in loaded.objectives if n != "distance"]      # distance: its own column
     extra = ["verdict", "feasible", "violation", *objectives, *bounds(loaded), "distance",
-             "failed_checks", "same_as", "message", "cpu_s"]
+             "failed_checks", "same_as", "move", "message", "cpu_s"]
     for c in extra:
         cols[c] = []
     g = loaded.spec.goal
@@ -111,6 +113,7 @@ def table(loaded: Loaded, rows: list[dict]) -> pa.Table:
         cols["distance"].append(r.get("distance"))
         cols["failed_checks"].append(json.dumps(r.get("failures") or []))
         cols["same_as"].append(r.get("same_as"))
+        cols["move"].append(bool(r.get("move")))
         cols["message"].append(r.get("message"))
         cols["cpu_s"].append(r.get("cpu_s"))
     arrays = {}

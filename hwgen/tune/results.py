@@ -27,8 +27,10 @@ from __future__ import annotations
 import json
 import re
 
+from ..checks.purpose import stiffening_checks
 from ..errors import nearest
 from ..model import stiffness as sf
+from ..sweep.lengths import failure
 
 STATICS = {"tip_stiffness": "N/mm", "least_stiffness": "N/mm", "tip_torsion": "N·mm/rad", "tip_sag": "mm"}
 ROW = {"centre_mm": ("mm", "lengths"), "taut_mm": ("mm", "lengths"), "robust_mm": ("mm", "robust"),
@@ -67,13 +69,32 @@ def figures(plan, states: tuple[str, ...] | None = None, orientation: str = ORIE
     return by_state(report, orientation, friction)
 
 
-def statics(plan, states: tuple[str, ...] | None, orientation: str = ORIENTATION, friction: str = FRICTION) -> dict:
+def statics(plan, states: tuple[str, ...] | None, orientation: str = ORIENTATION, friction: str = FRICTION,
+            judge: bool = False) -> dict:
     """Every statics figure of the named states of a plan, keyed ``name@state`` (the worker's hook:
-    ``options["with_plan"]`` of :func:`hwgen.sweep.levels.evaluate_batch`)."""
-    if states is not None and not states:
+    ``options["with_plan"]`` of :func:`hwgen.sweep.levels.evaluate_batch`), and ``set_n``: state ->
+    tendon -> the tension each is set to (the protocol's, or its own ``pretension_n``). ``judge``: also the
+    failing checks of what the stiffening tendons are for (``stiffening.tip``, ``stiffening.torsion``:
+    :func:`hwgen.checks.purpose.stiffening_checks`, which ``hwgen check`` fails on the build), as the
+    row's ``statics_failures``: every tendon locked and the actuating pair alone, in hwgen stiffness's
+    reference orientation, are then computed too."""
+    if states is not None and not states and not judge:
         return {}
-    return {"statics": {f"{k}@{s}": v for s, fig in figures(plan, states, orientation, friction).items()
-                        for k, v in fig.items()}}
+    extra, orientations = [], [orientation]
+    if judge:
+        every = sf.states(plan)
+        extra = [max(every, key=lambda s: len(s.channels)).name, plan.tensioner.actuating_channel]
+        orientations += [sf.REFERENCE] if orientation != sf.REFERENCE else []
+    which = None if states is None else list(dict.fromkeys([*states, *extra]))
+    report = sf.study(plan, which, orientations)
+    entries = sf.entries_by_state(report, orientation, friction)
+    out = {"statics": {f"{k}@{s}": v for s, e in entries.items() for k, v in state_figures(e).items()},
+           "set_n": {s: e["set_n"] for s, e in entries.items()}}
+    if judge:
+        out["statics_failures"] = [
+            failure(c.id, f"{c.id}: {c.message}", c.severity, c.measured, c.limit, None, c.fix or "")
+            for c in stiffening_checks(plan, report) if not c.passed]
+    return out
 
 
 def is_statics(name: str) -> bool:

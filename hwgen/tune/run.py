@@ -32,6 +32,7 @@ import math
 import shutil
 import time
 import uuid
+from collections import deque
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
@@ -42,7 +43,7 @@ from ..errors import InputError
 from ..sweep import levels
 from ..sweep.run import pool
 from ..sweep.spec import Variant, resolve
-from . import results
+from . import local, results
 from .spec import Loaded, distance
 
 TRIALS_PER_TASK = {"lengths": 8, "robust": 1, "coupling": 1, "build": 1}
@@ -56,6 +57,12 @@ MIN_EXCESS = 1e-3
 # and the best are judged by the goal's own bounds. (Not measured apart from the changes beside it.)
 SEARCH_MARGIN = 0.01
 UNMEASURED = 1.0
+# the moves are the feasible-first phase: while this share of the trials told passes, TPE's model of the
+# good trials is informed and it draws every trial (on the known answer, where every trial passes, moves
+# from the start left the best farther from the answer than random search's, TPE's model then fitted
+# to the base's neighbourhood)
+FEASIBLE_ENOUGH = 0.25
+LOCAL_SHARE = 0.8           # of the trials, moves from the incumbent (:class:`_Moves`); measured in docs/sweeps.md
 JOURNAL = "journal.log"
 
 
@@ -108,7 +115,7 @@ def distributions(loaded: Loaded) -> dict:
             out[fr.path] = optuna.distributions.CategoricalDistribution(fr.choices)
             continue
         low = grid_low(fr, b)
-        high = fr.high if fr.step is None else low + math.floor((fr.high - low) / fr.step + 1e-9) * fr.step
+        high = fr.high if fr.step is None else round(low + math.floor((fr.high - low) / fr.step + 1e-9) * fr.step, 9)
         if fr.integer:
             out[fr.path] = optuna.distributions.IntDistribution(int(low), int(round(high)), log=fr.log,
                                                                 step=int(fr.step or 1))
@@ -164,18 +171,43 @@ def open_study(loaded: Loaded, folder: Path):
     else:
         study = optuna.create_study(study_name=name, storage=storage, directions=directions)
         study.set_user_attr("digest", loaded.digest)
-        dists = distributions(loaded)
-        start = {n: v for n, v in zip(loaded.names, loaded.base_values) if _within(dists[n], v)}
-        if start:
-            # the base is the first trial (told the base's own evaluation): the search starts from what works;
-            # a value the base leaves unset (pretension_n: the protocol's) or outside the bounds is drawn
-            study.enqueue_trial(start)
     told = len(study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)))
     study.sampler = sampler(loaded, told)
     for t in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
         study.tell(t.number, state=TrialState.FAIL)
         study.enqueue_trial(t.params, skip_if_exists=False)
     return study
+
+
+def enqueue_base(loaded: Loaded, study, base: dict) -> None:
+    """The base as the first trial of a new study: the search starts from what works. A pre-tension
+    the base leaves to the protocol takes the tension the protocol sets it to in the goal's state
+    (the base row's ``set_n``), the next up on its grid; any other value the base leaves unset or
+    has outside the bounds is drawn."""
+    if study.get_trials(deepcopy=False):
+        return
+    dists = distributions(loaded)
+    set_n = (base.get("set_n") or {}).get(loaded.state) or {}
+    start = {}
+    for n, v in zip(loaded.names, loaded.base_values):
+        if v is None and n.endswith(".pretension_n"):
+            i = int(n.split("[")[1].split("]")[0])
+            v = _on_grid(dists[n], set_n.get(loaded.base["tendons"][i].get("name")))
+        if _within(dists[n], v):
+            start[n] = v
+    if start:
+        study.enqueue_trial(start)
+
+
+def _on_grid(dist, v):
+    """The least value of a number distribution at or above ``v`` (None for None): a tension no
+    lower than the protocol's (the prototype's base sits on its own torsion bound, and 12.5 N for
+    the protocol's 12.63 N left trial 0 0.4 % short of it)."""
+    if v is None or getattr(dist, "choices", None) is not None:
+        return None
+    v = min(max(float(v), dist.low), dist.high)
+    step = getattr(dist, "step", None)
+    return v if step is None else round(min(dist.low + math.ceil((v - dist.low) / step - 1e-9) * step, dist.high), 9)
 
 
 def constraint_names(loaded: Loaded) -> list[str]:
@@ -281,10 +313,17 @@ def _options(loaded: Loaded, folder: Path, cache, p) -> dict:
     if loaded.states:
         g = loaded.spec.goal
         opts["with_plan"] = partial(results.statics, states=loaded.states, orientation=g.orientation,
-                                    friction=g.friction)
+                                    friction=g.friction, judge=judges_stiffening(g))
     if p.client is not None:
         opts["numba_threads"] = 1           # a worker has a core of its own
     return opts
+
+
+def judges_stiffening(goal) -> bool:
+    """Whether a goal's trials must pass what the stiffening tendons are for (``stiffening.tip``,
+    ``.torsion``: errors ``hwgen check`` fails a build by), screened with the statics: every check
+    passing, or either under ``require``."""
+    return goal.checks == "all" or any(c.startswith("stiffening.") for c in goal.require)
 
 
 def _finish(loaded: Loaded, row: dict, values: tuple) -> dict:
@@ -337,9 +376,14 @@ def _folder(loaded: Loaded, out_root: Path) -> tuple[Path, Path | None]:
 
 
 class _Search:
-    """One run's ask-evaluate-tell loop: trials asked in batches onto the pool's workers, a new batch
-    whenever one finishes; a design already evaluated (by hash) is told that result, and one asked
-    while its twin is in flight waits for it."""
+    """One run's ask-evaluate-tell loop. Trials are asked ahead of the last told by a fixed lag (the
+    pool's tasks in flight times the trials a task) and told in the order they were asked, whatever
+    order the workers finish them in: the trial asked n-th is asked right after the (n - lag)-th is
+    told, so the sampler sees the same trials at every ask and a seed draws the same trials however
+    the workers' timing falls (with two workers and constant liar, telling in completion order made
+    two runs of one seed part at trial 21). A design already evaluated (by hash) takes that result,
+    and one asked while its twin is in flight waits for it. A share of the trials (:data:`LOCAL_SHARE`)
+    is a move from the incumbent (:mod:`hwgen.tune.local`) instead of the sampler's draw."""
 
     def __init__(self, loaded: Loaded, study, p, options: dict, base: dict, out: Outcome, by_hash: dict,
                  on_trial=None):
@@ -349,11 +393,16 @@ class _Search:
         self.told = out.done_before
         self.doc = p.scatter(loaded.base)
         self.per_task = TRIALS_PER_TASK[loaded.spec.level]
-        self.cap = loaded.spec.batch or 2 * p.workers
+        self.cap = loaded.spec.batch or (2 * p.workers if p.client is not None else 1)   # inline: one at a time
+        self.lag = self.cap * self.per_task
         self.ac = p.completed()
+        self.asked: deque = deque()                  # trials asked and not yet told, in the order asked
+        self.ready: dict[int, tuple] = {}            # trial number -> (row, same as) to tell in its turn
+        self.unsent: list = []                       # [(trial, values, hash)] asked, not yet on a worker
         self.flying: dict[str, list] = {}            # task key -> [(trial, values, hash)]
         self.waiting: dict[str, list] = {}           # hash in flight -> trials of the same design asked meanwhile
         self.best = None
+        self.moves = _Moves(loaded, study, self.dists, base)
         self.t0 = time.perf_counter()
 
     def tell(self, trial, row: dict, same_as: int | None = None) -> None:
@@ -368,6 +417,7 @@ class _Search:
             trial.set_user_attr("same_as", same_as)
         self.study.tell(trial, values)
         self.told += 1
+        self.moves.saw(trial.params, values, cons, ok)
         out.verdicts[row["verdict"]] = out.verdicts.get(row["verdict"], 0) + 1
         if ok and len(values) == 1:
             sign = 1 if loaded.objectives[0][1] == "maximize" else -1
@@ -377,47 +427,50 @@ class _Search:
         if self.on_trial:
             self.on_trial(self.told, out.budget)
 
-    def in_flight(self) -> int:
-        return sum(len(b) for b in self.flying.values()) + sum(len(w) for w in self.waiting.values())
+    def ask(self) -> None:
+        """Ask one trial: told at once where its design is known, queued behind its twin in flight, or
+        kept to be sent."""
+        loaded = self.loaded
+        trial = self.moves.ask()
+        values = tuple(trial.params[n] for n in loaded.names)
+        h = resolve(loaded.base, loaded.names, Variant(trial.number, values)).hash
+        self.asked.append(trial)
+        if h in self.by_hash:
+            self.out.repeated += 1
+            known = self.by_hash[h]
+            self.ready[trial.number] = (dict(known, values=list(values), distance=distance(loaded, values)),
+                                        known.get("trial"))
+        elif h in self.waiting:
+            self.waiting[h].append((trial, values))
+        else:
+            self.waiting[h] = []
+            self.unsent.append((trial, values, h))
 
-    def room(self) -> bool:
-        return self.told + self.in_flight() < self.out.budget
-
-    def launch(self) -> None:
-        """Ask a batch of trials and send it to a worker (those of a design known or in flight told or
-        queued instead)."""
-        loaded, batch = self.loaded, []
-        while len(batch) < self.per_task and self.told + self.in_flight() + len(batch) < self.out.budget:
-            trial = self.study.ask(self.dists)
-            values = tuple(trial.params[n] for n in loaded.names)
-            h = resolve(loaded.base, loaded.names, Variant(trial.number, values)).hash
-            if h in self.by_hash:
-                self.out.repeated += 1
-                row = dict(self.by_hash[h], values=list(values), distance=distance(loaded, values))
-                self.tell(trial, row, self.by_hash[h].get("trial"))
-            elif h in self.waiting or any(h == b[2] for b in batch):
-                self.waiting.setdefault(h, []).append((trial, values))
+    def advance(self) -> None:
+        """Ask up to the lag ahead, and tell the oldest trial whenever its result is in; an ask first,
+        so that each ask follows the same tells whatever the timing."""
+        while True:
+            if len(self.asked) < self.lag and self.told + len(self.asked) < self.out.budget:
+                self.ask()
+            elif self.asked and self.asked[0].number in self.ready:
+                trial = self.asked.popleft()
+                self.tell(trial, *self.ready.pop(trial.number))
             else:
-                batch.append((trial, values, h))
-        if not batch:
-            return
-        key = f"tune-{loaded.spec.tune}-{batch[0][0].number}-{uuid.uuid4().hex[:6]}"
-        for _, _, h in batch:
-            self.waiting.setdefault(h, [])
-        self.flying[key] = batch
-        self.ac.add(self.p.submit(levels.evaluate_batch, [(t.number, v) for t, v, _ in batch], self.doc,
-                                  loaded.names, loaded.spec.level, frozenset(), self.options, key=key))
+                return
 
-    def fill(self) -> None:
-        """Launch batches until the workers are full or the budget is asked."""
-        while len(self.flying) < self.cap and self.room():
-            n = len(self.flying)
-            self.launch()
-            if len(self.flying) == n:
-                break
+    def send(self) -> None:
+        """Send the trials asked to the workers, a task of at most ``per_task`` trials at a time, while
+        fewer than ``cap`` tasks are in flight."""
+        loaded = self.loaded
+        while self.unsent and len(self.flying) < self.cap:
+            batch, self.unsent = self.unsent[:self.per_task], self.unsent[self.per_task:]
+            key = f"tune-{loaded.spec.tune}-{batch[0][0].number}-{uuid.uuid4().hex[:6]}"
+            self.flying[key] = batch
+            self.ac.add(self.p.submit(levels.evaluate_batch, [(t.number, v) for t, v, _ in batch], self.doc,
+                                      loaded.names, loaded.spec.level, frozenset(), self.options, key=key))
 
     def collect(self, fut) -> None:
-        """Tell the trials of a finished batch (and their twins that waited)."""
+        """The rows of a finished task (and of their twins that waited), each to be told in its turn."""
         batch = self.flying.pop(fut.key)
         rows = {r["variant"]: r for r in fut.result()}
         fut.release()
@@ -431,16 +484,68 @@ class _Search:
                 out.whole += 1
                 out.whole_cpu_s += row.get("cpu_s") or 0.0
             self.by_hash[h] = row
-            self.tell(trial, row)
+            self.ready[trial.number] = (row, None)
             for twin, v in self.waiting.pop(h, []):
                 out.repeated += 1
-                self.tell(twin, dict(row, values=list(v), distance=distance(self.loaded, v)), trial.number)
+                self.ready[twin.number] = (dict(row, values=list(v), distance=distance(self.loaded, v)), trial.number)
 
     def run(self) -> None:
-        self.fill()
+        self.advance()
+        self.send()
         for fut in self.ac:
             self.collect(fut)
-            self.fill()
+            self.advance()
+            self.send()
+
+
+class _Moves:
+    """Where each trial comes from: the trials an interrupted run left (queued in the study) first,
+    then a move from the incumbent (:func:`hwgen.tune.local.neighbour`) for a :data:`LOCAL_SHARE`
+    of them (drawn with the tune's seed), the sampler's draw for the rest. The incumbent is the best
+    feasible trial told, the base itself (trial -1) first when it passes: its values, and those it
+    leaves unset (a pre-tension the protocol sets) drawn by the sampler at each move (the prototype's
+    base sits on its own torsion bound, and trial 0, its protocol tensions on the grid, 0.3 % under
+    it: 109 moves from trial 0 found nothing that passes); while none is feasible, the trial nearest
+    feasibility (the least sum of its constraints). No moves for a front or for the random baseline,
+    nor once feasible trials are no longer scarce (:meth:`scarce`)."""
+
+    def __init__(self, loaded: Loaded, study, dists: dict, base: dict):
+        from optuna.trial import TrialState
+        self.study, self.dists = study, dists
+        self.queued = len(study.get_trials(deepcopy=False, states=(TrialState.WAITING,)))
+        multi = len(loaded.objectives) > 1
+        self.share = 0.0 if multi or loaded.spec.sampler in ("random", "nsga2") else LOCAL_SHARE
+        self.sign = 1.0 if loaded.objectives[0][1] == "maximize" else -1.0
+        told = len(study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)))
+        self.rng = np.random.default_rng([loaded.spec.seed, told, 44])
+        self.incumbent: tuple | None = None          # (feasible, rank, params)
+        self.told = self.passed = 0
+        values, cons, ok = score(loaded, base, base)
+        if ok:
+            self.incumbent = (True, self.sign * values[0],
+                              {n: v for n, v in zip(loaded.names, loaded.base_values) if _within(dists[n], v)})
+        for t in study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)):
+            self.saw(t.params, t.values, t.user_attrs.get("constraints") or [BAD], bool(t.user_attrs.get("feasible")))
+
+    def saw(self, params: dict, values, cons, ok: bool) -> None:
+        self.told += 1
+        self.passed += ok
+        rank = self.sign * values[0] if ok else -sum(cons)
+        if len(params) == len(self.dists) and (self.incumbent is None or (ok, rank) > self.incumbent[:2]):
+            self.incumbent = (ok, rank, dict(params))
+
+    def scarce(self) -> bool:
+        """Whether feasible trials are still scarce (:data:`FEASIBLE_ENOUGH`): moves while they are."""
+        return 0 < self.told and self.passed < FEASIBLE_ENOUGH * self.told      # none before the first result
+
+    def ask(self):
+        if self.queued > 0:
+            self.queued -= 1
+        elif self.share > 0 and self.incumbent is not None and self.scarce() and self.rng.random() < self.share:
+            most = local.MOST_CHANGED if self.incumbent[0] else 1      # toward feasibility: one change at a time
+            self.study.enqueue_trial(local.neighbour(self.dists, self.incumbent[2], self.rng, most),
+                                     user_attrs={"move": True}, skip_if_exists=False)
+        return self.study.ask(self.dists)
 
 
 def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: int | None = None,
@@ -467,6 +572,7 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
             if limits:
                 options = dict(options, stop=partial(short_of_bounds, limits))
         by_hash.setdefault(base["hash"], base)
+        enqueue_base(loaded, study, base)
         search = _Search(loaded, study, p, options, base, out, by_hash, on_trial)
         search.t0 = t0
         search.run()

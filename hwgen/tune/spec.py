@@ -147,7 +147,8 @@ class Tune(_Model):
     free: list[Free] = Field(min_length=1, max_length=64)
     goal: Goal
     budget: int = Field(100, ge=1, le=MAX_BUDGET, description="trials in all (--budget overrides)")
-    batch: int | None = Field(None, ge=1, le=1000, description="trials in flight at once (default: 2 a worker)")
+    batch: int | None = Field(None, ge=1, le=1000, description="tasks in flight at once (default: 2 a worker; inline 1): "
+                                                                    "one seed draws the same trials wherever this is the same")
     seed: int = Field(0, ge=0, le=2**32 - 1, description="the sampler's seed")
     sampler: Literal["auto", "tpe", "nsga2", "random"] = Field(
         "auto", description="auto: TPE for one objective, NSGA-II for a front")
