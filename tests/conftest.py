@@ -57,8 +57,10 @@ BUILDS = "built"          # the fixture that makes a test slow wherever it is as
 # matches only loses its place in the queue.
 LONGEST = ("tests/test_sim.py::",                               # the prototype and paper-table2, simulated
            "tests/test_fix.py::test_a_lab_robot_is_fixed_whole",  # tests/labs' robot, its own parts
+           "tests/test_experiment.py::",                        # the prototype's plan: hwgen experiment, compare
            "tests/test_any_robot.py::test_lab_robots_build_without_breaking",
-           "tests/test_tune.py::", "tests/test_reproducible.py::", "tests/test_tensioner.py::",
+           "tests/test_tune.py::", "tests/test_reproducible.py::", "tests/test_render.py::",
+           "tests/test_tensioner.py::",
            "tests/test_user_loop.py::test_the_readmes_own_robot", "tests/test_cache.py::",
            "tests/test_variant.py::", "tests/test_sweep.py::test_build_level", "tests/test_tried.py::",
            "tests/test_fuzz.py::", "tests/test_any_design.py::")
