@@ -52,9 +52,9 @@ BUILDS = "built"          # the fixture that makes a test slow wherever it is as
 # module's build), longest first so that no long one starts last; `make test` and `make test-fast`
 # pass --no-loadscope-reorder, else pytest-xdist hands out the groups with the most tests first,
 # whatever they cost. Measured in CPU seconds, December 2026. The first unit builds the prototype
-# (every unit after the second needs it) and the second builds a robot of its own: the other
-# worker starts on it instead of waiting, idle, for the prototype's lock. A name that no longer
-# matches only loses its place in the queue.
+# (most slow units need it) and the next two need no build of it: the other worker starts on them
+# instead of waiting, idle, for the prototype's lock. A name that no longer matches only loses its
+# place in the queue.
 LONGEST = ("tests/test_sim.py::",                               # the prototype and paper-table2, simulated
            "tests/test_fix.py::test_a_lab_robot_is_fixed_whole",  # tests/labs' robot, its own parts
            "tests/test_experiment.py::",                        # the prototype's plan: hwgen experiment, compare
