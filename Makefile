@@ -63,7 +63,8 @@ clients:
 	  else echo "not installed:$$missing (apt-get install prusa-slicer freecad chromium); their tests will skip"; fi; fi
 
 # one pytest worker per core (pytest-xdist); the tests that share a module's build run in one
-# worker, and the workers share one part cache (tests/conftest.py)
+# worker, and the workers share one part cache; the work is handed out in the order
+# tests/conftest.py sorts it (LONGEST: the longest first), not the groups with the most tests first
 # the clients' install (apt-get: minutes, mostly downloading) runs beside the environment's (pip,
 # npm) rather than before it; its output is shown once it ends
 test:
@@ -71,7 +72,7 @@ test:
 	  $(MAKE) --no-print-directory $(STAMP) bytecode viewer; made=$$?; \
 	  wait $$clients; installed=$$?; cat .clients.log; rm -f .clients.log; \
 	  [ $$made = 0 ] && [ $$installed = 0 ]
-	$(BIN)/python -m pytest -q -n auto --dist loadgroup
+	$(BIN)/python -m pytest -q -n auto --dist loadgroup --no-loadscope-reorder
 
 # every print plate sliced in PrusaSlicer as the process prints it (SLA: minutes per plate); not in make test
 slicer-check: $(STAMP) clients
@@ -80,7 +81,7 @@ slicer-check: $(STAMP) clients
 
 # one pytest worker per core (pytest-xdist): the CAD-free tier is many small tests that do not share a build
 test-fast: $(STAMP) bytecode
-	$(BIN)/python -m pytest -q -m "not slow" -n auto --dist loadgroup
+	$(BIN)/python -m pytest -q -m "not slow" -n auto --dist loadgroup --no-loadscope-reorder
 
 # the benchmark times the disks against OpenSCAD (Debian's openscad, installed here when missing and apt-get can)
 bench: $(STAMP) bytecode viewer

@@ -48,14 +48,21 @@ os.environ["HWGEN_CACHE_SIZE"] = "1T"
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / "params"
 BUILDS = "built"          # the fixture that makes a test slow wherever it is asked for
-# The tests of each tier that take longest on their own, measured in November 2026 (the slow ones
-# 25 to 90 s of CPU, the gear stability run, also long, is a group; the quick ones 20 to 60 s of
-# wall on a loaded machine): each starts before the others of its tier. A name that no longer
-# matches only loses its place in the queue.
-LONGEST = ("tests/test_reproducible.py::", "tests/test_user_loop.py::test_the_readmes_own_robot",
+# The order the workers are handed the suite's work units (a test, or a group of tests sharing a
+# module's build), longest first so that no long one starts last; `make test` and `make test-fast`
+# pass --no-loadscope-reorder, else pytest-xdist hands out the groups with the most tests first,
+# whatever they cost. Measured in CPU seconds, December 2026. The first unit builds the prototype
+# (most slow units need it) and the next two need no build of it: the other worker starts on them
+# instead of waiting, idle, for the prototype's lock. A name that no longer matches only loses its
+# place in the queue.
+LONGEST = ("tests/test_sim.py::",                               # the prototype and paper-table2, simulated
+           "tests/test_fix.py::test_a_lab_robot_is_fixed_whole",  # tests/labs' robot, its own parts
+           "tests/test_experiment.py::",                        # the prototype's plan: hwgen experiment, compare
            "tests/test_any_robot.py::test_lab_robots_build_without_breaking",
-           "tests/test_variant.py::", "tests/test_sweep.py::test_build_level",
-           "tests/test_cache.py::test_two_builds_sharing",
+           "tests/test_tune.py::", "tests/test_reproducible.py::", "tests/test_render.py::",
+           "tests/test_tensioner.py::",
+           "tests/test_user_loop.py::test_the_readmes_own_robot", "tests/test_cache.py::",
+           "tests/test_variant.py::", "tests/test_sweep.py::test_build_level", "tests/test_tried.py::",
            "tests/test_fuzz.py::", "tests/test_any_design.py::")
 
 
@@ -106,12 +113,15 @@ def pytest_collection_modifyitems(config, items):
         if _module_fixtures(item):
             item.add_marker(pytest.mark.xdist_group(item.module.__name__))
     if WORKER:
-        # the slow tests first, the longest of them before the others, the many quick ones after:
-        # they fill whichever worker is done first, instead of one long build being the last test
-        # of one worker while the other waits (--dist loadgroup hands out the groups first, then
-        # the other tests in this order)
-        items.sort(key=lambda item: (item.get_closest_marker("slow") is None,
-                                     not item.nodeid.startswith(LONGEST)))
+        # the slow tests first, the longest of them before the others in LONGEST's order, the many
+        # quick ones after: they fill whichever worker is done first, instead of one long build being
+        # the last test of one worker while the other waits
+        items.sort(key=lambda item: (item.get_closest_marker("slow") is None, _place(item.nodeid)))
+
+
+def _place(nodeid: str) -> int:
+    """Where the test's unit comes in LONGEST's order (after all of them if it is not named)."""
+    return next((i for i, prefix in enumerate(LONGEST) if nodeid.startswith(prefix)), len(LONGEST))
 
 
 def _module_fixtures(item) -> list[str]:

@@ -374,9 +374,11 @@ def broken_walls(tmp_path_factory):
     src = root / "thin-walls.yaml"
     src.write_text(yaml.safe_dump(doc, sort_keys=False))
     # the disks and the strip are what is broken; the tensioner is not what these tests look
-    # at, so only those two families are built (its layout still sizes the tip's eyelets)
+    # at, so only those two families are built (its layout still sizes the tip's eyelets); these
+    # tests read the report, so no pictures are drawn (as without an OpenGL backend)
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(assembly, "FAMILIES", [f for f in assembly.FAMILIES if f[0] in ("disks", "backbone")])
+        mp.setenv("HWGEN_RENDER_BACKEND", "none")
         folder = build(load(src), root / "out").folder
     return dict(json.loads((folder / "report.json").read_text()), _source=src)
 

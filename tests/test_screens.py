@@ -80,7 +80,8 @@ def test_screens_agree_with_the_checks_on_the_shipped_designs(design, built):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("case", sorted(TUNED))
-def test_screens_agree_with_the_checks_on_screened_trials(case, tmp_path):
+def test_screens_agree_with_the_checks_on_screened_trials(case, tmp_path, monkeypatch):
+    monkeypatch.setenv("HWGEN_RENDER_BACKEND", "none")          # the report is compared, not the pictures
     d = _tuned(**TUNED[case]).model_copy(update={"design": f"screened-{case}"})
     loaded = LoadedDesign(design=d, source=f"screened {case}", sha256=case)
     assert plan_screens(design_plan(loaded))             # the sweep screens it out
@@ -89,8 +90,9 @@ def test_screens_agree_with_the_checks_on_screened_trials(case, tmp_path):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("index", [12, 37])
-def test_screens_agree_with_the_checks_on_drawn_robots(index, tmp_path):
+def test_screens_agree_with_the_checks_on_drawn_robots(index, tmp_path, monkeypatch):
     """Two cheap robots (four or five disks) of `make stability`'s widened draw (tests/test_any_robot.py's)."""
+    monkeypatch.setenv("HWGEN_RENDER_BACKEND", "none")          # the report is compared, not the pictures
     rng = np.random.default_rng(SEED)
     docs = [lab_robot(rng, f"robot{i:03d}") for i in range(index + 1)]
     f = tmp_path / "robot.yaml"
