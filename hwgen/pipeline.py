@@ -388,9 +388,9 @@ def _files_stage(b: Build) -> tuple[Manifest, list[str], dict[str, Beside]]:
 
 def _written(b: Build, manifest: Manifest, pattern: str) -> Manifest:
     """A --parts build's manifest, saying which parts it wrote; bad input when the pattern matches none."""
-    written = [p["name"] for p in manifest.parts if b.select(p["name"])]
+    written = [p.name for p in manifest.parts if b.select(p.name)]
     if not written:
-        names = ", ".join(p["name"] for p in manifest.parts)
+        names = ", ".join(p.name for p in manifest.parts)
         raise InputError(b.loaded.source, "--parts", f"{clip(pattern)!r} matches none of the parts: {clip(names, 200)}")
     return replace(manifest, parts_written={"pattern": pattern, "names": written})
 
@@ -485,8 +485,8 @@ def check(loaded: params.LoadedDesign, out_root: Path, progress=None,
 def tensioner_record(manifest: Manifest) -> dict | None:
     """The tensioner layout's search record a build kept in its manifest (None: none there)."""
     for p in manifest.parts:
-        if p.get("role") == "tensioner_housing" and isinstance(p.get("layout_search"), dict):
-            return p["layout_search"]
+        if p.role == "tensioner_housing" and isinstance(p.meta.get("layout_search"), dict):
+            return p.meta["layout_search"]
     return None
 
 

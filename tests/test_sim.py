@@ -534,7 +534,7 @@ def test_robot_xml_has_a_table_at_the_mounts_foot_that_the_disks_hit(simulated, 
     from hwgen.checks.meshes import placed_mesh
 
     folder, result, _ = simulated[name]
-    entry = next(p for p in read_manifest(folder).parts if p["role"] == "base_mount")
+    entry = next(p for p in read_manifest(folder).parts if p.role == "base_mount")
     v = np.asarray(placed_mesh(folder, entry).vertices)
     m = mujoco.MjModel.from_xml_path(str(folder / "sim" / "robot.xml"))
     d = mujoco.MjData(m)
@@ -562,13 +562,13 @@ def test_robot_xml_weighs_the_bought_metal_the_bill_of_materials_lists(simulated
     folder, result, _ = simulated[name]
     manifest = read_manifest(folder)
     from hwgen.sim.parts import BENCH_ROLES
-    printed = sum(p["mass_g"] for p in manifest.parts if not p.get("fixture") and p["role"] not in BENCH_ROLES)
+    printed = sum(p.mass_g for p in manifest.parts if not p.fixture and p.role not in BENCH_ROLES)
     m = mujoco.MjModel.from_xml_path(str(folder / "sim" / "robot.xml"))
     assert m.body_mass.sum() * 1e3 - printed >= 10.0
     listed: dict = {}
     for p in manifest.parts:
-        if p["role"].startswith("tensioner_"):
-            for h in p.get("hardware", []):
+        if p.role.startswith("tensioner_"):
+            for h in p.hardware:
                 listed[(h["item"], h["size"])] = listed.get((h["item"], h["size"]), 0) + h["qty"]
     assert steel.bill(steel.tip_pieces(_plan(name))) == listed
 
