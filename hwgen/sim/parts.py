@@ -24,6 +24,7 @@ from ..cad.families import BENCH_ROLES      # the bench's parts: not the robot t
 from ..cad.manifest import Manifest, ManifestPart, manifest_parts
 from ..checks.meshes import part_meshes
 from ..model import steel
+from ..model.gravity import Gravity
 
 FOOT_MM = 0.5                 # a mount vertex this close above its lowest is on the table
 TIP_ROLES = ("tensioner_housing", "tensioner_worm", "tensioner_drive", "tensioner_wheel", "tensioner_clamp")
@@ -157,10 +158,9 @@ def read_build(folder: Path, manifest: Manifest, report: dict) -> Printed:
     stations = {i: mids.get(i, float(y)) for i, y in enumerate(drep["stations_mm"])}
     disks = {p.station: bodies[p.name] for p in parts if p.role == "disk"}
     thick = {p.station: float(p.meta["thickness_mm"]) for p in parts if p.role == "disk"}
-    g = report["gravity"]
-    strip = {"height_mm": float(g["height_mm"]), "thickness_mm": float(g["thickness_mm"]),
-             "y_mm": [float(v) for v in g["strip"]["y_mm"]], "g_per_mm": float(g["strip"]["lambda_g_mm"]),
-             "E_mpa": float(g["E_mpa"])}
+    g = Gravity.of(report["gravity"])
+    strip = {"height_mm": g.height_mm, "thickness_mm": g.thickness_mm, "y_mm": list(g.strip.y_mm),
+             "g_per_mm": g.strip.lambda_g_mm, "E_mpa": g.E_mpa}
     base = drep["disks"][0]
     face = stations[0] - thick.get(0, base["thickness_mm"]) / 2
     seats = {s["tendon"]: (float(s["x"]), float(s["z"]), face) for s in base.get("seats", [])}
