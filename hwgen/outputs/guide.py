@@ -121,9 +121,9 @@ def _tension_step(manifest: Manifest, plan, tendon_rows: list[dict], shown: list
     lines.append(f"Take up the slack of every channel, then tension the stiffening channels and the actuating "
                  f"channel ({plan.tensioner.actuating_channel}) last, a quarter turn at a time; the worm "
                  f"self-locks, so the tension stays when the key comes off.")
-    inside = [n for n in tensioner if n not in names(lambda p: p["role"] == "tensioner_housing")]
+    inside = [n for n in tensioner if n not in names(lambda p: p.role == "tensioner_housing")]
     return Step("tension", "Tensioning", lines, shown + inside,   # the housing hides the worms
-                names(lambda p: p["role"] in ("tensioner_worm", "tensioner_drive")), tendons=True,
+                names(lambda p: p.role in ("tensioner_worm", "tensioner_drive")), tendons=True,
                 extra={"take_up": ups})
 
 
@@ -201,7 +201,7 @@ def steps(folder: Path, manifest: Manifest, plan, bom: list[dict] | None = None)
         out.append(_frame_step(frame, base, strip + disks, rows, bom, manifest))
 
     if tensioner:
-        clamps = names(lambda p: p["role"] == "tensioner_clamp")
+        clamps = names(lambda p: p.role == "tensioner_clamp")
         hw = [r for r in _hardware_for(bom, set(tensioner)) if r not in _hardware_for(bom, set(clamps), only=True)]
         lines = ["Press the dowel pins, set the worms and wheels into the housing and fasten it to the tip disk: "
                  + "; ".join(cite(rows[n]) for n in tensioner if n in rows and rows[n]["family"] != "tensioner_clamp")
@@ -217,7 +217,7 @@ def steps(folder: Path, manifest: Manifest, plan, bom: list[dict] | None = None)
                  + "; ".join(cite(rows[n]) for n in clamps if n in rows) + "."]
         if hw:
             lines.append("Hardware: " + "; ".join(cite(r) for r in hw) + ".")
-        out.append(Step("wind", "Lines wound", lines, shown, clamps + names(lambda p: p["role"] == "tensioner_wheel"),
+        out.append(Step("wind", "Lines wound", lines, shown, clamps + names(lambda p: p.role == "tensioner_wheel"),
                         tendons=True))
 
     tension = _tension_step(manifest, plan, tendon_rows, strip + disks[-1:], tensioner, names)
