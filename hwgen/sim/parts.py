@@ -126,7 +126,7 @@ def _bodies(folder: Path, parts: list[ManifestPart]) -> tuple[dict[str, Body], t
                               placement=part.placement, color=part.color or (0.7, 0.7, 0.7, 1.0),
                               mass_g=float(part.mass_g), com_mm=np.asarray(part.center_of_mass_mm, float),
                               inertia_g_mm2=_inertia(mesh, part.placement, float(part.density_g_cm3) * 1e-3),
-                              box_min=lo, box_max=hi, entry=dict(e))
+                              box_min=lo, box_max=hi, entry=dict(part.entry))
     return out, foot
 
 
