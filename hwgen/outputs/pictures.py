@@ -318,7 +318,7 @@ def reachable_note(manifest: Manifest) -> str:
         return (f"the worm of channel {bending[0].meta['channel']} bends the robot: its drum winds "
                 f"{' and '.join(bending[0].tendons)} in opposite senses")
     if drums:
-        return (f"model only: the tensioner pre-tensions {' and '.join(drums[0]['tendons'])} together "
+        return (f"model only: the tensioner pre-tensions {' and '.join(drums[0].tendons)} together "
                 f"(tensioner.winding: same); it cannot bend the robot")
     return "model only: no drum of this tensioner winds a pair of tendons, so nothing bends the robot"
 
