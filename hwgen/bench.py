@@ -136,10 +136,15 @@ def _from_cache(stdout: str) -> str:
     return f"{int(m.group(1)) - int(m.group(2) or 0)} of {m.group(1)} parts built"
 
 
-def _sim_note(stdout: str) -> str:
-    """How much faster than real time `hwgen sim` says its model steps (its slowest keyframe)."""
-    rates = [int(v) for v in re.findall(r"(\d+)× real time", stdout)]
-    return f"the model steps {min(rates)}× real time on one core" if rates else ""
+def _sim_note(sim: dict) -> str:
+    """How much faster than real time the model of sim.json steps (its slowest keyframe), and where
+    `hwgen sim`'s time goes (sim.json's ``seconds``)."""
+    rates = [d["real_time_factor"] for d in sim.get("dynamics", []) if d.get("real_time_factor")]
+    secs = sim.get("seconds") or {}
+    return "; ".join(x for x in (
+        f"the model steps {min(rates):.0f}× real time on one core" if rates else "",
+        f"in sim.json: statics {secs['statics']:.1f} s, written and damped by {secs['written']:.1f}, measured by "
+        f"{secs['measured']:.1f}" if {"statics", "written", "measured"} <= set(secs) else "") if x)
 
 
 def sim_rows(params: Path, out: Path, store: Path, env: dict) -> list[tuple]:
@@ -148,14 +153,20 @@ def sim_rows(params: Path, out: Path, store: Path, env: dict) -> list[tuple]:
     r = _process("hwgen sim", ["sim", str(params), "--out", str(out), "--cache-dir", str(store), "-q"], env,
                  "on the built outputs: robot.xml written twice (its damping from state N's mode), 3 states and "
                  "the bent robot solved, the Cosserat reference, 3 modes with ring-downs, the drive, 3 × 2 s stepped")
-    try:
-        design = next(p.name for p in out.iterdir() if (p / "sim" / "sim.json").is_file())
-        secs = json.loads((out / design / "sim" / "sim.json").read_text())["seconds"]
-        split = (f"in sim.json: statics {secs['statics']:.1f} s, written and damped by "
-                 f"{secs['written']:.1f}, measured by {secs['measured']:.1f}")
-    except (StopIteration, OSError, KeyError, ValueError):
-        split = ""
-    return [(*r[:4], "; ".join(x for x in (r[4], _sim_note(r[5]), split) if x))]
+    sim = _written_json(out, "sim/sim.json")
+    return [(*r[:4], "; ".join(x for x in (r[4], _sim_note(sim) if sim else "no sim.json") if x))]
+
+
+def _written_json(out: Path, name: str) -> dict | None:
+    """The JSON file ``name`` a command wrote into its design's folder under ``out`` (None: none, or unreadable)."""
+    for path in sorted(Path(out).glob(f"*/{name}")):
+        try:
+            doc = json.loads(path.read_text())
+        except (OSError, ValueError):
+            continue
+        if isinstance(doc, dict):
+            return doc
+    return None
 
 
 def processes(params_path: Path) -> None:
@@ -224,9 +235,13 @@ def processes(params_path: Path) -> None:
 
 # ---------------------------------------------------------------- the push test
 
-def _endpoint_note(stdout: str) -> str:
-    m = re.search(r"endpoint ratio (\S+) at disk \d+: ([\d.]+)× \(([\d.]+)–([\d.]+)×", stdout)
-    return f"{m.group(1)} {m.group(2)}× ({m.group(3)}–{m.group(4)}×)" if m else ""
+def _endpoint_note(experiment: dict | None) -> str:
+    """The predicted endpoint ratio and its band, from experiment.json."""
+    ep = (experiment or {}).get("endpoint_ratio")
+    if not ep:
+        return ""
+    band = f" ({ep['low']:.2f}–{ep['high']:.2f}×)" if ep.get("corners") else ""
+    return f"{ep['state']}/{ep['over']} {ep['nominal']:.2f}×{band}"
 
 
 def experiment_rows(params: Path, tmp: Path, env: dict) -> list[tuple]:
@@ -239,7 +254,8 @@ def experiment_rows(params: Path, tmp: Path, env: dict) -> list[tuple]:
                         ("hwgen experiment", "every state tensioned and pushed on every robot of the band "
                                              "(issue 47: at most 30 s CPU)")):
         r = _process(label, argv, numba_env, note)
-        rows.append((*r[:4], "; ".join(x for x in (r[4], _endpoint_note(r[5])) if x)))
+        ep = _endpoint_note(_written_json(tmp / "experiment", "experiment/experiment.json"))
+        rows.append((*r[:4], "; ".join(x for x in (r[4], ep) if x)))
     return rows
 
 

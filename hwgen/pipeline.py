@@ -33,7 +33,7 @@ import json
 import os
 import shutil
 import tempfile
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import ExitStack, contextmanager, suppress
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -55,6 +55,7 @@ from .engine.stagecache import cached_stage
 from .engine.units import PartFiles
 from .errors import InputError, clip
 from .model import document, feasibility, materials
+from .model.gravity import Gravity
 from .model.plan import Plan, make_plan
 from .options import BuildOptions
 from .outputs import bom, guide, pictures, plates as print_plates, webview
@@ -151,7 +152,7 @@ def checked(folder: Path, manifest: Manifest, plan: Plan, ahead: Ahead | None = 
     from .checks.run import run_checks as run
     report = run(folder, manifest, plan, ahead.measured(folder, manifest) if ahead is not None else None)
     try:
-        study = statics(plan, report.get("gravity"))
+        study = statics(plan, Gravity.of(report.get("gravity")))
     except (ValueError, ArithmeticError, np.linalg.LinAlgError) as e:      # the statics says why, the rest stands
         study = {"skipped": f"the tendon states' statics was not computed: {e}"}
     report["stiffening"] = study.get("stiffening") or ({"skipped": study["skipped"]} if "skipped" in study else None)
@@ -167,7 +168,7 @@ def checked(folder: Path, manifest: Manifest, plan: Plan, ahead: Ahead | None = 
     return report, study
 
 
-def statics(plan: Plan, measured: dict | None, which: list[str] | None = None) -> dict:
+def statics(plan: Plan, measured: Gravity | Mapping | None, which: list[str] | None = None) -> dict:
     """The statics of the plan's tendon states (or those named; :func:`hwgen.model.stiffness.study`)
     with the weights the checks measured (a report's ``gravity`` section, else the plan's
     estimate): stiffness.json's content, remembered in the active cache by what it reads (the
@@ -388,9 +389,9 @@ def _files_stage(b: Build) -> tuple[Manifest, list[str], dict[str, Beside]]:
 
 def _written(b: Build, manifest: Manifest, pattern: str) -> Manifest:
     """A --parts build's manifest, saying which parts it wrote; bad input when the pattern matches none."""
-    written = [p["name"] for p in manifest.parts if b.select(p["name"])]
+    written = [p.name for p in manifest.parts if b.select(p.name)]
     if not written:
-        names = ", ".join(p["name"] for p in manifest.parts)
+        names = ", ".join(p.name for p in manifest.parts)
         raise InputError(b.loaded.source, "--parts", f"{clip(pattern)!r} matches none of the parts: {clip(names, 200)}")
     return replace(manifest, parts_written={"pattern": pattern, "names": written})
 
@@ -485,8 +486,8 @@ def check(loaded: params.LoadedDesign, out_root: Path, progress=None,
 def tensioner_record(manifest: Manifest) -> dict | None:
     """The tensioner layout's search record a build kept in its manifest (None: none there)."""
     for p in manifest.parts:
-        if p.get("role") == "tensioner_housing" and isinstance(p.get("layout_search"), dict):
-            return p["layout_search"]
+        if p.role == "tensioner_housing" and isinstance(p.meta.get("layout_search"), dict):
+            return p.meta["layout_search"]
     return None
 
 

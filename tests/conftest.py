@@ -23,7 +23,8 @@ import pytest
 
 # Every design the suite builds or checks (also through the CLI, in child processes) runs its
 # as-built Monte Carlo on this many samples, not the shipped 10 000: the suite tests the machinery
-# and the verdicts, `make bench` the default's cost.
+# and the verdicts, `make bench` the default's cost; the slow tier measures the prototype once at
+# the design's own count (tests/test_taut.py: test_the_shipped_sample_count_measures_the_prototype).
 os.environ.setdefault("HWGEN_CHECK_SAMPLES", "64")
 # `hwgen build` through the CLI (in this process or a child) builds its parts in the process itself,
 # not in a worker (the CLI's default): CadQuery is imported once per process, and a builder a test

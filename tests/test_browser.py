@@ -48,12 +48,12 @@ def test_the_prototype_opens_offline_draws_the_robot_and_names_every_part(built,
     assert state == "ready", messages
     assert visit.errors == [] and visit.refused == []
     assert messages == ""
-    names = {e["name"] for e in manifest.parts}
+    names = {e.name for e in manifest.parts}
     assert names <= set(tree.split()) and set(drawn) == names       # every part listed, and drawn from the GLB
     px = _pixels(canvas)
     background = float((px.min(axis=1) > WHITE).mean())
     assert 0.2 < background < 0.95, background                         # something drawn, not all of it
-    disk = next(e["color"] for e in manifest.parts if e["role"] == "disk")
+    disk = next(e.color for e in manifest.parts if e.role == "disk")
     assert _share_near(px, disk) > 0.02                               # the disks, lit, in their colour
     assert _share_near(px, WARNING_COLOUR) < 1e-3                      # nothing fails: no magenta
 

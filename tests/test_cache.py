@@ -170,7 +170,7 @@ def fresh(tmp_path_factory):
     root = tmp_path_factory.mktemp("cache-test")
     loaded = load(PARAMS / "prototype.yaml")
     res = build(loaded, root / "fresh", post_build=False, cache_dir=root / "cache")
-    assert sorted(res.built) == sorted(p["name"] for p in res.manifest.parts)
+    assert sorted(res.built) == sorted(p.name for p in res.manifest.parts)
     return loaded, root, _tree(res.folder)
 
 
@@ -251,7 +251,7 @@ def test_editing_one_tendon_rebuilds_exactly_the_parts_whose_specs_changed(tmp_p
     changed = [b.name for a, b in zip(old.disks, new.disks) if a != b]
     changed += [new.backbone.name] if old.backbone != new.backbone else []
     if cache.key(old.tensioner_layout) != cache.key(new.tensioner_layout):     # holds arrays: compared by value
-        changed += [p["name"] for p in first.manifest.parts if p["role"].startswith("tensioner")]
+        changed += [p.name for p in first.manifest.parts if p.role.startswith("tensioner")]
     assert "disk_08" in changed and len(changed) < len(new.disks)         # a local edit
     assert second.built == changed
     # the row is in the middle: the tip eyelets, the tendons' runs and the tensioner's layout stay,
@@ -323,7 +323,7 @@ def test_a_stage_is_reused_only_for_the_same_files_manifest_plan_and_options(tmp
         for path, text in files.items():
             (folder / path).write_text(text)
         reused = []
-        manifest = Manifest(name, "0", "", "", [], {}, {}, [], {})
+        manifest = Manifest(name, "0", "", "", [], {}, {}, (), {})
         out = cached_stage(store, Hashes(), "checks", stage, StageInput(plan, folder, manifest, options=options), reused)
         return out, manifest.adding(out.added), (folder / "report.json").read_text(), reused
 
@@ -355,7 +355,7 @@ def test_parts_writes_only_the_parts_it_names_and_the_whole_manifest(built, tmp_
     disks = sorted(p["name"] for p in whole["parts"] if p["name"].startswith("disk_"))
     assert sorted(_tree(res.folder)) == ["manifest.json"] + [f"step/{n}.step" for n in disks] + \
         [f"stl/{n}.stl" for n in disks]
-    assert res.manifest.parts == whole["parts"] and res.manifest.parts_written["names"] == disks
+    assert [p.to_json() for p in res.manifest.parts] == whole["parts"] and res.manifest.parts_written["names"] == disks
     for n in disks:
         assert _tree(res.folder)[f"stl/{n}.stl"] == _tree(built("prototype"))[f"stl/{n}.stl"]
     assert "missing" in stale_reason(res.folder, loaded)          # hwgen check builds it whole first
@@ -389,7 +389,7 @@ def test_parts_built_in_worker_processes_have_the_bytes_of_a_serial_build(fresh,
     monkeypatch.setattr(gear_mesh, "measure_pair", lambda *a: gears_here.append(1) or real_gears(*a))
     loaded, _, first = fresh
     res = build(loaded, tmp_path / "out", cache_dir=tmp_path / "cache", jobs=2)
-    assert sorted(res.built) == sorted(p["name"] for p in res.manifest.parts)
+    assert sorted(res.built) == sorted(p.name for p in res.manifest.parts)
     tree = _tree(res.folder)
     assert {f: tree.get(f) for f in first if f != "manifest.json"} == {f: first[f] for f in first if f != "manifest.json"}
     assert measured_in == ["hwgen-measure"] and gears_here == []

@@ -9,12 +9,15 @@ import math
 import numpy as np
 import pytest
 
+from hwgen.model.gravity import Gravity, StripWeight, TipWeight
 from hwgen.sim import cosserat as co
 from hwgen.sim import independent
 
 E, G, H, T, L = 50000.0, 4000.0, 60.0, 0.59, 270.0
 EI = E * H * T ** 3 / 12
-SECTION = {"E_mpa": E, "height_mm": H, "thickness_mm": T, "length_mm": L, "strip": {"lambda_g_mm": 0.05}}
+SECTION = Gravity(model="", E_mpa=E, height_mm=H, thickness_mm=T, length_mm=L, disks=(), spans=(), cases={},
+                  strip=StripWeight(part="strip", mass_g=0.05 * L, y_mm=(0.0, L), lambda_g_mm=0.05),
+                  tip=TipWeight(mass_g=0.0, a_mm=0.0, z_mm=0.0), document={})
 # Bisshopp & Drucker (1945), as tabulated by Bathe & Bolourchi (1979): α = PL²/EI -> (w/L, u/L)
 BISSHOPP_DRUCKER = {1.0: (0.30172, -0.05643), 2.0: (0.49346, -0.16064)}
 

@@ -153,9 +153,10 @@ def _count_measures(monkeypatch) -> list:
 
 
 def _checks(ps: list[LoadedPart]) -> list[dict]:
-    from hwgen.cad.manifest import Manifest
-    manifest = Manifest("test", "0", "", "", [], {}, {}, [{"name": p.name, **p.entry} for p in ps],
-                        {"stations_mm": [0.0]})
+    from hwgen.cad.manifest import Manifest, ManifestPart
+    entries = [{"name": p.name, "placement": p.placement.tolist(), "files": {}, **p.entry,
+                "bbox_mm": {"min": p.mesh.bounds[0].tolist(), "max": p.mesh.bounds[1].tolist()}} for p in ps]
+    manifest = Manifest("test", "0", "", "", [], {}, {}, tuple(map(ManifestPart.of, entries)), {"stations_mm": [0.0]})
     return ([c.to_json() for c in mesh_checks(ps) + printing_checks(ps, "SLA")]
             + [mass_summary(ps, manifest)[0]])
 

@@ -23,6 +23,7 @@ mujoco = pytest.importorskip("mujoco")
 from hwgen import params
 from hwgen.model import statics as st
 from hwgen.model import stiffness
+from hwgen.model.gravity import Gravity, PointWeight, StripWeight, TipWeight
 from hwgen.model.plan import make_plan
 from hwgen.sim import chain, limits, measure, reference
 
@@ -171,9 +172,12 @@ def test_the_builds_statics_serve_only_when_they_hold_every_state_from_the_same_
     assert served(full) == "the build's stiffness.json" and not solved
     heavier = stiffness.describe(plan).masses
     heavier = {**heavier, "tip_assembly": {**heavier["tip_assembly"], "mass_g": 2 * heavier["tip_assembly"]["mass_g"]}}
-    measured = {"disks": heavier["disks"], "strip": {"lambda_g_mm": heavier["strip_g_per_mm"]},
-                "tip_assembly": {"mass_g": heavier["tip_assembly"]["mass_g"], "a_mm": heavier["tip_assembly"]["a_mm"],
-                                 "z_mm": heavier["tip_assembly"]["b_mm"]}}
+    tip = heavier["tip_assembly"]
+    # the weights the statics reads; the section's strip figures (its modulus, section, spans) are the sim's
+    measured = Gravity(model="", E_mpa=0.0, height_mm=0.0, thickness_mm=0.0, length_mm=0.0, spans=(), cases={},
+                       strip=StripWeight(part="backbone", mass_g=0.0, y_mm=(0.0, 0.0), lambda_g_mm=heavier["strip_g_per_mm"]),
+                       disks=tuple(PointWeight(**d) for d in heavier["disks"]),
+                       tip=TipWeight(mass_g=tip["mass_g"], a_mm=tip["a_mm"], z_mm=tip["b_mm"]), document={})
     for content, why, m in (({**full, "states": [e for e in full["states"] if e["state"] != "AC2"]}, "state AC2", None),
                             ({**full, "states": [{**e, "orientation": "weightless"} for e in full["states"]]},
                              "state N", None),
@@ -430,7 +434,7 @@ def test_the_independent_rod_puts_the_tip_where_mujoco_does(simulated, name):
     report = read_report(folder)
     printed = dataclasses.replace(parts.read_build(folder, read_manifest(folder), report),
                                   bought=steel.tip_pieces(plan))
-    rod, k, local = independent.robot_rod(printed, report["gravity"], plan.backbone.shear_modulus_gpa * 1e3)
+    rod, k, local = independent.robot_rod(printed, Gravity.of(report["gravity"]), plan.backbone.shear_modulus_gpa * 1e3)
     sol = cosserat.solve(rod, cosserat.Loads(gravity=(0.0, 0.0, -1.0)))
     assert sol.point(k, local) == pytest.approx(ref["N"]["cosserat_tip_mm"], abs=1e-6)
     assert ref["N"]["cosserat_tip_mm"] != pytest.approx(result["states"][0]["statics_tip_mm"], abs=1e-3)
@@ -534,7 +538,7 @@ def test_robot_xml_has_a_table_at_the_mounts_foot_that_the_disks_hit(simulated, 
     from hwgen.checks.meshes import placed_mesh
 
     folder, result, _ = simulated[name]
-    entry = next(p for p in read_manifest(folder).parts if p["role"] == "base_mount")
+    entry = next(p for p in read_manifest(folder).parts if p.role == "base_mount")
     v = np.asarray(placed_mesh(folder, entry).vertices)
     m = mujoco.MjModel.from_xml_path(str(folder / "sim" / "robot.xml"))
     d = mujoco.MjData(m)
@@ -562,13 +566,13 @@ def test_robot_xml_weighs_the_bought_metal_the_bill_of_materials_lists(simulated
     folder, result, _ = simulated[name]
     manifest = read_manifest(folder)
     from hwgen.sim.parts import BENCH_ROLES
-    printed = sum(p["mass_g"] for p in manifest.parts if not p.get("fixture") and p["role"] not in BENCH_ROLES)
+    printed = sum(p.mass_g for p in manifest.parts if not p.fixture and p.role not in BENCH_ROLES)
     m = mujoco.MjModel.from_xml_path(str(folder / "sim" / "robot.xml"))
     assert m.body_mass.sum() * 1e3 - printed >= 10.0
     listed: dict = {}
     for p in manifest.parts:
-        if p["role"].startswith("tensioner_"):
-            for h in p.get("hardware", []):
+        if p.role.startswith("tensioner_"):
+            for h in p.hardware:
                 listed[(h["item"], h["size"])] = listed.get((h["item"], h["size"]), 0) + h["qty"]
     assert steel.bill(steel.tip_pieces(_plan(name))) == listed
 

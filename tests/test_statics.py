@@ -342,9 +342,13 @@ def test_state_N_sags_as_the_own_weight_model_shoots_it(prototype):
 
 def test_measured_weights_replace_the_plans_estimate(prototype):
     sf, design, desc, _ = prototype
+    from hwgen.model.gravity import Gravity, PointWeight, StripWeight, TipWeight
     from hwgen.model.plan import make_plan
-    gravity = {"disks": [{"part": "disk_06", "s_mm": 134.0, "mass_g": 10.0}],
-               "tip_assembly": {"mass_g": 100.0, "a_mm": 60.0, "z_mm": -2.0}, "strip": {"lambda_g_mm": 0.05}}
+    # the weights the statics reads; the section's strip figures (modulus, section, spans) are the sim's
+    gravity = Gravity(model="", E_mpa=0.0, height_mm=0.0, thickness_mm=0.0, length_mm=0.0, spans=(), cases={},
+                      disks=(PointWeight(part="disk_06", s_mm=134.0, mass_g=10.0),),
+                      tip=TipWeight(mass_g=100.0, a_mm=60.0, z_mm=-2.0), document={},
+                      strip=StripWeight(part="backbone", mass_g=0.0, y_mm=(0.0, 0.0), lambda_g_mm=0.05))
     measured = sf.describe(make_plan(design), gravity)
     r = measured.robot
     assert r.point_masses == ((134.0, 10.0),) and r.tip_mass == 100.0 and r.tip_offset == (60.0, -2.0)

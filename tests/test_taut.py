@@ -113,6 +113,34 @@ def test_shipped_prototype_as_built(built, proto):
         assert np.percentile(res.worst[:, names.index(t)], 95) <= 0.2, t
 
 
+def test_the_shipped_sample_count_measures_the_prototype(built):
+    """The suite draws 64 as-built samples (tests/conftest.py: $HWGEN_CHECK_SAMPLES); once, the slow
+    tier measures the prototype as a user's build does, at the design's own check.samples: the
+    Monte Carlo then draws more than the suite's 64 and stops by its rule at or under that count, and
+    each budgeted tendon's verdict is the p95 of the samples it drew, against its budget."""
+    from hwgen.cad.manifest import read_manifest
+    from hwgen.checks.run import run_checks
+    from hwgen.model.plan import make_plan
+    from hwgen.options import BuildOptions
+    from hwgen.pipeline import load
+    from .conftest import PARAMS
+
+    assert BuildOptions.from_environment().check_samples == 64      # what every other test draws
+    folder = built("prototype")
+    plan = make_plan(load(PARAMS / "prototype.yaml").design)
+    assert plan.check.samples > 64
+    report = run_checks(folder, read_manifest(folder), plan)
+    tb = report["as_built"]["taut"]
+    assert 64 < tb["samples"] <= plan.check.samples
+    tendons = {t["name"]: t for t in tb["tendons"]}
+    robust = [c for c in report["checks"] if c["id"] == "tendon.robust"]
+    assert {c["where"]["tendon"] for c in robust} == {t for t, r in tendons.items() if r["budget_mm"] is not None}
+    for c in robust:
+        t = tendons[c["where"]["tendon"]]
+        assert sum(t["histogram"]["counts"]) == tb["samples"]
+        assert c["measured"] == pytest.approx(t["p95_mm"]) and c["passed"] == (t["p95_mm"] <= t["budget_mm"])
+
+
 def test_paper_table2_fails_on_c2(built):
     rep = _report(built("paper-table2"))
     bad = [c for c in rep["checks"] if c["id"] == "tendon.robust" and not c["passed"]]

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from hwgen.cad.manifest import Manifest, manifest_parts, sha256
+from hwgen.cad.manifest import Manifest, ManifestPart, manifest_parts, sha256
 from hwgen.outputs import scene, webview
 
 UP_Y = np.array([[1.0, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]])     # file z -> robot y (a disk's)
@@ -63,7 +63,8 @@ def _robot(folder, missing: str | None = None, garbled: bool = False) -> Manifes
         parts.append(entry)
     design = {"stations_mm": STATIONS,
               "tendons": [{"name": n, "eyelets_xz_mm": [[x, 0.0]] * 3} for n, x in (("A1", 12.0), ("A2", -12.0))]}
-    return Manifest("little", "0", "", "", [], {}, {}, parts, design, checks=CHECKS, checks_ok=False)
+    return Manifest("little", "0", "", "", [], {}, {}, tuple(map(ManifestPart.of, parts)), design, checks=CHECKS,
+                    checks_ok=False)
 
 
 STUDY = {"stiffening": {"reference": "gravity -z", "headline": "stiffening AA/N at the tip: 2×"},
@@ -124,7 +125,7 @@ def test_the_page_names_every_part_and_marks_the_failing_ones(tmp_path, monkeypa
     _, manifest, _, page = _page(tmp_path, monkeypatch)
     tree = re.search(r"<nav id=tree>(.*?)</nav>", page, re.S).group(1)
     for e in manifest.parts:
-        assert f">{e['name']}</button>" in tree
+        assert f">{e.name}</button>" in tree
     failing = re.findall(r'<li data-part="([^"]+)" class=failing>.*?<span class=ids>([^<]*)</span>', tree)
     assert failing == [("disk_01", "eyelet.wall.edge")]
     tendons = re.findall(r'<li data-tendon="([^"]+)" class=failing>.*?<span class=ids>([^<]*)</span>', tree)
@@ -171,7 +172,7 @@ def test_without_the_viewer_the_page_lists_everything_and_says_why(tmp_path, mon
     assert "<script" not in page
     assert "The 3D view is not in this page" in page and "make viewer" in page
     for e in manifest.parts:
-        assert f">{e['name']}</button>" in page
+        assert f">{e.name}</button>" in page
     assert "eyelet.wall.edge" in page and "<table id=stiffness>" in page
     assert added.sections["view"]["status"] == "no viewer"
 

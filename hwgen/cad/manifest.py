@@ -6,7 +6,8 @@ Written here and read here: :class:`Manifest` is the manifest as every stage rea
 :func:`read_manifest` its one reader and :func:`write_manifest` its one writer; a stage after
 the files returns what it adds (:class:`Added`) and only the pipeline puts it in
 (:meth:`Manifest.adding`). :class:`ManifestPart` is one part's entry as the later stages use it
-(its files, placement, role), so no stage spells the JSON's keys itself."""
+(its files, placement, role, mass, its family's own fields), a frozen record, so no stage spells
+the JSON's common keys itself; the manifest holds them as records and writes each back as read."""
 from __future__ import annotations
 
 import dataclasses
@@ -58,7 +59,7 @@ class Manifest:
     params_base: list                   # the file's base, its base's base, ...: merged under it
     design_resolved: dict               # the design as read, bases merged
     files: dict                         # the whole design's files: key -> {"path", "sha256", ...}
-    parts: list                         # each part's entry (:class:`ManifestPart` reads one)
+    parts: tuple[ManifestPart, ...]     # each part's record, in the build's order
     design_report: dict                 # :func:`design_report`
     parts_written: dict | None = None   # a --parts build: the pattern and the parts it wrote
     checks: list | None = None          # the checks' records (report.json's)
@@ -70,14 +71,18 @@ class Manifest:
     view: dict | None = None            # view.html: what the page holds and what it could not draw
 
     def to_json(self) -> dict:
-        return {_JSON_KEY.get(f.name, f.name): getattr(self, f.name) for f in dataclasses.fields(self)
+        return {_JSON_KEY.get(f.name, f.name): [p.to_json() for p in self.parts] if f.name == "parts"
+                else getattr(self, f.name) for f in dataclasses.fields(self)
                 if getattr(self, f.name) is not None or f.default is not None}
 
     @staticmethod
     def of(doc: Mapping) -> Manifest:
         """The manifest a JSON document holds; KeyError or TypeError when it is not one hwgen wrote."""
         fields = {_JSON_KEY.get(f.name, f.name): f.name for f in dataclasses.fields(Manifest)}
-        return Manifest(**{fields[k]: v for k, v in doc.items() if k in fields})
+        given = {fields[k]: v for k, v in doc.items() if k in fields}
+        if "parts" in given:
+            given["parts"] = tuple(ManifestPart.of(e) for e in given["parts"])
+        return Manifest(**given)
 
     def adding(self, added: Added) -> Manifest:
         """This manifest with a stage's sections and files put in (files already listed keep their place)."""
@@ -109,10 +114,18 @@ class PartFile:
     sha256: str
 
 
-@dataclass(frozen=True, kw_only=True)
+# the keys every part's entry has (:func:`entry`); the others are its family's own (:attr:`ManifestPart.meta`)
+COMMON_KEYS = ("name", "role", "files", "volume_mm3", "material", "density_g_cm3", "mass_g", "center_of_mass_mm",
+               "bbox_mm", "placement", "color", "station")
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
 class ManifestPart:
-    """One part's manifest entry as the checks and outputs read it. ``entry`` keeps the whole
-    entry for the fields only one family has (a disk's role, a drum's tendon runs, ...)."""
+    """One part's manifest entry as every later stage reads it: the fields all parts have, typed,
+    and ``meta``, the fields only its family has (a drum's tendons and runs, a worm's teeth, the
+    housing's layout record, the hardware a part takes). ``entry`` is the JSON entry whole, as
+    read or as the parts' stage made it: what the manifest writes back, in its keys' order. Two
+    records are equal when their entries are."""
 
     name: str
     role: str
@@ -120,20 +133,41 @@ class ManifestPart:
     placement: np.ndarray               # 4x4: file coordinates -> robot coordinates, mm
     station: int | None
     volume_mm3: float | None
+    mass_g: float | None
+    material: str | None
+    density_g_cm3: float | None
+    center_of_mass_mm: tuple[float, ...] | None     # in robot coordinates
+    color: tuple[float, ...] | None
     bbox_min: np.ndarray                # the solid's box in file coordinates, mm
     bbox_max: np.ndarray
     fixture: bool                       # an assembly aid (the jig), not part of the robot
+    meta: Mapping                       # the family's own fields (the entry's keys beyond COMMON_KEYS)
     entry: Mapping
 
     @staticmethod
-    def of(entry: Mapping) -> ManifestPart:
+    def of(entry: Mapping | ManifestPart) -> ManifestPart:
+        """The record of a manifest entry (a record is its own)."""
+        if isinstance(entry, ManifestPart):
+            return entry
         bbox = entry["bbox_mm"]
+        com, color = entry.get("center_of_mass_mm"), entry.get("color")
         return ManifestPart(
             name=entry["name"], role=entry.get("role", ""),
             files={kind: PartFile(path=f["path"], sha256=f["sha256"]) for kind, f in entry["files"].items()},
             placement=np.asarray(entry["placement"], dtype=float), station=entry.get("station"),
-            volume_mm3=entry.get("volume_mm3"), bbox_min=np.asarray(bbox["min"], dtype=float),
-            bbox_max=np.asarray(bbox["max"], dtype=float), fixture=bool(entry.get("fixture")), entry=entry)
+            volume_mm3=entry.get("volume_mm3"), mass_g=entry.get("mass_g"), material=entry.get("material"),
+            density_g_cm3=entry.get("density_g_cm3"), center_of_mass_mm=None if com is None else tuple(com),
+            color=None if color is None else tuple(color), bbox_min=np.asarray(bbox["min"], dtype=float),
+            bbox_max=np.asarray(bbox["max"], dtype=float), fixture=bool(entry.get("fixture")),
+            meta={k: v for k, v in entry.items() if k not in COMMON_KEYS}, entry=entry)
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, ManifestPart) and self.entry == other.entry
+
+    __hash__ = None     # type: ignore[assignment]  # equal by a mapping's value
+
+    def to_json(self) -> dict:
+        return dict(self.entry)
 
     @property
     def stl(self) -> str:
@@ -148,10 +182,31 @@ class ManifestPart:
     def stl_in(self, folder: str | Path) -> Path:
         return Path(folder) / self.stl
 
+    @property
+    def channel(self) -> str | None:
+        """The tensioner's channel the part belongs to (its worm, wheel, ...), None elsewhere."""
+        ch = self.meta.get("channel")
+        return ch if isinstance(ch, str) else None
+
+    @property
+    def tendons(self) -> list[str]:
+        """The tendons a drum winds (none for other parts)."""
+        return list(self.meta.get("tendons") or [])
+
+    @property
+    def tendon_runs(self) -> list[Mapping]:
+        """Each tendon's run from the tip eyelet to its drum, as the tensioner's parts record it."""
+        return list(self.meta.get("tendon_runs") or [])
+
+    @property
+    def hardware(self) -> list[Mapping]:
+        """The bought hardware the part takes (screws, nuts, bearings), as its family lists it."""
+        return list(self.meta.get("hardware") or [])
+
 
 def manifest_parts(manifest: Manifest) -> list[ManifestPart]:
     """Every part of a manifest, in its order."""
-    return [ManifestPart.of(e) for e in manifest.parts]
+    return list(manifest.parts)
 
 
 def manifest_files(manifest: Manifest) -> list[PartFile]:

@@ -72,16 +72,17 @@ POSE_DECIMALS = (12, 11)      # a wheel's pose to its worm, rounded: rotation en
 #                               the rounding, ≤ 5e-12 mm, moves the 0.024 mm gap by < 1e-9 of itself)
 
 
-def toward(wheel: dict, worm: dict, distance: float) -> np.ndarray:
+def toward(wheel: ManifestPart | dict, worm: ManifestPart | dict, distance: float) -> np.ndarray:
     """The wheel's placement moved ``distance`` mm toward the worm along the common normal of
     their file Z axes (a what-if for tests: the checks never read axes from placements)."""
-    pa, da = (np.asarray(wheel["placement"], dtype=float)[:3, k] for k in (3, 2))
-    pb, db = (np.asarray(worm["placement"], dtype=float)[:3, k] for k in (3, 2))
+    wheel, worm = ManifestPart.of(wheel), ManifestPart.of(worm)
+    pa, da = (wheel.placement[:3, k] for k in (3, 2))
+    pb, db = (worm.placement[:3, k] for k in (3, 2))
     n = np.cross(da, db)
     n /= np.linalg.norm(n)
     if np.dot(pb - pa, n) < 0:
         n = -n
-    m = np.asarray(wheel["placement"], dtype=float).copy()
+    m = wheel.placement.copy()
     m[:3, 3] += distance * n
     return m
 
@@ -263,21 +264,21 @@ class Meshing:
         return {"turn_deg": turns, "extent_mm": extents, "points": int(len(pts))}
 
 
-def gear_pairs(parts: list[dict]) -> dict[str, dict[str, dict]]:
-    """The tensioner's worm and wheel entries of ``parts`` (manifest entries), per channel."""
-    out: dict[str, dict[str, dict]] = {}
-    for p in parts:
-        if p.get("role") in ("tensioner_worm", "tensioner_wheel"):
-            out.setdefault(p["channel"], {})[p["role"].split("_")[1]] = p
+def gear_pairs(parts) -> dict[str, dict[str, ManifestPart]]:
+    """The tensioner's worm and wheel of ``parts`` (manifest records or entries), per channel."""
+    out: dict[str, dict[str, ManifestPart]] = {}
+    for p in map(ManifestPart.of, parts):
+        if p.role in ("tensioner_worm", "tensioner_wheel"):
+            out.setdefault(p.channel, {})[p.role.split("_")[1]] = p
     return out
 
 
-def relative_pose(worm: dict, wheel: dict) -> np.ndarray:
+def relative_pose(worm: ManifestPart, wheel: ManifestPart) -> np.ndarray:
     """Where the wheel's file lies in its worm's file: inv(worm placement) @ wheel placement, its
     rotation rounded to POSE_DECIMALS[0] places and its translation (mm) to POSE_DECIMALS[1], -0.0
     made 0.0: pairs placed apart by a rigid motion give the same array, not ones that differ in
     their last digits (the product's rounding depends on where each pair sits)."""
-    pw, ph = (np.asarray(e["placement"], dtype=float) for e in (worm, wheel))
+    pw, ph = ManifestPart.of(worm).placement, ManifestPart.of(wheel).placement
     rel = np.linalg.solve(pw, ph)
     out = np.eye(4)
     out[:3, :3] = np.round(rel[:3, :3], POSE_DECIMALS[0])
@@ -285,7 +286,7 @@ def relative_pose(worm: dict, wheel: dict) -> np.ndarray:
     return out + 0.0
 
 
-def measure_pair(folder: Path, worm: dict, wheel: dict, relative: np.ndarray | None = None) -> dict:
+def measure_pair(folder: Path, worm: ManifestPart, wheel: ManifestPart, relative: np.ndarray | None = None) -> dict:
     """Axes, counts and the meshing motion of one worm and wheel, from their files: placed by their
     manifest placements (robot mm), or, with ``relative``, the worm as its file has it and the wheel
     under ``relative`` (the worm's file frame, where :func:`gear_checks` measures)."""
@@ -308,8 +309,8 @@ class DistinctPair:
     other (:func:`relative_pose`): one measurement serves them all, made on the first's files."""
 
     channels: list[str]                  # sorted; the first is the one measured
-    worm: dict                           # the first channel's manifest entries
-    wheel: dict
+    worm: ManifestPart                   # the first channel's parts
+    wheel: ManifestPart
     files: tuple[str | None, str | None]  # sha256 of the worm's and the wheel's STL (None: unreadable)
     pose: np.ndarray                     # :func:`relative_pose`
 
@@ -322,14 +323,14 @@ class DistinctPair:
         return measure_pair(folder, self.worm, self.wheel, self.pose)
 
 
-def distinct_pairs(folder: Path, pairs: dict[str, dict[str, dict]]) -> list[DistinctPair]:
+def distinct_pairs(folder: Path, pairs: dict[str, dict[str, ManifestPart]]) -> list[DistinctPair]:
     """The channels that have both a worm and a wheel, grouped by their files' bytes and the pose of
     the wheel to its worm; in the order of each group's first channel."""
     groups: dict[tuple, DistinctPair] = {}
     for channel, pw in sorted(pairs.items()):
         if set(pw) != {"worm", "wheel"}:
             continue
-        files = tuple(_file_sha(ManifestPart.of(pw[r]).stl_in(folder)) for r in ("worm", "wheel"))
+        files = tuple(_file_sha(pw[r].stl_in(folder)) for r in ("worm", "wheel"))
         pose = relative_pose(pw["worm"], pw["wheel"])
         k = (files, pose.tobytes())
         if k in groups:
@@ -339,8 +340,8 @@ def distinct_pairs(folder: Path, pairs: dict[str, dict[str, dict]]) -> list[Dist
     return list(groups.values())
 
 
-def gear_checks(folder: Path, parts: list[dict], plan) -> list[Check]:
-    """Every distinct worm and wheel of ``parts`` (manifest entries; :func:`distinct_pairs`) measured from its files, once. What
+def gear_checks(folder: Path, parts, plan) -> list[Check]:
+    """Every distinct worm and wheel of ``parts`` (manifest records; :func:`distinct_pairs`) measured from its files, once. What
     the measuring finds (most of a check's time) is remembered (:func:`hwgen.cache.remembered`) per
     distinct pair under what it depends on: the two files' bytes, the wheel's pose to its worm and
     the design values it reads (the center offset, beyond which the gap is not searched; for the
@@ -478,7 +479,7 @@ def _strength_checks(measured: dict, of: dict, measurer: _Measurer, pairs: dict,
     usable = [c for c, m in measured.items() if "gap" in m]
     if not usable:
         return []
-    rep = max(usable, key=lambda c: (len(wheels[c].get("tendons", [])), c))
+    rep = max(usable, key=lambda c: (len(wheels[c].tendons), c))
     m, on = measured[rep], of[rep].measured_on
     found = measurer.contact(of[rep], pair.module)
     contact = dict(zip((1, -1), found["flanks"]))
@@ -513,8 +514,8 @@ def _strength_checks(measured: dict, of: dict, measurer: _Measurer, pairs: dict,
     allow = hertz_allowable(ts.resin_strength)
     for channel in sorted(measured):
         where = {"channel": channel}
-        n = len(wheels[channel].get("tendons", [])) or 1
-        r_w = wheels[channel].get("winding_radius_mm", lay.winding_radius)
+        n = len(wheels[channel].tendons) or 1
+        r_w = wheels[channel].meta.get("winding_radius_mm", lay.winding_radius)
         t2 = n * load * r_w
         loading = (f"{n} × {load:g} N (design: tendon break load) at r = {r_w:.3f} mm: {t2:.0f} N·mm on the wheel, "
                    f"F_t2 = {pair.wheel_tangential_force(t2):.1f} N")

@@ -60,20 +60,20 @@ def loads(parts, manifest: Manifest, length: float, bought=()):
     """(strip mass per mm in g/mm and its record, [(part, s, mass)], tip assembly record) from the
     STLs (volume, centroid) and the manifest's densities, and the tip assembly's bought metal
     ``bought`` (:func:`hwgen.model.steel.tip_pieces`: design data, the files hold no steel)."""
-    entries = {p["name"]: p for p in manifest.parts}
+    entries = {p.name: p for p in manifest.parts}
     strip, points, tip = None, [], []
     for p in parts:
-        e = entries.get(p.name, {})
-        closed = None if "density_g_cm3" not in e or e.get("fixture") else p.volume_and_centroid()
+        e = entries.get(p.name)
+        closed = None if e is None or e.density_g_cm3 is None or e.fixture else p.volume_and_centroid()
         if closed is None:
             continue
         volume, com = closed
-        m = volume / 1000 * e["density_g_cm3"]
+        m = volume / 1000 * e.density_g_cm3
         if p.role == "backbone":
             lo, hi = p.robot_bounds()[:, 1]
             strip = {"part": p.name, "mass_g": m, "y_mm": [float(lo), float(hi)], "lambda_g_mm": m / (hi - lo)}
             continue
-        if p.role in GROUNDED_ROLES or e.get("grounded") or (p.role == "disk" and e.get("station") == 0):
+        if p.role in GROUNDED_ROLES or e.meta.get("grounded") or (p.role == "disk" and e.station == 0):
             continue
         if com[1] > length:
             tip.append((p.name, m, com))

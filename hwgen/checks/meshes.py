@@ -189,7 +189,7 @@ def part_meshes(folder: str | Path, parts: Iterable[ManifestPart]) -> list[tuple
         return [(p, part_mesh(folder, p)) for p in parts]
 
 
-def placed_mesh(folder: str | Path, entry: Mapping, placement: np.ndarray | None = None):
+def placed_mesh(folder: str | Path, entry: ManifestPart | Mapping, placement: np.ndarray | None = None):
     """A part's STL as a trimesh in robot coordinates (or under ``placement``); a copy, free to change."""
     part = ManifestPart.of(entry)
     mesh = part_mesh(folder, part).copy()      # the loaded mesh may be shared
@@ -197,7 +197,7 @@ def placed_mesh(folder: str | Path, entry: Mapping, placement: np.ndarray | None
     return mesh
 
 
-def placed_manifold(folder: str | Path, entry: Mapping, placement: np.ndarray | None = None):
+def placed_manifold(folder: str | Path, entry: ManifestPart | Mapping, placement: np.ndarray | None = None):
     """A part's STL as a manifold3d solid in robot coordinates (or under ``placement``)."""
     part = ManifestPart.of(entry)
     return to_manifold(part_mesh(folder, part), part.placement if placement is None else placement)

@@ -187,17 +187,18 @@ def mass_summary(parts: list[LoadedPart], manifest: Manifest) -> tuple[dict, lis
     """Mass and centre of mass of the robot (the base mount included, the jig not) and of everything
     beyond the tip disk, from the STLs (volume and centroid of each closed mesh) and each part's
     density in the manifest (design data: the files do not say what they are printed in)."""
-    entries = {p["name"]: p for p in manifest.parts}
+    entries = {p.name: p for p in manifest.parts}
     tip_y = max(manifest.design_report["stations_mm"])
     rows = []
     for p in parts:
-        e = entries.get(p.name, {})
+        e = entries.get(p.name)
         # the bench's frame and rig are not the robot's (hwgen.checks.bench weighs them)
-        closed = None if "density_g_cm3" not in e or p.fixture or e.get("bench") else p.volume_and_centroid()
+        weighed = e is not None and e.density_g_cm3 is not None and not p.fixture and not e.meta.get("bench")
+        closed = p.volume_and_centroid() if weighed else None
         if closed is None:
             continue
         volume, com = closed
-        rows.append((p.name, p.role, volume, volume / 1000 * e["density_g_cm3"], com))
+        rows.append((p.name, p.role, volume, volume / 1000 * e.density_g_cm3, com))
 
     def group(sel) -> dict:
         m = sum(r[3] for r in sel)

@@ -87,10 +87,10 @@ def _strip_clamp_checks(manifest: Manifest) -> list[Check]:
     """A warning where the tensioner was laid out without the block that clamps the strip's tip
     (a tendon leaves the tip where it would stand): as its housing's layout record says."""
     return [Check("tensioner.strip_clamp", "warning", False,
-                  f"{p['name']}: strip clamp {p['layout_search']['strip_clamp']}", None, None, {"part": p["name"]},
+                  f"{p.name}: strip clamp {p.meta['layout_search']['strip_clamp']}", None, None, {"part": p.name},
                   fix="route the tendons to leave the tip disk clear of the strip's end (tendons[].routing at the "
                       "tip station), or hold the strip's tip in the housing by other means")
-            for p in manifest.parts if "strip_clamp" in p.get("layout_search", {})]
+            for p in manifest.parts if "strip_clamp" in p.meta.get("layout_search", {})]
 
 
 def run_checks(folder: str | Path, manifest: Manifest, plan, measured: Measured | None = None) -> Report:
@@ -260,7 +260,7 @@ def _measure_disks(folder: Path, manifest: Manifest, meshes: dict, tol: float):
         if not stl.exists():
             continue
         try:
-            dk = measure_disk(stl, p.entry["placement"], p.name, int(p.station), meshes.get(p.name),
+            dk = measure_disk(stl, p.placement, p.name, int(p.station), meshes.get(p.name),
                               recess.get(int(p.station), 0.0))
         except Exception as e:
             checks.append(Check("disk.section", "error", False, f"{p.name}: cannot be measured ({e})",
@@ -281,7 +281,7 @@ def _measure_strip(folder: Path, manifest: Manifest):
     if bb is None or not bb.stl_in(folder).exists():
         return None, None, None, []
     try:
-        return (*backbone_section(bb.stl_in(folder), bb.entry["placement"]), [])
+        return (*backbone_section(bb.stl_in(folder), bb.placement), [])
     except Exception as e:
         return None, None, None, [Check("backbone.section", "error", False, f"{bb.name}: cannot be measured "
                                         f"({e})", None, None, {"part": bb.name}, fix=REBUILD)]
@@ -364,7 +364,7 @@ def tip_exits(manifest: Manifest) -> dict[str, np.ndarray]:
     parts record. The tensioner is fixed to the tip disk, so in the tip frame it never turns."""
     out = {}
     for part in manifest.parts:
-        for r in part.get("tendon_runs", []):
+        for r in part.tendon_runs:
             v = np.subtract(r["end"], r["start"])
             out[r["tendon"]] = v / np.linalg.norm(v)
     return out

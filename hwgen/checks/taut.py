@@ -52,7 +52,7 @@ def robot(emap: EyeletMap, rep: dict, manifest: Manifest, tendon_d: float, lengt
             chain[names.index(t), e.station] = seen[key]
     base, tip = rep["disks"][0], rep["disks"][-1]
     seats = {s["tendon"]: s for s in base.get("seats", [])}
-    runs = {r["tendon"]: r for p in manifest.parts for r in p.get("tendon_runs", [])}
+    runs = {r["tendon"]: r for p in manifest.parts for r in p.tendon_runs}
     anchor, end = [], []
     for k, t in enumerate(names):
         if t in seats:     # the tendon leaves its seat at the plate's inner face

@@ -37,10 +37,10 @@ def tendon_checks(folder: Path, manifest: Manifest, plan) -> list[Check]:
     folder = Path(folder)
     d = plan.tendon_material.diameter
     every = manifest_parts(manifest)
-    runs = [(p.name, r) for p in every for r in p.entry.get("tendon_runs", [])]
+    runs = [(p.name, r) for p in every for r in p.tendon_runs]
     if not runs:
         return [Check("tensioner.tendon_clearance", "error", False, "no tendon runs in the manifest", fix=REBUILD)]
-    parts = [p for p in every if not (p.role == "disk" and p.entry.get("disk_role") == "tip")]
+    parts = [p for p in every if not (p.role == "disk" and p.meta.get("disk_role") == "tip")]
     solids = {}
     out = []
     for own, r in runs:
@@ -58,7 +58,7 @@ def tendon_checks(folder: Path, manifest: Manifest, plan) -> list[Check]:
                 trim = r["own_part_trim_mm"]
                 s1 = end - trim * (end - start) / np.linalg.norm(end - start)
             if p.name not in solids:
-                solids[p.name] = placed_manifold(folder, p.entry)
+                solids[p.name] = placed_manifold(folder, p)
             g = float(tendon_cylinder(s0, s1, d / 2).min_gap(solids[p.name], TENDON_SEARCH_MM))
             if p.name == own:
                 own_gap = g

@@ -20,7 +20,7 @@ import numpy as np
 from .. import __version__, cache
 from ..cad import Part, export
 from ..cad.families import build_unit, kernel_errors, part_count, units
-from ..cad.manifest import Manifest, describe, design_report, entry, measure, sha256
+from ..cad.manifest import Manifest, ManifestPart, describe, design_report, entry, measure, sha256
 from ..cad.memo import KERNEL, Busy, kept_in, made_as, setting_aside
 from ..errors import DesignError, InputError
 from ..model.plan import Plan
@@ -57,7 +57,8 @@ def base_manifest(b: Build, files: dict, entries: list[dict]) -> Manifest:
     loaded = b.loaded
     return Manifest(name=loaded.name, hwgen_version=__version__, params_file=loaded.source,
                     params_sha256=loaded.sha256, params_base=list(loaded.bases),
-                    design_resolved=loaded.design.model_dump(mode="json"), files=files, parts=entries,
+                    design_resolved=loaded.design.model_dump(mode="json"), files=files,
+                    parts=tuple(ManifestPart.of(e) for e in entries),
                     design_report=design_report(b.plan))
 
 

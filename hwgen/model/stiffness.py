@@ -49,6 +49,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -57,6 +58,7 @@ from . import friction as fr
 from . import protocol
 from . import statics as st
 from . import steel
+from .gravity import Gravity
 from .intervals import interval_difference
 from .sag import Span
 
@@ -241,7 +243,7 @@ def _tip_assembly(plan, rho: float, lam: float) -> dict:
 
 # ------------------------------------------------------------------ the robot
 
-def describe(plan, measured: dict | None = None) -> Described:
+def describe(plan, measured: Gravity | Mapping | None = None) -> Described:
     """The plan's robot for :mod:`hwgen.model.statics` (see the module's docstring). ``measured``:
     the ``gravity`` section of a check report of this design (masses and centres of mass from
     its STLs), used for the weights instead of the plan's estimate."""
@@ -259,11 +261,11 @@ def describe(plan, measured: dict | None = None) -> Described:
     how = ("estimated from the plan (plate and hub volumes, the tensioner layout's members, wheels as flange "
            "cylinders, worms as pitch cylinders) × densities, and the bought metal at the tip (hwgen.model.steel): "
            "not measured from the files")
-    if measured and measured.get("tip_assembly") and measured.get("strip"):
-        disks = [(r["part"], min(float(r["s_mm"]), bb.length), float(r["mass_g"])) for r in measured["disks"]]
-        mt = measured["tip_assembly"]
-        tip = {"mass_g": float(mt["mass_g"]), "a_mm": float(mt["a_mm"]), "b_mm": float(mt["z_mm"])}
-        lam = float(measured["strip"]["lambda_g_mm"])
+    weighed = Gravity.of(measured)
+    if weighed is not None:
+        disks = [(d.part, min(d.s_mm, bb.length), d.mass_g) for d in weighed.disks]
+        tip = {"mass_g": weighed.tip.mass_g, "a_mm": weighed.tip.a_mm, "b_mm": weighed.tip.z_mm}
+        lam = weighed.strip.lambda_g_mm
         section = dataclasses.replace(section, lin_density=lam)
         how = ("measured from the built files' STLs (the check report's gravity section), with the bought metal at "
                "the tip (hwgen.model.steel)")
@@ -404,7 +406,7 @@ SOFTER = 1e-3              # a state this much under one with a channel fewer is
 
 
 def study(plan, which: list[str] | None = None, orientations: list[str] | None = None, h_max: float = STUDY_H_MAX,
-          measured: dict | None = None) -> dict:
+          measured: Gravity | Mapping | None = None) -> dict:
     """Every state (or those named) of a plan in every orientation (or those named): the stiffness
     report (see the module's docstring); ``measured``: as :func:`describe` takes it."""
     desc = describe(plan, measured)

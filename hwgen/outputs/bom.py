@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import csv
 import io
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -52,8 +53,10 @@ def family_label(role: str) -> str:
     return FAMILY_LABELS.get(role, role.replace("_", " "))
 
 
-def is_purchased(entry: dict) -> bool:
-    return bool(entry.get("purchased")) or entry["role"] in PURCHASED_ROLES
+def is_purchased(part: ManifestPart | dict) -> bool:
+    """A part bought, not printed (the strip, the steel): its family says so, or its role is one of those."""
+    p = ManifestPart.of(part)
+    return bool(p.meta.get("purchased")) or p.role in PURCHASED_ROLES
 
 
 def thread_for_hole(diameter: float) -> str | None:
@@ -78,12 +81,12 @@ def rest_lengths(manifest: Manifest, report: dict | None) -> tuple[dict[str, flo
     return lengths, "eq. (2) at zero curvature on the design report's eyelets (no report.json)"
 
 
-def _size(folder: Path, entry: dict) -> str:
+def _size(folder: Path, part: ManifestPart) -> str:
     """Overall size, largest first, from the STL's vertices (the manifest's CAD box is loose)."""
     try:
-        lo, hi = stl_bounds(ManifestPart.of(entry).stl_in(folder))
+        lo, hi = stl_bounds(part.stl_in(folder))
     except (OSError, ValueError, KeyError):
-        lo, hi = np.asarray(entry["bbox_mm"]["min"]), np.asarray(entry["bbox_mm"]["max"])
+        lo, hi = part.bbox_min, part.bbox_max
     ext = sorted(np.asarray(hi) - np.asarray(lo), reverse=True)
     return " × ".join(f"{v:.4g}" for v in ext) + " mm"
 
@@ -106,26 +109,26 @@ def bom_rows(folder: Path, manifest: Manifest, plan, report: dict | None) -> tup
     for e in manifest.parts:
         if is_purchased(e):
             continue
-        add(category="printed", part=e["name"], family=e["role"], qty=1,
+        add(category="printed", part=e.name, family=e.role, qty=1,
             material=plan.process.name, size=_size(folder, e),
-            volume_mm3=f"{e['volume_mm3']:.1f}", mass_g=f"{e['mass_g']:.2f}", file=ManifestPart.of(e).stl,
-            notes=_printed_note(e))
+            volume_mm3=f"{e.volume_mm3:.1f}", mass_g=f"{e.mass_g:.2f}", file=e.stl, notes=_printed_note(e))
 
     template = manifest.files.get("backbone_template", {}).get("path", "backbone_template.dxf")
     for e in manifest.parts:
         if not is_purchased(e):
             continue
-        notes = e.get("notes", "")
-        if e["role"] == "backbone":
+        notes = e.meta.get("notes", "")
+        if e.role == "backbone":
             n = _strip_holes(manifest)
             notes = (f"cut to size; drill {n} hole{'s' if n != 1 else ''} from {template} (1:1 template)"
                      if n else f"cut to size; {template} is the 1:1 template")
-            material = e.get("material", f"carbon-fibre/epoxy laminate, {plan.backbone.thickness:g} mm")
+            laminate = f"carbon-fibre/epoxy laminate, {plan.backbone.thickness:g} mm"
+            material = e.material if e.material is not None else laminate
         else:
-            material = e.get("material", "")
-        add(category="purchased", part=e["name"], family=e["role"], qty=1, material=material,
-            size=_size(folder, e), volume_mm3=f"{e['volume_mm3']:.1f}", mass_g=f"{e['mass_g']:.2f}",
-            file=ManifestPart.of(e).step, notes=notes)
+            material = e.material if e.material is not None else ""
+        add(category="purchased", part=e.name, family=e.role, qty=1, material=material,
+            size=_size(folder, e), volume_mm3=f"{e.volume_mm3:.1f}", mass_g=f"{e.mass_g:.2f}",
+            file=e.step, notes=notes)
 
     lengths, source = rest_lengths(manifest, report)
     r = plan.bom
@@ -181,31 +184,31 @@ def _adhesive_ml(manifest: Manifest, h: float, t: float, report: dict | None) ->
     return ADHESIVE_MARGIN * need, f"{how}: {need:.2f} ml, × {ADHESIVE_MARGIN:g}; through each disk's glue port"
 
 
-def _printed_note(e: dict) -> str:
-    bits = []
-    if e.get("fixture"):
-        bits.append(f"assembly jig, piece {e.get('piece', 1)} of {e.get('pieces', 1)}: not part of the robot")
-    if e["role"] in ("base_mount", "base_clamp"):
-        bits.append("base mount: clamps the strip's base; " + ("bolts to the table" if e["role"] == "base_mount"
+def _printed_note(p: ManifestPart) -> str:
+    bits, m = [], p.meta
+    if p.fixture:
+        bits.append(f"assembly jig, piece {m.get('piece', 1)} of {m.get('pieces', 1)}: not part of the robot")
+    if p.role in ("base_mount", "base_clamp"):
+        bits.append("base mount: clamps the strip's base; " + ("bolts to the table" if p.role == "base_mount"
                                                                else "the upper jaw"))
-    if e.get("bench") == "base_frame":
-        bits.append("base frame (Fig. 3): " + ("turns with the robot" if e.get("turns") and e["role"] == "base_frame"
+    if m.get("bench") == "base_frame":
+        bits.append("base frame (Fig. 3): " + ("turns with the robot" if m.get("turns") and p.role == "base_frame"
                                                else "stands on the table"))
-    if e.get("bench") == "rig":
+    if m.get("bench") == "rig":
         bits.append("stiffness rig (Sect. IV-C): not part of the robot")
-    if "station" in e:
-        bits.append(f"station {e['station']}")
-    if e.get("disk_role") in ("base", "tip"):
-        bits.append(f"{e['disk_role']} disk")
-    if "channel" in e:
-        bits.append(f"channel {e['channel']}")
+    if p.station is not None:
+        bits.append(f"station {p.station}")
+    if m.get("disk_role") in ("base", "tip"):
+        bits.append(f"{m['disk_role']} disk")
+    if "channel" in m:
+        bits.append(f"channel {m['channel']}")
     return "; ".join(bits)
 
 
 def _fasteners(manifest: Manifest) -> list[tuple[str, int, str, str, str]]:
     """The hardware the parts list, summed by (item, size); and, when no part says what takes
     the tip disk's bolt pattern (``"tip_mount": true``), screws and nuts for it."""
-    listed: list[tuple[dict, str]] = [(h, e["name"]) for e in manifest.parts for h in e.get("hardware", []) or []]
+    listed: list[tuple[Mapping, str]] = [(h, p.name) for p in manifest.parts for h in p.hardware]
     if not any(h.get("tip_mount") for h, _ in listed):
         listed = _tip_screws(manifest) + listed
     summed: dict[tuple[str, str], list] = {}
@@ -244,16 +247,17 @@ def family_table(manifest: Manifest, printed_in: str, rows: list[dict] | None = 
     """One entry per part family of the robot (assembly aids such as the jig are not drawn with it),
     numbered in order of first appearance (the drawing's balloons); ``printed_in``: the process's name."""
     out: list[dict] = []
-    robot = [p for p in manifest.parts if not p.get("fixture")]
+    robot = [p for p in manifest.parts if not p.fixture]
     for e in robot:
-        if any(f["role"] == e["role"] for f in out):
+        if any(f["role"] == e.role for f in out):
             continue
-        members = [p for p in robot if p["role"] == e["role"]]
-        material = e.get("material", "") if is_purchased(e) else printed_in
-        out.append({"item": len(out) + 1, "role": e["role"], "label": family_label(e["role"]),
+        members = [p for p in robot if p.role == e.role]
+        bought = e.material if e.material is not None else ""
+        material = bought if is_purchased(e) else printed_in
+        out.append({"item": len(out) + 1, "role": e.role, "label": family_label(e.role),
                     "qty": len(members), "material": material,
                     "kind": "purchased" if is_purchased(e) else "printed",
-                    "parts": [p["name"] for p in members]})
+                    "parts": [p.name for p in members]})
     return out
 
 

@@ -84,16 +84,16 @@ def take_up(manifest: Manifest) -> dict | None:
     """Tendon wound in per worm turn, per channel, from the worm's starts and teeth and the drum's
     winding radius in the manifest."""
     out = {}
-    worms = {p["channel"]: p for p in manifest.parts if p["role"] == "tensioner_worm"}
-    for wheel in (p for p in manifest.parts if p["role"] == "tensioner_wheel"):
-        worm = worms.get(wheel["channel"])
-        if worm is None or "winding_radius_mm" not in wheel:
+    worms = {p.channel: p for p in manifest.parts if p.role == "tensioner_worm"}
+    for wheel in (p for p in manifest.parts if p.role == "tensioner_wheel"):
+        worm = worms.get(wheel.channel)
+        if worm is None or "winding_radius_mm" not in wheel.meta:
             continue
-        r, starts, teeth = wheel["winding_radius_mm"], worm["starts"], worm["teeth"]
-        out[wheel["channel"]] = {"winding_radius_mm": r, "spool_diameter_mm": wheel.get("spool_diameter_mm"),
-                                 "starts": starts, "teeth": teeth, "tendons": wheel.get("tendons", []),
-                                 "take_up_mm": 2 * math.pi * r * starts / teeth,
-                                 "hex_key_mm": worm.get("hex_key_mm"), "worm": worm["name"], "wheel": wheel["name"]}
+        r, starts, teeth = wheel.meta["winding_radius_mm"], worm.meta["starts"], worm.meta["teeth"]
+        out[wheel.channel] = {"winding_radius_mm": r, "spool_diameter_mm": wheel.meta.get("spool_diameter_mm"),
+                              "starts": starts, "teeth": teeth, "tendons": wheel.meta.get("tendons", []),
+                              "take_up_mm": 2 * math.pi * r * starts / teeth,
+                              "hex_key_mm": worm.meta.get("hex_key_mm"), "worm": worm.name, "wheel": wheel.name}
     return out or None
 
 
@@ -121,9 +121,9 @@ def _tension_step(manifest: Manifest, plan, tendon_rows: list[dict], shown: list
     lines.append(f"Take up the slack of every channel, then tension the stiffening channels and the actuating "
                  f"channel ({plan.tensioner.actuating_channel}) last, a quarter turn at a time; the worm "
                  f"self-locks, so the tension stays when the key comes off.")
-    inside = [n for n in tensioner if n not in names(lambda p: p["role"] == "tensioner_housing")]
+    inside = [n for n in tensioner if n not in names(lambda p: p.role == "tensioner_housing")]
     return Step("tension", "Tensioning", lines, shown + inside,   # the housing hides the worms
-                names(lambda p: p["role"] in ("tensioner_worm", "tensioner_drive")), tendons=True,
+                names(lambda p: p.role in ("tensioner_worm", "tensioner_drive")), tendons=True,
                 extra={"take_up": ups})
 
 
@@ -146,15 +146,15 @@ def steps(folder: Path, manifest: Manifest, plan, bom: list[dict] | None = None)
     the plan's tendon material and actuating channel) and what its picture shows (from the manifest
     alone)."""
     bom = read_bom(folder) if bom is None else bom
-    parts = [p for p in manifest.parts]
-    names = lambda pred: [p["name"] for p in parts if pred(p)]          # noqa: E731
-    disks = names(lambda p: p["role"] == "disk")
-    strip = names(lambda p: p["role"] == "backbone")
-    jig = names(lambda p: p.get("fixture"))
-    base = names(lambda p: p["role"] in ("base_mount", "base_clamp"))
-    tensioner = names(lambda p: p["role"].startswith("tensioner"))
-    frame = names(lambda p: p.get("bench") == "base_frame")
-    rig = names(lambda p: p.get("bench") == "rig")
+    parts = manifest.parts
+    names = lambda pred: [p.name for p in parts if pred(p)]          # noqa: E731
+    disks = names(lambda p: p.role == "disk")
+    strip = names(lambda p: p.role == "backbone")
+    jig = names(lambda p: p.fixture)
+    base = names(lambda p: p.role in ("base_mount", "base_clamp"))
+    tensioner = names(lambda p: p.role.startswith("tensioner"))
+    frame = names(lambda p: p.meta.get("bench") == "base_frame")
+    rig = names(lambda p: p.meta.get("bench") == "rig")
     rows = {r["part"]: r for r in bom}
     tendon_rows = [r for r in bom if r["family"] == "tendon"]
     out: list[Step] = []
@@ -201,7 +201,7 @@ def steps(folder: Path, manifest: Manifest, plan, bom: list[dict] | None = None)
         out.append(_frame_step(frame, base, strip + disks, rows, bom, manifest))
 
     if tensioner:
-        clamps = names(lambda p: p["role"] == "tensioner_clamp")
+        clamps = names(lambda p: p.role == "tensioner_clamp")
         hw = [r for r in _hardware_for(bom, set(tensioner)) if r not in _hardware_for(bom, set(clamps), only=True)]
         lines = ["Press the dowel pins, set the worms and wheels into the housing and fasten it to the tip disk: "
                  + "; ".join(cite(rows[n]) for n in tensioner if n in rows and rows[n]["family"] != "tensioner_clamp")
@@ -217,7 +217,7 @@ def steps(folder: Path, manifest: Manifest, plan, bom: list[dict] | None = None)
                  + "; ".join(cite(rows[n]) for n in clamps if n in rows) + "."]
         if hw:
             lines.append("Hardware: " + "; ".join(cite(r) for r in hw) + ".")
-        out.append(Step("wind", "Lines wound", lines, shown, clamps + names(lambda p: p["role"] == "tensioner_wheel"),
+        out.append(Step("wind", "Lines wound", lines, shown, clamps + names(lambda p: p.role == "tensioner_wheel"),
                         tendons=True))
 
     tension = _tension_step(manifest, plan, tendon_rows, strip + disks[-1:], tensioner, names)
@@ -234,7 +234,7 @@ def _frame_step(frame: list[str], base: list[str], robot: list[str], rows: dict,
                 manifest: Manifest) -> Step:
     """The rotating base frame (Fig. 3): built, and the base mount bolted onto its cradle."""
     hw = _hardware_for(bom, set(frame))
-    cradle = next((p for p in manifest.parts if p["name"] == "base_frame_cradle"), {})
+    cradle = next((p.meta for p in manifest.parts if p.name == "base_frame_cradle"), {})
     step = cradle.get("mark_step_deg", 15)
     lines = ["Press a bearing into each seat of the two uprights and screw the uprights onto the base plate; push "
              "the supporting shaft (on the robot's axis) and the lower shaft through them with a pulley each and the "

@@ -312,13 +312,13 @@ GUIDE_WIDTH_PX = 1000        # a guide step's picture: the parts tell apart on a
 def reachable_note(manifest: Manifest) -> str:
     """Whether the hardware can hold the bent pose: only if some drum winds a pair of tendons in
     opposite senses, so that turning its worm hauls one in as it pays the other out."""
-    drums = [p for p in manifest.parts if p.get("role") == "tensioner_wheel" and len(p.get("tendons", [])) > 1]
-    bending = [p for p in drums if p.get("winding") == "opposite"]
+    drums = [p for p in manifest.parts if p.role == "tensioner_wheel" and len(p.tendons) > 1]
+    bending = [p for p in drums if p.meta.get("winding") == "opposite"]
     if bending:
-        return (f"the worm of channel {bending[0]['channel']} bends the robot: its drum winds "
-                f"{' and '.join(bending[0]['tendons'])} in opposite senses")
+        return (f"the worm of channel {bending[0].meta['channel']} bends the robot: its drum winds "
+                f"{' and '.join(bending[0].tendons)} in opposite senses")
     if drums:
-        return (f"model only: the tensioner pre-tensions {' and '.join(drums[0]['tendons'])} together "
+        return (f"model only: the tensioner pre-tensions {' and '.join(drums[0].tendons)} together "
                 f"(tensioner.winding: same); it cannot bend the robot")
     return "model only: no drum of this tensioner winds a pair of tendons, so nothing bends the robot"
 

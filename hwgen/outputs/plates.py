@@ -274,7 +274,7 @@ def _read_3mf(path: Path) -> list[tuple[str, np.ndarray, np.ndarray]]:
 
 # --------------------------------------------------------------------------- the stage
 
-def printed_parts(manifest: Manifest) -> list[dict]:
+def printed_parts(manifest: Manifest) -> list[ManifestPart]:
     return [e for e in manifest.parts if not is_purchased(e)]
 
 
@@ -284,7 +284,7 @@ def layout(folder: Path, manifest: Manifest, proc, settings) -> tuple[list[Orien
     Parts whose files have the same bytes are decided once."""
     oriented_parts, decided = [], {}
     with sharing_meshes():            # files of the same bytes: one mesh, one decision
-        for p in [ManifestPart.of(e) for e in printed_parts(manifest)]:
+        for p in printed_parts(manifest):
             sha, mesh = read_mesh(p.stl_in(folder))
             V, F = np.asarray(mesh.vertices), np.asarray(mesh.faces)
             if sha not in decided:

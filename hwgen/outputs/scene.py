@@ -116,9 +116,9 @@ def transform(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:
     return points @ matrix[:3, :3].T + matrix[:3, 3]
 
 
-def is_fixture(entry: dict) -> bool:
+def is_fixture(part: ManifestPart | dict) -> bool:
     """An assembly aid (the jig): drawn on its own, never in the robot's pictures."""
-    return bool(entry.get("fixture"))
+    return ManifestPart.of(part).fixture
 
 
 def load_parts(folder: Path, manifest: Manifest, fixtures: bool = False) -> list[ScenePart]:
@@ -149,8 +149,8 @@ def families(manifest: Manifest, fixtures: bool = False) -> list[str]:
     for e in manifest.parts:
         if is_fixture(e) and not fixtures:
             continue
-        if e["role"] not in seen:
-            seen.append(e["role"])
+        if e.role not in seen:
+            seen.append(e.role)
     return seen
 
 
@@ -167,8 +167,8 @@ def family_colours(manifest: Manifest, fixtures: bool = False) -> dict[str, tupl
     out: dict[str, tuple[float, float, float]] = {}
     candidates = list(FAMILY_PALETTE) + [tuple(c) for c in np.random.default_rng(0).uniform(0.1, 0.9, (64, 3))]
     for role in families(manifest, fixtures):
-        first = next(e for e in manifest.parts if e["role"] == role)
-        rgb = np.asarray((first.get("color") or (0.7, 0.7, 0.7))[:3], dtype=float)
+        first = next(e for e in manifest.parts if e.role == role)
+        rgb = np.asarray((first.color or (0.7, 0.7, 0.7))[:3], dtype=float)
         if rgb.max() < MIN_LIGHTNESS:
             rgb = rgb + (MIN_LIGHTNESS - rgb.max())
         taken = list(out.values())

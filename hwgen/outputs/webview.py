@@ -178,8 +178,8 @@ def check_index(checks: list[dict], manifest: Manifest) -> tuple[dict[str, list[
     channel (the gear checks) names that channel's parts ("all": every part of a channel)."""
     channel_parts: dict[str, list[str]] = {}
     for e in manifest.parts:
-        if isinstance(e.get("channel"), str):
-            channel_parts.setdefault(e["channel"], []).append(e["name"])
+        if e.channel is not None:
+            channel_parts.setdefault(e.channel, []).append(e.name)
     parts: dict[str, list[int]] = {}
     tendons: dict[str, list[int]] = {}
     for i, c in enumerate(checks):
@@ -238,7 +238,7 @@ def listed(manifest: Manifest, report: dict | None, study: dict | None) -> dict:
     return {
         "design": manifest.name, "hwgen": __version__,
         "parts": [{"name": p.name, "role": p.role, "family": family_label(p.role), "group": group_of(p.role),
-                   "colour": _hex(p.entry.get("color") or (0.7, 0.7, 0.7)), "station": p.station,
+                   "colour": _hex(p.color or (0.7, 0.7, 0.7)), "station": p.station,
                    "fixture": p.fixture, "box": False, "failing": failing_parts.get(p.name, []),
                    "checks": by_part.get(p.name, [])} for p in manifest_parts(manifest)],
         "tendons": [{"name": n, "colour": _hex(rgb), "failing": failing_tendons.get(n, []),

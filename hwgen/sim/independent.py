@@ -34,6 +34,7 @@ import time
 
 import numpy as np
 
+from ..model.gravity import Gravity
 from . import cosserat as co
 from . import limits
 from .parts import Printed, tip_masses
@@ -42,13 +43,13 @@ SHEAR_COEFFICIENT = 5.0 / 6.0     # Timoshenko's κ of a rectangle
 GRAVITY = (0.0, 0.0, -1.0)        # robot.xml's world
 
 
-def _sections(g: dict, shear_modulus_mpa: float) -> tuple[tuple, tuple, float]:
+def _sections(g: Gravity, shear_modulus_mpa: float) -> tuple[tuple, tuple, float]:
     """(K_bt, K_se, g/mm) of the bare strip from the report's gravity section."""
-    E, h, t = float(g["E_mpa"]), float(g["height_mm"]), float(g["thickness_mm"])
+    E, h, t = g.E_mpa, g.height_mm, g.thickness_mm
     G, A = shear_modulus_mpa, h * t
     J = h * t ** 3 / 3 * (1 - 0.63 * t / h)
     return ((E * h * t ** 3 / 12, G * J, E * t * h ** 3 / 12),
-            (SHEAR_COEFFICIENT * G * A, E * A, SHEAR_COEFFICIENT * G * A), float(g["strip"]["lambda_g_mm"]))
+            (SHEAR_COEFFICIENT * G * A, E * A, SHEAR_COEFFICIENT * G * A), g.strip.lambda_g_mm)
 
 
 def _plate(printed: Printed, a: float, b: float, lam: float, extra=()) -> co.Rigid:
@@ -61,13 +62,12 @@ def _plate(printed: Printed, a: float, b: float, lam: float, extra=()) -> co.Rig
     return co.Rigid(a, b, tuple(masses), eyelets)
 
 
-def robot_rod(printed: Printed, gravity_report: dict, shear_modulus_mpa: float) -> tuple[co.Rod, int, tuple]:
+def robot_rod(printed: Printed, g: Gravity, shear_modulus_mpa: float) -> tuple[co.Rod, int, tuple]:
     """The rod of a build (see the module's docstring): (the rod, the tip body's piece, the tip
-    site's point in that piece's frame)."""
-    g = gravity_report
-    L = float(g["length_mm"])
+    site's point in that piece's frame); ``g``: the check report's gravity section."""
+    L = g.length_mm
     bending, shear, lam = _sections(g, shear_modulus_mpa)
-    spans = sorted(((float(s["start_mm"]), float(s["end_mm"]), s["ei_nmm2"]) for s in g["spans"]))
+    spans = sorted((s.start_mm, s.end_mm, s.ei_nmm2) for s in g.spans)
     y_end = float(printed.strip["y_mm"][1])
     tip_station = max(printed.disks)
     start = spans[0][1] if spans and spans[0][2] is None and spans[0][0] <= 0.0 else 0.0
@@ -101,12 +101,12 @@ def _case(rod: co.Rod, tip: tuple, loads: co.Loads) -> dict:
             "residual": sol.residual, "seconds": time.perf_counter() - t0, "curve": curve}
 
 
-def reference(printed: Printed, gravity_report: dict, shear_modulus_mpa: float, mujoco: dict,
+def reference(printed: Printed, gravity: Gravity, shear_modulus_mpa: float, mujoco: dict,
               pulled: tuple[str, float] | None) -> dict:
     """sim.json's ``reference``: the rod's tip against MuJoCo's (``mujoco``: case -> tip, mm) in state
     N and with ``pulled`` = (tendon, N) pulled, both under gravity."""
-    rod, k, local = robot_rod(printed, gravity_report, shear_modulus_mpa)
-    L = float(gravity_report["length_mm"])
+    rod, k, local = robot_rod(printed, gravity, shear_modulus_mpa)
+    L = gravity.length_mm
     cases = {"N": co.Loads(gravity=GRAVITY)}
     if pulled is not None:
         cases[f"{pulled[0]}_pulled"] = co.Loads(gravity=GRAVITY, tensions={pulled[0]: pulled[1]})

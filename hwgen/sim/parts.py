@@ -24,6 +24,7 @@ from ..cad.families import BENCH_ROLES      # the bench's parts: not the robot t
 from ..cad.manifest import Manifest, ManifestPart, manifest_parts
 from ..checks.meshes import part_meshes
 from ..model import steel
+from ..model.gravity import Gravity
 
 FOOT_MM = 0.5                 # a mount vertex this close above its lowest is on the table
 TIP_ROLES = ("tensioner_housing", "tensioner_worm", "tensioner_drive", "tensioner_wheel", "tensioner_clamp")
@@ -120,13 +121,12 @@ def _bodies(folder: Path, parts: list[ManifestPart]) -> tuple[dict[str, Body], t
     for part, mesh in part_meshes(folder, parts):
         if part.role == "base_mount":
             foot = _foot(mesh, part.placement)
-        e = part.entry
         lo, hi = _box(part)
         out[part.name] = Body(name=part.name, role=part.role, stl=part.stl, sha256=part.files["stl"].sha256,
-                              placement=part.placement, color=tuple(e.get("color", (0.7, 0.7, 0.7, 1.0))),
-                              mass_g=float(e["mass_g"]), com_mm=np.asarray(e["center_of_mass_mm"], float),
-                              inertia_g_mm2=_inertia(mesh, part.placement, float(e["density_g_cm3"]) * 1e-3),
-                              box_min=lo, box_max=hi, entry=dict(e))
+                              placement=part.placement, color=part.color or (0.7, 0.7, 0.7, 1.0),
+                              mass_g=float(part.mass_g), com_mm=np.asarray(part.center_of_mass_mm, float),
+                              inertia_g_mm2=_inertia(mesh, part.placement, float(part.density_g_cm3) * 1e-3),
+                              box_min=lo, box_max=hi, entry=dict(part.entry))
     return out, foot
 
 
@@ -157,11 +157,10 @@ def read_build(folder: Path, manifest: Manifest, report: dict) -> Printed:
             if d.get("y_mid_mm") is not None}
     stations = {i: mids.get(i, float(y)) for i, y in enumerate(drep["stations_mm"])}
     disks = {p.station: bodies[p.name] for p in parts if p.role == "disk"}
-    thick = {p.station: float(p.entry["thickness_mm"]) for p in parts if p.role == "disk"}
-    g = report["gravity"]
-    strip = {"height_mm": float(g["height_mm"]), "thickness_mm": float(g["thickness_mm"]),
-             "y_mm": [float(v) for v in g["strip"]["y_mm"]], "g_per_mm": float(g["strip"]["lambda_g_mm"]),
-             "E_mpa": float(g["E_mpa"])}
+    thick = {p.station: float(p.meta["thickness_mm"]) for p in parts if p.role == "disk"}
+    g = Gravity.of(report["gravity"])
+    strip = {"height_mm": g.height_mm, "thickness_mm": g.thickness_mm, "y_mm": list(g.strip.y_mm),
+             "g_per_mm": g.strip.lambda_g_mm, "E_mpa": g.E_mpa}
     base = drep["disks"][0]
     face = stations[0] - thick.get(0, base["thickness_mm"]) / 2
     seats = {s["tendon"]: (float(s["x"]), float(s["z"]), face) for s in base.get("seats", [])}
@@ -169,11 +168,11 @@ def read_build(folder: Path, manifest: Manifest, report: dict) -> Printed:
     for p in parts:
         if p.role != "tensioner_wheel":
             continue
-        radius[p.name] = float(p.entry.get("winding_radius_mm", p.entry.get("spool_diameter_mm", 10.0) / 2))
-        for r in p.entry.get("tendon_runs", []):
-            runs[r["tendon"]] = Run(r["tendon"], p.entry.get("channel", ""), np.asarray(r["start"], float),
+        radius[p.name] = float(p.meta.get("winding_radius_mm", p.meta.get("spool_diameter_mm", 10.0) / 2))
+        for r in p.tendon_runs:
+            runs[r["tendon"]] = Run(r["tendon"], p.meta.get("channel", ""), np.asarray(r["start"], float),
                                     np.asarray(r["end"], float), int(r.get("sense", 1)), p.name,
-                                    p.entry.get("winding", "same"))
+                                    p.meta.get("winding", "same"))
     return Printed(disks=disks, tip=[b for b in bodies.values() if b.role in TIP_ROLES],
                    base=[b for b in bodies.values() if b.role in BASE_ROLES], strip=strip, stations_mm=stations,
                    disk_thickness_mm=thick, eyelets=_eyelets(report, drep, stations), seats=seats, runs=runs,

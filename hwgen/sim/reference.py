@@ -26,6 +26,7 @@ from ..cache import as_json
 from ..model import bending
 from ..model import statics as st
 from ..model import stiffness
+from ..model.gravity import Gravity
 
 ORIENTATION = "gravity -z"        # the statics' REFERENCE orientation, and robot.xml's gravity (−z)
 FRICTION = "none"                 # eyelets without friction, the statics' frictionless bound
@@ -83,7 +84,7 @@ def unusable(study, plan, desc: stiffness.Described) -> str | None:
     return None
 
 
-def study_of(folder: Path, plan, measured: dict | None, solve) -> tuple[dict, str]:
+def study_of(folder: Path, plan, measured: Gravity | None, solve) -> tuple[dict, str]:
     """The statics to compare with: the build's stiffness.json in ``folder`` when it holds what
     :func:`unusable` asks, else ``solve()`` (the statics of ``plan`` with the weights
     ``measured``). Returns (the study, where it came from in words)."""
@@ -107,7 +108,7 @@ def _result(desc: stiffness.Described, e: dict) -> dict:
             "tip_sag_mm": -tip[2], "tip_mm": tip, "tensions_n": dict(e["tensions_n"]), "curve": c}
 
 
-def statics_reference(plan, measured: dict | None, study: dict, compare: list[str] | None = None,
+def statics_reference(plan, measured: Gravity | None, study: dict, compare: list[str] | None = None,
                       bend_tension_n: float | None = None, source: str = "") -> Reference:
     """The statics of ``plan`` (weights ``measured`` as ``hwgen stiffness`` takes them: the check
     report's gravity section, else None for the plan's estimate) read from ``study`` (what

@@ -28,6 +28,7 @@ import numpy as np
 from ..cad.manifest import Manifest
 from ..atomic import write_json
 from ..model import steel, stiffness
+from ..model.gravity import Gravity
 from . import chain, drive, independent, limits, measure, mjcf, modes, parts, reference
 from .plot import plot_sim
 
@@ -263,7 +264,8 @@ def _measure(sim: measure.Sim, made: tuple, plan, ref: reference.Reference, repo
     mujoco_tips = {"N": N["mujoco_tip_mm"]} if N else {}
     if bent_:
         mujoco_tips[f"{bent_['tendon']}_pulled"] = bent_["mujoco_tip_mm"]
-    ref_ = independent.reference(printed, report["gravity"], plan.backbone.shear_modulus_gpa * 1e3, mujoco_tips,
+    ref_ = independent.reference(printed, Gravity.of(report["gravity"]), plan.backbone.shear_modulus_gpa * 1e3,
+                                 mujoco_tips,
                                  (bent_["tendon"], bent_["tension_n"]) if bent_ else None) if N else {}
     return {"states": compared, "bent": bent_, "reference": ref_, "modes": state_modes(sim, compared),
             "driven": _driven(sim, written, plan, ref, report, compared),
@@ -271,12 +273,12 @@ def _measure(sim: measure.Sim, made: tuple, plan, ref: reference.Reference, repo
 
 
 def _sag(N: dict | None, report: dict) -> dict:
-    g = report.get("gravity", {})
+    g = Gravity.of(report.get("gravity"))
     facing = reference.orientation()
-    sag_model = g.get("cases", {}).get("-z" if facing["gravity"][2] < 0 else "+z", {})
+    sag_model = g.cases.get("-z" if facing["gravity"][2] < 0 else "+z", {}) if g else {}
     return {"state": "N", "mujoco_tip_sag_mm": N["mujoco_tip_sag_mm"] if N else None,
             "statics_tip_sag_mm": N["statics_tip_sag_mm"] if N else None,
-            "sag_model_tip_sag_mm": sag_model.get("tip_sag_mm"), "sag_model": g.get("model")}
+            "sag_model_tip_sag_mm": sag_model.get("tip_sag_mm"), "sag_model": g.model if g else None}
 
 
 def _mass(sim: measure.Sim, printed: parts.Printed) -> dict:
@@ -303,8 +305,9 @@ def simulate(plan, folder: Path, manifest: Manifest, report: dict, out: Path, so
     weights (:func:`hwgen.model.stiffness.study`), for when the build's stiffness.json cannot serve."""
     t0 = time.perf_counter()
     secs = {}
-    study, source = reference.study_of(folder, plan, report.get("gravity"), solve)
-    ref = reference.statics_reference(plan, report.get("gravity"), study, source=source)
+    weighed = Gravity.of(report.get("gravity"))
+    study, source = reference.study_of(folder, plan, weighed, solve)
+    ref = reference.statics_reference(plan, weighed, study, source=source)
     secs["statics"] = time.perf_counter() - t0
     printed = dataclasses.replace(parts.read_build(folder, manifest, report), bought=steel.tip_pieces(plan))
     out.mkdir(parents=True, exist_ok=True)

@@ -23,6 +23,7 @@ from ..designfile import keys_of
 from ..errors import DesignError, InputError
 from ..model import feasibility
 from ..model.document import design_from
+from ..model.gravity import Gravity
 from ..model import statics as st
 from ..model import stiffness as sf
 from ..model.plan import make_plan
@@ -64,7 +65,7 @@ class Trial:
     def __init__(self, loaded: params.LoadedDesign, plan, report: dict, study: dict):
         self.loaded, self.plan, self.report = loaded, plan, report
         self.doc = designfile.document_of(loaded.layers)      # which keys a base wrote, for the gear
-        self.gravity = report.get("gravity")
+        self.gravity = Gravity.of(report.get("gravity"))
         self.taut = (report.get("as_built") or {}).get("taut") or {}
         self.centre = {t["name"]: t["max_abs_delta_mm"] for t in report.get("tendons", [])}
         self.base = purpose.figures(study)
