@@ -109,6 +109,11 @@ class Goal(_Model):
         "all", description="all: every check of the level must pass (and those under require); required: only "
                            "those under require")
 
+    def default_state(self, known: tuple[str, ...]) -> str:
+        """The one rule for the state a statics result without "@" is of: the goal's ``state``, else
+        every tendon locked (the base's last state, as ``hwgen stiffness`` lists them)."""
+        return self.state or (known[-1] if known else "")
+
     @model_validator(mode="after")
     def _one_kind(self):
         if self.pass_ and (self.maximize or self.minimize):
@@ -248,12 +253,6 @@ def _drop(doc: dict, keys: list) -> dict:
     return sweep_spec.set_path(doc, parent, {k: v for k, v in node.items() if k != keys[-1]})
 
 
-def default_state(goal: Goal, known: tuple[str, ...]) -> str:
-    """The one rule for the state a statics result without "@" is of: the goal's ``state``, else
-    every tendon locked (the base's last state, as ``hwgen stiffness`` lists them)."""
-    return goal.state or (known[-1] if known else "")
-
-
 def _check_goal(path: Path, spec: Tune, known: tuple[str, ...]) -> tuple[tuple[str, ...], str]:
     """(the tendon states the goal's results need, the goal's state); InputError naming the goal's
     field that is wrong."""
@@ -261,7 +260,7 @@ def _check_goal(path: Path, spec: Tune, known: tuple[str, ...]) -> tuple[tuple[s
     if g.state is not None and g.state not in known:
         raise InputError(path, "goal.state", f"{echo(g.state)} is not a tendon state of the base: "
                                              f"{', '.join(known)}")
-    default = default_state(g, known)
+    default = g.default_state(known)
     wanted = []
 
     def name(field: str, text: str) -> None:
