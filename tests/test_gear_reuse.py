@@ -46,8 +46,8 @@ def counted(monkeypatch):
     return calls
 
 
-def _stl_sha(entry):
-    return entry["files"]["stl"]["sha256"]
+def _stl_sha(part):
+    return part.files["stl"].sha256
 
 
 def _by_channel(checks):
@@ -141,7 +141,8 @@ def test_a_wheel_moved_toward_its_worm_is_measured_again(proto, counted, tmp_pat
         before = _by_channel(gear_checks(folder, man["parts"], p))
     moved = copy.deepcopy(man)
     pairs = gear_pairs(moved["parts"])
-    pairs["C2"]["wheel"]["placement"] = toward(pairs["C2"]["wheel"], pairs["C2"]["worm"], 0.1).tolist()
+    (entry,) = [e for e in moved["parts"] if e["name"] == pairs["C2"]["wheel"].name]
+    entry["placement"] = toward(pairs["C2"]["wheel"], pairs["C2"]["worm"], 0.1).tolist()
     n = dict(counted)
     with cache.using(store):
         after = _by_channel(gear_checks(folder, moved["parts"], p))

@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 import yaml
 
-from hwgen.cad.manifest import ManifestPart
 
 from .conftest import PARAMS
 from .robots import classic_robot, reordered, turned_over
@@ -122,11 +121,11 @@ def test_odd_tensioners_build_with_a_housing_in_one_piece(odd_build):
     doc, res = odd_build
     parts = res.manifest.parts
     channels = set(doc["tensioner"]["channels"])
-    assert {p["channel"] for p in parts if p["role"] == "tensioner_worm"} == channels
-    (housing,) = [p for p in parts if p["role"] == "tensioner_housing"]
-    mesh = load_mesh(ManifestPart.of(housing).stl_in(res.folder))
+    assert {p.channel for p in parts if p.role == "tensioner_worm"} == channels
+    (housing,) = [p for p in parts if p.role == "tensioner_housing"]
+    mesh = load_mesh(housing.stl_in(res.folder))
     assert mesh.is_watertight and mesh.body_count == 1
-    runs = {r["tendon"]: r for p in parts for r in p.get("tendon_runs", [])}
+    runs = {r["tendon"]: r for p in parts for r in p.tendon_runs}
     assert set(runs) == {t.name for t in res.plan.paths}
     for t in res.plan.paths:            # each tendon leaves the tip where its routing puts it
         assert runs[t.name]["start"][0] == pytest.approx(t.points[-1][0])
@@ -138,11 +137,11 @@ def test_two_tendons_of_different_x_wind_on_one_drum_in_their_own_grooves(odd_bu
     doc, res = odd_build
     if doc["design"] != "two-x":
         pytest.skip("the two-x robot only")
-    (wheel,) = [p for p in res.manifest.parts if p["role"] == "tensioner_wheel" and p["channel"] == "P"]
-    assert sorted(wheel["tendons"]) == ["P1", "P2"]
-    zones = wheel["winding_zones_z_mm"]
+    (wheel,) = [p for p in res.manifest.parts if p.role == "tensioner_wheel" and p.channel == "P"]
+    assert sorted(wheel.tendons) == ["P1", "P2"]
+    zones = wheel.meta["winding_zones_z_mm"]
     assert len(zones) == 2 and zones[0][1] < zones[1][0]      # two grooves, apart
-    ends = sorted(r["end"][2] for r in wheel["tendon_runs"])
+    ends = sorted(r["end"][2] for r in wheel.tendon_runs)
     assert ends == pytest.approx([-24, 22])
 
 
