@@ -6,6 +6,7 @@ pipeline's business (:func:`hwgen.pipeline.check`), not this module's.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import NamedTuple
 
@@ -124,16 +125,17 @@ def backbone_template(manifest: Manifest) -> str:
     return manifest.files.get("backbone_template", {}).get("path", "backbone_template.dxf")
 
 
-def measure(folder: str | Path, manifest: Manifest, plan) -> Measured:
+def measure(folder: str | Path, manifest: Manifest, plan, gears_made: Callable[[], None] | None = None) -> Measured:
     """Every check but the files' own, measured from the parts' STLs and the strip's DXF template
     (:func:`backbone_template`; the only entry of the manifest's ``files`` read) against the
     manifest's parts and design report. Every STL is read once and handed to every check that
-    needs it."""
+    needs it. ``gears_made``: waits for the gear measurements another process is making (a build's
+    work ahead), called before the gear checks, which then read them from the cache."""
     with one_load_per_mesh():
-        return _measure(Path(folder), manifest, plan)
+        return _measure(Path(folder), manifest, plan, gears_made)
 
 
-def _measure(folder: Path, manifest: Manifest, plan) -> Measured:
+def _measure(folder: Path, manifest: Manifest, plan, gears_made: Callable[[], None] | None = None) -> Measured:
     s = plan.check
     rep_in = manifest.design_report
     checks: list[Check] = []
@@ -194,6 +196,8 @@ def _measure(folder: Path, manifest: Manifest, plan) -> Measured:
     checks += c
     bench, c = bench_checks(parts, plan)
     checks += c
+    if gears_made is not None:
+        gears_made()
     checks[gears_at:gears_at] = gear_checks(folder, manifest.parts, plan)
     sections_bench = {"bench": _plain(bench)} if bench else {}
     return Measured(checks, angles, tls, pair, emap, taut, {

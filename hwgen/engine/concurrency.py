@@ -93,6 +93,7 @@ class Ahead:
         self.tensioner_parts = sum(u.count for f, _, u in units(plan) if f.name == "tensioner")
         self.measuring: threading.Thread | None = None     # the measurement (:meth:`measure`), once asked for
         self.started = threading.Event()                    # ... and started
+        self.gears = threading.Event()      # set once the gear checks' process is done, or none is to be started
         self.found: tuple[str, object] | None = None      # (key of the files measured, checks.run.Measured)
         self.failures: list[str] = []   # what failed here ("measure: ValueError: ..."), done again by the checks
 
@@ -126,14 +127,24 @@ class Ahead:
         gears = [e for i in sorted(self.tensioner) for e in self.tensioner[i]]
         if self.store.enabled and len(gears) == self.tensioner_parts:
             self.jobs.put(("gears", folder, gears))
+        else:
+            self.gears.set()
 
     def _measure(self, folder: Path, manifest: Manifest, key: str) -> None:
         from ..checks.run import measure
         with cache.using(self.store), reading_early(self.meshes):
             try:
-                self.found = (key, measure(folder, manifest, self.plan))
+                self.found = (key, measure(folder, manifest, self.plan, self._gears_made))
             except Exception as e:      # the checks measure again and report what fails
                 self._failed("the checks' measurement", e)
+
+    def _gears_made(self) -> None:
+        """Wait for the gear checks' process (started beside the measurement): the measurement's gear
+        checks then read its values from the cache. Without the wait they would make in this process
+        any value that process had not begun (it takes each entry's lock only while making it)."""
+        while not self.gears.wait(1.0):
+            if not self.thread.is_alive():
+                return
 
     def _failed(self, what: str, e: Exception) -> None:
         self.failures.append(f"{what}: {type(e).__name__}: {e}")
@@ -182,6 +193,9 @@ class Ahead:
                     except Exception as e:  # the checks read, measure or check the gears again
                         self._failed({"meshes": "reading the STLs", "measure": "starting the measurement"}
                                      .get(kind, "the gear checks"), e)
+                    finally:
+                        if kind == "gears":
+                            self.gears.set()
 
     def join(self) -> None:
         if self.thread is not None:
