@@ -3,11 +3,11 @@ front and back uprights, base plate, worm wheel, worm and its drive shaft) and t
 (``rig_*``: the load cell's bracket, the push block, the support), built in robot coordinates from
 :class:`hwgen.model.bench_frame.FrameLayout` and :class:`hwgen.model.bench_rig.RigLayout`.
 
-Each part's file is its solid set on the largest flat face it can rest on, its lowest point on
+Each part's file is its solid set on a flat face it can rest on, square to its bores and seats
+where one can carry it (:func:`_resting`; the cradle stands on its foot), its lowest point on
 Z = 0 (the gear's wheel, worm and drive shaft keep the tensioner's file frames: axis on Z); the
-placement maps it back. The worm
-pair's solids are the tensioner's, kept under the same keys (:mod:`hwgen.cad.memo`), so a frame
-whose pair is the tensioner's makes no gear again.
+placement maps it back. The worm pair's solids are the tensioner's, kept under the same keys
+(:mod:`hwgen.cad.memo`), so a frame whose pair is the tensioner's makes no gear again.
 """
 from __future__ import annotations
 
@@ -100,13 +100,13 @@ def _turning(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 QUARTER = np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])     # a quarter turn about Z: (x, y) -> (y, -x)
 
 
-def _file(solid: cq.Solid, upright: bool = True) -> tuple[cq.Solid, np.ndarray]:
-    """A robot-frame solid set on a flat face it can rest on (:func:`_resting`; with ``upright``
-    False, on the part's own base, robot -z, as it stands on the bench), turned a
+def _file(solid: cq.Solid, as_on_bench: bool = False) -> tuple[cq.Solid, np.ndarray]:
+    """A robot-frame solid set on a flat face it can rest on (:func:`_resting`; with ``as_on_bench``,
+    on the part's own base, robot -z, as it stands on the bench), turned a
     quarter about Z where it is then longer along Y than X (the printer's long axis is X; slicers
     place a part as its file has it), and moved so its box's lowest corner is at the origin:
     (file solid, placement file -> robot)."""
-    r = _resting(solid) if upright else np.eye(3)
+    r = np.eye(3) if as_on_bench else _resting(solid)
     turned = _turned(solid, r)
     bb = turned.BoundingBox()
     if bb.ylen > bb.xlen + 1e-6:
@@ -270,7 +270,7 @@ def frame_parts(lay: FrameLayout) -> Iterator[Part]:
 
     # the cradle stands on its foot: on its flange's outer face (square to its bore) the index
     # marks on the face toward the pointer would open upward, cups that hold resin (print.cup)
-    solid, place = _file(cradle_solid(lay), upright=False)
+    solid, place = _file(cradle_solid(lay), as_on_bench=True)
     yield Part("base_frame_cradle", "base_frame", solid, place, CRADLE_COLOR,
                meta={**common, "turns": True, "hardware": bought, "mark_step_deg": lay.mark_step_deg,
                      "index_deg": list(bf.INDEX_ANGLES), "axis": [0.0, 1.0, 0.0]})

@@ -213,12 +213,12 @@ def _own_clearance(f: SlotFit, limit: float, clearance: float) -> float:
 
 
 def _shared_tilt_fix(failing: list[tuple[SlotFit, float]], limit: float, clearance: float
-                     ) -> tuple[float | None, float, int]:
-    """(the clearance that holds every failing disk that a clearance can hold, or None; the pitch
-    to allow that covers them all; how many disks fail)."""
+                     ) -> tuple[float | None, int, float, int]:
+    """(the clearance that holds every failing disk that a clearance can hold, or None; how many
+    disks it holds; the pitch to allow that covers them all; how many disks fail)."""
     own = [c for c in (_own_clearance(f, limit, clearance) for f, _ in failing) if c >= 0]
     allow = max((math.ceil(t * 100) / 100 for _, t in failing), default=limit)
-    return (min(own) if own else None), allow, len(failing)
+    return (min(own) if own else None), len(own), allow, len(failing)
 
 
 def _tilt_fix(f: SlotFit, tilt: float, limit: float, clearance: float, shared) -> str:
@@ -236,8 +236,10 @@ def _tilt_fixes(f: SlotFit, tilt: float, limit: float, clearance: float, shared)
     build); and (a relaxation) the tilt it has, allowed. Both at the values ``shared`` holds for
     every failing disk (:func:`_shared_tilt_fix`)."""
     out = []
-    new, allow, count = shared
-    every = f" (the slot that holds all {count} disks that pitch too far)" if count > 1 else ""
+    new, held, allow, count = shared
+    every = (f" (the slot that holds all {held} disks that pitch too far)" if held == count > 1 else
+             f" (the slot that holds the {held} of the {count} disks that pitch too far a slot can hold)" if held > 1
+             else "")
     if new is not None and _own_clearance(f, limit, clearance) >= 0:
         play = f.play_z - 2 * (clearance - new)
         got = math.degrees(math.atan2(max(play, 0.0), f.engagement))
