@@ -9,8 +9,9 @@ from types import SimpleNamespace
 import pytest
 import yaml
 
-from hwgen.checks.gear_walls import TIP_TOL_MM, thread_tip, tip_checks, tip_planes, wheel_tip
+from hwgen.checks.gear_walls import TIP_TOL_MM, drive_check, drive_wall_model, thread_tip, tip_checks, tip_planes, wheel_tip
 from hwgen.checks.screens import plan_screens
+from hwgen.errors import InputError
 from hwgen.model.gearing import WormPair, worm_pair
 from hwgen.pipeline import design_plan, load
 
@@ -64,7 +65,7 @@ def test_the_tip_checks_fix_is_tried_and_applies(tmp_path):
     first fix is the gear the derivation finds, whose tip (the model's, scaled as measured) passes, and
     the design with that fix written plans, its pair free of every rule; the worm's passes."""
     pair = _pair(min_tip=0.9)
-    lay = SimpleNamespace(friction_coefficient=0.1, hex_key=2.5)
+    lay = SimpleNamespace(friction_coefficient=0.1, hex_key=2.5, shaft_diameter=3.0, running_fit=0.2)
     measured = {"wheel": {"tip_mm": pair.thinnest_tip() - 0.004, "plane_mm": 1.63},
                 "worm": {"tip_mm": pair.thread_tip - 0.004}}
     tooth, thread = tip_checks(measured, pair, lay, 0.9, "A")
@@ -107,3 +108,76 @@ def test_tips_measured_from_the_files_match_the_generated_gear(tmp_path):
         assert tooth == pytest.approx(pair.thinnest_tip(), abs=TIP_TOL_MM), (pair, wall)
         assert thread == pytest.approx(pair.thread_tip, abs=TIP_TOL_MM), (pair, wall)
         assert (tooth >= wall - TIP_TOL_MM) == passes, (pair, wall, tooth)
+
+
+# ---- the worm's core round its bores (gear.bore_wall) -----------------------------------------
+
+_LAY = SimpleNamespace(friction_coefficient=0.15, shaft_diameter=3.0, running_fit=0.2, hex_key=2.5)
+
+
+def test_thin_walls_round_the_bores_fail_with_tried_fixes_and_only_a_bore_that_breaks_through_is_refused(tmp_path):
+    """A worm of Ø10 at the prototype's module leaves 0.55 mm round the drive's 5 mm hex: measured so,
+    the check fails at an FDM wall, and its first fix (a larger worm, the derivation's search) has a
+    core that passes on the model; the prototype's worm passes. The key's socket is judged in the
+    drive shaft it is cut in: a 6 mm key breaks through it and is refused, naming the largest that
+    fits; a 4.5 mm key leaves 0.84 mm there, builds, and fails ``gear.drive_wall`` with a smaller key."""
+    from hwgen.checks.gear_walls import BORE_TOL_MM, bore_check
+    from hwgen.model.tensioner_layout.sizes import DRIVE_HEX
+    thin = _pair(d1=10.0, min_tip=0.9)
+    check = bore_check({"wall_mm": thin.bore_wall(DRIVE_HEX) - 0.005, "from_end_mm": 7.8, "bore": "hex"},
+                       thin, _LAY, 0.9, "A")
+    assert not check.passed and check.limit == pytest.approx(0.9 - BORE_TOL_MM)
+    assert "hex end" in check.message and "tensioner.worm_pitch_diameter" in check.fix and "tried" in check.fix
+    first = check.fixes[0]
+    assert first.then["passed"] and first.set["tensioner.worm_pitch_diameter"] > 10.0
+    fixed = WormPair(**{**{k: getattr(thin, k) for k in ("module", "starts", "teeth", "pressure_angle_deg",
+                                                          "face_width", "worm_length", "center_offset")},
+                        "worm_pitch_diameter": first.set["tensioner.worm_pitch_diameter"],
+                        "module": first.set.get("tensioner.module", thin.module), "min_tip": 0.9})
+    assert fixed.bore_wall(DRIVE_HEX, 3.2) >= 0.9
+    proto = _pair()
+    assert bore_check({"wall_mm": proto.bore_wall(DRIVE_HEX) - 0.005, "from_end_mm": 1.3, "bore": "hex"},
+                      proto, _LAY, 0.9, "A").passed
+    data = yaml.safe_load(fdm_copy(tmp_path).read_text())
+    data["tensioner"]["hex_key"] = 6.0
+    (tmp_path / "key.yaml").write_text(yaml.safe_dump(data, sort_keys=False))
+    with pytest.raises(InputError, match=r"tensioner.hex_key: .*breaks through the Ø7 mm drive shaft.*at most 5.9 mm"):
+        load(tmp_path / "key.yaml")
+    data["tensioner"]["hex_key"] = 4.5          # walls of 0.84 mm in the shaft: built, and the check fails
+    (tmp_path / "key.yaml").write_text(yaml.safe_dump(data, sort_keys=False))
+    plan = design_plan(load(tmp_path / "key.yaml"))
+    assert [s.id for s in plan_screens(plan)] == ["gear.tooth_tip", "gear.drive_wall"]
+    drive = drive_check({"wall_mm": drive_wall_model(4.5) - 0.005, "from_end_mm": 2.0, "bore": "hex"}, 4.5, 0.9, "A")
+    assert not drive.passed and "key's socket" in drive.message
+    key, relax = drive.fixes
+    assert key.set == {"tensioner.hex_key": 4.4} and key.then["passed"] and relax.relax
+    assert drive_check({"wall_mm": drive_wall_model(2.5), "from_end_mm": 2.0, "bore": "round"}, 2.5, 0.9, "A").passed
+
+
+@pytest.mark.slow
+def test_the_bore_wall_measured_from_the_file_is_the_generated_cores(tmp_path):
+    """Worms exported as the build exports them: the thinnest wall round their bores, cut from the
+    file, is the generated core's within the tessellation, round the hex (the prototype's, a thin Ø10
+    worm's) or round a wide dowel bore where that is the thinner."""
+    import trimesh
+
+    from hwgen.cad.worm import worm_solid
+    from hwgen.checks.axes import fit_axis
+    from hwgen.checks.gear_walls import BORE_TOL_MM, bore_wall
+    from hwgen.model.tensioner_layout.sizes import DRIVE_HEX
+    for pair, pin, kind in ((_pair(), 3.2, "hex"), (_pair(d1=10.0), 3.2, "hex"), (_pair(), 6.6, "round")):
+        f = tmp_path / f"worm-{pair.worm_pitch_diameter}-{pin}.stl"
+        worm_solid(pair, 4.0, DRIVE_HEX, pin, 3.0).exportStl(str(f), tolerance=0.01, angularTolerance=0.2)
+        mesh = trimesh.load_mesh(str(f))
+        got = bore_wall(mesh, fit_axis(mesh))
+        assert got["wall_mm"] == pytest.approx(pair.bore_wall(DRIVE_HEX, pin), abs=BORE_TOL_MM), (pair, pin, got)
+        assert got["bore"].startswith(kind), got
+    from hwgen.cad.worm import drive_solid
+    from hwgen.checks.gear_mesh import FILE_Z
+    from hwgen.checks.gear_walls import drive_wall_model
+    for key, kind in ((2.5, "round"), (4.5, "hex")):        # the vent in the hex end, then the key's socket
+        f = tmp_path / f"drive-{key}.stl"
+        drive_solid(4.0, key).exportStl(str(f), tolerance=0.01, angularTolerance=0.2)
+        got = bore_wall(trimesh.load_mesh(str(f)), FILE_Z)
+        assert got["wall_mm"] == pytest.approx(drive_wall_model(key), abs=BORE_TOL_MM), (key, got)
+        assert got["bore"].startswith(kind), got

@@ -22,7 +22,8 @@ from .stability import SEED
 OWNER = {"eyelet.overlap": ("eyelet.overlap", True), "eyelet.wall": ("eyelet.wall.eyelet", False),
          "backbone.crossing": ("backbone.crossing", False), "eyelet.shared_sliding": ("eyelet.shared_sliding", False),
          "tendon.clearance": ("tendon.clearance", False), "tendon.seat": ("tendon.seat", False),
-         "gear.tooth_tip": ("gear.tooth_tip", False), "gear.thread_tip": ("gear.thread_tip", False)}
+         "gear.tooth_tip": ("gear.tooth_tip", False), "gear.thread_tip": ("gear.thread_tip", False),
+         "gear.bore_wall": ("gear.bore_wall", False), "gear.drive_wall": ("gear.drive_wall", False)}
 
 
 def _failed(report: dict, tip: int) -> set[str]:

@@ -5,14 +5,12 @@ from __future__ import annotations
 import cadquery as cq
 
 from ..model.gearing import GearDesignError, WormPair
-from ..model.tensioner_layout.sizes import AXIAL_PLAY, DRIVE_FLANGE, DRIVE_HEX, DRIVE_HEX_LENGTH, DRIVE_SHAFT, WORM_END
+from ..model.tensioner_layout.sizes import (AXIAL_PLAY, DRIVE_FLANGE, DRIVE_HEX, DRIVE_HEX_LENGTH, DRIVE_SHAFT,
+                                            KEY_SOCKET_CLEARANCE, KEY_SOCKET_DEPTH, VENT, WORM_END)
 from .primitives import TOOL, hex_prism, one, wire
 
 ROOT_OVERLAP = 0.05      # thread root sunk into the worm core so the fuse has no seam, mm
-HEX_DEPTH = 5.0          # depth of the hex key's socket, mm (a 2.5 mm key engages fully at 5 mm)
 FAR_CHAMFER = 1.0        # 45° chamfer on the worm's far end, mm
-VENT = 1.2               # through every blind bore: resin drains and no cup forms while printing, mm
-HEX_CLEARANCE = 0.1      # across flats over the key, mm
 
 
 def worm_solid(pair: WormPair, near_end: float, hex_bore: float, pin_bore: float, pin_depth: float) -> cq.Solid:
@@ -53,7 +51,7 @@ def drive_solid(spine_length: float, hex_key: float) -> cq.Solid:
     flange = cq.Solid.makeCylinder(fd / 2, ft, cq.Vector(0, 0, 0))
     shaft = cq.Solid.makeCylinder(DRIVE_SHAFT / 2, shaft_len + 0.01, cq.Vector(0, 0, ft - 0.01))
     hexa = hex_prism(DRIVE_HEX, (0, 0, ft + shaft_len - 0.01), (0, 0, ft + shaft_len + DRIVE_HEX_LENGTH), (1, 0, 0))
-    socket = hex_prism(hex_key + HEX_CLEARANCE, (0, 0, -TOOL), (0, 0, HEX_DEPTH), (1, 0, 0))
+    socket = hex_prism(hex_key + KEY_SOCKET_CLEARANCE, (0, 0, -TOOL), (0, 0, KEY_SOCKET_DEPTH), (1, 0, 0))
     vent = cq.Solid.makeCylinder(VENT / 2, ft + shaft_len + DRIVE_HEX_LENGTH + TOOL, cq.Vector(0, 0, 0))
     return one(flange.fuse(shaft, hexa).cut(socket, vent), GearDesignError)
 

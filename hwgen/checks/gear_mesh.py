@@ -45,8 +45,8 @@ from ..cad.manifest import ManifestPart
 from ..model.gearing import hertz_allowable
 from .axes import Axis, axes_angle, axes_distance, fit_axis
 from .base import REBUILD, Check, Fix, fix_text
-from .gear_walls import thread_tip, tip_checks, tip_planes, wheel_tip
-from .meshes import placed_mesh, to_manifold
+from .gear_walls import bore_check, bore_wall, drive_check, thread_tip, tip_checks, tip_planes, wheel_tip
+from .meshes import part_mesh, placed_mesh, to_manifold
 from .surface import SurfaceDistance, sample_surface
 
 INTERFERENCE_TOL_MM3 = 0.01   # worm ∩ wheel counts as zero below this
@@ -352,8 +352,23 @@ def gear_checks(folder: Path, parts, plan) -> list[Check]:
     pairs = gear_pairs(parts)
     if not pairs:
         return [Check("gear.parts", "error", False, "no tensioner worm/wheel parts in the manifest", fix=REBUILD)]
-    checks = _pair_checks(folder, plan, pairs)
+    checks = _pair_checks(folder, plan, pairs) + _drive_checks(folder, parts, plan)
     return [Check(**c) for c in as_json([c.to_json() for c in checks])]
+
+
+FILE_Z = Axis(np.zeros(3), np.array([0.0, 0.0, 1.0]), 0.0, 0.0, (0.0, 0.0))    # a drive shaft's axis in its file
+
+
+def _drive_checks(folder: Path, parts, plan) -> list[Check]:
+    """``gear.drive_wall`` measured on the first channel's drive shaft (one shaft serves every channel),
+    remembered under its file's bytes."""
+    drives = sorted((p for p in parts if p.role == "tensioner_drive"), key=lambda p: p.channel or "")
+    if not drives:
+        return []
+    drive = drives[0]
+    got = remembered("drive walls", (_file_sha(drive.stl_in(folder)),),
+                     lambda: bore_wall(part_mesh(folder, drive), FILE_Z))
+    return [drive_check(got, plan.require_tensioner_layout().hex_key, plan.min_wall, drive.channel or "")]
 
 
 def _file_sha(path: Path) -> str | None:
@@ -397,6 +412,11 @@ class _Measurer:
             return {"wheel": wheel_tip(m["wheel"], m["wheel_axis"], planes),
                     "worm": thread_tip(m["worm"], m["worm_axis"], pair.pitch)}
         return remembered("gear tips", (d.files, d.pose, planes, pair.pitch), measure)
+
+    def bore(self, d: DistinctPair) -> dict:
+        """The worm's thinnest wall round the bores on its axis (:func:`hwgen.checks.gear_walls.bore_wall`)."""
+        return remembered("worm bore", (d.files, d.pose), lambda: bore_wall(self._measured(d)["worm"],
+                                                                            self._measured(d)["worm_axis"]))
 
 
 def measure_distinct_pair(m: dict, search: float) -> dict:
@@ -510,6 +530,7 @@ def _strength_checks(measured: dict, of: dict, measurer: _Measurer, pairs: dict,
                      f"{phi - gamma:.2f}° below the friction angle atan(μ / cos α_n) = {phi:.3f}° (design μ = {mu:g}; "
                      f"loading refuses a pair that is not self-locking)", gamma, phi, common))
     out += tip_checks(measurer.tips(of[rep], pair), pair, lay, plan.min_wall, on)
+    out.append(bore_check(measurer.bore(of[rep]), pair, lay, plan.min_wall, on))
     e_mpa, nu, why = proc.contact_modulus_mpa, proc.poisson, proc.contact_reason
     allow = hertz_allowable(ts.resin_strength)
     for channel in sorted(measured):

@@ -1,6 +1,8 @@
 """The worm gear's thinnest printed features, measured from its files against the process's wall:
-the wheel's tooth tip across its face (``gear.tooth_tip``) and the worm's thread tip
-(``gear.thread_tip``).
+the wheel's tooth tip across its face (``gear.tooth_tip``), the worm's thread tip
+(``gear.thread_tip``), the worm's core round the bores on its axis (``gear.bore_wall``: the drive
+shaft's hex end pressed in from its near face, the dowel it turns on at its far end) and the drive
+shaft round the key's socket and its vent (``gear.drive_wall``).
 
 A gear whose tips are thinner than ``process.min_wall`` is still a gear: it is built, and these
 checks fail naming the wall, the tip measured and the gear that prints, found by the search that
@@ -14,7 +16,9 @@ How a tip is read: in a section of the part, the tooth's (thread's) width is cut
 tip itself a ring would meet the tessellated tip's chords (0.01 mm under the true surface) in
 pieces. The wheel is cut normal to its axis at the planes the model looks at (mid-face to where
 the rim's chamfer begins, and where the throat meets the outside radius; both sides); the worm in
-the plane through its axis, the threads clear of its ends by a pitch.
+the plane through its axis, the threads clear of its ends by a pitch. A bore's wall is the least
+distance between the bore's outline and the worm's outline in sections normal to the worm's axis,
+every :data:`BORE_STEP_MM` along it.
 """
 from __future__ import annotations
 
@@ -24,12 +28,17 @@ import numpy as np
 
 from ..model import gear_choice
 from ..model.gearing import WormPair
+from ..model.tensioner_layout.sizes import DRIVE_HEX, DRIVE_SHAFT, KEY_SOCKET_CLEARANCE, VENT
 from .base import REBUILD, Check, Fix, Screen, fix_text
 
 TIP_TOL_MM = 0.02             # each flank of a tip tessellated up to 0.01 mm inside the solid
 TIP_DEPTHS_MM = (0.05, 0.1, 0.15, 0.2)   # under the tip, where the width is cut, then extrapolated to it
 BAND_MM = 0.002               # the ring's (band's) width
 RING_SEGMENTS = 4096
+BORE_TOL_MM = 0.01            # the core's round face tessellated up to 0.01 mm inside the solid (a hex bore is exact)
+BORE_STEP_MM = 0.25           # the worm cut normal to its axis this often
+END_CLEAR_MM = 1.2            # and not within this of its ends: the far end's 1 mm chamfer thins its wall by design
+HEX_ROUNDNESS = 1.05          # a bore's perimeter² / (4π area): 1 round, 1.10 a hexagon
 
 
 def tip_planes(pair: WormPair) -> tuple[float, ...]:
@@ -111,6 +120,46 @@ def thread_tip(mesh, axis, pitch: float) -> dict:
     return {"tip_mm": _extrapolated(widths) if len(widths) >= 2 else math.nan}
 
 
+def bore_wall(mesh, axis) -> dict:
+    """The thinnest wall of a worm's core round the bores on its axis (mm), where it is (mm from the
+    worm's nearer end) and round which bore ("hex", or "round" with its diameter)."""
+    solid = _manifold(mesh, axis.frame())
+    _, along = axis.radial(np.asarray(mesh.vertices))
+    lo, hi = float(along.min()), float(along.max())
+    best = {"wall_mm": math.inf, "from_end_mm": None, "bore": None}
+    for z in np.arange(lo + END_CLEAR_MM, hi - END_CLEAR_MM + 1e-9, BORE_STEP_MM):
+        polys = [np.asarray(p, dtype=float) for p in solid.slice(float(z)).to_polygons()]
+        area = [_signed_area(p) for p in polys]
+        outer = [p for p, a in zip(polys, area) if a > 0]
+        for hole, a in zip(polys, area):
+            if a >= 0 or not outer:
+                continue
+            wall = min(_ring_distance(hole, o) for o in outer)
+            if wall < best["wall_mm"]:
+                perimeter = float(np.linalg.norm(np.roll(hole, -1, axis=0) - hole, axis=1).sum())
+                kind = ("hex" if perimeter ** 2 / (4 * math.pi * -a) > HEX_ROUNDNESS else
+                        f"round Ø{2 * math.sqrt(-a / math.pi):.2f} mm")
+                best = {"wall_mm": wall, "from_end_mm": float(min(z - lo, hi - z)), "bore": kind}
+    return best
+
+
+def _signed_area(p: np.ndarray) -> float:
+    x, y = p[:, 0], p[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def _ring_distance(a: np.ndarray, b: np.ndarray) -> float:
+    """The least distance between two closed outlines that do not cross: each one's corners to the
+    other's edges, both ways."""
+    def corners_to_edges(p: np.ndarray, q: np.ndarray) -> float:
+        s0, d = q, np.roll(q, -1, axis=0) - q
+        length2 = np.maximum((d * d).sum(1), 1e-30)
+        rel = p[:, None, :] - s0[None]
+        t = np.clip((rel * d[None]).sum(2) / length2[None], 0.0, 1.0)
+        return float(np.sqrt(((rel - t[..., None] * d[None]) ** 2).sum(2)).min())
+    return min(corners_to_edges(a, b), corners_to_edges(b, a))
+
+
 def _manifold(mesh, frame: np.ndarray):
     from .meshes import to_manifold
     return to_manifold(mesh, frame)
@@ -125,14 +174,14 @@ def tip_checks(tips: dict, pair: WormPair, lay, min_wall: float, on: str) -> lis
     out = []
     for cid, part, got, why in (("gear.tooth_tip", "wheel", tips["wheel"], "module"),
                                 ("gear.thread_tip", "worm", tips["worm"], "module and pressure angle")):
-        tip, model = got["tip_mm"], _model_tip(cid, pair)
+        tip, model = got["tip_mm"], _model(cid, pair, lay)
         if not math.isfinite(tip):          # no section met a tooth: the file is not the gear the plan made
             out.append(Check(cid, "error", False, f"measured on channel {on}'s files: the {part}'s tips could not "
                                                   f"be cut from its file", None, floor, dict(common), fix=REBUILD))
             continue
         ok = bool(tip >= floor)
         where = "" if got.get("plane_mm") is None else f", {got['plane_mm']:+.2f} mm from mid-face"
-        fixes = () if ok else _tip_fixes(cid, pair, lay, min_wall, tip)
+        fixes = () if ok else _wall_fixes(cid, pair, lay, min_wall, tip)
         out.append(Check(
             cid, "error", ok,
             f"measured on channel {on}'s files: the {part}'s thinnest {'tooth' if part == 'wheel' else 'thread'} tip "
@@ -142,36 +191,112 @@ def tip_checks(tips: dict, pair: WormPair, lay, min_wall: float, on: str) -> lis
     return out
 
 
-def _model_tip(cid: str, pair: WormPair) -> float:
+def bore_check(got: dict, pair: WormPair, lay, min_wall: float, on: str) -> Check:
+    """``gear.bore_wall`` of the measured ``got`` (:func:`bore_wall`, on channel ``on``'s worm; every
+    channel has that worm) against the process's ``min_wall``, with its tried fixes."""
+    cid, common, floor = "gear.bore_wall", {"channel": "all", "measured_on": on}, min_wall - BORE_TOL_MM
+    wall = got["wall_mm"]
+    if not math.isfinite(wall):             # no section met a bore: the file is not the worm the plan made
+        return Check("gear.bore_wall", "error", False, f"measured on channel {on}'s files: no bore could be cut from the "
+                                          f"worm's file", None, floor, dict(common), fix=REBUILD)
+    model = _model(cid, pair, lay)
+    what = "the drive shaft's hex end" if got["bore"] == "hex" else f"a {got['bore']} bore"
+    ok = bool(wall >= floor)
+    fixes = () if ok else _wall_fixes(cid, pair, lay, min_wall, wall)
+    return Check("gear.bore_wall", "error", ok,
+                 f"measured on channel {on}'s files: the worm's core is {wall:.3f} mm thick round {what}, "
+                 f"{got['from_end_mm']:.1f} mm from its end (the generated worm: {model:.3f} mm, its root Ø"
+                 f"{2 * pair.rf1:.3f} mm round the {DRIVE_HEX:g} mm hex and the Ø{gear_choice.pin_bore(lay):g} mm "
+                 f"dowel bore), against process.min_wall {min_wall:g} mm less {BORE_TOL_MM:g} mm for the files' "
+                 f"tessellation", wall, floor, {**common, "model_mm": model},
+                 fix="" if ok else fix_text(fixes), fixes=fixes)
+
+
+def drive_wall_model(hex_key: float) -> float:
+    """The drive shaft's thinnest wall as generated, mm: round the key's socket in its Ø shaft, or round
+    the vent in its hex end (the vent's wall to the hexagon's flats)."""
+    socket = (DRIVE_SHAFT - (hex_key + KEY_SOCKET_CLEARANCE) * 2 / math.sqrt(3)) / 2
+    return min(socket, (DRIVE_HEX - VENT) / 2)
+
+
+def drive_check(got: dict, hex_key: float, min_wall: float, on: str) -> Check:
+    """``gear.drive_wall`` of the measured ``got`` (:func:`bore_wall` of channel ``on``'s drive shaft,
+    along its file Z; every channel has that shaft) against the process's ``min_wall``, with its tried
+    fixes: the largest key whose socket leaves the wall, then (a relaxation) the wall it prints with."""
+    common, floor = {"channel": "all", "measured_on": on}, min_wall - BORE_TOL_MM
+    wall = got["wall_mm"]
+    if not math.isfinite(wall):
+        return Check("gear.drive_wall", "error", False, f"measured on channel {on}'s files: no bore could be cut from the "
+                                          f"drive shaft's file", None, floor, dict(common), fix=REBUILD)
+    model = drive_wall_model(hex_key)
+    what = "the key's socket" if got["bore"] == "hex" else "the vent in its hex end"
+    ok = bool(wall >= floor)
+    fixes = () if ok else _drive_fixes(hex_key, min_wall, wall, model)
+    return Check("gear.drive_wall", "error", ok,
+                 f"measured on channel {on}'s files: the drive shaft is {wall:.3f} mm thick round {what}, "
+                 f"{got['from_end_mm']:.1f} mm from its end (as generated: {model:.3f} mm; a {hex_key:g} mm key's "
+                 f"socket in its Ø{DRIVE_SHAFT:g} mm shaft, a Ø{VENT:g} mm vent in its {DRIVE_HEX:g} mm hex end), "
+                 f"against process.min_wall {min_wall:g} mm less {BORE_TOL_MM:g} mm for the files' tessellation",
+                 wall, floor, {**common, "model_mm": model}, fix="" if ok else fix_text(fixes), fixes=fixes)
+
+
+def _drive_fixes(hex_key: float, min_wall: float, measured: float, model: float) -> tuple[Fix, ...]:
+    scale, limit = measured / model, min_wall - BORE_TOL_MM
+    out = []
+    key = math.floor(((DRIVE_SHAFT - 2 * min_wall) * math.sqrt(3) / 2 - KEY_SOCKET_CLEARANCE) * 10 + 1e-9) / 10
+    if 0 < key < hex_key:
+        got = scale * drive_wall_model(key)
+        out.append(Fix({"tensioner.hex_key": key}, {"measured": got, "passed": got >= limit, "limit": limit},
+                       note=f"from {hex_key:g} mm: the largest key (to 0.1 mm) whose socket leaves the wall in the "
+                            f"shaft; the shaft's walls as generated, scaled as this one measured"))
+    wall = math.floor(measured * 100 + 1e-9) / 100
+    if 0 < wall < min_wall:
+        out.append(Fix({"process.min_wall": wall}, {"measured": measured, "passed": measured >= wall - BORE_TOL_MM,
+                                                    "limit": wall - BORE_TOL_MM},
+                       note=f"from {min_wall:g} mm: state that the printer holds {wall:g} mm walls, with which this "
+                            f"shaft prints", relax=True))
+    return tuple(out)
+
+
+def _model(cid: str, pair: WormPair, lay) -> float:
+    """The figure of the generated gear that check ``cid`` measures, mm."""
+    if cid == "gear.bore_wall":
+        return pair.bore_wall(DRIVE_HEX, gear_choice.pin_bore(lay))
     return pair.thinnest_tip() if cid == "gear.tooth_tip" else pair.thread_tip
 
 
-def _tip_fixes(cid: str, pair: WormPair, lay, min_wall: float, tip: float) -> tuple[Fix, ...]:
-    """The least gear change that prints with ``min_wall`` (every rule of the pair, the hex socket);
-    then, a relaxation, the thickest wall the built gear prints with (the wheel's outside radius
-    follows the wall). Each tried on the model of the generated gear, its tip scaled as the built
-    ``tip`` measured against the model's."""
-    mu, hex_key = lay.friction_coefficient, lay.hex_key
-    scale = tip / _model_tip(cid, pair)
-    limit = min_wall - TIP_TOL_MM
+def _tol(cid: str) -> float:
+    return BORE_TOL_MM if cid == "gear.bore_wall" else TIP_TOL_MM
+
+
+def _wall_fixes(cid: str, pair: WormPair, lay, min_wall: float, measured: float) -> tuple[Fix, ...]:
+    """The least gear change that prints with ``min_wall`` (every rule of the pair, the walls round the
+    worm's bores); then, a relaxation, the thickest wall the built gear prints with (the wheel's
+    outside radius follows the wall). Each tried on the model of the generated gear, its figure
+    scaled as the built one ``measured`` against the model's."""
+    scale = measured / _model(cid, pair, lay)
+    limit = min_wall - _tol(cid)
     out = []
-    choice = gear_choice.least_change(pair, mu, hex_key, min_wall)
+    choice = gear_choice.least_change(pair, lay, min_wall)
     if choice.values:
-        got = scale * _model_tip(cid, WormPair(**{**_fields(pair), **_renamed(choice.values), "min_tip": min_wall}))
+        got = scale * _model(cid, WormPair(**{**_fields(pair), **_renamed(choice.values), "min_tip": min_wall}), lay)
         was = ", ".join(f"{getattr(pair, _PAIR[k]):g}" for k in choice.values)
         out.append(Fix({f"tensioner.{k}": v for k, v in choice.values.items()},
                        {"measured": got, "passed": got >= limit, "limit": limit},
                        note=f"from {was}: the least change of the gear that prints with this wall, self-locks and "
-                            f"covers the wheel's reach (the search hwgen derives a gear with); the tip of that "
-                            f"gear as generated, scaled as this one measured"))
-    wall = gear_choice.thickest_wall(pair, mu, hex_key, min_wall)
+                            f"covers the wheel's reach (the search hwgen derives a gear with); the {_FIGURE[cid]} of "
+                            f"that gear as generated, scaled as this one measured"))
+    wall = gear_choice.thickest_wall(pair, lay, min_wall)
     if wall is not None:
-        got = scale * _model_tip(cid, WormPair(**{**_fields(pair), "min_tip": wall}))
-        out.append(Fix({"process.min_wall": wall}, {"measured": got, "passed": got >= wall - TIP_TOL_MM,
-                                                    "limit": wall - TIP_TOL_MM},
+        got = scale * _model(cid, WormPair(**{**_fields(pair), "min_tip": wall}), lay)
+        out.append(Fix({"process.min_wall": wall}, {"measured": got, "passed": got >= wall - _tol(cid),
+                                                    "limit": wall - _tol(cid)},
                        note=f"from {min_wall:g} mm: state that the printer holds {wall:g} mm walls, with which this "
                             f"gear prints (the wheel's outside radius cut for them)", relax=True))
     return tuple(out)
+
+
+_FIGURE = {"gear.tooth_tip": "tooth tip", "gear.thread_tip": "thread tip", "gear.bore_wall": "worm's bore wall"}
 
 
 # the tensioner section's gear keys as the pair names them
@@ -195,7 +320,7 @@ def _tip_screen(plan, cid: str) -> list[Screen]:
     if lay is None:
         return []
     pair, floor = lay.pair, plan.min_wall - TIP_TOL_MM
-    tip = _model_tip(cid, pair)
+    tip = _model(cid, pair, lay)
     part = "wheel's tooth" if cid == "gear.tooth_tip" else "worm's thread"
     return [Screen(cid, f"the {part} tip is {tip:.3f} mm as generated, under process.min_wall {plan.min_wall:g} mm",
                    "error", tip, floor)] if tip < floor else []
@@ -209,3 +334,23 @@ def tooth_tip_screen(plan) -> list[Screen]:
 def thread_tip_screen(plan) -> list[Screen]:
     """``gear.thread_tip`` foreseen on the plan: the generated worm's thread tip under the wall."""
     return _tip_screen(plan, "gear.thread_tip")
+
+
+def bore_wall_screen(plan) -> list[Screen]:
+    """``gear.bore_wall`` foreseen on the plan: the generated worm's core round its bores under the wall."""
+    lay = plan.tensioner_layout
+    if lay is None:
+        return []
+    wall, floor = _model("gear.bore_wall", lay.pair, lay), plan.min_wall - BORE_TOL_MM
+    return [Screen("gear.bore_wall", f"the worm's core is {wall:.3f} mm round its bores as generated, under "
+                                     f"process.min_wall {plan.min_wall:g} mm", "error", wall, floor)] if wall < floor else []
+
+
+def drive_wall_screen(plan) -> list[Screen]:
+    """``gear.drive_wall`` foreseen on the plan: the generated drive shaft's walls under the process's."""
+    lay = plan.tensioner_layout
+    if lay is None:
+        return []
+    wall, floor = drive_wall_model(lay.hex_key), plan.min_wall - BORE_TOL_MM
+    return [Screen("gear.drive_wall", f"the drive shaft is {wall:.3f} mm round its key's socket or vent as generated, "
+                                      f"under process.min_wall {plan.min_wall:g} mm", "error", wall, floor)] if wall < floor else []

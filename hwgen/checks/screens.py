@@ -7,12 +7,12 @@ from .anchors import seat_screen
 from .base import Screen
 from .clearances import crossing_screen, rubbing_screen, wall_screen
 from .eyelets import overlap_screen
-from .gear_walls import thread_tip_screen, tooth_tip_screen
+from .gear_walls import bore_wall_screen, drive_wall_screen, thread_tip_screen, tooth_tip_screen
 from .sliding import sliding_screen
 
 # in the order a sweep's row lists them
 SCREENS = (overlap_screen, wall_screen, crossing_screen, sliding_screen, rubbing_screen, seat_screen, tooth_tip_screen,
-           thread_tip_screen)
+           thread_tip_screen, bore_wall_screen, drive_wall_screen)
 
 
 def plan_screens(plan) -> list[Screen]:

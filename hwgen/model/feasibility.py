@@ -16,12 +16,14 @@ from ..errors import DesignError, InputError, Problem
 from ..params import Design
 from .fixing import disk_gaps, disk_thicknesses, seat_diameter
 from .fixtures import mount_problems
+from .gear_choice import pin_bore
 from .gearing import worm_pair
 from .holes import straight_hole
 from .materials import material_problem
 from .routing import sample_function
 from .specs import slot_size
 from .tensioner_layout import spool_wall_problem
+from .tensioner_layout.sizes import DRIVE_HEX, DRIVE_SHAFT, KEY_SOCKET_CLEARANCE
 
 
 SLOT = "the slot"       # the cause the problems of what stands in or around the strip's slot follow from
@@ -43,10 +45,7 @@ def problems(d: Design) -> list[tuple[str | tuple[str, ...], str] | Problem]:
     wall = spool_wall_problem(ts, d.process.min_wall)
     if wall:
         out.append(("tensioner.spool_diameter", wall))
-    core = ts.worm_pitch_diameter - 2.5 * ts.module
-    if ts.hex_key / math.cos(math.pi / 6) + 2 * d.process.min_wall >= core:
-        out.append(("tensioner.hex_key", f"a {ts.hex_key:g} mm hex socket does not fit in the worm's core "
-                                         f"({core:g} mm) with {d.process.min_wall:g} mm walls"))
+    out += _drive_problems(d)
     out += _eyelets_outside(d)
     out += _spacing_problems(d)
     out += _anchor_problems(d)
@@ -60,6 +59,27 @@ def _gear_problems(pair, mu: float) -> tuple[tuple[str, str], ...]:
     same pair thousands of times). Tips thinner than the process's wall are not among them: that gear
     is built and its checks (``gear.tooth_tip``, ``gear.thread_tip``) fail."""
     return tuple(pair.refusals(mu))
+
+
+def _drive_problems(d: Design) -> list[tuple[str, str]]:
+    """Bores that break through what holds them: the key's socket through the drive shaft, the
+    worm's bores (the shaft's hex end, the dowel's) through its core. A wall thinner than the
+    process's is built, and ``gear.drive_wall`` and ``gear.bore_wall`` measure it."""
+    ts = d.tensioner
+    out = []
+    socket = (ts.hex_key + KEY_SOCKET_CLEARANCE) * 2 / math.sqrt(3)      # across corners
+    if socket >= DRIVE_SHAFT:
+        largest = math.ceil((DRIVE_SHAFT * math.sqrt(3) / 2 - KEY_SOCKET_CLEARANCE) * 10 - 1) / 10
+        out.append(("tensioner.hex_key", f"a {ts.hex_key:g} mm key's socket ({socket:.2f} mm across corners) breaks "
+                                         f"through the Ø{DRIVE_SHAFT:g} mm drive shaft it is cut in; use a key of at "
+                                         f"most {largest:g} mm"))
+    pair = worm_pair(ts, d.process.min_wall)
+    if pair.rf1 > 0 and pair.bore_wall(DRIVE_HEX, pin_bore(ts)) <= 0:
+        out.append(("tensioner.worm_pitch_diameter",
+                    f"the worm's core (root Ø{2 * pair.rf1:.2f} mm) is smaller than the bores it takes: the drive "
+                    f"shaft's {DRIVE_HEX:g} mm hex end ({2 * DRIVE_HEX / math.sqrt(3):.2f} mm across corners) and "
+                    f"the Ø{pin_bore(ts):g} mm bore of the dowel it turns on; use a larger worm_pitch_diameter"))
+    return out
 
 
 def _spacing_problems(d: Design) -> list[tuple[str, str]]:

@@ -6,7 +6,7 @@ switches the process (FDM, ``process.min_wall: 0.9``) and writes nothing about t
 not be refused because the base's 1.25 mm module leaves a 0.894 mm tooth tip. The gear is a part
 hwgen derives, so it follows the process: of the gear's keys the design's own file did not
 write, :func:`follow_process` finds the least change that leaves the pair buildable (every rule
-of :meth:`hwgen.model.gearing.WormPair.problems`, the hex socket in the worm's core), searching
+of :meth:`hwgen.model.gearing.WormPair.problems`, the walls round the worm's bores), searching
 the module up a quarter-millimetre grid first (the wheel's tooth tip grows with it), then the
 worm's pitch diameter in whole millimetres (self-locking: the lead angle atan(z1 m / d1) falls
 as d1 grows), with no more starts than the base's, and the shortest worm in whole millimetres
@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .gearing import worm_pair
+from .tensioner_layout.sizes import DRIVE_HEX
 
 # the keys of the tensioner section this module may derive (the others, teeth, face, pressure
 # angle, friction, are the lab's statements about the parts it buys or prints and are kept)
@@ -35,7 +36,6 @@ DIAMETER_STEP = 1.0         # mm: the worm's pitch diameter in whole millimetres
 DIAMETER_MAX = 40.0         # mm: the schema's bound on tensioner.worm_pitch_diameter
 LENGTH_STEP = 1.0           # mm: the worm's threaded length in whole millimetres
 LENGTH_MAX = 60.0           # mm: the schema's bound on tensioner.worm_length
-HEX_ACROSS_CORNERS = 1 / math.cos(math.pi / 6)     # a hexagon's across-corners over its across-flats
 
 
 @dataclass(frozen=True)
@@ -47,20 +47,30 @@ class GearChoice:
     note: str = ""
 
 
-def hex_problem(ts, module: float, d1: float, min_wall: float) -> str | None:
-    """Why the worm's hex socket does not fit in its core with the process's walls, or None."""
-    core = d1 - 2.5 * module
-    if ts.hex_key * HEX_ACROSS_CORNERS + 2 * min_wall >= core:
-        return (f"a {ts.hex_key:g} mm hex socket does not fit in the worm's core ({core:g} mm) "
-                f"with {min_wall:g} mm walls")
-    return None
+def bore_problem(pair, pin_bore: float, min_wall: float) -> tuple[str, str] | None:
+    """Why the worm's core is thinner than the process's wall round one of its bores (the drive
+    shaft's hex end, pressed in from its near face; the dowel's, ``pin_bore`` mm, at its far end),
+    or None. The check ``gear.bore_wall`` measures that wall in the worm's file."""
+    hex_wall, pin_wall = pair.bore_wall(DRIVE_HEX), pair.bore_wall(round_bore=pin_bore)
+    wall = min(hex_wall, pin_wall)
+    if wall >= min_wall:
+        return None
+    what = (f"the drive shaft's {DRIVE_HEX:g} mm hex end" if hex_wall <= pin_wall else
+            f"the Ø{pin_bore:g} mm bore of the dowel it turns on")
+    return ("worm_bore", f"{what} leaves {wall:.2f} mm of the worm's core (root Ø{2 * pair.rf1:.2f} mm), "
+                         f"under the process's {min_wall:g} mm wall")
+
+
+def pin_bore(ts) -> float:
+    """The worm's bore for the dowel it turns on, mm (the tensioner's shaft and its running fit)."""
+    return ts.shaft_diameter + ts.running_fit
 
 
 def _problems(ts, values: dict, min_wall: float) -> list[tuple[str, str]]:
     t = _Tensioner(ts, values)
-    out = list(_pair_problems(worm_pair(t, min_wall), ts.friction_coefficient, min_wall))
-    hexp = hex_problem(ts, t.module, t.worm_pitch_diameter, min_wall)
-    return out + ([("hex_key", hexp)] if hexp else [])
+    pair = worm_pair(t, min_wall)
+    bore = bore_problem(pair, pin_bore(ts), min_wall)
+    return list(_pair_problems(pair, ts.friction_coefficient, min_wall)) + ([bore] if bore else [])
 
 
 @functools.lru_cache(maxsize=512)
@@ -136,24 +146,25 @@ def follow_process(ts, min_wall: float, free: set[str] | frozenset[str]) -> Gear
 class _Section:
     """The tensioner section's gear keys as a built pair has them (what :func:`follow_process` reads)."""
 
-    def __init__(self, pair, mu: float, hex_key: float):
+    def __init__(self, pair, lay):
         self.module, self.worm_starts, self.wheel_teeth = pair.module, pair.starts, pair.teeth
         self.worm_pitch_diameter, self.pressure_angle_deg = pair.worm_pitch_diameter, pair.pressure_angle_deg
         self.face_width, self.worm_length, self.center_offset = pair.face_width, pair.worm_length, pair.center_offset
-        self.friction_coefficient, self.hex_key = mu, hex_key
+        self.friction_coefficient = lay.friction_coefficient
+        self.shaft_diameter, self.running_fit = lay.shaft_diameter, lay.running_fit
 
 
-def least_change(pair, mu: float, hex_key: float, min_wall: float) -> GearChoice:
+def least_change(pair, lay, min_wall: float) -> GearChoice:
     """The least change of the built ``pair``'s module, worm diameter, length and starts that passes
     every rule of the pair at ``min_wall`` (the search of :func:`follow_process`, every gear key free):
-    the tried fix of a tip thinner than the wall. Empty ``values`` when none within the schema's bounds does."""
-    return follow_process(_Section(pair, mu, hex_key), min_wall, frozenset(GEAR_KEYS))
+    the tried fix of a tip or a bore's wall thinner than the wall. Empty ``values`` when none within the schema's bounds does."""
+    return follow_process(_Section(pair, lay), min_wall, frozenset(GEAR_KEYS))
 
 
-def thickest_wall(pair, mu: float, hex_key: float, below: float) -> float | None:
-    """The thickest process wall (to 0.01 mm, under ``below``) the built ``pair``'s tips are not
-    thinner than; None when none is."""
-    return _thickest_wall(_Section(pair, mu, hex_key), {}, below)
+def thickest_wall(pair, lay, below: float) -> float | None:
+    """The thickest process wall (to 0.01 mm, under ``below``) the built ``pair``'s tips and bore
+    walls are not thinner than; None when none is."""
+    return _thickest_wall(_Section(pair, lay), {}, below)
 
 
 def _note(stated: dict, changed: dict, before: list, min_wall: float) -> str:
@@ -163,7 +174,7 @@ def _note(stated: dict, changed: dict, before: list, min_wall: float) -> str:
             f"gear this file does not state would not print ({why}); write these keys to choose the gear yourself")
 
 
-WALL_RULES = ("module", "pressure_angle_deg")      # the fields of the pair's rules on the process's wall
+WALL_RULES = ("module", "pressure_angle_deg", "worm_bore")     # the fields of the gear's rules on the process's wall
 
 
 def _thickest_wall(ts, values: dict, below: float) -> float | None:
@@ -196,5 +207,5 @@ def _none_prints(ts, stated: dict, before: list, min_wall: float) -> str:
                f"{MODULE_MAX:g} mm module), or " if most is not None and most > own else "")
     return (f"process.min_wall {min_wall:g} mm: no worm gear within tensioner.module ≤ {MODULE_MAX:g} mm and "
             f"worm Ø ≤ {DIAMETER_MAX:g} mm prints with this wall ({why}), so the stated gear ({gear}) is built as it "
-            f"is and its tip checks fail; {largest}process.min_wall {own:g} mm, with which the stated gear "
+            f"is and its wall checks fail; {largest}process.min_wall {own:g} mm, with which the stated gear "
             f"prints, or state a gear in tensioner")

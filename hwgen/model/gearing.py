@@ -133,6 +133,11 @@ class WormPair:
     def rf1(self) -> float:
         return self.r1 - DEDENDUM * self.module
 
+    def bore_wall(self, hex_across_flats: float = 0.0, round_bore: float = 0.0) -> float:
+        """The worm core's wall round a bore on its axis, mm: the root radius less a hex bore's corner
+        radius (``hex_across_flats``) or a round bore's radius (``round_bore``, its diameter)."""
+        return self.rf1 - max(hex_across_flats / math.sqrt(3), round_bore / 2)
+
     @property
     def r2(self) -> float:
         return self.module * self.teeth / 2
