@@ -2,6 +2,8 @@
 byte-stable STEP colour block, each on the smallest piece that shows it."""
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -82,6 +84,73 @@ def test_seats_and_chambers_that_meet_the_plate_leave_a_closed_mesh(tmp_path, a)
     plate = [f for f in part.solid.Faces() if f.geomType() == "PLANE"
              and abs(f.BoundingBox().zmin - spec.seat_plate) < 1e-6 and abs(f.BoundingBox().zmax - spec.seat_plate) < 1e-6]
     assert len(plate) == 1 and plate[0].Area() > 0.1
+
+
+def _grazing_base_disk():
+    """The prototype's base disk with one eyelet of a drawn robot (robot 89 of the stability draw):
+    a table tendon's bore slanted 20° across the normal, its Ø1.0 seat where the bore's axis meets the
+    plate; 0.3 mm above the plate the bore's wall is 0.00005 mm beyond the seat's rim."""
+    import dataclasses
+
+    from hwgen.model.plan import make_plan
+    from hwgen.model.specs import Hole, Seat
+    from hwgen.pipeline import load
+    spec = make_plan(load(PARAMS / "prototype.yaml").design).disks[0]
+    axis = (-0.34637083622414866, 0.9380876814404024, -0.004329635452802022)
+    hole = Hole(x=25.34, z=28.44, axis=axis, diameter=1.1458257700460643, tendons=("T3",), worst_angle_deg=4.2,
+                in_slot=False)
+    t = (spec.seat_plate - spec.thickness / 2) / axis[1]
+    seat = Seat(tendon="T3", x=hole.x + t * axis[0], z=hole.z + t * axis[2], diameter=1.0, termination=1.5)
+    return dataclasses.replace(spec, holes=(hole,), seats=(seat,), seat_chambers=())
+
+
+def test_a_seat_that_would_graze_its_slanted_bore_ends_short_of_it():
+    """Where the seat's rim would end within 0.01 mm of its bore's wall (a sliver face the STL's
+    mesher leaves open), its cut stops lower, clear of the wall; elsewhere it runs the full overlap."""
+    from hwgen.model.fixing import SEAT_TANGENT_MM, rim_to_wall, seat_overlap, seat_reach
+    spec = _grazing_base_disk()
+    T, plate = spec.thickness, spec.seat_plate
+    overlap = seat_overlap(T, plate)
+    seat, hole = spec.seats[0], spec.holes[0]
+    assert rim_to_wall(seat, hole, T, plate + overlap) < 1e-3
+    reach = seat_reach(seat, hole, T, plate)
+    assert 0 < reach < overlap and rim_to_wall(seat, hole, T, plate + reach) >= SEAT_TANGENT_MM
+    assert seat_reach(dataclasses.replace(seat, diameter=0.8), hole, T, plate) == overlap
+    straight = dataclasses.replace(hole, axis=(0.0, 1.0, 0.0), diameter=1.0)
+    on_axis = dataclasses.replace(seat, x=hole.x, z=hole.z)
+    assert rim_to_wall(on_axis, straight, T, plate) is None and seat_reach(on_axis, straight, T, plate) == overlap
+
+
+@pytest.mark.slow                   # builds the base disk with the CAD kernel
+def test_a_seat_beside_a_slanted_bore_leaves_a_closed_mesh(tmp_path):
+    """Robot 89 of the stability draw: its base disk had three faces of no area where T3's seat ended
+    against its slanted bore's wall, and its STL four open edges (part.mesh). With the seat ending
+    short of the graze, the file is watertight with the solid's volume."""
+    import trimesh
+    import yaml
+
+    from hwgen.cad.disk import build_disk
+    from hwgen.cad.export import write_stl
+    from hwgen.model.fixing import rim_to_wall, seat_overlap
+    from hwgen.pipeline import design_plan, load
+
+    from .robots import lab_robot
+    from .stability import SEED
+    rng = np.random.default_rng(SEED)
+    doc = [lab_robot(rng, f"robot{i:03d}") for i in range(90)][89]
+    (tmp_path / "robot089.yaml").write_text(yaml.safe_dump(doc, sort_keys=False))
+    spec = design_plan(load(tmp_path / "robot089.yaml")).disks[0]
+    seat = next(s for s in spec.seats if s.tendon == "T3")
+    hole = next(h for h in spec.holes if "T3" in h.tendons)
+    overlap = seat_overlap(spec.thickness, spec.seat_plate)
+    assert rim_to_wall(seat, hole, spec.thickness, spec.seat_plate + overlap) < 1e-3     # still the robot that grazed
+    part = build_disk(spec)
+    assert min(f.Area() for f in part.solid.Faces()) > 1e-3
+    stl = tmp_path / "base.stl"
+    write_stl(part.solid, stl)
+    mesh = trimesh.load(stl)
+    assert mesh.is_watertight and mesh.is_winding_consistent
+    assert mesh.volume == pytest.approx(part.solid.Volume(), rel=2e-3)
 
 
 def test_the_check_sweeps_what_the_eyelets_are_sized_for(tmp_path):

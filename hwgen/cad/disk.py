@@ -15,7 +15,7 @@ import math
 import cadquery as cq
 import numpy as np
 
-from ..model.fixing import seat_overlap
+from ..model.fixing import seat_reach
 from ..model.holes import AXIS_CUT_FRACTION
 from ..model.specs import DiskSpec, Hole, HubSpec
 from . import DISK_ROTATION, Part, disk_placement
@@ -217,10 +217,10 @@ def blank_and_tools(spec: DiskSpec) -> tuple[cq.Solid, list[cq.Solid]]:
             tools.append(_truncated(tool, spec.seat_plate, spec) if seated and not h.in_slot else tool)
         else:
             tools.extend(_eyelet_tool(drill, T, edge, base_side, True, with_bore=False))
-    overlap = seat_overlap(T, spec.seat_plate)
     for s in spec.seats:
         fx, fy = sketch_xy(s.x, s.z)
-        tools.append(cq.Solid.makeCylinder(s.diameter / 2, spec.seat_plate + overlap + TOOL_OVERRUN,
+        reach = seat_reach(s, next((h for h in spec.holes if s.tendon in h.tendons), None), T, spec.seat_plate)
+        tools.append(cq.Solid.makeCylinder(s.diameter / 2, spec.seat_plate + reach + TOOL_OVERRUN,
                                            cq.Vector(fx, fy, -TOOL_OVERRUN)))
     for x, z, dia, height in spec.seat_chambers:
         fx, fy = sketch_xy(x, z)

@@ -218,6 +218,44 @@ def seat_overlap(thickness: float, plate: float) -> float:
     return min(SEAT_OVERLAP_MM, CHAMBER_ROOM_SHARE * max(thickness / 2 - plate, 0.0) / 2)
 
 
+SEAT_TANGENT_MM = 0.01      # a seat's rim this near its bore's wall where the seat's cut ends leaves faces of no area
+
+
+def seat_reach(seat, hole, thickness: float, plate: float) -> float:
+    """How far a seat's cut runs above the plate into its eyelet's ``hole`` (None: no eyelet of its
+    own): :func:`seat_overlap`, or less where the seat's rim would end within
+    :data:`SEAT_TANGENT_MM` of the bore's wall (a slanted bore moves across the seat as it rises and
+    can graze its rim there): the cut would leave a sliver face that the STL's mesher leaves open.
+    The seat through the plate is the same either way. A seat as wide as a bore along the normal, on
+    its axis, is one surface with it, not a graze: kept as it is."""
+    overlap = seat_overlap(thickness, plate)
+    if hole is None or rim_to_wall(seat, hole, thickness, plate) is None:
+        return overlap
+    for reach in (overlap, 0.75 * overlap, 0.5 * overlap, 0.25 * overlap):
+        if rim_to_wall(seat, hole, thickness, plate + reach) >= SEAT_TANGENT_MM:
+            return reach
+    return overlap
+
+
+def rim_to_wall(seat, hole, thickness: float, height: float) -> float | None:
+    """How near the seat's rim comes to grazing its eyelet's bore at ``height`` above the base
+    disk's outer face, mm (from inside or outside, where the rim lies most inside or most outside
+    the bore): the bore's section there is an ellipse, r across the slant and r / |a_y| along it,
+    centred where the bore's axis meets that plane. None where the rim is the wall all round."""
+    ax, ay, az = hole.axis
+    t = (height - thickness / 2) / ay
+    centre = np.array([hole.x + t * ax, hole.z + t * az])
+    r = hole.diameter / 2
+    slant = np.array([ax, az])
+    d = slant / np.linalg.norm(slant) if np.linalg.norm(slant) > 1e-12 else np.array([1.0, 0.0])
+    a = np.linspace(0.0, 2 * np.pi, 720, endpoint=False)
+    rim = np.array([seat.x, seat.z]) + seat.diameter / 2 * np.column_stack([np.cos(a), np.sin(a)]) - centre
+    rho = np.hypot(rim @ d / (r / abs(ay)), rim @ np.array([-d[1], d[0]]) / r)   # 1 on the bore's wall
+    if np.ptp(rho) < 1e-9 and abs(rho[0] - 1) < 1e-9:
+        return None
+    return float(r * min(abs(1 - rho.max()), abs(1 - rho.min())))
+
+
 def seats_for(design: Design, hole: Hole, thickness: float, directions: dict[str, np.ndarray]
               ) -> tuple[list[Seat], tuple[float, float, float, float] | None]:
     """Seats for the tendons of one base-disk eyelet, and the chamber over the plate that joins
