@@ -21,7 +21,7 @@ import threading
 import time
 import uuid
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import pyarrow as pa
@@ -30,6 +30,7 @@ import pyarrow.parquet as pq
 from ..atomic import atomic_path
 from ..errors import InputError
 from . import levels
+from .records import EvalOptions
 from .spec import Loaded, variants
 
 BATCH = {"lengths": 256, "robust": 4, "coupling": 1, "build": 1}
@@ -216,8 +217,8 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
     done = _done(folder)
     batches = _batches(loaded)
     total = sum(len(b) for b in batches)
-    options = {"robust_samples": loaded.spec.robust_samples, "keep": list(loaded.spec.keep),
-               "out": str(folder.parent), "cache": cache}
+    options = EvalOptions(robust_samples=loaded.spec.robust_samples, keep=tuple(loaded.spec.keep),
+                          out=str(folder.parent), cache=cache)
     args = (loaded.base, loaded.names, loaded.spec.level)
     written, cpu, verdicts = set(done), 0.0, {}
 
@@ -240,7 +241,7 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
                 write(levels.evaluate_batch(b, *args, done, options))
         else:
             client = p.client
-            options = dict(options, numba_threads=1)
+            options = replace(options, numba_threads=1)
             # the base design and the hashes already done go to every worker once, not with every task
             base, seen = client.scatter([loaded.base, frozenset(done)], broadcast=True)
             futures = [client.submit(levels.evaluate_batch, b, base, loaded.names, loaded.spec.level, seen, options,
