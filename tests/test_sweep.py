@@ -194,7 +194,7 @@ def test_lengths_level_imports_no_cad_kernel():
             "import yaml\n"
             f"base = yaml.safe_load(open({str(PROTOTYPE)!r}))\n"
             f"rows = levels.evaluate_batch([(0, (1.0,)), (1, (2.0,))], base, ({K_AXIS!r},), 'lengths')\n"
-            "assert [r['verdict'] for r in rows] == ['pass', 'pass'], rows\n"
+            "assert [r.verdict for r in rows] == ['pass', 'pass'], rows\n"
             "bad = sorted(m for m in sys.modules if m.split('.')[0] in ('cadquery', 'OCP', 'vtk', 'vtkmodules'))\n"
             "print(bad)\n")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)

@@ -261,7 +261,7 @@ def test_the_statics_a_tune_reads_are_hwgen_stiffness(tmp_path):
     doc = yaml.safe_load(PROTOTYPE.read_text())
     rows = levels.evaluate_batch([(0, (1.0,))], doc, (K,), "lengths",
                                  options=EvalOptions(with_plan=partial(results.statics, states=("AC1C2H",))))
-    assert rows[0]["statics"]["tip_stiffness@AC1C2H"] == pytest.approx(default["tip_stiffness_n_per_mm"], rel=1e-9)
+    assert rows[0].figures["statics"]["tip_stiffness@AC1C2H"] == pytest.approx(default["tip_stiffness_n_per_mm"], rel=1e-9)
 
 
 def test_a_screened_trial_still_measures_its_bounds():
@@ -270,10 +270,12 @@ def test_a_screened_trial_still_measures_its_bounds():
     doc = yaml.safe_load(PROTOTYPE.read_text())
     opts = EvalOptions(screen=True, with_plan=partial(results.statics, states=("AC1C2H",)), robust_samples=10)
     off, whole = levels.evaluate_batch([(0, (2.5,)), (1, (1.0,))], doc, (K,), "coupling", options=opts)
-    assert off["screened"] and any(f.id == "tendon.length" and f.fails for f in off["failures"])
-    assert off["coupling"] is None                                       # the tension checks were not run
-    assert off["statics"]["tip_stiffness@AC1C2H"] > 0 and off["statics"]["tip_torsion@AC1C2H"] > 0
-    assert not whole.get("screened") and whole["coupling"] is not None
+    assert off.screened and any(f.id == "tendon.length" and f.fails for f in off.failures)
+    assert off.coupling is None                                          # the tension checks were not run
+    statics = off.figures["statics"]
+    assert statics["tip_stiffness@AC1C2H"] > 0 and statics["tip_torsion@AC1C2H"] > 0
+    assert not whole.screened and whole.coupling is not None
+    assert "screened" not in whole.to_json() and off.to_json()["statics"] == statics   # a tune's stored row
 
 
 def test_constraints_count_failing_checks_and_bounds():

@@ -1,4 +1,5 @@
-"""What each level of a sweep computes for a batch of variants, on a worker: one row per variant.
+"""What each level of a sweep computes for a batch of variants, on a worker: one
+:class:`~hwgen.sweep.records.Row` per variant.
 
 ``lengths`` (:mod:`.lengths`): the plan's eyelets, eq. (2) and the nominal taut path, many
 variants at once. ``robust``: the full plan (:func:`hwgen.model.plan.make_plan`: its tip disk's
@@ -41,14 +42,13 @@ from ..errors import DesignError, InputError
 from ..model import feasibility, scatter as mc
 from ..model.plan import Plan, make_plan
 from . import lengths
-from .records import EvalOptions, Failure
+from .records import EvalOptions, Failure, Row
 from .spec import Resolved, Variant, resolve
 
-METRICS = ("centre_mm", "taut_mm", "robust_mm", "clearance_mm", "mass_g", "coupling", "least_tension_n")
 
 
 def evaluate_batch(batch: list[tuple[int, tuple]], base: dict, names: tuple[str, ...], level: str,
-                   done: frozenset | set = frozenset(), options: EvalOptions | None = None) -> list[dict]:
+                   done: frozenset | set = frozenset(), options: EvalOptions | None = None) -> list[Row]:
     """Rows for the variants of ``batch`` ((index, values) pairs) whose hash is not in ``done``."""
     options = options or EvalOptions()
     if options.numba_threads:
@@ -64,22 +64,22 @@ def evaluate_batch(batch: list[tuple[int, tuple]], base: dict, names: tuple[str,
         row = rows[r.index]
         fig = figures[r.index]
         if isinstance(fig, str):
-            row.update(verdict="error", message=fig, failures=[Failure(id="error", message=fig)])
+            row.set(verdict="error", message=fig, failures=[Failure(id="error", message=fig)])
             continue
-        row["verdict"], row["message"], f = lengths.verdict(fig)
-        row.update(f)
-        row["failures"] = lengths.failures(fig)
+        row.verdict, row.message, f = lengths.verdict(fig)
+        row.set(**f)
+        row.failures = lengths.failures(fig)
     share = (time.process_time() - t0) / max(len(todo), 1)
     for r in todo:
-        rows[r.index]["cpu_s"] = share
+        rows[r.index].cpu_s = share
     if level != "lengths" or options.with_plan:
         for r in good:
             row = rows[r.index]
-            if row["verdict"] == "error":
+            if row.verdict == "error":
                 continue
-            screened = options.screen and any(f.fails for f in row["failures"])
+            screened = options.screen and any(f.fails for f in row.failures)
             if screened and not options.with_plan:
-                row["screened"] = True          # a tune's trial that fails already: the levels after it not run
+                row.screened = True             # a tune's trial that fails already: the levels after it not run
                 continue
             t1 = time.process_time()
             try:
@@ -88,12 +88,12 @@ def evaluate_batch(batch: list[tuple[int, tuple]], base: dict, names: tuple[str,
                 else:
                     _deeper(r, row, level, options)
             except (InputError, DesignError) as e:
-                row.update(verdict="bad input", message=f"{e.path or '<document>'}: {e.message}")
-                row["failures"] = [Failure(id="input", message=row["message"])]
+                row.set(verdict="bad input", message=f"{e.path or '<document>'}: {e.message}")
+                row.failures = [Failure(id="input", message=row.message)]
             except Exception as e:      # a variant that makes hwgen fail is a row, never the end of the sweep
-                row.update(verdict="error", message=f"internal error: {type(e).__name__}: {e}"[:400])
-                row["failures"] = [Failure(id="error", message=row["message"])]
-            row["cpu_s"] += time.process_time() - t1
+                row.set(verdict="error", message=f"internal error: {type(e).__name__}: {e}"[:400])
+                row.failures = [Failure(id="error", message=row.message)]
+            row.cpu_s += time.process_time() - t1
     return [rows[r.index] for r in todo]
 
 
@@ -102,13 +102,10 @@ def warm() -> None:
     from ..model import taut_kernels  # noqa: F401
 
 
-def _row(r: Resolved, level: str) -> dict:
-    row = {"variant": r.index, "hash": r.hash, "level": level, "values": r.values,
-           "verdict": "bad input" if r.design is None else "pass", "message": r.message, "decoupled": None,
-           "checks_failed": None, "per_tendon": None, "kept": None, "cpu_s": 0.0,
-           "failures": [Failure(id="input", message=r.message)] if r.design is None else []}
-    row.update({m: None for m in METRICS})
-    return row
+def _row(r: Resolved, level: str) -> Row:
+    bad = r.design is None
+    return Row(variant=r.index, hash=r.hash, level=level, values=r.values, verdict="bad input" if bad else "pass",
+               message=r.message, failures=[Failure(id="input", message=r.message)] if bad else [])
 
 
 def _lengths(good: list[Resolved]) -> dict[int, dict | str]:
@@ -128,11 +125,11 @@ def _lengths(good: list[Resolved]) -> dict[int, dict | str]:
 
 # ---------------------------------------------------------------- robust, coupling, build
 
-def _figures_only(r: Resolved, row: dict, options: EvalOptions) -> None:
+def _figures_only(r: Resolved, row: Row, options: EvalOptions) -> None:
     """A screened trial's ``with_plan`` figures (a tune's statics, a fraction of the checks after
     them): every bound of its goal is then measured, so the optimiser learns how far the trial is
     from each, not only that it failed eq. (2) or a wall. A plan that is refused leaves them out."""
-    row["screened"] = True
+    row.screened = True
     try:
         plan = make_plan(r.design)
     except (InputError, DesignError):
@@ -140,20 +137,20 @@ def _figures_only(r: Resolved, row: dict, options: EvalOptions) -> None:
     _with_plan(row, plan, options)
 
 
-def _with_plan(row: dict, plan: Plan, options: EvalOptions) -> None:
+def _with_plan(row: Row, plan: Plan, options: EvalOptions) -> None:
     """``with_plan``'s figures into the row, and its ``statics_failures`` into the row's failures
     (an error among them fails the row, its message added to the row's)."""
     got = dict(options.with_plan(plan))
     more = got.pop("statics_failures", [])
-    row.update(got)
-    row["failures"] = list(row["failures"]) + more
+    row.figures.update(got)
+    row.failures = list(row.failures) + more
     errors = [f.message for f in more if f.fails]
     if errors:
-        row["verdict"] = "fail"
-        row["message"] = "; ".join(([row["message"]] if row["message"] else []) + errors)[:2000]
+        row.verdict = "fail"
+        row.message = "; ".join(([row.message] if row.message else []) + errors)[:2000]
 
 
-def _deeper(r: Resolved, row: dict, level: str, options: EvalOptions) -> None:
+def _deeper(r: Resolved, row: Row, level: str, options: EvalOptions) -> None:
     d = r.design
     plan = make_plan(d)
     feasibility.check_plan(plan, d)
@@ -162,19 +159,19 @@ def _deeper(r: Resolved, row: dict, level: str, options: EvalOptions) -> None:
     if level == "lengths":
         return
     if options.stop and options.stop(row):
-        row["screened"] = True         # a tune's trial its figures already rule out: the checks after them not run
+        row.screened = True            # a tune's trial its figures already rule out: the checks after them not run
         return
-    centre = {t["name"]: t["centre_mm"] for t in json.loads(row["per_tendon"])}
-    fails = [row["message"]] if row["message"] else []
+    centre = {t["name"]: t["centre_mm"] for t in json.loads(row.per_tendon)}
+    fails = [row.message] if row.message else []
     warns = []
-    failures = list(row["failures"])
+    failures = list(row.failures)
     for f in _plan_screens(plan):
         if not any(g.id == f.id for g in failures):
             (fails if f.fails else warns).append(f.message)
             failures.append(f)
     if options.screen and any(f.fails for f in failures):
         # a tune's trial the plan already fails: the Monte Carlo and the statics of the tensions not run
-        row.update(screened=True, failures=failures, verdict="fail",
+        row.set(screened=True, failures=failures, verdict="fail",
                    message="; ".join([f for f in fails if f] + [f"warning: {w}" for w in warns])[:2000])
         return
     taut_rows = robust(plan, plan.slot_clearance, options.robust_samples)
@@ -187,11 +184,11 @@ def _deeper(r: Resolved, row: dict, level: str, options: EvalOptions) -> None:
                         measured=t["robust_mm"], limit=t["budget_mm"], where=t["name"])
             (fails if f.fails else warns).append(text)
             failures.append(f)
-    tendons = json.loads(row["per_tendon"])
+    tendons = json.loads(row.per_tendon)
     for t in tendons:
         t.update({k: v for k, v in next(x for x in taut_rows if x["name"] == t["name"]).items()
                   if k in ("robust_mm", "taut_built_mm")})
-    row["robust_mm"] = max((t["robust_mm"] for t in budgeted), default=None)
+    row.robust_mm = max((t["robust_mm"] for t in budgeted), default=None)
     if level in ("coupling", "build"):
         report = coupling(plan, taut_rows, centre)
         if "skipped" in report:
@@ -200,13 +197,13 @@ def _deeper(r: Resolved, row: dict, level: str, options: EvalOptions) -> None:
             f = Failure.of_check(c)
             (fails if f.fails else warns).append(f"{f.id}: {f.message}")
             failures.append(f)
-        row["coupling"] = report.get("coupling")
-        row["least_tension_n"] = report.get("least_tension_n")
+        row.coupling = report.get("coupling")
+        row.least_tension_n = report.get("least_tension_n")
     if level == "build":
         from .build import build_and_check       # CadQuery: only a build-level worker imports it, once
         failed, kept = build_and_check(r, options)
-        row["checks_failed"] = len(failed)
-        row["kept"] = kept
+        row.checks_failed = len(failed)
+        row.kept = kept
         # the build's verdict is hwgen check's, which runs every rule above on the built files (eq. (2)
         # through the centres only as information): the screening figures stay on record as warnings
         failures = [replace(f, severity="warning") for f in failures]
@@ -215,10 +212,10 @@ def _deeper(r: Resolved, row: dict, level: str, options: EvalOptions) -> None:
         fails = [f"{c['id']}: {c['message']}" for c in failed[:3]]
         if len(failed) > 3:
             fails.append(f"and {len(failed) - 3} more failed checks")
-    row["per_tendon"] = json.dumps(tendons)
-    row["failures"] = failures
-    row["verdict"] = "fail" if any(fails) else "pass"
-    row["message"] = "; ".join([f for f in fails if f] + [f"warning: {w}" for w in warns])[:2000]
+    row.per_tendon = json.dumps(tendons)
+    row.failures = failures
+    row.verdict = "fail" if any(fails) else "pass"
+    row.message = "; ".join([f for f in fails if f] + [f"warning: {w}" for w in warns])[:2000]
 
 
 def _plan_screens(plan: Plan) -> list[Failure]:

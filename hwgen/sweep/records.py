@@ -9,7 +9,7 @@ design is :func:`hwgen.checks.base.fails`'s to say, as for a check.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -87,3 +87,57 @@ class EvalOptions:
     with_plan: Callable | None = None
     stop: Callable | None = None
     numba_threads: int | None = None
+
+
+METRICS = ("centre_mm", "taut_mm", "robust_mm", "clearance_mm", "mass_g", "coupling", "least_tension_n")
+
+
+@dataclass(kw_only=True)
+class Row:
+    """One variant's row, as a worker fills it level by level (so not frozen). The sweep's Parquet
+    columns are its fields of those names (:func:`hwgen.sweep.run.schema`: ``failures``, ``screened``
+    and ``figures`` are not among them); a tune stores :meth:`to_json`, the keys as the row dict had them.
+
+    ``verdict``: pass, fail, error (hwgen failed on it) or bad input. ``per_tendon``: each tendon's
+    figures as a JSON list (a Parquet string column). ``screened``: the levels after a failure were
+    not run (a tune's trial). ``figures``: what ``EvalOptions.with_plan`` added (a tune's ``statics``
+    and ``set_n``), top-level keys of the JSON."""
+
+    variant: int
+    hash: str
+    level: str
+    values: tuple
+    verdict: str = "pass"
+    message: str = ""
+    decoupled: bool | None = None
+    checks_failed: int | None = None
+    per_tendon: str | None = None
+    kept: str | None = None
+    cpu_s: float = 0.0
+    failures: list[Failure] = field(default_factory=list)
+    centre_mm: float | None = None
+    taut_mm: float | None = None
+    robust_mm: float | None = None
+    clearance_mm: float | None = None
+    mass_g: float | None = None
+    coupling: float | None = None
+    least_tension_n: float | None = None
+    screened: bool = False
+    figures: dict = field(default_factory=dict)
+
+    def set(self, **values) -> None:
+        """Fields by name (a level's summary figures); a name the row has no field for is an error."""
+        for k, v in values.items():
+            if k not in self.__dataclass_fields__ or k == "figures":
+                raise AttributeError(f"a row has no field {k!r}")
+            setattr(self, k, v)
+
+    def to_json(self) -> dict:
+        """The row as the sweep wrote its dict: its fields (``screened`` only when true), the failures'
+        JSON, then ``figures``' keys."""
+        out = {f.name: getattr(self, f.name) for f in fields(self) if f.name not in ("figures", "screened")}
+        out["failures"] = [f.to_json() for f in self.failures]
+        if self.screened:
+            out["screened"] = True
+        out.update(self.figures)
+        return out

@@ -30,12 +30,12 @@ import pyarrow.parquet as pq
 from ..atomic import atomic_path
 from ..errors import InputError
 from . import levels
-from .records import EvalOptions
+from .records import METRICS, EvalOptions, Row
 from .spec import Loaded, variants
 
 BATCH = {"lengths": 256, "robust": 4, "coupling": 1, "build": 1}
 PART_GLOB = "part-*.parquet"
-FLOAT_COLUMNS = levels.METRICS + ("cpu_s",)
+FLOAT_COLUMNS = METRICS + ("cpu_s",)
 
 
 @dataclass
@@ -65,17 +65,17 @@ def schema(loaded: Loaded) -> pa.Schema:
     return pa.schema(fields)
 
 
-def table(loaded: Loaded, rows: list[dict]) -> pa.Table:
+def table(loaded: Loaded, rows: list[Row]) -> pa.Table:
     """Rows as a table of :func:`schema`; an axis whose values are not numbers is stored as JSON."""
     sch = schema(loaded)
     cols: dict[str, list] = {f.name: [] for f in sch}
     for row in rows:
-        for name, v in zip(loaded.names, row["values"]):
+        for name, v in zip(loaded.names, row.values):
             kind = loaded.columns[name]
             cols[name].append(json.dumps(v, sort_keys=True) if kind == "json" else v)
         for f in sch:
             if f.name not in loaded.names:
-                cols[f.name].append(levels.finite(row.get(f.name)))
+                cols[f.name].append(levels.finite(getattr(row, f.name)))
     return pa.table(cols, schema=sch)
 
 
@@ -222,17 +222,17 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
     args = (loaded.base, loaded.names, loaded.spec.level)
     written, cpu, verdicts = set(done), 0.0, {}
 
-    def write(rows: list[dict]) -> None:
+    def write(rows: list[Row]) -> None:
         nonlocal cpu
-        rows = [r for r in rows if r["hash"] not in written]     # two variants of one design: one row
+        rows = [r for r in rows if r.hash not in written]        # two variants of one design: one row
         if not rows:
             return
-        with atomic_path(folder / f"part-{rows[0]['variant']:09d}-{uuid.uuid4().hex[:8]}.parquet") as tmp:
+        with atomic_path(folder / f"part-{rows[0].variant:09d}-{uuid.uuid4().hex[:8]}.parquet") as tmp:
             pq.write_table(table(loaded, rows), tmp)
         for r in rows:
-            written.add(r["hash"])
-            cpu += r["cpu_s"]
-            verdicts[r["verdict"]] = verdicts.get(r["verdict"], 0) + 1
+            written.add(r.hash)
+            cpu += r.cpu_s
+            verdicts[r.verdict] = verdicts.get(r.verdict, 0) + 1
 
     with pool(scheduler, workers) as p:
         t0 = time.perf_counter()

@@ -42,7 +42,7 @@ import numpy as np
 from ..errors import InputError
 from ..sweep import levels
 from ..sweep.run import pool
-from ..sweep.records import EvalOptions, Failure
+from ..sweep.records import EvalOptions, Failure, Row
 from ..sweep.spec import Variant, resolve
 from . import local, results
 from .spec import Loaded, distance
@@ -281,10 +281,10 @@ def bound_limits(loaded: Loaded, base_row: dict) -> list[tuple[str, float, float
     return out
 
 
-def short_of_bounds(limits: list[tuple[str, float, float]], row: dict) -> bool:
+def short_of_bounds(limits: list[tuple[str, float, float]], row: Row) -> bool:
     """Whether a row's statics already miss a bound of the goal (the worker's ``stop``: such a trial
     is infeasible whatever its checks say, so the checks after the statics are not run)."""
-    got = row.get("statics") or {}
+    got = row.figures.get("statics") or {}
     return any(key in got and sign * (bound - got[key]) > 0 for key, sign, bound in limits)
 
 
@@ -328,9 +328,10 @@ def judges_stiffening(goal) -> bool:
     return goal.checks == "all" or any(c.startswith("stiffening.") for c in goal.require)
 
 
-def _finish(loaded: Loaded, row: dict, values: tuple) -> dict:
-    """A worker's row made plain (JSON), with the trial's distance from the base."""
-    row = json.loads(json.dumps(row, default=_plain))
+def _finish(loaded: Loaded, row: Row, values: tuple) -> dict:
+    """A worker's row made plain (JSON: :meth:`~hwgen.sweep.records.Row.to_json`), with the trial's
+    distance from the base."""
+    row = json.loads(json.dumps(row.to_json(), default=_plain))
     row["distance"] = distance(loaded, values)
     row["values"] = list(values)
     return row
@@ -474,7 +475,7 @@ class _Search:
     def collect(self, fut) -> None:
         """The rows of a finished task (and of their twins that waited), each to be told in its turn."""
         batch = self.flying.pop(fut.key)
-        rows = {r["variant"]: r for r in fut.result()}
+        rows = {r.variant: r for r in fut.result()}
         fut.release()
         out = self.out
         for trial, values, h in batch:
