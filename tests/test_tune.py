@@ -15,6 +15,7 @@ import pyarrow.parquet as pq
 import pytest
 import yaml
 
+from hwgen import bench
 from hwgen.errors import InputError
 from hwgen.sweep import levels
 from hwgen.sweep.records import EvalOptions
@@ -116,6 +117,12 @@ def test_a_tune_with_a_known_answer_finds_a_whole_k(tmp_path):
     assert worst_half > 3 * best["centre_mm.C1"]
     text = (tmp_path / "out" / "tunes" / "t" / "best.yaml").read_text()
     assert f"k: {round(k, 6)}" in text
+    # the figures the terminal prints, for the bench and scripts: the best it names is the trials' best
+    run = json.loads((tmp_path / "out" / "tunes" / "t" / "run.json").read_text())
+    assert run["command"] == "tune" and run["evaluated"] + run["repeated"] == 60 and run["seconds"] > 0
+    assert run["best"]["trial"] == best["trial"]
+    assert run["best"]["objectives"]["centre_mm.C1"] == pytest.approx(best["centre_mm.C1"], rel=1e-12)
+    assert f"at trial {best['trial']}" in bench._tune_note(run)
 
 
 # ---------------------------------------------------------------- resuming, repeats
