@@ -178,7 +178,7 @@ def gravity_checks(parts, manifest: Manifest, plan, fits: list[SlotFit], strip_h
                         lowered_by="check.overstress" if not ok and sev == "warning" else ""))
     checks.append(Check("gravity.sag", "info", True, f"state N: tip sag {r.tip_sag:.1f} mm (small-deflection "
                         f"theory: {r.linear.tip_sag:.1f} mm)", r.tip_sag, None, {"gravity": worst_key}))
-    mount, c = _mount_check(parts, plan.mount.max_tip_share, r, e_print, e_why)
+    mount, c = _mount_check(parts, plan.mount.rules.max_tip_share, r, e_print, e_why)
     report["mount"] = mount
     checks += c
     bend, c = _bend_check(strip_study, spans, I, strip["part"])
