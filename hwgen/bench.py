@@ -160,7 +160,12 @@ def sim_rows(params: Path, out: Path, store: Path, env: dict) -> list[tuple]:
 
 def _written_json(out: Path, name: str) -> dict | None:
     """The JSON file ``name`` a command wrote into its design's folder under ``out`` (None: none, or unreadable)."""
-    for path in sorted(Path(out).glob(f"*/{name}")):
+    return _first_json(sorted(Path(out).glob(f"*/{name}")))
+
+
+def _first_json(paths) -> dict | None:
+    """The first of ``paths`` that holds a JSON object (None: none does)."""
+    for path in paths:
         try:
             doc = json.loads(path.read_text())
         except (OSError, ValueError):
@@ -432,15 +437,7 @@ SWEEP_AXES = ("  - path: tendons[1].routing.function.k\n    range: {start: 0.5, 
 
 def _run_json(folder: Path) -> dict | None:
     """The run.json a sweep, tune or fix wrote beside its results under ``folder`` (the newest; None: none)."""
-    found = sorted(Path(folder).rglob(RUN_JSON), key=lambda p: p.stat().st_mtime)
-    for path in reversed(found):
-        try:
-            doc = json.loads(path.read_text())
-        except (OSError, ValueError):
-            continue
-        if isinstance(doc, dict):
-            return doc
-    return None
+    return _first_json(sorted(Path(folder).rglob(RUN_JSON), key=lambda p: p.stat().st_mtime, reverse=True))
 
 
 def _sweep_note(run: dict | None) -> str:
