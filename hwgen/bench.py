@@ -28,6 +28,7 @@ from pathlib import Path
 from rich.console import Console
 from rich.table import Table
 
+from .cli.search import RUN_JSON
 from .outputs.view import BACKEND_ENV
 
 ROWS: list[tuple[str, float, str]] = []
@@ -159,7 +160,12 @@ def sim_rows(params: Path, out: Path, store: Path, env: dict) -> list[tuple]:
 
 def _written_json(out: Path, name: str) -> dict | None:
     """The JSON file ``name`` a command wrote into its design's folder under ``out`` (None: none, or unreadable)."""
-    for path in sorted(Path(out).glob(f"*/{name}")):
+    return _first_json(sorted(Path(out).glob(f"*/{name}")))
+
+
+def _first_json(paths) -> dict | None:
+    """The first of ``paths`` that holds a JSON object (None: none does)."""
+    for path in paths:
         try:
             doc = json.loads(path.read_text())
         except (OSError, ValueError):
@@ -427,16 +433,20 @@ def _version(exe: str) -> str:
 SWEEP_AXES = ("  - path: tendons[1].routing.function.k\n    range: {start: 0.5, stop: 4, step: 0.25}\n"
               "  - path: tendons[1].routing.function.a\n    range: {start: 10, stop: 29, step: 1}\n"
               "  - path: tendons[1].routing.function.phase_deg\n    range: {start: 0, stop: 45, step: 5}\n")
-SWEEP_RATE = re.compile(r"(\d+) evaluated in ([\d.]+) s on (\d+) worker\(s\): ([\d,.]+) variants/s(?: \([^)]*\))?, ([\d.]+) ms CPU")
 
 
-def _sweep_note(stdout: str) -> str:
-    m = SWEEP_RATE.search(stdout)
-    if not m:
-        return "no throughput line"
-    n, sec, workers, rate, cpu = m.groups()
-    return (f"{rate} variants/s over {n} variants on {workers} worker(s) ({sec} s, {cpu} ms CPU per variant; "
-            f"the whole process includes starting it and the cluster)")
+def _run_json(folder: Path) -> dict | None:
+    """The run.json a sweep, tune or fix wrote beside its results under ``folder`` (the newest; None: none)."""
+    return _first_json(sorted(Path(folder).rglob(RUN_JSON), key=lambda p: p.stat().st_mtime, reverse=True))
+
+
+def _sweep_note(run: dict | None) -> str:
+    """The sweep's throughput from its run.json."""
+    if not run or not run.get("evaluated") or not run.get("seconds"):
+        return "no run.json with variants evaluated"
+    n, sec = run["evaluated"], run["seconds"]
+    return (f"{n / sec:,.1f} variants/s over {n} variants on {run['workers']} worker(s) ({sec:.2f} s, "
+            f"{1000 * run['cpu_s'] / n:.2f} ms CPU per variant; the whole process includes starting it and the cluster)")
 
 
 def sweep_rows(params_path: Path, tmp: Path, level: str = "lengths", axes: str = SWEEP_AXES,
@@ -453,13 +463,10 @@ def sweep_rows(params_path: Path, tmp: Path, level: str = "lengths", axes: str =
         out = tmp / f"sweep-{level}-{args[-1]}"
         extra = ["--cache-dir", str(tmp / f"cache-{level}-{args[-1]}")] if own_cache else []
         r = _process(label, ["sweep", str(sweep), "--out", str(out), "-q", *args, *extra], env)
-        rows.append((*r[:4], "; ".join(x for x in (r[4], _sweep_note(r[5])) if x)))
+        rows.append((*r[:4], "; ".join(x for x in (r[4], _sweep_note(_run_json(out))) if x)))
     return rows
 
 
-TUNE_RATE = re.compile(r"(\d+) evaluated .* in ([\d.]+) s on (\d+) worker\(s\): ([\d.]+) trials/s, ([\d.]+) (m?s) CPU"
-                       r" a trial(?: \(([\d.]+) s each of the (\d+) through every level\))?")
-TUNE_BEST = re.compile(r"best: trial (\d+): (.*?)(?: \(found ([\d.]+) s into this run\))?$", re.M)
 
 
 def tune_rows(tmp: Path, budget: int = 60) -> list[tuple]:
@@ -469,19 +476,29 @@ def tune_rows(tmp: Path, budget: int = 60) -> list[tuple]:
     r = _process(f"hwgen tune, stiffness, {budget} trials", ["tune", "params/tune-stiffness.yaml", "--out",
                                                               str(tmp / "tune"), "--budget", str(budget),
                                                               "--workers", "2", "--no-build", "-q"], env)
-    m, b = TUNE_RATE.search(r[5]), TUNE_BEST.search(r[5])
-    note = "no throughput line"
-    if m:
-        n, sec, workers, rate, cpu, unit, whole, k = m.groups()
-        note = (f"{rate} trials/s over {n} trials on {workers} workers ({sec} s, {cpu} {unit} CPU a trial"
-                + (f"; {whole} s each of the {k} through every level" if whole else "") + ")")
-    if b:
-        note += f"; best {b.group(2)} at trial {b.group(1)}" + (f", {b.group(3)} s in" if b.group(3) else "")
-    return [(*r[:4], "; ".join(x for x in (r[4], note) if x))]
+    return [(*r[:4], "; ".join(x for x in (r[4], _tune_note(_run_json(tmp / "tune"))) if x))]
+
+
+def _tune_note(run: dict | None) -> str:
+    """The tune's throughput and its best, from its run.json."""
+    if not run or not run.get("evaluated") or not run.get("seconds"):
+        return "no run.json with trials evaluated"
+    n, sec = run["evaluated"], run["seconds"]
+    per = run["cpu_s"] / n
+    cpu = f"{per:.2f} s" if per >= 0.1 else f"{1000 * per:.2f} ms"
+    whole = run.get("whole") or 0
+    note = (f"{n / sec:.3g} trials/s over {n} trials on {run['workers']} workers ({sec:.1f} s, {cpu} CPU a trial"
+            + (f"; {run['whole_cpu_s'] / whole:.2f} s each of the {whole} through every level" if 0 < whole < n else "")
+            + ")")
+    best = run.get("best")
+    if best:
+        objs = ", ".join(f"{k} {v:.4g}" for k, v in best["objectives"].items())
+        note += f"; best {objs} at trial {best['trial']}" + (f", {best['found_s']:.1f} s in" if best.get("found_s")
+                                                             is not None else "")
+    return note
 
 
 FIX_LAB = "tests/labs/fdm-ten-fix.yaml"
-FIX_PASS = re.compile(r": (PASS|FAIL).*?after (\d+) change\(s\), (\d+) design\(s\) built")
 
 
 def fix_rows(tmp: Path) -> list[tuple]:
@@ -493,10 +510,15 @@ def fix_rows(tmp: Path) -> list[tuple]:
     r = _process("hwgen fix, the FDM lab robot", ["fix", FIX_LAB, "--allow-relax", "check.robust_severity", "--out",
                                                   str(tmp / "fix"), "--cache-dir", str(tmp / "fix-cache"), "-q"],
                  env)
-    m = FIX_PASS.search(r[5])
-    note = f"{m.group(1)}: {m.group(2)} value(s) changed, {m.group(3)} designs built, empty cache" if m else \
-        "no verdict line"
-    return [(*r[:4], "; ".join(x for x in (r[4], note) if x))]
+    return [(*r[:4], "; ".join(x for x in (r[4], _fix_note(_run_json(tmp / "fix"))) if x))]
+
+
+def _fix_note(run: dict | None) -> str:
+    """The fix's verdict, its changes and builds, from its run.json."""
+    if not run or "passed" not in run:
+        return "no run.json with a verdict"
+    return (f"{'PASS' if run['passed'] else 'FAIL'}: {run['changes']} value(s) changed, {run['builds']} designs "
+            f"built, empty cache")
 SAMPLER_SEEDS = (0, 1, 2)
 # the known answer: three cosine tendons' half waves, free in 0.5-6.5 from k 2.4, 2.6 and 3.5, the worst
 # budgeted tendon's eq. (2) change minimised: whole k for all three (a cosine keeps its length only there)

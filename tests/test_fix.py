@@ -139,6 +139,8 @@ def test_a_lab_robot_is_fixed_whole_and_keep_is_honoured(tmp_path, monkeypatch):
     assert tip["passed"] and tip["measured"] >= tip["limit"]
     summary = (folder / "summary.md").read_text()
     assert "**PASS**" in summary and "| tendon.taut C1 | fails (error)" in summary
+    run = json.loads((folder / "run.json").read_text())          # what the bench reads
+    assert run["passed"] and run["failing"] == [] and run["changes"] == text.count("# hwgen fix, round")
 
     # C1's pretension kept, the budgets allowed (not the severity, which would state C1's slack as a warning)
     r = hwgen("fix", str(LAB), "--allow-relax", "tendons.budget_mm", "--keep", "tendons[1].pretension_n",
@@ -150,6 +152,8 @@ def test_a_lab_robot_is_fixed_whole_and_keep_is_honoured(tmp_path, monkeypatch):
     assert all(kept.tendons[i].budget_mm > 0.2 for i in (1, 2, 3))        # the relaxation it was allowed
     summary = (folder / "summary.md").read_text()
     assert "**FAIL**" in summary and "which --keep tendons[1].pretension_n holds" in summary
+    run = json.loads((folder / "run.json").read_text())
+    assert not run["passed"] and run["failing"] and all(name in r.stdout + r.stderr for name in run["failing"])
 
 
 @pytest.mark.slow

@@ -96,7 +96,7 @@ def test_a_small_disk_sets_the_lower_jaw_on_the_foot(od):
     assert foot.passed == full
     if not full:
         least = float(foot.fix.split("table_clearance ≥ ")[1].split(" ")[0])
-        assert least == pytest.approx(m.table_clearance + m.least_below_strip - foot.measured, abs=0.01)
+        assert least == pytest.approx(m.rules.table_clearance + m.rules.least_below_strip - foot.measured, abs=0.01)
         wider = _plan(doc=small, base_mount__table_clearance=least + 0.01)
         assert mount_checks(_mount_parts(wider), [_Disk(6.0)], wider)[1].passed
 

@@ -247,6 +247,14 @@ def test_a_failing_check_is_defined_once():
              if m != "hwgen.checks.base" and rule.search(f.read_text())]
     assert not found, f"the failing-check rule written out again in {found}: use checks.base.failing"
     assert rule.search('x = [c for c in cs if not c.get("passed", True) and c.get("severity") == "error"]')
+    # a sweep's row, a tune's trial and a fix's round judge their failure records the same way
+    # (sweep.records.Failure.fails), not by their severity alone
+    severity = re.compile(r"""severity["']?\)?\]?\s*==\s*["']error""")
+    found = [str(f.relative_to(PKG.parent)) for m, f in _modules().items()
+             if m.startswith(("hwgen.sweep.", "hwgen.tune.", "hwgen.fix.")) and severity.search(f.read_text())]
+    assert not found, f"a failure judged by its severity alone in {found}: use Failure.fails or checks.base.fails"
+    assert all(severity.search(s) for s in ('f["severity"] == "error"', "c.get('severity') == 'error'",
+                                            'f.severity == "error"'))
 
 
 # ---------------------------------------------------------------- the house's mechanical limits (issue 49)

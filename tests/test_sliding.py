@@ -31,13 +31,13 @@ def test_the_lengths_level_fails_a_helix_through_the_actuating_eyelets():
     proto = Design.model_validate(yaml.safe_load((PARAMS / "prototype.yaml").read_text()))
     rows = lengths.evaluate([proto, _shared(), _shared("warning")])
     assert rows[0]["shared_sliding"] == []
-    assert "eyelet.shared_sliding" not in {f["id"] for f in lengths.failures(rows[0])}
+    assert "eyelet.shared_sliding" not in {f.id for f in lengths.failures(rows[0])}
     assert rows[1]["shared_sliding"] == ["A2+H@3", "A1+H@6", "A2+H@9", "A1+H@12"]
-    (f,) = [f for f in lengths.failures(rows[1]) if f["id"] == "eyelet.shared_sliding"]
-    assert f["severity"] == "error" and lengths.verdict(rows[1])[0] == "fail"
+    (f,) = [f for f in lengths.failures(rows[1]) if f.id == "eyelet.shared_sliding"]
+    assert f.severity == "error" and f.fails and lengths.verdict(rows[1])[0] == "fail"
     # stated as a warning: still listed, the verdict no longer fails on it
-    (w,) = [f for f in lengths.failures(rows[2]) if f["id"] == "eyelet.shared_sliding"]
-    assert w["severity"] == "warning"
+    (w,) = [f for f in lengths.failures(rows[2]) if f.id == "eyelet.shared_sliding"]
+    assert w.severity == "warning" and not w.fails
     assert "shared_sliding" not in lengths.verdict(rows[2])[1]
 
 

@@ -522,3 +522,27 @@ def _assert_stiffness_figures(rep):
                 assert np.allclose(ln.get_xdata(), s["curve"]["y_mm"]) and np.allclose(ln.get_ydata(), s["curve"]["z_mm"])
     finally:
         plt.close(fig)
+
+
+def test_the_sim_reads_the_tension_sweep_as_the_check_wrote_it(swept):
+    """The sim sets its driven pair beside report.json's tension sweep, read back as
+    :class:`hwgen.checks.studies.TensionStudy`: each side names the tendon it hauls in, the worst
+    side's rise is what actuation.coupling measured, and the sim's comparison takes the locked
+    tendons' change and the rise from the side that hauls in the tendon it drove."""
+    from hwgen.checks.studies import TensionStudy
+    from hwgen.checks.tension import tension_checks
+    from hwgen.sim.drive import against_sweep
+    _, p, sw = swept
+    rep, checks = tension_checks(p, {"tendons": []}, {}, sw)
+    study = TensionStudy.of(rep)
+    assert study.actuation and [s.inner for s in study.actuation] == [s["inner"] for s in rep["actuation"]]
+    coupling = next(c for c in checks if c.id == "actuation.coupling")
+    assert max(s.rise for s in study.actuation) == coupling.measured
+    for s in study.actuation:
+        assert study.side_hauling(s.inner) is s
+        locked = {t: 0.0 for t in s.tensions_n if t != s.inner}
+        got = against_sweep({"tendon": s.inner, "locked_tension_change_n": locked}, study)
+        assert got["side"] == s.side and got["coupling_rise"] == s.rise and got["without_n"] == s.without_n
+        assert got["tension_change_n"] == {t: v[-1] - v[0] for t, v in s.tensions_n.items() if t in locked}
+    assert against_sweep({"tendon": "no such tendon", "locked_tension_change_n": {}}, study) == {}
+    assert TensionStudy.of({"skipped": "no tensioner"}).actuation == ()

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import yaml
 
+from hwgen import bench
 from hwgen.sweep import levels, lengths, run, spec
 
 from .clirunner import hwgen, hwgen_process
@@ -194,7 +195,7 @@ def test_lengths_level_imports_no_cad_kernel():
             "import yaml\n"
             f"base = yaml.safe_load(open({str(PROTOTYPE)!r}))\n"
             f"rows = levels.evaluate_batch([(0, (1.0,)), (1, (2.0,))], base, ({K_AXIS!r},), 'lengths')\n"
-            "assert [r['verdict'] for r in rows] == ['pass', 'pass'], rows\n"
+            "assert [r.verdict for r in rows] == ['pass', 'pass'], rows\n"
             "bad = sorted(m for m in sys.modules if m.split('.')[0] in ('cadquery', 'OCP', 'vtk', 'vtkmodules'))\n"
             "print(bad)\n")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
@@ -212,6 +213,11 @@ def test_cosine_k_sweep_finds_whole_k_decoupled(tmp_path):
     folder = tmp_path / "sweeps" / "cosine-k" / "robust"
     rows = {row[K_AXIS]: row for row in _rows(folder)}
     assert sorted(rows) == [0.5 * i for i in range(1, 9)]
+    # the throughput line's figures beside the results (what the bench reads): this run's rows, their verdicts
+    run = json.loads((folder / "run.json").read_text())
+    assert run["evaluated"] == run["variants"] == len(rows) and run["done_before"] == 0
+    assert run["verdicts"] == {v: [x["verdict"] for x in rows.values()].count(v) for v in run["verdicts"]}
+    assert f"over {len(rows)} variants" in bench._sweep_note(run)
     for k, row in rows.items():
         c1 = _tendon(row, "C1")
         if k == int(k):

@@ -15,8 +15,10 @@ import pyarrow.parquet as pq
 import pytest
 import yaml
 
+from hwgen import bench
 from hwgen.errors import InputError
 from hwgen.sweep import levels
+from hwgen.sweep.records import EvalOptions
 from hwgen.tune import report, results, run as tune_run, spec
 
 from .clirunner import hwgen, hwgen_process
@@ -115,6 +117,12 @@ def test_a_tune_with_a_known_answer_finds_a_whole_k(tmp_path):
     assert worst_half > 3 * best["centre_mm.C1"]
     text = (tmp_path / "out" / "tunes" / "t" / "best.yaml").read_text()
     assert f"k: {round(k, 6)}" in text
+    # the figures the terminal prints, for the bench and scripts: the best it names is the trials' best
+    run = json.loads((tmp_path / "out" / "tunes" / "t" / "run.json").read_text())
+    assert run["command"] == "tune" and run["evaluated"] + run["repeated"] == 60 and run["seconds"] > 0
+    assert run["best"]["trial"] == best["trial"]
+    assert run["best"]["objectives"]["centre_mm.C1"] == pytest.approx(best["centre_mm.C1"], rel=1e-12)
+    assert f"at trial {best['trial']}" in bench._tune_note(run)
 
 
 # ---------------------------------------------------------------- resuming, repeats
@@ -259,20 +267,22 @@ def test_the_statics_a_tune_reads_are_hwgen_stiffness(tmp_path):
                    and e["friction"] == "none")
     doc = yaml.safe_load(PROTOTYPE.read_text())
     rows = levels.evaluate_batch([(0, (1.0,))], doc, (K,), "lengths",
-                                 options={"with_plan": partial(results.statics, states=("AC1C2H",))})
-    assert rows[0]["statics"]["tip_stiffness@AC1C2H"] == pytest.approx(default["tip_stiffness_n_per_mm"], rel=1e-9)
+                                 options=EvalOptions(with_plan=partial(results.statics, states=("AC1C2H",))))
+    assert rows[0].figures["statics"]["tip_stiffness@AC1C2H"] == pytest.approx(default["tip_stiffness_n_per_mm"], rel=1e-9)
 
 
 def test_a_screened_trial_still_measures_its_bounds():
     """A trial that fails eq. (2) stops before the checks after it, but its statics are measured: the
     optimiser learns how far it is from each bound, not a stand-in worse than any trial."""
     doc = yaml.safe_load(PROTOTYPE.read_text())
-    opts = {"screen": True, "with_plan": partial(results.statics, states=("AC1C2H",)), "robust_samples": 10}
+    opts = EvalOptions(screen=True, with_plan=partial(results.statics, states=("AC1C2H",)), robust_samples=10)
     off, whole = levels.evaluate_batch([(0, (2.5,)), (1, (1.0,))], doc, (K,), "coupling", options=opts)
-    assert off["screened"] and any(f["id"] == "tendon.length" for f in off["failures"])
-    assert off["coupling"] is None                                       # the tension checks were not run
-    assert off["statics"]["tip_stiffness@AC1C2H"] > 0 and off["statics"]["tip_torsion@AC1C2H"] > 0
-    assert not whole.get("screened") and whole["coupling"] is not None
+    assert off.screened and any(f.id == "tendon.length" and f.fails for f in off.failures)
+    assert off.coupling is None                                          # the tension checks were not run
+    statics = off.figures["statics"]
+    assert statics["tip_stiffness@AC1C2H"] > 0 and statics["tip_torsion@AC1C2H"] > 0
+    assert not whole.screened and whole.coupling is not None
+    assert "screened" not in whole.to_json() and off.to_json()["statics"] == statics   # a tune's stored row
 
 
 def test_constraints_count_failing_checks_and_bounds():
@@ -376,13 +386,13 @@ def test_the_full_plan_screens_what_hwgen_check_fails():
 
     def screens(values: dict) -> dict:
         d = resolve(loaded.base, loaded.names, Variant(0, tuple(values[n] for n in loaded.names))).design
-        return {f["id"]: f for f in levels._plan_screens(make_plan(d))}
+        return {f.id: f for f in levels._plan_screens(make_plan(d))}
 
     prototype = dict(zip(loaded.names, loaded.base_values))
     assert screens({**prototype, **{f"tendons[{i}].pretension_n": 6.0 for i in (1, 2, 3)}}) == {}
     seat = screens(tuned)
-    assert set(seat) == {"tendon.seat"} and seat["tendon.seat"]["measured"] > 1.5 == seat["tendon.seat"]["limit"]
+    assert set(seat) == {"tendon.seat"} and seat["tendon.seat"].measured > 1.5 == seat["tendon.seat"].limit
     assert "eyelet.overlap" in screens({**tuned, "tendons[3].routing.function.a": 28})
     edge = screens({**tuned, "tendons[1].routing.function.x0": -7.0, "tendons[2].routing.function.x0": 14.0,
                     "tendons[3].routing.function.a": 30})       # on the strip's edge (x = 30 mm) at the middle disk
-    assert edge["backbone.crossing"]["measured"] > 30 == edge["backbone.crossing"]["limit"]
+    assert edge["backbone.crossing"].measured > 30 == edge["backbone.crossing"].limit

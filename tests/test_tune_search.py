@@ -95,9 +95,9 @@ def test_the_tune_screens_the_stiffening_hwgen_check_fails():
     plan = make_plan(resolve_doc(loaded.base, -1, (), "lab").design)
     got = results.statics(plan, loaded.states, judge=True)
     figs = got["statics"]
-    tip = next(f for f in got["statics_failures"] if f["id"] == "stiffening.tip")
+    tip = next(f for f in got["statics_failures"] if f.id == "stiffening.tip")
     full = loaded.state
-    assert tip["limit"] == plan.check.min_stiffening == 2.5
-    assert tip["measured"] == pytest.approx(figs[f"tip_stiffness@{full}"] / figs["tip_stiffness@A"], rel=1e-9)
-    assert tip["measured"] < 2.5 and tip["severity"] == "error"
+    assert tip.limit == plan.check.min_stiffening == 2.5
+    assert tip.measured == pytest.approx(figs[f"tip_stiffness@{full}"] / figs["tip_stiffness@A"], rel=1e-9)
+    assert tip.measured < 2.5 and tip.severity == "error" and tip.fails
     assert "statics_failures" not in results.statics(plan, loaded.states)

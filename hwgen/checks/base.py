@@ -62,14 +62,15 @@ class Check:
         return out
 
 
-def _failed_as(check: Check | dict) -> str | None:
-    """The severity ``check`` (a record or its JSON) failed with; None when it passed."""
-    if isinstance(check, Check):
+def _failed_as(check) -> str | None:
+    """The severity ``check`` (a record with ``passed`` and ``severity``: a :class:`Check`, a sweep
+    row's failure record; or a check's JSON) failed with; None when it passed."""
+    if not isinstance(check, dict):
         return None if check.passed else check.severity
     return None if check.get("passed", True) else check.get("severity")
 
 
-def fails(check: Check | dict) -> bool:
+def fails(check) -> bool:
     """Whether ``check`` (a record or its JSON) fails the design: not passed, and an error (a failing
     warning is reported and does not). The one statement of the rule: every verdict, exit code,
     summary, sweep row and tune trial asks it here."""

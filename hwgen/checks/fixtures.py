@@ -33,7 +33,7 @@ def mount_checks(parts, disks, plan) -> list[Check]:
     base = next((dk for dk in disks if dk.station == 0), None)
     if clamp is None or mount is None or strip is None or base is None:
         return []
-    lay = plan.mount
+    lay = plan.mount.rules
     sb, cb, mb = strip.robot_bounds(), clamp.robot_bounds(), mount.robot_bounds()
     face = base.y_mid - base.thickness / 2                      # the base disk's outer face
     held = max(0.0, min(face, float(cb[1, 1])) - max(float(sb[0, 1]), float(cb[0, 1])))

@@ -99,8 +99,8 @@ def _case(r: sag.SagResult) -> dict:
     return {"tip_sag_mm": r.tip_sag, "tip_angle_deg": -r.tip_angle_deg, "tip_y_mm": r.tip_y,
             "base_moment_nmm": abs(r.base_moment), "max_stress_mpa": r.max_stress, "s_max_stress_mm": r.s_max_stress,
             "carried_weight_n": r.total_weight,
-            "linear": {"tip_sag_mm": r.lin_tip_sag, "tip_angle_deg": -math.degrees(r.lin_tip_angle),
-                       "base_moment_nmm": abs(r.lin_base_moment)}}
+            "linear": {"tip_sag_mm": r.linear.tip_sag, "tip_angle_deg": -math.degrees(r.linear.tip_angle),
+                       "base_moment_nmm": abs(r.linear.base_moment)}}
 
 
 def gravity_checks(parts, manifest: Manifest, plan, fits: list[SlotFit], strip_h: float | None,
@@ -177,8 +177,8 @@ def gravity_checks(parts, manifest: Manifest, plan, fits: list[SlotFit], strip_h
                         fix="" if ok else _fix_text(own, OWN_WEIGHT_ELSE), fixes=own,
                         lowered_by="check.overstress" if not ok and sev == "warning" else ""))
     checks.append(Check("gravity.sag", "info", True, f"state N: tip sag {r.tip_sag:.1f} mm (small-deflection "
-                        f"theory: {r.lin_tip_sag:.1f} mm)", r.tip_sag, None, {"gravity": worst_key}))
-    mount, c = _mount_check(parts, plan.mount.max_tip_share, r, e_print, e_why)
+                        f"theory: {r.linear.tip_sag:.1f} mm)", r.tip_sag, None, {"gravity": worst_key}))
+    mount, c = _mount_check(parts, plan.mount.rules.max_tip_share, r, e_print, e_why)
     report["mount"] = mount
     checks += c
     bend, c = _bend_check(strip_study, spans, I, strip["part"])
@@ -214,7 +214,7 @@ def _mount_check(parts, limit: float, r: sag.SagResult, e_print: float, e_why: s
     drop = theta * r.tip_y
     share = drop / r.tip_sag if r.tip_sag > 0 else 0.0
     ok = share <= limit
-    strip_k = r.EI / r.L
+    strip_k = r.loads.EI / r.loads.L
     mount_k = e_print * mo["i_vc"] / H
     rep = {"part": mount.name, "height_mm": H, "thinnest_section_z_mm": zc, "section_area_mm2": mo["area"],
            "section_i_mm4": mo["i_vc"], "modulus_mpa": e_print, "rotation_rad": theta, "tip_drop_mm": drop,
@@ -281,9 +281,9 @@ class _StripStudy:
     def __init__(self, r: sag.SagResult, fits, E: float, h: float, e_print: float, ang: float, allow: float):
         """``r``: the worse own-weight case as solved (its loads, strip and gravity's direction)."""
         self.r, self.fits, self.E, self.h, self.e_print = r, fits, E, h, e_print
-        self.length, self.t = r.L, r.thickness
+        self.length, self.t = r.loads.L, r.loads.strip.thickness
         self.ang, self.allow = ang, allow
-        self.solved: dict[tuple[float, float], float] = {(r.thickness, h): r.max_stress}
+        self.solved: dict[tuple[float, float], float] = {(self.t, h): r.max_stress}
 
     def own_weight(self, t: float, h: float | None = None) -> float:
         """The largest own-weight stress (MPa) with a strip ``t`` thick and ``h`` wide."""
@@ -294,9 +294,9 @@ class _StripStudy:
 
     def _own_weight(self, t: float, h: float) -> float:
         I = sag.second_moment(h, t)
-        r = self.r
-        section = sag.Strip(self.E, I, t, r.strip_lin_density * t * h / (r.thickness * self.h))
-        return sag.solve_sag(r.L, r.stations, r.point_masses, section, tip=sag.Tip(r.tip_mass, r.tip_offset),
+        ld = self.r.loads
+        section = sag.Strip(self.E, I, t, ld.strip.lin_density * t * h / (ld.strip.thickness * self.h))
+        return sag.solve_sag(ld.L, ld.stations, ld.point_masses, section, tip=ld.tip,
                              spans=_spans(self.fits, self.length, self.E * I, self.e_print)).max_stress
 
     def bend(self, t: float, ang: float | None = None) -> float:

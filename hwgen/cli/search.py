@@ -2,16 +2,21 @@
 from __future__ import annotations
 
 import dataclasses
-
 import sys
 from pathlib import Path
 
 import typer
 from rich.table import Table
 
+from ..atomic import write_json
+from ..checks.base import failing
 from ..errors import InputError, printable
 from .common import (CACHE_DIR, EXIT_FINDINGS, NO_CACHE, SCHEDULER, WORKERS, _cache, _check_scheduler, _command, _load,
                      err, out, say)
+
+
+# each command's figures, beside its results, for the bench and for scripts (the terminal's lines are for people)
+RUN_JSON = "run.json"
 
 
 @_command
@@ -49,6 +54,11 @@ def sweep(sweep_file: Path = typer.Argument(..., help="sweep YAML: a base design
     start = f"; local cluster started in {o.start_seconds:.1f} s" if o.start_seconds else ""
     out.print(f"{loaded.spec.sweep} ({loaded.spec.level}): {o.total} variants, {o.done_before} already in the results, "
               f"{o.evaluated} evaluated in {o.seconds:.2f} s on {o.workers} worker(s): {rate}{cpu}{start}")
+    write_json(o.folder / RUN_JSON, {
+        "command": "sweep", "variants": o.total, "done_before": o.done_before, "evaluated": o.evaluated,
+        "seconds": o.seconds, "workers": o.workers, "start_seconds": o.start_seconds, "cpu_s": o.cpu_s,
+        "verdicts": o.verdicts})
+    files = [o.folder / RUN_JSON, *files]
     if table is not None:
         counts = {}
         for v in table.column("verdict").to_pylist():
@@ -130,6 +140,14 @@ def tune(tune_file: Path = typer.Argument(..., help="tune YAML (a base design, f
     out.print(f"{loaded.spec.tune} ({loaded.spec.level}): {o.done_before} trials told before, {o.evaluated} evaluated "
               f"and {o.repeated} told from an earlier trial of the same design in {o.seconds:.1f} s on {o.workers} "
               f"worker(s): {rate}{cpu}{start}", soft_wrap=True)     # one line on a pipe too: the bench reads it
+    best = None if t.best is None else {
+        "trial": t.best["trial"], "objectives": dict(zip((n for n, _ in loaded.objectives), t.best["objectives"])),
+        "found_s": o.first_best_s if t.best["trial"] >= 0 else None}
+    write_json(o.folder / RUN_JSON, {
+        "command": "tune", "level": loaded.spec.level, "done_before": o.done_before, "evaluated": o.evaluated,
+        "repeated": o.repeated, "seconds": o.seconds, "workers": o.workers, "start_seconds": o.start_seconds,
+        "cpu_s": o.cpu_s, "whole": o.whole, "whole_cpu_s": o.whole_cpu_s, "best": best,
+        "build_ok": t.build_ok})
     if t.best is None:
         say("no trial passes;", "red", f"see {printable(o.folder / 'summary.md')}")
     else:
@@ -140,7 +158,7 @@ def tune(tune_file: Path = typer.Argument(..., help="tune YAML (a base design, f
         out.print(f"best: {who}: {objs}{found}" + (f"; front of {len(t.front)}" if len(t.front) > 1
                                                                      and len(loaded.objectives) > 1 else ""),
                   soft_wrap=True)
-    for f in t.files:
+    for f in [*t.files, o.folder / RUN_JSON]:
         out.print(f"  {printable(f)}")
     if t.build_folder is not None:
         out.print(f"  {printable(t.build_folder)}/ (the best, built: "
@@ -188,14 +206,17 @@ def fix(params: Path = typer.Argument(..., help="design parameter YAML that fail
     for c in f.changes:
         out.print(f"  {c.path}: {fixing._value(c.old)} -> {fixing._value(c.value)} ({', '.join(dict.fromkeys(c.checks))}"
                   + (", a relaxation" if c.relax else "") + ")", soft_wrap=True, markup=False)
+    write_json(f.folder / RUN_JSON, {
+        "command": "fix", "passed": f.passed, "changes": len(f.changes), "builds": f.builds, "seconds": f.seconds,
+        "failing": [fixing.choose.check_name(c) for c in failing(f.after)]})
     if f.passed:
         out.print(f"{loaded.name}: PASS after {len(f.changes)} change(s), {f.builds} design(s) built in "
                   f"{f.seconds:.0f} s", soft_wrap=True)
     else:
         say("FAIL:", "red", f"{loaded.name}: the nearest design found still fails "
-                            f"{', '.join(fixing.choose.check_name(c) for c in fixing._errs(f.after))}; "
+                            f"{', '.join(fixing.choose.check_name(c) for c in failing(f.after))}; "
                             f"see {printable(f.folder / fixing.SUMMARY)}")
-    for p in f.files:
+    for p in [*f.files, f.folder / RUN_JSON]:
         out.print(f"  {printable(p)}")
     if f.build_folder is not None:
         out.print(f"  {printable(f.build_folder)}/ (the fixed design, built)")

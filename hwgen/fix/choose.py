@@ -15,6 +15,8 @@ import re
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..checks.base import fails
+
 # checks whose failure a design may state as a warning, by the setting that does so (the prototype
 # states it for itself, with its reason): a relaxation like any other, applied only when named
 SEVERITY = {"tendon.robust": "check.robust_severity", "tendon.taut": "check.robust_severity",
@@ -81,7 +83,7 @@ def options(c: dict) -> list[Option]:
         out.append(Option(name, dict(f.get("set") or {}), bool(then.get("passed")), bool(f.get("relax")),
                           f.get("note", ""), tuple(f.get("breaks") or ())))
     setting = SEVERITY.get(c["id"])
-    if setting and c.get("severity") == "error":
+    if setting and fails(c):
         out.append(Option(name, {setting: "warning"}, None, True,
                           f"state {c['id']}'s failure as a warning ({setting}), as the prototype does with its reason"))
     return out

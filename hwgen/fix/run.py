@@ -319,7 +319,7 @@ def _plain(v):
 def summary(fx: Fixer, f: Fixed) -> str:
     """summary.md: the verdict, each change and why, the rounds, the checks before and after, what is left."""
     name = fx.loaded.name
-    verdict = "every check passes" if f.passed else f"{len(_errs(f.after))} error(s) still fail"
+    verdict = "every check passes" if f.passed else f"{len(failing(f.after))} error(s) still fail"
     out = [f"# hwgen fix: {name}", "",
            f"**{'PASS' if f.passed else 'FAIL'}**: {verdict} after {len(f.changes)} change(s), {f.builds} design(s) "
            f"built and checked in {f.seconds:.0f} s; `{FIXED}` is the design with them, built in "
@@ -354,10 +354,6 @@ def summary(fx: Fixer, f: Fixed) -> str:
         for check, why in f.left.items():
             out.append(f"- {check}: " + ("; ".join(why) if why else "no fix left to apply"))
     return "\n".join(out) + "\n"
-
-
-def _errs(checks: list[dict]) -> list[dict]:
-    return [c for c in checks if c["severity"] == "error"]
 
 
 def _key(c: dict) -> tuple:

@@ -75,7 +75,22 @@ JIG_PIECES_MAX = 40         # the jig is cut into at most this many pieces
 
 
 @dataclass(frozen=True, kw_only=True)
+class MountRules:
+    """What the checks of the base mount judge it by and name in their fixes (none of it is geometry)."""
+
+    max_tip_share: float        # base_mount.max_tip_share: the share of the tip's sag the mount's give may add
+    least_clamp: float          # the least strip the jaws clamp beyond the base disk (JAW_LEAST)
+    extra_base: float | None    # backbone.extra_base as the YAML gives it (None: derived; the checks name it)
+    table_clearance: float      # base_mount.table_clearance (the checks name it)
+    least_below_strip: float    # table to the strip's underside that a full foot under a lower jaw deep
+    #                             enough for its nut traps needs
+
+
+@dataclass(frozen=True, kw_only=True)
 class MountLayout:
+    """Where the base mount's jaws, column and foot go (what the CAD builds), and ``rules``: what its
+    checks judge it by."""
+
     y_face: float               # base disk's outer face: the jaws' front
     y_back: float               # the jaws' back face
     y_column_front: float       # the column and foot stand behind this
@@ -99,12 +114,7 @@ class MountLayout:
     foot_half_x: float
     bolt_pattern: str           # the table's grid, as the YAML names it (base_mount.bolt_pattern)
     disk_thickness: float       # the base disk's thickness: the disk screws' grip with the jaws
-    max_tip_share: float        # base_mount.max_tip_share: the share of the tip's sag the mount's give may add (checks)
-    least_clamp: float          # the least strip the jaws clamp beyond the base disk (JAW_LEAST; checks)
-    extra_base: float | None    # backbone.extra_base as the YAML gives it (None: derived; checks name it)
-    table_clearance: float      # base_mount.table_clearance (checks name it)
-    least_below_strip: float    # table to the strip's underside that a full foot under a lower jaw deep
-    #                             enough for its nut traps needs (checks)
+    rules: MountRules
 
 
 def base_length(d: Design) -> float:
@@ -145,9 +155,9 @@ def mount_layout(d: Design, disk_screws=()) -> MountLayout:
         jaw_screws=screws, disk_screws=tuple((float(x), float(z)) for x, z in disk_screws),
         screw_hole=bm.screw_hole, foot_holes=feet, foot_hole=hole, bolt=bolt, pitch=pitch,
         foot_half_x=fx + FOOT_EDGE, bolt_pattern=bm.bolt_pattern, disk_thickness=base_t,
-        max_tip_share=bm.max_tip_share, least_clamp=float(JAW_LEAST), extra_base=bb.extra_base,
-        table_clearance=bm.table_clearance,
-        least_below_strip=(-t / 2 - z_lower_top) + LOWER_JAW_LEAST + FOOT_THICKNESS)
+        rules=MountRules(max_tip_share=bm.max_tip_share, least_clamp=float(JAW_LEAST), extra_base=bb.extra_base,
+                         table_clearance=bm.table_clearance,
+                         least_below_strip=(-t / 2 - z_lower_top) + LOWER_JAW_LEAST + FOOT_THICKNESS))
 
 
 def _foot_and_jaw(z_table: float, z_lower_top: float, z_recess: float) -> tuple[float, float]:

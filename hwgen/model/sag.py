@@ -80,9 +80,55 @@ class Tip:
     offset: tuple[float, float] = (0.0, 0.0)
 
 
+@dataclass(frozen=True)
+class SagLoads:
+    """What a solve was given, as floats: the clamp-to-tip length ``L`` (mm), the point loads'
+    ``stations`` (mm) and ``point_masses`` (g), the ``strip``'s section and weight, the ``tip``
+    assembly, gravity ``g`` (m/s²) and the stiffened ``spans``: enough to solve again with another
+    section (:mod:`hwgen.checks.gravity`'s strip study) or to check the solution's statics."""
+
+    L: float
+    stations: np.ndarray
+    point_masses: np.ndarray
+    strip: Strip
+    tip: Tip
+    g: float
+    spans: tuple
+
+    @property
+    def EI(self) -> float:
+        """N·mm², the strip's own bending stiffness (the spans' are their own)."""
+        return self.strip.E * self.strip.I
+
+
+@dataclass(frozen=True)
+class LinearSag:
+    """The small-deflection estimate under the same loads: the tip's drop (mm), its angle (rad), the
+    base moment (N·mm) and the deflection ``z`` on the solver's mesh."""
+
+    tip_sag: float
+    tip_angle: float
+    base_moment: float
+    z: np.ndarray
+
+
+@dataclass(frozen=True)
+class SagSolve:
+    """How the elastica was solved: the integration steps, the residual |ψ(0)| at the solution (rad),
+    the equilibria the scan found, the rejected (higher-energy) ones' tip angles (rad), seconds."""
+
+    n_steps: int = 0
+    residual: float = 0.0
+    n_roots_in_scan: int = 0
+    other_tip_angles: tuple = ()
+    seconds: float = 0.0
+
+
 @dataclass
 class SagResult:
-    """Everything :func:`solve_sag` computes. Lengths mm, forces N, moments N·mm, stress MPa."""
+    """What :func:`solve_sag` finds: the deflected strip along the solver's mesh and its figures,
+    with the ``loads`` it was solved for, the ``linear`` estimate and the ``solver``'s figures.
+    Lengths mm, forces N, moments N·mm, stress MPa."""
 
     s: np.ndarray            # solver mesh, base at index 0
     y: np.ndarray
@@ -100,26 +146,9 @@ class SagResult:
     max_stress: float        # MPa, the largest along s
     s_max_stress: float      # mm, where it is
     tip_com: tuple           # (y, z) of the tip assembly's centre of mass, deformed
-    lin_tip_sag: float       # small-deflection estimate, same loads
-    lin_tip_angle: float
-    lin_base_moment: float
-    lin_z: np.ndarray
-    L: float
-    stations: np.ndarray
-    point_masses: np.ndarray
-    tip_mass: float
-    tip_offset: tuple
-    EI: float                # the strip's own
-    I: float
-    thickness: float
-    strip_lin_density: float
-    g: float
-    spans: tuple
-    n_steps: int = 0
-    residual: float = 0.0            # |ψ(0)| at the solution, rad
-    n_roots_in_scan: int = 0
-    other_tip_angles: tuple = ()     # the rejected (higher-energy) equilibria, rad
-    solve_time: float = 0.0
+    loads: SagLoads
+    linear: LinearSag
+    solver: SagSolve = field(default_factory=SagSolve)
     info: dict = field(default_factory=dict)
 
     @property
@@ -372,30 +401,31 @@ def solve_sag(L: float, stations, point_masses, strip: Strip, *, tip: Tip = Tip(
     com = (float(y[-1] + a * math.cos(psiL) - b * math.sin(psiL)),
            float(z[-1] + a * math.sin(psiL) + b * math.cos(psiL)))
     lin = _linear(prob, s)
+    loads = SagLoads(L=float(L), stations=stations, point_masses=point_masses,
+                     strip=Strip(float(E), float(I), float(thickness), float(strip_lin_density)),
+                     tip=Tip(float(tip_mass), (float(a), float(b))), g=float(g), spans=spans)
+    linear = LinearSag(tip_sag=float(-lin["tip_z"]), tip_angle=float(lin["tip_angle"]),
+                       base_moment=float(lin["base_moment"]), z=lin["z"])
+    solver = SagSolve(n_steps=prob.n_steps, residual=abs(float(psi[0])), n_roots_in_scan=len(roots),
+                      other_tip_angles=tuple(float(x) for x in roots if x != psiL), seconds=time.perf_counter() - t0)
     return SagResult(
         s=s, y=y, z=z, psi=psi, moment=M, weight_beyond=W, stress=stress,
         tip_y=float(y[-1]), tip_z=float(z[-1]), tip_sag=float(-z[-1]), tip_angle=float(psiL),
         base_moment=float(M[0]), base_stress=float(stress[0]), max_stress=float(stress[k]),
-        s_max_stress=float(s[k]), tip_com=com,
-        lin_tip_sag=float(-lin["tip_z"]), lin_tip_angle=float(lin["tip_angle"]),
-        lin_base_moment=float(lin["base_moment"]), lin_z=lin["z"],
-        L=float(L), stations=stations, point_masses=point_masses, tip_mass=float(tip_mass),
-        tip_offset=(float(a), float(b)), EI=float(EI), I=float(I), thickness=float(thickness),
-        strip_lin_density=float(strip_lin_density), g=float(g), spans=spans,
-        n_steps=prob.n_steps, residual=abs(float(psi[0])), n_roots_in_scan=len(roots),
-        other_tip_angles=tuple(float(x) for x in roots if x != psiL), solve_time=time.perf_counter() - t0)
+        s_max_stress=float(s[k]), tip_com=com, loads=loads, linear=linear, solver=solver)
 
 
 def base_moment_from_statics(r: SagResult) -> float:
     """The base moment from the deformed geometry alone: -(each weight × its horizontal lever arm
     about the clamp), N·mm. Independent of the ODE's moment variable."""
-    kg = 1e-3 * r.g
+    ld = r.loads
+    kg = 1e-3 * ld.g
     m = 0.0
-    for sj, mj in zip(r.stations, r.point_masses):
+    for sj, mj in zip(ld.stations, ld.point_masses):
         if sj > 0:
             m += mj * kg * np.interp(sj, r.s, r.y)
-    m += r.strip_lin_density * kg * float(np.sum(0.5 * (r.y[1:] + r.y[:-1]) * np.diff(r.s)))
-    m += r.tip_mass * kg * r.tip_com[0]
+    m += ld.strip.lin_density * kg * float(np.sum(0.5 * (r.y[1:] + r.y[:-1]) * np.diff(r.s)))
+    m += ld.tip.mass * kg * r.tip_com[0]
     return -m
 
 

@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from ..checks.studies import TensionStudy
 from ..model import kinematics
 from . import measure, mjcf
 
@@ -78,16 +79,16 @@ def driven(sim: measure.Sim, written: mjcf.Written, plan, lift: str, cases: dict
             "cases": cases}
 
 
-def against_sweep(result: dict, tension_report: dict) -> dict:
+def against_sweep(result: dict, tension: TensionStudy) -> dict:
     """The check's bending sweep beside ``result`` (:func:`driven`): on the side the same tendon is
     hauled in, each stiffening tendon's tension change from straight to the sweep's end, and the
     actuating tendon's rise with them locked (``actuation.coupling``)."""
-    side = next((s for s in tension_report.get("actuation", []) if s["inner"] == result.get("tendon")), None)
+    side = tension.side_hauling(result.get("tendon"))
     if side is None:
         return {}
-    change = {t: float(v[-1] - v[0]) for t, v in side["tensions_n"].items() if t in result["locked_tension_change_n"]}
-    return {"side": side["side"], "reached_deg": side["reached_deg"], "tension_change_n": change,
-            "coupling_rise": side["rise"], "with_stiffening_n": side["with_stiffening_n"], "without_n": side["without_n"],
+    change = {t: float(v[-1] - v[0]) for t, v in side.tensions_n.items() if t in result["locked_tension_change_n"]}
+    return {"side": side.side, "reached_deg": side.reached_deg, "tension_change_n": change,
+            "coupling_rise": side.rise, "with_stiffening_n": side.with_stiffening_n, "without_n": side.without_n,
             "words": "hwgen check's sweep: weightless, the inner tendon hauled in, the other actuating tendons at their "
                      "working tension, the stiffening tendons locked at theirs (report.json's tension section); the "
                      "sim's: under gravity, from the keyframes, the pair driven against each other"}

@@ -23,6 +23,7 @@ import numpy as np
 from ..cad.families import BENCH_ROLES      # the bench's parts: not the robot the model simulates
 from ..cad.manifest import Manifest, ManifestPart, manifest_parts
 from ..checks.meshes import part_meshes
+from ..checks.studies import as_built_disks
 from ..model import steel
 from ..model.gravity import Gravity
 
@@ -153,8 +154,7 @@ def read_build(folder: Path, manifest: Manifest, report: dict) -> Printed:
     parts = [p for p in manifest_parts(manifest) if not p.fixture and p.role not in BENCH_ROLES]
     bodies, foot = _bodies(folder, [p for p in parts if p.role != "backbone"])
     drep = manifest.design_report
-    mids = {d["station"]: float(d["y_mid_mm"]) for d in report.get("as_built", {}).get("disks", [])
-            if d.get("y_mid_mm") is not None}
+    mids = {d.station: d.y_mid_mm for d in as_built_disks(report) if d.y_mid_mm is not None}
     stations = {i: mids.get(i, float(y)) for i, y in enumerate(drep["stations_mm"])}
     disks = {p.station: bodies[p.name] for p in parts if p.role == "disk"}
     thick = {p.station: float(p.meta["thickness_mm"]) for p in parts if p.role == "disk"}

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..cad.manifest import Manifest
 from ..atomic import write_json
+from ..checks.studies import TensionStudy, tendon_reaches
 from ..model import steel, stiffness
 from ..model.gravity import Gravity
 from . import chain, drive, independent, limits, measure, mjcf, modes, parts, reference
@@ -184,7 +185,7 @@ def _rig(plan, printed: parts.Printed, ref: reference.Reference, report: dict) -
     """What robot.xml is made of (its damping still to be set): (rig, locks, springs)."""
     springs = reference.tendon_springs(ref)
     hauled = reference.haul_in(ref)
-    reach = {r["name"]: float(r.get("max_abs_delta_mm") or 0.0) for r in report.get("tendons", [])}
+    reach = {t.name: t.max_abs_delta_mm for t in tendon_reaches(report)}
     for lock in hauled.values():
         for t, h in lock.items():
             reach[t] = max(reach.get(t, 0.0), abs(h))
@@ -249,7 +250,7 @@ def _driven(sim: measure.Sim, written: mjcf.Written, plan, ref: reference.Refere
     cases = {"locked": (ref.all_tendons, at[ref.all_tendons]), "unlocked": (act[0], at[act[0]])}
     out = drive.driven(sim, written, plan, ref.bent["tendon"], cases, _tensions)
     if out:
-        out["sweep"] = drive.against_sweep(out, report.get("tension", {}))
+        out["sweep"] = drive.against_sweep(out, TensionStudy.of(report.get("tension")))
     return out
 
 

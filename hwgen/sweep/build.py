@@ -16,16 +16,17 @@ from .. import pipeline
 from ..checks.base import failing
 from ..options import BuildOptions
 from ..params import LoadedDesign
+from .records import EvalOptions
 from .spec import Resolved
 
 
-def build_and_check(r: Resolved, options: dict) -> tuple[list[dict], str | None]:
+def build_and_check(r: Resolved, options: EvalOptions) -> tuple[list[dict], str | None]:
     """(the failed error-severity checks, the kept folder or None) of building this variant."""
     loaded = LoadedDesign(design=r.design, source=f"variant {r.index}", sha256=r.hash)
-    keep = r.index in set(options.get("keep", ()))
-    cache = options.get("cache", True)            # the pipeline's cache_dir: True (default folder), a folder, False
+    keep = r.index in set(options.keep)
+    cache = options.cache                         # the pipeline's cache_dir: True (default folder), a folder, False
     if keep:
-        root = Path(options["out"]) / "kept" / f"{r.index:06d}-{r.hash[:12]}"
+        root = Path(options.out) / "kept" / f"{r.index:06d}-{r.hash[:12]}"
         result = pipeline.build(loaded, root, cache_dir=cache)
         kept = str(result.folder)
     else:

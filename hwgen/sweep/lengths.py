@@ -42,6 +42,7 @@ from ..model.specs import slot_size
 from ..model.holes import hole_diameter
 from ..model.plan import SAME_POSITION_MM, SWEEP_STEP_DEG as SIZING_STEP_DEG, eyelet_holes
 from ..params import Design
+from .records import Failure
 
 # what hwgen check and the plan use, so a variant's figures are theirs
 check_angles = sweep_angles
@@ -313,7 +314,7 @@ def verdict(row: dict) -> tuple[str, str, dict]:
     """(verdict, message, summary figures) of a lengths row: a budgeted tendon over its budget by
     eq. (2) through the hole centres, or a wall thinner than the process's minimum, fails."""
     budgeted = [t for t in row["tendons"] if t["budget_mm"] is not None]
-    fails = [f["message"] for f in failures(row) if f["severity"] == "error"]
+    fails = [f.message for f in failures(row) if f.fails]
     figures = {"centre_mm": max((t["centre_mm"] for t in budgeted), default=None),
                "taut_mm": max((t["taut_mm"] for t in budgeted), default=None),
                "decoupled": all(t["centre_mm"] <= t["budget_mm"] for t in budgeted),
@@ -322,37 +323,29 @@ def verdict(row: dict) -> tuple[str, str, dict]:
     return ("fail" if fails else "pass"), "; ".join(fails), figures
 
 
-def failure(cid: str, message: str, severity: str = "error", measured=None, limit=None, where=None,
-            fix: str = "") -> dict:
-    """One record of a rule a sweep's row breaks (or only warns of): what a tune's constraints read,
-    and the check's fix where the check gives one."""
-    out = {"id": cid, "severity": severity, "where": where, "measured": measured, "limit": limit,
-           "message": message}
-    if fix:
-        out["fix"] = fix
-    return out
-
-
-def failures(row: dict) -> list[dict]:
-    """What fails in a lengths row, one :func:`failure` record a rule: a budgeted tendon over its
-    budget by eq. (2) through the hole centres (``tendon.length``), tendons routed into one opening
-    (``eyelet.overlap``), a driven tendon through one opening with another (``eyelet.shared_sliding``),
-    a wall under the process's minimum (``eyelet.wall``)."""
-    out = [failure("tendon.length", f"{t['name']} changes {t['centre_mm']:.3f} mm by eq. (2), budget "
-                                    f"{t['budget_mm']:g} mm", "error", t["centre_mm"], t["budget_mm"], t["name"])
+def failures(row: dict) -> list[Failure]:
+    """What fails in a lengths row, one :class:`~hwgen.sweep.records.Failure` a rule: a budgeted tendon
+    over its budget by eq. (2) through the hole centres (``tendon.length``), tendons routed into one
+    opening (``eyelet.overlap``), a driven tendon through one opening with another
+    (``eyelet.shared_sliding``), a wall under the process's minimum (``eyelet.wall``)."""
+    out = [Failure(id="tendon.length", message=f"{t['name']} changes {t['centre_mm']:.3f} mm by eq. (2), budget "
+                                               f"{t['budget_mm']:g} mm",
+                   measured=t["centre_mm"], limit=t["budget_mm"], where=t["name"])
            for t in row["tendons"] if t["budget_mm"] is not None and t["centre_mm"] > t["budget_mm"]]
     if row.get("overlapping_eyelets"):
-        out.append(failure("eyelet.overlap", f"tendons routed into each other share one opening on "
-                                             f"{row['overlapping_eyelets']} disk(s)"))
+        out.append(Failure(id="eyelet.overlap", message=f"tendons routed into each other share one opening on "
+                                                        f"{row['overlapping_eyelets']} disk(s)"))
     if row.get("shared_sliding"):
         pairs = sorted({p.split("@")[0] for p in row["shared_sliding"]})
-        out.append(failure("eyelet.shared_sliding", f"{', '.join(pairs)}: a driven tendon slides through one "
-                                                    f"opening with another on {len(row['shared_sliding'])} disk(s)",
-                           row.get("shared_sliding_severity", "error"), 2, 1, row["shared_sliding"],
-                           "route the other tendon clear of the driven one's eyelets (its amplitude or phase: "
-                           "tendons[].routing.function)"))
+        out.append(Failure(id="eyelet.shared_sliding",
+                           message=f"{', '.join(pairs)}: a driven tendon slides through one opening with another "
+                                   f"on {len(row['shared_sliding'])} disk(s)",
+                           severity=row.get("shared_sliding_severity", "error"), measured=2, limit=1,
+                           where=row["shared_sliding"],
+                           fix="route the other tendon clear of the driven one's eyelets (its amplitude or phase: "
+                               "tendons[].routing.function)"))
     if row["clearance_mm"] < row["min_wall_mm"]:
-        out.append(failure("eyelet.wall", f"least wall {row['clearance_mm']:.2f} mm, under process.min_wall "
-                                          f"{row['min_wall_mm']:g} mm", "error", row["clearance_mm"],
-                           row["min_wall_mm"]))
+        out.append(Failure(id="eyelet.wall", message=f"least wall {row['clearance_mm']:.2f} mm, under process.min_wall "
+                                                     f"{row['min_wall_mm']:g} mm",
+                           measured=row["clearance_mm"], limit=row["min_wall_mm"]))
     return out

@@ -1,4 +1,5 @@
-"""What each level of a sweep computes for a batch of variants, on a worker: one row per variant.
+"""What each level of a sweep computes for a batch of variants, on a worker: one
+:class:`~hwgen.sweep.records.Row` per variant.
 
 ``lengths`` (:mod:`.lengths`): the plan's eyelets, eq. (2) and the nominal taut path, many
 variants at once. ``robust``: the full plan (:func:`hwgen.model.plan.make_plan`: its tip disk's
@@ -12,16 +13,17 @@ the ones before it.
 A variant that is bad input, or whose plan is refused, is a row with verdict ``bad input`` and
 the message ``hwgen build`` would print; one that makes hwgen fail is a row with verdict
 ``error``; neither stops the batch. Each row's ``failures`` lists what fails (and what only warns)
-one record a rule: ``id``, ``severity``, ``message``, ``measured``, ``limit`` (for a tune's
-constraints; the sweep's Parquet keeps the message).
+one :class:`~hwgen.sweep.records.Failure` a rule (``id``, ``severity``, ``message``, ``measured``,
+``limit``: what a tune's constraints read; the sweep's Parquet keeps the message), and whether one
+fails the design is :attr:`Failure.fails`, the checks' one predicate.
 
-``options["screen"]``: a variant that fails at the lengths level (eq. (2), the walls) goes no
+How a batch is evaluated is an :class:`~hwgen.sweep.records.EvalOptions`. ``screen``: a variant that fails at the lengths level (eq. (2), the walls) goes no
 further than ``with_plan``'s figures (its row says ``screened``): a tune's trial that cannot be
 feasible costs no more than its statics;
-``options["stop"]``, called with the row once ``with_plan``'s figures are in, does the same for
+``stop``, called with the row once ``with_plan``'s figures are in, does the same for
 a trial those figures rule out (a tune's bound on the statics), and so does a plan that fails its
 screens (:func:`_plan_screens`: the Monte Carlo and the tensions' statics are not run for it).
-``options["with_plan"]``, when given, is called with each valid variant's plan (made for it at the
+``with_plan``, when given, is called with each valid variant's plan (made for it at the
 lengths level too) and returns more figures for its row: a tune's objectives
 (:mod:`hwgen.tune.results`), and, as ``statics_failures``, the failure records of the checks those
 figures judge (``stiffening.tip``): added to the row's failures, so they screen as the plan's do.
@@ -31,6 +33,7 @@ from __future__ import annotations
 import json
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -39,20 +42,19 @@ from ..errors import DesignError, InputError
 from ..model import feasibility, scatter as mc
 from ..model.plan import Plan, make_plan
 from . import lengths
-from .lengths import failure
+from .records import EvalOptions, Failure, Row
 from .spec import Resolved, Variant, resolve
 
-METRICS = ("centre_mm", "taut_mm", "robust_mm", "clearance_mm", "mass_g", "coupling", "least_tension_n")
 
 
 def evaluate_batch(batch: list[tuple[int, tuple]], base: dict, names: tuple[str, ...], level: str,
-                   done: frozenset | set = frozenset(), options: dict | None = None) -> list[dict]:
+                   done: frozenset | set = frozenset(), options: EvalOptions | None = None) -> list[Row]:
     """Rows for the variants of ``batch`` ((index, values) pairs) whose hash is not in ``done``."""
-    options = options or {}
-    if options.get("numba_threads"):
+    options = options or EvalOptions()
+    if options.numba_threads:
         # a Dask worker already has a core of its own: the taut kernel's threads would only contend
         import numba
-        numba.set_num_threads(options["numba_threads"])
+        numba.set_num_threads(options.numba_threads)
     t0 = time.process_time()
     todo = [r for r in (resolve(base, names, Variant(i, tuple(v))) for i, v in batch) if r.hash not in done]
     rows = {r.index: _row(r, level) for r in todo}
@@ -62,22 +64,22 @@ def evaluate_batch(batch: list[tuple[int, tuple]], base: dict, names: tuple[str,
         row = rows[r.index]
         fig = figures[r.index]
         if isinstance(fig, str):
-            row.update(verdict="error", message=fig, failures=[failure("error", fig)])
+            row.set(verdict="error", message=fig, failures=[Failure(id="error", message=fig)])
             continue
-        row["verdict"], row["message"], f = lengths.verdict(fig)
-        row.update(f)
-        row["failures"] = lengths.failures(fig)
+        row.verdict, row.message, f = lengths.verdict(fig)
+        row.set(**f)
+        row.failures = lengths.failures(fig)
     share = (time.process_time() - t0) / max(len(todo), 1)
     for r in todo:
-        rows[r.index]["cpu_s"] = share
-    if level != "lengths" or options.get("with_plan"):
+        rows[r.index].cpu_s = share
+    if level != "lengths" or options.with_plan:
         for r in good:
             row = rows[r.index]
-            if row["verdict"] == "error":
+            if row.verdict == "error":
                 continue
-            screened = bool(options.get("screen") and any(f["severity"] == "error" for f in row["failures"]))
-            if screened and not options.get("with_plan"):
-                row["screened"] = True          # a tune's trial that fails already: the levels after it not run
+            screened = options.screen and any(f.fails for f in row.failures)
+            if screened and not options.with_plan:
+                row.screened = True             # a tune's trial that fails already: the levels after it not run
                 continue
             t1 = time.process_time()
             try:
@@ -86,12 +88,12 @@ def evaluate_batch(batch: list[tuple[int, tuple]], base: dict, names: tuple[str,
                 else:
                     _deeper(r, row, level, options)
             except (InputError, DesignError) as e:
-                row.update(verdict="bad input", message=f"{e.path or '<document>'}: {e.message}")
-                row["failures"] = [failure("input", row["message"])]
+                row.set(verdict="bad input", message=f"{e.path or '<document>'}: {e.message}")
+                row.failures = [Failure(id="input", message=row.message)]
             except Exception as e:      # a variant that makes hwgen fail is a row, never the end of the sweep
-                row.update(verdict="error", message=f"internal error: {type(e).__name__}: {e}"[:400])
-                row["failures"] = [failure("error", row["message"])]
-            row["cpu_s"] += time.process_time() - t1
+                row.set(verdict="error", message=f"internal error: {type(e).__name__}: {e}"[:400])
+                row.failures = [Failure(id="error", message=row.message)]
+            row.cpu_s += time.process_time() - t1
     return [rows[r.index] for r in todo]
 
 
@@ -100,13 +102,10 @@ def warm() -> None:
     from ..model import taut_kernels  # noqa: F401
 
 
-def _row(r: Resolved, level: str) -> dict:
-    row = {"variant": r.index, "hash": r.hash, "level": level, "values": r.values,
-           "verdict": "bad input" if r.design is None else "pass", "message": r.message, "decoupled": None,
-           "checks_failed": None, "per_tendon": None, "kept": None, "cpu_s": 0.0,
-           "failures": [failure("input", r.message)] if r.design is None else []}
-    row.update({m: None for m in METRICS})
-    return row
+def _row(r: Resolved, level: str) -> Row:
+    bad = r.design is None
+    return Row(variant=r.index, hash=r.hash, level=level, values=r.values, verdict="bad input" if bad else "pass",
+               message=r.message, failures=[Failure(id="input", message=r.message)] if bad else [])
 
 
 def _lengths(good: list[Resolved]) -> dict[int, dict | str]:
@@ -126,11 +125,11 @@ def _lengths(good: list[Resolved]) -> dict[int, dict | str]:
 
 # ---------------------------------------------------------------- robust, coupling, build
 
-def _figures_only(r: Resolved, row: dict, options: dict) -> None:
+def _figures_only(r: Resolved, row: Row, options: EvalOptions) -> None:
     """A screened trial's ``with_plan`` figures (a tune's statics, a fraction of the checks after
     them): every bound of its goal is then measured, so the optimiser learns how far the trial is
     from each, not only that it failed eq. (2) or a wall. A plan that is refused leaves them out."""
-    row["screened"] = True
+    row.screened = True
     try:
         plan = make_plan(r.design)
     except (InputError, DesignError):
@@ -138,92 +137,92 @@ def _figures_only(r: Resolved, row: dict, options: dict) -> None:
     _with_plan(row, plan, options)
 
 
-def _with_plan(row: dict, plan: Plan, options: dict) -> None:
+def _with_plan(row: Row, plan: Plan, options: EvalOptions) -> None:
     """``with_plan``'s figures into the row, and its ``statics_failures`` into the row's failures
     (an error among them fails the row, its message added to the row's)."""
-    got = dict(options["with_plan"](plan))
+    got = dict(options.with_plan(plan))
     more = got.pop("statics_failures", [])
-    row.update(got)
-    row["failures"] = list(row["failures"]) + more
-    errors = [f["message"] for f in more if f["severity"] == "error"]
+    row.figures.update(got)
+    row.failures = list(row.failures) + more
+    errors = [f.message for f in more if f.fails]
     if errors:
-        row["verdict"] = "fail"
-        row["message"] = "; ".join(([row["message"]] if row["message"] else []) + errors)[:2000]
+        row.verdict = "fail"
+        row.message = "; ".join(([row.message] if row.message else []) + errors)[:2000]
 
 
-def _deeper(r: Resolved, row: dict, level: str, options: dict) -> None:
+def _deeper(r: Resolved, row: Row, level: str, options: EvalOptions) -> None:
     d = r.design
     plan = make_plan(d)
     feasibility.check_plan(plan, d)
-    if options.get("with_plan"):
+    if options.with_plan:
         _with_plan(row, plan, options)
     if level == "lengths":
         return
-    if options.get("stop") and options["stop"](row):
-        row["screened"] = True         # a tune's trial its figures already rule out: the checks after them not run
+    if options.stop and options.stop(row):
+        row.screened = True            # a tune's trial its figures already rule out: the checks after them not run
         return
-    centre = {t["name"]: t["centre_mm"] for t in json.loads(row["per_tendon"])}
-    fails = [row["message"]] if row["message"] else []
+    centre = {t["name"]: t["centre_mm"] for t in json.loads(row.per_tendon)}
+    fails = [row.message] if row.message else []
     warns = []
-    failures = list(row["failures"])
+    failures = list(row.failures)
     for f in _plan_screens(plan):
-        if not any(g["id"] == f["id"] for g in failures):
-            (fails if f["severity"] == "error" else warns).append(f["message"])
+        if not any(g.id == f.id for g in failures):
+            (fails if f.fails else warns).append(f.message)
             failures.append(f)
-    if options.get("screen") and any(f["severity"] == "error" for f in failures):
+    if options.screen and any(f.fails for f in failures):
         # a tune's trial the plan already fails: the Monte Carlo and the statics of the tensions not run
-        row.update(screened=True, failures=failures, verdict="fail",
+        row.set(screened=True, failures=failures, verdict="fail",
                    message="; ".join([f for f in fails if f] + [f"warning: {w}" for w in warns])[:2000])
         return
-    taut_rows = robust(plan, plan.slot_clearance, options.get("robust_samples", 200))
+    taut_rows = robust(plan, plan.slot_clearance, options.robust_samples)
     budgeted = [t for t in taut_rows if t["budget_mm"] is not None]
     for t in budgeted:
         if t["robust_mm"] > t["budget_mm"]:
             text = (f"{t['name']} changes {t['robust_mm']:.3f} mm at {plan.check.robust} as built, "
                     f"budget {t['budget_mm']:g} mm")
-            (fails if plan.check.robust_severity == "error" else warns).append(text)
-            failures.append(failure("tendon.robust", text, plan.check.robust_severity, t["robust_mm"], t["budget_mm"],
-                                     t["name"]))
-    tendons = json.loads(row["per_tendon"])
+            f = Failure(id="tendon.robust", message=text, severity=plan.check.robust_severity,
+                        measured=t["robust_mm"], limit=t["budget_mm"], where=t["name"])
+            (fails if f.fails else warns).append(text)
+            failures.append(f)
+    tendons = json.loads(row.per_tendon)
     for t in tendons:
         t.update({k: v for k, v in next(x for x in taut_rows if x["name"] == t["name"]).items()
                   if k in ("robust_mm", "taut_built_mm")})
-    row["robust_mm"] = max((t["robust_mm"] for t in budgeted), default=None)
+    row.robust_mm = max((t["robust_mm"] for t in budgeted), default=None)
     if level in ("coupling", "build"):
         report = coupling(plan, taut_rows, centre)
         if "skipped" in report:
             warns.append(f"statics skipped: {report['skipped']}")
         for c in report.get("failed", []):
-            (fails if c["severity"] == "error" else warns).append(f"{c['id']}: {c['message']}")
-            failures.append(failure(c["id"], c["message"], c["severity"], c.get("measured"), c.get("limit"),
-                                     (c.get("where") or {}).get("tendon"), c.get("fix") or ""))
-        row["coupling"] = report.get("coupling")
-        row["least_tension_n"] = report.get("least_tension_n")
+            f = Failure.of_check(c)
+            (fails if f.fails else warns).append(f"{f.id}: {f.message}")
+            failures.append(f)
+        row.coupling = report.get("coupling")
+        row.least_tension_n = report.get("least_tension_n")
     if level == "build":
         from .build import build_and_check       # CadQuery: only a build-level worker imports it, once
         failed, kept = build_and_check(r, options)
-        row["checks_failed"] = len(failed)
-        row["kept"] = kept
+        row.checks_failed = len(failed)
+        row.kept = kept
         # the build's verdict is hwgen check's, which runs every rule above on the built files (eq. (2)
         # through the centres only as information): the screening figures stay on record as warnings
-        failures = [dict(f, severity="warning") for f in failures]
-        failures += [failure(c["id"], c["message"], c["severity"], c.get("measured"), c.get("limit"), None,
-                             c.get("fix") or "")
-                     for c in failed]
+        failures = [replace(f, severity="warning") for f in failures]
+        failures += [replace(Failure.of_check(c), where=None) for c in failed]
         warns = [f"screening: {f}" for f in fails if f] + warns
         fails = [f"{c['id']}: {c['message']}" for c in failed[:3]]
         if len(failed) > 3:
             fails.append(f"and {len(failed) - 3} more failed checks")
-    row["per_tendon"] = json.dumps(tendons)
-    row["failures"] = failures
-    row["verdict"] = "fail" if any(fails) else "pass"
-    row["message"] = "; ".join([f for f in fails if f] + [f"warning: {w}" for w in warns])[:2000]
+    row.per_tendon = json.dumps(tendons)
+    row.failures = failures
+    row.verdict = "fail" if any(fails) else "pass"
+    row.message = "; ".join([f for f in fails if f] + [f"warning: {w}" for w in warns])[:2000]
 
 
-def _plan_screens(plan: Plan) -> list[dict]:
+def _plan_screens(plan: Plan) -> list[Failure]:
     """What the full plan says that the lengths level cannot (``hwgen check`` fails each): the
     checks' own screens (:func:`hwgen.checks.screens.plan_screens`), as a row's failure records."""
-    return [failure(s.id, s.message, s.severity, s.measured, s.limit, s.tendon) for s in plan_screens(plan)]
+    return [Failure(id=s.id, message=s.message, severity=s.severity, measured=s.measured, limit=s.limit,
+                    where=s.tendon) for s in plan_screens(plan)]
 
 
 def robot(plan: Plan) -> mc.Robot:
@@ -301,8 +300,7 @@ def coupling(plan: Plan, taut_rows: list[dict], centre: dict[str, float]) -> dic
     report, checks = tension_checks(plan, {"tendons": [{"name": t["name"], "robust_mm": t["robust_mm"],
                                                         "taut_max_abs_delta_mm": t["taut_built_mm"]}
                                                        for t in taut_rows]}, centre)
-    out: dict = {"failed": [c.to_json() if hasattr(c, "to_json") else _check(c) for c in checks if not c.passed
-                            and c.severity in ("error", "warning")]}
+    out: dict = {"failed": [c for c in checks if not c.passed and c.severity in ("error", "warning")]}
     if "skipped" in report:
         out["skipped"] = report["skipped"]
         return out
@@ -311,10 +309,6 @@ def coupling(plan: Plan, taut_rows: list[dict], centre: dict[str, float]) -> dic
     least = [t["least_as_built_n"] for t in report.get("tendons", [])]
     out["least_tension_n"] = min(least) if least else None
     return out
-
-
-def _check(c) -> dict:
-    return {"id": c.id, "severity": c.severity, "message": c.message}
 
 
 def finite(v):

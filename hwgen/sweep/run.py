@@ -21,7 +21,7 @@ import threading
 import time
 import uuid
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import pyarrow as pa
@@ -30,11 +30,12 @@ import pyarrow.parquet as pq
 from ..atomic import atomic_path
 from ..errors import InputError
 from . import levels
+from .records import METRICS, EvalOptions, Row
 from .spec import Loaded, variants
 
 BATCH = {"lengths": 256, "robust": 4, "coupling": 1, "build": 1}
 PART_GLOB = "part-*.parquet"
-FLOAT_COLUMNS = levels.METRICS + ("cpu_s",)
+FLOAT_COLUMNS = METRICS + ("cpu_s",)
 
 
 @dataclass
@@ -64,17 +65,17 @@ def schema(loaded: Loaded) -> pa.Schema:
     return pa.schema(fields)
 
 
-def table(loaded: Loaded, rows: list[dict]) -> pa.Table:
+def table(loaded: Loaded, rows: list[Row]) -> pa.Table:
     """Rows as a table of :func:`schema`; an axis whose values are not numbers is stored as JSON."""
     sch = schema(loaded)
     cols: dict[str, list] = {f.name: [] for f in sch}
     for row in rows:
-        for name, v in zip(loaded.names, row["values"]):
+        for name, v in zip(loaded.names, row.values):
             kind = loaded.columns[name]
             cols[name].append(json.dumps(v, sort_keys=True) if kind == "json" else v)
         for f in sch:
             if f.name not in loaded.names:
-                cols[f.name].append(levels.finite(row.get(f.name)))
+                cols[f.name].append(levels.finite(getattr(row, f.name)))
     return pa.table(cols, schema=sch)
 
 
@@ -216,22 +217,22 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
     done = _done(folder)
     batches = _batches(loaded)
     total = sum(len(b) for b in batches)
-    options = {"robust_samples": loaded.spec.robust_samples, "keep": list(loaded.spec.keep),
-               "out": str(folder.parent), "cache": cache}
+    options = EvalOptions(robust_samples=loaded.spec.robust_samples, keep=tuple(loaded.spec.keep),
+                          out=str(folder.parent), cache=cache)
     args = (loaded.base, loaded.names, loaded.spec.level)
     written, cpu, verdicts = set(done), 0.0, {}
 
-    def write(rows: list[dict]) -> None:
+    def write(rows: list[Row]) -> None:
         nonlocal cpu
-        rows = [r for r in rows if r["hash"] not in written]     # two variants of one design: one row
+        rows = [r for r in rows if r.hash not in written]        # two variants of one design: one row
         if not rows:
             return
-        with atomic_path(folder / f"part-{rows[0]['variant']:09d}-{uuid.uuid4().hex[:8]}.parquet") as tmp:
+        with atomic_path(folder / f"part-{rows[0].variant:09d}-{uuid.uuid4().hex[:8]}.parquet") as tmp:
             pq.write_table(table(loaded, rows), tmp)
         for r in rows:
-            written.add(r["hash"])
-            cpu += r["cpu_s"]
-            verdicts[r["verdict"]] = verdicts.get(r["verdict"], 0) + 1
+            written.add(r.hash)
+            cpu += r.cpu_s
+            verdicts[r.verdict] = verdicts.get(r.verdict, 0) + 1
 
     with pool(scheduler, workers) as p:
         t0 = time.perf_counter()
@@ -240,7 +241,7 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
                 write(levels.evaluate_batch(b, *args, done, options))
         else:
             client = p.client
-            options = dict(options, numba_threads=1)
+            options = replace(options, numba_threads=1)
             # the base design and the hashes already done go to every worker once, not with every task
             base, seen = client.scatter([loaded.base, frozenset(done)], broadcast=True)
             futures = [client.submit(levels.evaluate_batch, b, base, loaded.names, loaded.spec.level, seen, options,

@@ -30,6 +30,7 @@ from ..atomic import atomic_path, write_text
 from ..outputs.plots import pyplot, save
 from ..params import SAFE_NAME
 from ..sweep import spec as sweep_spec
+from ..sweep.records import Failure
 from . import results
 from .spec import Loaded
 
@@ -268,8 +269,7 @@ def markdown(loaded: Loaded, rows: list[dict], base_row: dict, outcome=None, bui
             lines.append(f"| {n} | {_fmt(results.value(n, base_row, state))} | "
                          f"{_fmt(results.value(n, best_row, state))} |")
         lines.append(f"| verdict ({loaded.spec.level}) | {base_row['verdict']} | {best_row['verdict']} |")
-    fails = [f"{f['id']}" for f in base_row.get("failures") or [] if f["severity"] == "error"
-             or f["id"] in g.require]
+    fails = [f.id for f in map(Failure.of, base_row.get("failures") or []) if f.fails or f.id in g.require]
     if fails:
         lines += ["", "The base fails: " + ", ".join(sorted(set(fails))) + "."]
     if built:
@@ -323,11 +323,11 @@ def _stops(loaded: Loaded, r: dict, base_row: dict) -> tuple[str, str, str]:
     from .run import _violation
     g = loaded.spec.goal
     worst = None
-    for f in r.get("failures") or []:
+    for f in map(Failure.of, r.get("failures") or []):
         if g.binds(f):
             v = _violation(f)
             if worst is None or v > worst[0]:
-                worst = (v, f["id"], f.get("message") or "", f.get("fix") or "")
+                worst = (v, f.id, f.message or "", f.fix)
     for label, c, (n, how) in zip(bounds(loaded), r["constraints"][1:],
                                   [*((n, "≥") for n in g.at_least), *((n, "≤") for n in g.at_most)]):
         if c > 0 and (worst is None or c > worst[0]):
@@ -402,7 +402,7 @@ def binding(loaded: Loaded, rows: list[dict]) -> str:
     for r in rows:
         if r["feasible"]:
             continue
-        ids = {f["id"] for f in r.get("failures") or [] if g.binds(f)}
+        ids = {f.id for f in map(Failure.of, r.get("failures") or []) if g.binds(f)}
         for label, c in zip(bounds(loaded), r["constraints"][1:]):
             if c > 0:
                 ids.add(label)

@@ -26,11 +26,12 @@ from __future__ import annotations
 
 import json
 import re
+from dataclasses import replace
 
 from ..checks.purpose import stiffening_checks
 from ..errors import nearest
 from ..model import stiffness as sf
-from ..sweep.lengths import failure
+from ..sweep.records import Failure
 
 STATICS = {"tip_stiffness": "N/mm", "least_stiffness": "N/mm", "tip_torsion": "N·mm/rad", "tip_sag": "mm"}
 ROW = {"centre_mm": ("mm", "lengths"), "taut_mm": ("mm", "lengths"), "robust_mm": ("mm", "robust"),
@@ -72,7 +73,7 @@ def figures(plan, states: tuple[str, ...] | None = None, orientation: str = ORIE
 def statics(plan, states: tuple[str, ...] | None, orientation: str = ORIENTATION, friction: str = FRICTION,
             judge: bool = False) -> dict:
     """Every statics figure of the named states of a plan, keyed ``name@state`` (the worker's hook:
-    ``options["with_plan"]`` of :func:`hwgen.sweep.levels.evaluate_batch`), and ``set_n``: state ->
+    ``EvalOptions.with_plan`` of :func:`hwgen.sweep.levels.evaluate_batch`), and ``set_n``: state ->
     tendon -> the tension each is set to (the protocol's, or its own ``pretension_n``). ``judge``: also the
     failing checks of what the stiffening tendons are for (``stiffening.tip``, ``stiffening.torsion``:
     :func:`hwgen.checks.purpose.stiffening_checks`, which ``hwgen check`` fails on the build), as the
@@ -92,7 +93,7 @@ def statics(plan, states: tuple[str, ...] | None, orientation: str = ORIENTATION
            "set_n": {s: e["set_n"] for s, e in entries.items()}}
     if judge:
         out["statics_failures"] = [
-            failure(c.id, f"{c.id}: {c.message}", c.severity, c.measured, c.limit, None, c.fix or "")
+            replace(Failure.of_check(c, f"{c.id}: {c.message}"), where=None)
             for c in stiffening_checks(plan, report) if not c.passed]
     return out
 

@@ -33,7 +33,7 @@ import shutil
 import time
 import uuid
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
 
@@ -42,6 +42,7 @@ import numpy as np
 from ..errors import InputError
 from ..sweep import levels
 from ..sweep.run import pool
+from ..sweep.records import EvalOptions, Failure, Row
 from ..sweep.spec import Variant, resolve
 from . import local, results
 from .spec import Loaded, distance
@@ -238,7 +239,7 @@ def score(loaded: Loaded, row: dict, base_row: dict | None,
         checks = BAD
     else:
         checks = 0.0
-        for f in row.get("failures") or []:
+        for f in map(Failure.of, row.get("failures") or []):
             if g.binds(f):
                 checks += _violation(f)
     bounds = []
@@ -280,24 +281,27 @@ def bound_limits(loaded: Loaded, base_row: dict) -> list[tuple[str, float, float
     return out
 
 
-def short_of_bounds(limits: list[tuple[str, float, float]], row: dict) -> bool:
+def short_of_bounds(limits: list[tuple[str, float, float]], row: Row) -> bool:
     """Whether a row's statics already miss a bound of the goal (the worker's ``stop``: such a trial
     is infeasible whatever its checks say, so the checks after the statics are not run)."""
-    got = row.get("statics") or {}
+    got = row.figures.get("statics") or {}
     return any(key in got and sign * (bound - got[key]) > 0 for key, sign, bound in limits)
 
 
-def _violation(f: dict) -> float:
+def _violation(f: Failure | dict) -> float:
     """How far past its limit a failed check is, relative to the limit (at most EXCESS_CAP; at least
     MIN_EXCESS, so that a check failed at its limit still counts); one that measures nothing (two
     eyelets that merge) counts UNMEASURED, as far past as a value twice its limit."""
-    m, lim = f.get("measured"), f.get("limit")
+    f = Failure.of(f)
+    m, lim = f.measured, f.limit
     if not isinstance(m, (int, float)) or not isinstance(lim, (int, float)) or not math.isfinite(m):
         return UNMEASURED
     return min(max(abs(m - lim) / max(abs(lim), 1e-9), MIN_EXCESS), EXCESS_CAP)
 
 
 def _plain(v):
+    if isinstance(v, Failure):
+        return v.to_json()
     if isinstance(v, (np.floating, np.integer)):
         return v.item()
     if isinstance(v, (tuple, set)):
@@ -305,18 +309,16 @@ def _plain(v):
     return str(v)
 
 
-def _options(loaded: Loaded, folder: Path, cache, p) -> dict:
-    opts = {"robust_samples": loaded.spec.robust_samples, "keep": [], "out": str(folder), "cache": cache,
-            # a trial that fails its level's screening stops there; not at the build level, whose verdict is
-            # hwgen check's (eq. (2) through the hole centres is information there, not a failure)
-            "screen": loaded.spec.goal.checks == "all" and loaded.spec.level in ("robust", "coupling")}
-    if loaded.states:
-        g = loaded.spec.goal
-        opts["with_plan"] = partial(results.statics, states=loaded.states, orientation=g.orientation,
-                                    friction=g.friction, judge=judges_stiffening(g))
-    if p.client is not None:
-        opts["numba_threads"] = 1           # a worker has a core of its own
-    return opts
+def _options(loaded: Loaded, folder: Path, cache, p) -> EvalOptions:
+    g = loaded.spec.goal
+    return EvalOptions(
+        robust_samples=loaded.spec.robust_samples, out=str(folder), cache=cache,
+        # a trial that fails its level's screening stops there; not at the build level, whose verdict is
+        # hwgen check's (eq. (2) through the hole centres is information there, not a failure)
+        screen=g.checks == "all" and loaded.spec.level in ("robust", "coupling"),
+        with_plan=partial(results.statics, states=loaded.states, orientation=g.orientation, friction=g.friction,
+                          judge=judges_stiffening(g)) if loaded.states else None,
+        numba_threads=1 if p.client is not None else None)      # a worker has a core of its own
 
 
 def judges_stiffening(goal) -> bool:
@@ -326,9 +328,10 @@ def judges_stiffening(goal) -> bool:
     return goal.checks == "all" or any(c.startswith("stiffening.") for c in goal.require)
 
 
-def _finish(loaded: Loaded, row: dict, values: tuple) -> dict:
-    """A worker's row made plain (JSON), with the trial's distance from the base."""
-    row = json.loads(json.dumps(row, default=_plain))
+def _finish(loaded: Loaded, row: Row, values: tuple) -> dict:
+    """A worker's row made plain (JSON: :meth:`~hwgen.sweep.records.Row.to_json`), with the trial's
+    distance from the base."""
+    row = json.loads(json.dumps(row.to_json(), default=_plain))
     row["distance"] = distance(loaded, values)
     row["values"] = list(values)
     return row
@@ -350,7 +353,7 @@ def _base_figures(loaded: Loaded, base: dict, made: Path | None) -> None:
                                  f"a base that evaluates")
 
 
-def base_row(loaded: Loaded, study, p, options: dict) -> dict:
+def base_row(loaded: Loaded, study, p, options: EvalOptions) -> dict:
     """The base design evaluated like a trial (kept in the study: a resumed tune reads it back)."""
     if "base_row" in study.user_attrs:
         return study.user_attrs["base_row"]
@@ -385,7 +388,7 @@ class _Search:
     and one asked while its twin is in flight waits for it. A share of the trials (:data:`LOCAL_SHARE`)
     is a move from the incumbent (:mod:`hwgen.tune.local`) instead of the sampler's draw."""
 
-    def __init__(self, loaded: Loaded, study, p, options: dict, base: dict, out: Outcome, by_hash: dict,
+    def __init__(self, loaded: Loaded, study, p, options: EvalOptions, base: dict, out: Outcome, by_hash: dict,
                  on_trial=None):
         self.loaded, self.study, self.p, self.options, self.base, self.out = loaded, study, p, options, base, out
         self.by_hash, self.on_trial = by_hash, on_trial
@@ -472,7 +475,7 @@ class _Search:
     def collect(self, fut) -> None:
         """The rows of a finished task (and of their twins that waited), each to be told in its turn."""
         batch = self.flying.pop(fut.key)
-        rows = {r["variant"]: r for r in fut.result()}
+        rows = {r.variant: r for r in fut.result()}
         fut.release()
         out = self.out
         for trial, values, h in batch:
@@ -567,10 +570,10 @@ def run(loaded: Loaded, out_root: Path, scheduler: str | None = None, workers: i
         t0 = time.perf_counter()
         base = base_row(loaded, study, p, options)
         _base_figures(loaded, base, made)
-        if options.get("screen") and loaded.spec.level != "lengths":
+        if options.screen and loaded.spec.level != "lengths":
             limits = bound_limits(loaded, base)
             if limits:
-                options = dict(options, stop=partial(short_of_bounds, limits))
+                options = replace(options, stop=partial(short_of_bounds, limits))
         by_hash.setdefault(base["hash"], base)
         enqueue_base(loaded, study, base)
         search = _Search(loaded, study, p, options, base, out, by_hash, on_trial)

@@ -33,6 +33,7 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_valida
 from .. import designfile
 from ..errors import InputError, echo
 from ..sweep import spec as sweep_spec
+from ..sweep.records import Failure
 from . import results
 
 MAX_BUDGET = 100_000
@@ -127,10 +128,12 @@ class Goal(_Model):
                              f"not both, not twice)")
         return self
 
-    def binds(self, f: dict) -> bool:
-        """Whether a failure record (:func:`hwgen.sweep.lengths.failure`) counts against this goal: an
-        error when every check must pass, or a check under ``require`` whatever its severity."""
-        return (f["severity"] == "error" and self.checks == "all") or f["id"] in self.require
+    def binds(self, f: Failure | dict) -> bool:
+        """Whether a row's failure record (:class:`hwgen.sweep.records.Failure`, or its JSON) counts
+        against this goal: one that fails the design when every check must pass, or a check under
+        ``require`` whatever its severity."""
+        f = Failure.of(f)
+        return (f.fails and self.checks == "all") or f.id in self.require
 
     def objectives(self) -> list[tuple[str, str]]:
         """(name, "maximize" or "minimize") of each objective, in order; ``pass``: the distance."""
