@@ -62,6 +62,13 @@ clients:
 	      prusa-slicer freecad chromium >/dev/null; \
 	  else echo "not installed:$$missing (apt-get install prusa-slicer freecad chromium); their tests will skip"; fi; fi
 
+# pytest keeps each test module as rewritten for its asserts in tests/__pycache__ (as Python keeps
+# a compiled module), unless Python is told not to write bytecode (PYTHONDONTWRITEBYTECODE, set in
+# some CI images and shells): then every xdist worker rewrites all of tests/ on every run, about
+# 3 s of CPU each. The suite's pytest writes it whatever the caller's setting; hwgen's own modules
+# are compiled ahead by make bytecode either way
+PYTEST := PYTHONDONTWRITEBYTECODE= $(BIN)/python -m pytest
+
 # one pytest worker per core (pytest-xdist); the tests that share a module's build run in one
 # worker, and the workers share one part cache; the work is handed out in the order
 # tests/conftest.py sorts it (LONGEST: the longest first), not the groups with the most tests first
@@ -72,7 +79,7 @@ test:
 	  $(MAKE) --no-print-directory $(STAMP) bytecode viewer; made=$$?; \
 	  wait $$clients; installed=$$?; cat .clients.log; rm -f .clients.log; \
 	  [ $$made = 0 ] && [ $$installed = 0 ]
-	$(BIN)/python -m pytest -q -n auto --dist loadgroup --no-loadscope-reorder
+	$(PYTEST) -q -n auto --dist loadgroup --no-loadscope-reorder
 
 # every print plate sliced in PrusaSlicer as the process prints it (SLA: minutes per plate); not in make test
 slicer-check: $(STAMP) clients
@@ -81,7 +88,7 @@ slicer-check: $(STAMP) clients
 
 # one pytest worker per core (pytest-xdist): the CAD-free tier is many small tests that do not share a build
 test-fast: $(STAMP) bytecode
-	$(BIN)/python -m pytest -q -m "not slow" -n auto --dist loadgroup --no-loadscope-reorder
+	$(PYTEST) -q -m "not slow" -n auto --dist loadgroup --no-loadscope-reorder
 
 # the benchmark times the disks against OpenSCAD (Debian's openscad, installed here when missing and apt-get can)
 bench: $(STAMP) bytecode viewer

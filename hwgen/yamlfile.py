@@ -8,13 +8,27 @@ hundred bytes, and every later stage that walks them hangs), or on how long a sc
 limit, then walks its node graph once, with each aliased node counted as often as it is used,
 before any value is built; every fault comes back as a :class:`YamlFault` with the field path
 where it was found.
+
+The text is scanned and parsed by libyaml where PyYAML has it (PyYAML's own scanner, in Python, was
+most of the time a design took to read, which the CAD-free tests do hundreds of times); the composer
+over its events is PyYAML's, with the depth limit. A document libyaml refuses is read again by
+PyYAML's own parser: the error the user is shown is always PyYAML's (its wording, the line quoted),
+whichever parser ran. tests/test_fuzz.py holds the two parsers to the same values and errors.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import yaml
+from yaml.composer import Composer
+from yaml.constructor import SafeConstructor
 from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
+from yaml.resolver import Resolver
+
+try:
+    from yaml._yaml import CParser
+except ImportError:                  # PyYAML built without libyaml: its own parser reads every file
+    CParser = None
 
 MAX_BYTES = 1 << 20          # 1 MiB; the prototype is 8 kB, 200 stations of 60 tabled tendons about 500 kB
 MAX_DEPTH = 32               # nesting levels; the deepest a design needs is 6 (tendons[i].routing.table[j][k])
@@ -41,16 +55,14 @@ def join(path: str, key) -> str:
     return f"{path}.{key}" if path else str(key)
 
 
-class _Loader(yaml.SafeLoader):
-    """The safe loader, refusing documents nested deeper than :data:`MAX_DEPTH`.
+class _Depth:
+    """The composer's depth limit: documents nested deeper than :data:`MAX_DEPTH` are refused.
 
     PyYAML passes ``compose_node`` the key node of a mapping value or the index of a sequence
     item; a stack of them is the field path of the node being composed.
     """
 
-    def __init__(self, stream):
-        super().__init__(stream)
-        self._where: list[str] = []
+    _where: list[str]
 
     def compose_node(self, parent, index):
         if len(self._where) >= MAX_DEPTH:
@@ -70,6 +82,27 @@ class _Loader(yaml.SafeLoader):
             return super().compose_node(parent, index)
         finally:
             self._where.pop()
+
+
+class _Loader(_Depth, yaml.SafeLoader):
+    """PyYAML's safe loader, all in Python, with the depth limit."""
+
+    def __init__(self, stream):
+        super().__init__(stream)
+        self._where = []
+
+
+if CParser is not None:
+    class _FastLoader(_Depth, Composer, CParser, SafeConstructor, Resolver):
+        """libyaml's scanner and parser under PyYAML's composer (the Python one, with the depth
+        limit, not libyaml's own), constructor and resolver: the nodes and values of the safe loader."""
+
+        def __init__(self, stream):
+            CParser.__init__(self, stream)
+            Composer.__init__(self)
+            SafeConstructor.__init__(self)
+            Resolver.__init__(self)
+            self._where = []
 
 
 def _short(text: str, limit: int = 40) -> str:
@@ -137,10 +170,22 @@ def check_nodes(root: Node) -> None:
         stack.extend((c, p, False) for c, p in reversed(list(_children(node, path))))
 
 
-def load(text: str):
+def load(text: str, *, libyaml: bool = True):
     """The one document in ``text`` as plain Python values (dict, list, str, int, float, bool,
-    None, dates). Raises :class:`YamlFault` past a limit and ``yaml.YAMLError`` on bad syntax."""
-    loader = _Loader(text)
+    None, dates). Raises :class:`YamlFault` past a limit and ``yaml.YAMLError`` on bad syntax
+    (PyYAML's own, also where libyaml read the file first). ``libyaml=False`` reads with PyYAML's
+    parser alone, as an install without libyaml does."""
+    fast = libyaml and CParser is not None
+    try:
+        return _read(_FastLoader(text) if fast else _Loader(text))
+    except yaml.YAMLError:
+        if not fast:
+            raise
+        return _read(_Loader(text))          # PyYAML's parser says what is wrong, in its own words
+
+
+def _read(loader):
+    """The document ``loader`` composes, within the limits, as Python values."""
     try:
         root = loader.get_single_node()
         if root is None:

@@ -9,6 +9,10 @@ A failure prints the case number and its mutations, which the seed reproduces. T
 the first FAST_CASES of the seeded stream, the slow tier the next CASES after them. A numpy
 RuntimeWarning on the way (a division the model did not guard) is an error: the CLI shows Python's
 warnings when Python is told to (``sys.warnoptions``), and the test tells it.
+
+The same cases hold hwgen's YAML reader (libyaml's parser first, PyYAML's for an error) to what
+PyYAML's own parser makes of each text: the same values, or the same fault or error word for word
+(the fast tier the first PARSER_CASES, the slow tier all the others).
 """
 from __future__ import annotations
 
@@ -19,12 +23,15 @@ import sys
 import pytest
 import yaml
 
+from hwgen import yamlfile
+
 from .conftest import PARAMS
 from .test_hostile import FOLLOWING, run_cli
 
 SEED = 2026
 FAST_CASES = 60          # about 5 s of CPU: a fifth of them build a plan and print its routing
 CASES = 300
+PARSER_CASES = 20        # the fast tier's cases of the two parsers compared (the slow tier: all the others)
 SOURCES = {name: (PARAMS / f"{name}.yaml").read_text() for name in ("prototype", "paper-table2")}
 
 VALUES = [0, -1, 1, 2, 0.5, 1e-9, 1e9, 1e308, -1e308, float("nan"), float("inf"), True, False, None, "", "x",
@@ -170,6 +177,36 @@ def _run(tmp_path, first: int, count: int) -> tuple[dict[int, int], list[str]]:
             failures.append(f"case {n} ({source}: {'; '.join(steps)}): {problem}")
     print(f"fuzz outcomes by exit code: {dict(sorted(outcomes.items()))}")
     return outcomes, failures
+
+
+def _read(text: str, libyaml: bool) -> str:
+    """What hwgen's reader makes of the text, with libyaml first or PyYAML's parser alone: the
+    values (their repr: NaN equals NaN), or the fault or syntax error, its class and its words."""
+    try:
+        return repr(yamlfile.load(text, libyaml=libyaml))
+    except (yaml.YAMLError, yamlfile.YamlFault) as e:
+        return f"{type(e).__name__}: {e}"
+
+
+def _parsers_disagree(first: int, count: int) -> list[str]:
+    rng = random.Random(SEED)
+    cases = [mutate(rng) for _ in range(first + count)][first:]
+    return [f"case {first + n} ({source}: {'; '.join(steps)}): {fast[:200]} | {pure[:200]}"
+            for n, (source, text, steps) in enumerate(cases)
+            if (fast := _read(text, True)) != (pure := _read(text, False))]
+
+
+def test_libyaml_reads_every_mutated_design_as_pyyaml_reads_it():
+    """A design is parsed by libyaml (PyYAML's own parser only for its error): over the fuzz cases,
+    both give the same values, fault or error, word for word."""
+    if yamlfile.CParser is None:
+        pytest.skip("PyYAML without libyaml: every design is read by its own parser, nothing to compare")
+    assert not _parsers_disagree(0, PARSER_CASES)
+
+
+@pytest.mark.slow
+def test_libyaml_reads_many_more_mutated_designs_as_pyyaml_reads_them():
+    assert not _parsers_disagree(PARSER_CASES, FAST_CASES + CASES - PARSER_CASES)
 
 
 @pytest.fixture
