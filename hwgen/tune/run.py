@@ -63,6 +63,10 @@ UNMEASURED = 1.0
 # to the base's neighbourhood)
 FEASIBLE_ENOUGH = 0.25
 LOCAL_SHARE = 0.8           # of the trials, moves from the incumbent (:class:`_Moves`); measured in docs/sweeps.md
+# a climb from the one best trial stalls on its ridge (the prototype: 1.12x and 1.26x flat for the last
+# 250 of 600 trials): this share of the moves starts from another of the few best passing trials
+TOP_K = 5
+RESTART_SHARE = 0.25
 JOURNAL = "journal.log"
 
 
@@ -506,7 +510,9 @@ class _Moves:
     leaves unset (a pre-tension the protocol sets) drawn by the sampler at each move (the prototype's
     base sits on its own torsion bound, and trial 0, its protocol tensions on the grid, 0.3 % under
     it: 109 moves from trial 0 found nothing that passes); while none is feasible, the trial nearest
-    feasibility (the least sum of its constraints). No moves for a front or for the random baseline,
+    feasibility (the least sum of its constraints). A share of the moves from a passing design changes
+    one tendon's every value (:data:`hwgen.tune.local.WHOLE_TENDON`), and a share (:data:`RESTART_SHARE`)
+    starts from another of the :data:`TOP_K` best passing trials. No moves for a front or for the random baseline,
     nor once feasible trials are no longer scarce (:meth:`scarce`)."""
 
     def __init__(self, loaded: Loaded, study, dists: dict, base: dict):
@@ -519,6 +525,7 @@ class _Moves:
         told = len(study.get_trials(deepcopy=False, states=(TrialState.COMPLETE,)))
         self.rng = np.random.default_rng([loaded.spec.seed, told, 44])
         self.incumbent: tuple | None = None          # (feasible, rank, params)
+        self.top: list[tuple[float, dict]] = []      # the best passing trials told: (rank, params), best first
         self.told = self.passed = 0
         values, cons, ok = score(loaded, base, base)
         if ok:
@@ -531,8 +538,19 @@ class _Moves:
         self.told += 1
         self.passed += ok
         rank = self.sign * values[0] if ok else -sum(cons)
-        if len(params) == len(self.dists) and (self.incumbent is None or (ok, rank) > self.incumbent[:2]):
+        if len(params) != len(self.dists):
+            return
+        if self.incumbent is None or (ok, rank) > self.incumbent[:2]:
             self.incumbent = (ok, rank, dict(params))
+        if ok and all(p != params for _, p in self.top):
+            self.top = sorted([*self.top, (rank, dict(params))], key=lambda e: -e[0])[:TOP_K]
+
+    def start(self) -> tuple[bool, dict]:
+        """(whether it passes, the values) of the design the next move starts from: the incumbent, or,
+        for a :data:`RESTART_SHARE` of the moves, another of the :data:`TOP_K` best passing trials."""
+        if len(self.top) > 1 and self.rng.random() < RESTART_SHARE:
+            return True, self.top[1 + int(self.rng.integers(len(self.top) - 1))][1]
+        return self.incumbent[0], self.incumbent[2]
 
     def scarce(self) -> bool:
         """Whether feasible trials are still scarce (:data:`FEASIBLE_ENOUGH`): moves while they are."""
@@ -542,8 +560,9 @@ class _Moves:
         if self.queued > 0:
             self.queued -= 1
         elif self.share > 0 and self.incumbent is not None and self.scarce() and self.rng.random() < self.share:
-            most = local.MOST_CHANGED if self.incumbent[0] else 1      # toward feasibility: one change at a time
-            self.study.enqueue_trial(local.neighbour(self.dists, self.incumbent[2], self.rng, most),
+            ok, values = self.start()
+            most, whole = (local.MOST_CHANGED, local.WHOLE_TENDON) if ok else (1, 0.0)   # toward feasibility: one change at a time
+            self.study.enqueue_trial(local.neighbour(self.dists, values, self.rng, most, whole),
                                      user_attrs={"move": True}, skip_if_exists=False)
         return self.study.ask(self.dists)
 
