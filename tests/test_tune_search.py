@@ -105,12 +105,19 @@ def test_a_whole_tendon_move_changes_one_tendons_numbers_together():
 
 
 def test_the_tune_screens_the_stiffening_hwgen_check_fails():
-    """The lab robot states 2.5× (its base layer's check.min_stiffening): its trials are judged on
-    it with the statics, as hwgen check judges the build, the figure the row's own states' ratio."""
+    """The lab robot held to the prototype's 2.5× (``check.min_stiffening`` of its base layer, before
+    the lab stated its own 1.5×): its trials are judged on it with the statics, as hwgen check judges
+    the build, the figure the row's own states' ratio; on the lab's own floor its base passes."""
+    import copy
     loaded = derive.load(LAB, "stiffness")
     assert tune_run.judges_stiffening(loaded.spec.goal)
     from hwgen.sweep.spec import resolve_doc
-    plan = make_plan(resolve_doc(loaded.base, -1, (), "lab").design)
+    own = make_plan(resolve_doc(loaded.base, -1, (), "lab").design)
+    assert own.check.min_stiffening == 1.5
+    assert not results.statics(own, loaded.states, judge=True).get("statics_failures")
+    doc = copy.deepcopy(loaded.base)
+    doc["check"]["min_stiffening"] = 2.5
+    plan = make_plan(resolve_doc(doc, -1, (), "lab").design)
     got = results.statics(plan, loaded.states, judge=True)
     figs = got["statics"]
     tip = next(f for f in got["statics_failures"] if f["id"] == "stiffening.tip")

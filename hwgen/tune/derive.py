@@ -73,7 +73,7 @@ def fixed_terminations(design: params.Design, free: list[tune_spec.Free]) -> dic
     out = {}
     for f in free:
         if f.path.endswith(".termination.diameter"):
-            i = int(f.path.split("[")[1].split("]")[0])
+            i = designfile.parse_path(f.path)[1]
             if design.tendons[i].termination is None:
                 out[f"tendons[{i}].termination"] = design.tendon_material.termination.model_dump(exclude_none=True)
     return out

@@ -28,6 +28,8 @@ import math
 
 import numpy as np
 
+from ..designfile import parse_path
+
 SCALES = (0.02, 0.06, 0.2)      # the normal step's spread, a share of the parameter's range
 MOST_CHANGED = 3                # free parameters changed by one move, at most
 WHOLE_TENDON = 0.3              # of the moves from a passing incumbent, those that change one tendon's every value
@@ -56,9 +58,10 @@ def _number(dist, v: float, rng: np.random.Generator, scale: float) -> float | i
     return int(x) if isinstance(lo, int) and isinstance(step, int) else round(float(x), 9)
 
 
-def tendon_of(name: str) -> str:
-    """The tendon a free parameter belongs to (``tendons[2]`` of ``tendons[2].routing.function.a``)."""
-    return name.split(".", 1)[0]
+def tendon_of(name: str) -> tuple:
+    """The tendon a free parameter belongs to (``('tendons', 2)`` of ``tendons[2].routing.function.a``;
+    another field, its first key)."""
+    return tuple(parse_path(name)[:2])
 
 
 def _picks(names: list, rng: np.random.Generator, most: int, whole: float) -> tuple[list, float]:

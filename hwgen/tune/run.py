@@ -39,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..designfile import parse_path
 from ..errors import InputError
 from ..sweep import levels
 from ..sweep.run import pool
@@ -195,7 +196,7 @@ def enqueue_base(loaded: Loaded, study, base: dict) -> None:
     start = {}
     for n, v in zip(loaded.names, loaded.base_values):
         if v is None and n.endswith(".pretension_n"):
-            i = int(n.split("[")[1].split("]")[0])
+            i = parse_path(n)[1]
             v = _on_grid(dists[n], set_n.get(loaded.base["tendons"][i].get("name")))
         if _within(dists[n], v):
             start[n] = v
