@@ -67,7 +67,13 @@ LOCAL_SHARE = 0.8           # of the trials, moves from the incumbent (:class:`_
 # a climb from the one best trial stalls on its ridge (the prototype: 1.12x and 1.26x flat for the last
 # 250 of 600 trials): this share of the moves starts from another of the few best passing trials
 TOP_K = 5
-RESTART_SHARE = 0.25
+RESTART_SHARE = 0.2
+# the base sits on its own torsion bound, and most stiffer moves from it pass every check and miss that
+# bound by a little (a drawn tension moves the torsion across it): this share of the moves starts from
+# the stiffest such near miss (checks passing, bounds missed by at most NEAR_MISS in all, relative),
+# stiffer than the incumbent, one value changed, as from an incumbent that does not pass yet
+REPAIR_SHARE = 0.25
+NEAR_MISS = 0.05
 JOURNAL = "journal.log"
 
 
@@ -512,8 +518,9 @@ class _Moves:
     base sits on its own torsion bound, and trial 0, its protocol tensions on the grid, 0.3 % under
     it: 109 moves from trial 0 found nothing that passes); while none is feasible, the trial nearest
     feasibility (the least sum of its constraints). A share of the moves from a passing design changes
-    one tendon's every value (:data:`hwgen.tune.local.WHOLE_TENDON`), and a share (:data:`RESTART_SHARE`)
-    starts from another of the :data:`TOP_K` best passing trials. No moves for a front or for the random baseline,
+    one tendon's every value (:data:`hwgen.tune.local.WHOLE_TENDON`); a share (:data:`REPAIR_SHARE`)
+    starts from the stiffest near miss, and a share (:data:`RESTART_SHARE`) from another of the
+    :data:`TOP_K` best passing trials (:meth:`start`). No moves for a front or for the random baseline,
     nor once feasible trials are no longer scarce (:meth:`scarce`)."""
 
     def __init__(self, loaded: Loaded, study, dists: dict, base: dict):
@@ -527,6 +534,7 @@ class _Moves:
         self.rng = np.random.default_rng([loaded.spec.seed, told, 44])
         self.incumbent: tuple | None = None          # (feasible, rank, params)
         self.top: list[tuple[float, dict]] = []      # the best passing trials told: (rank, params), best first
+        self.near: tuple[float, dict] | None = None  # the stiffest near miss told (:data:`NEAR_MISS`): (rank, params)
         self.told = self.passed = 0
         values, cons, ok = score(loaded, base, base)
         if ok:
@@ -545,11 +553,18 @@ class _Moves:
             self.incumbent = (ok, rank, dict(params))
         if ok and all(p != params for _, p in self.top):
             self.top = sorted([*self.top, (rank, dict(params))], key=lambda e: -e[0])[:TOP_K]
+        near = self.sign * values[0]
+        if not ok and cons[0] <= 0 and sum(cons[1:]) <= NEAR_MISS and (self.near is None or near > self.near[0]):
+            self.near = (near, dict(params))
 
     def start(self) -> tuple[bool, dict]:
-        """(whether it passes, the values) of the design the next move starts from: the incumbent, or,
-        for a :data:`RESTART_SHARE` of the moves, another of the :data:`TOP_K` best passing trials."""
-        if len(self.top) > 1 and self.rng.random() < RESTART_SHARE:
+        """(whether it passes, the values) of the design the next move starts from: the incumbent; for a
+        :data:`REPAIR_SHARE` of the moves, the stiffest near miss when it is stiffer than the incumbent;
+        for a :data:`RESTART_SHARE`, another of the :data:`TOP_K` best passing trials."""
+        r = self.rng.random()
+        if self.incumbent[0] and self.near is not None and self.near[0] > self.incumbent[1] and r < REPAIR_SHARE:
+            return False, self.near[1]
+        if len(self.top) > 1 and r >= 1 - RESTART_SHARE:
             return True, self.top[1 + int(self.rng.integers(len(self.top) - 1))][1]
         return self.incumbent[0], self.incumbent[2]
 
