@@ -71,7 +71,8 @@ RESTART_SHARE = 0.2
 # the base sits on its own torsion bound, and most stiffer moves from it pass every check and miss that
 # bound by a little (a drawn tension moves the torsion across it): this share of the moves starts from
 # the stiffest such near miss (checks passing, bounds missed by at most NEAR_MISS in all, relative),
-# stiffer than the incumbent, one value changed, as from an incumbent that does not pass yet
+# stiffer than the incumbent, and moves one of its pre-tensions: a tension moves the statics (the
+# bounds) and leaves the geometry the checks passed (eq. (2), walls, overlaps) as it is
 REPAIR_SHARE = 0.25
 NEAR_MISS = 0.05
 JOURNAL = "journal.log"
@@ -535,6 +536,7 @@ class _Moves:
         self.incumbent: tuple | None = None          # (feasible, rank, params)
         self.top: list[tuple[float, dict]] = []      # the best passing trials told: (rank, params), best first
         self.near: tuple[float, dict] | None = None  # the stiffest near miss told (:data:`NEAR_MISS`): (rank, params)
+        self.tensions = [n for n in dists if n.endswith(".pretension_n")] or None
         self.told = self.passed = 0
         values, cons, ok = score(loaded, base, base)
         if ok:
@@ -557,16 +559,17 @@ class _Moves:
         if not ok and cons[0] <= 0 and sum(cons[1:]) <= NEAR_MISS and (self.near is None or near > self.near[0]):
             self.near = (near, dict(params))
 
-    def start(self) -> tuple[bool, dict]:
-        """(whether it passes, the values) of the design the next move starts from: the incumbent; for a
-        :data:`REPAIR_SHARE` of the moves, the stiffest near miss when it is stiffer than the incumbent;
+    def start(self) -> tuple[bool, dict, list | None]:
+        """(whether it passes, the values, the names a move may change: None for any) of the design the
+        next move starts from: the incumbent; for a :data:`REPAIR_SHARE` of the moves, the stiffest near
+        miss when it is stiffer than the incumbent (its pre-tensions, where it has any, to move);
         for a :data:`RESTART_SHARE`, another of the :data:`TOP_K` best passing trials."""
         r = self.rng.random()
         if self.incumbent[0] and self.near is not None and self.near[0] > self.incumbent[1] and r < REPAIR_SHARE:
-            return False, self.near[1]
+            return False, self.near[1], self.tensions
         if len(self.top) > 1 and r >= 1 - RESTART_SHARE:
-            return True, self.top[1 + int(self.rng.integers(len(self.top) - 1))][1]
-        return self.incumbent[0], self.incumbent[2]
+            return True, self.top[1 + int(self.rng.integers(len(self.top) - 1))][1], None
+        return self.incumbent[0], self.incumbent[2], None
 
     def scarce(self) -> bool:
         """Whether feasible trials are still scarce (:data:`FEASIBLE_ENOUGH`): moves while they are."""
@@ -576,9 +579,9 @@ class _Moves:
         if self.queued > 0:
             self.queued -= 1
         elif self.share > 0 and self.incumbent is not None and self.scarce() and self.rng.random() < self.share:
-            ok, values = self.start()
+            ok, values, among = self.start()
             most, whole = (local.MOST_CHANGED, local.WHOLE_TENDON) if ok else (1, 0.0)   # toward feasibility: one change at a time
-            self.study.enqueue_trial(local.neighbour(self.dists, values, self.rng, most, whole),
+            self.study.enqueue_trial(local.neighbour(self.dists, values, self.rng, most, whole, among),
                                      user_attrs={"move": True}, skip_if_exists=False)
         return self.study.ask(self.dists)
 
