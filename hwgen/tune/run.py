@@ -558,17 +558,17 @@ class _Moves:
         if not ok and sum(cons) <= NEAR_MISS and (self.near is None or near > self.near[0]):
             self.near = (near, dict(params))
 
-    def start(self) -> tuple[bool, dict, list | None]:
-        """(whether it passes, the values, the names a move may change: None for any) of the design the
-        next move starts from: the incumbent; for a :data:`REPAIR_SHARE` of the moves, the stiffest near
-        miss when it is stiffer than the incumbent;
-        for a :data:`RESTART_SHARE`, another of the :data:`TOP_K` best passing trials."""
+    def start(self) -> tuple[bool, dict]:
+        """(whether it passes, the values) of the design the next move starts from: the incumbent; for a
+        :data:`REPAIR_SHARE` of the moves, the stiffest near miss when it is stiffer than the incumbent
+        (one value moved, as toward feasibility); for a :data:`RESTART_SHARE`, another of the
+        :data:`TOP_K` best passing trials."""
         r = self.rng.random()
         if self.incumbent[0] and self.near is not None and self.near[0] > self.incumbent[1] and r < REPAIR_SHARE:
-            return False, self.near[1], None
+            return False, self.near[1]
         if len(self.top) > 1 and r >= 1 - RESTART_SHARE:
-            return True, self.top[1 + int(self.rng.integers(len(self.top) - 1))][1], None
-        return self.incumbent[0], self.incumbent[2], None
+            return True, self.top[1 + int(self.rng.integers(len(self.top) - 1))][1]
+        return self.incumbent[0], self.incumbent[2]
 
     def scarce(self) -> bool:
         """Whether feasible trials are still scarce (:data:`FEASIBLE_ENOUGH`): moves while they are."""
@@ -578,9 +578,10 @@ class _Moves:
         if self.queued > 0:
             self.queued -= 1
         elif self.share > 0 and self.incumbent is not None and self.scarce() and self.rng.random() < self.share:
-            ok, values, among = self.start()
-            most, whole = (local.MOST_CHANGED, local.WHOLE_TENDON) if ok else (1, 0.0)   # toward feasibility: one change at a time
-            self.study.enqueue_trial(local.neighbour(self.dists, values, self.rng, most, whole, among),
+            ok, values = self.start()
+            # toward feasibility, one value at a time
+            most, whole = (local.MOST_CHANGED, local.WHOLE_TENDON) if ok else (1, 0.0)
+            self.study.enqueue_trial(local.neighbour(self.dists, values, self.rng, most, whole),
                                      user_attrs={"move": True}, skip_if_exists=False)
         return self.study.ask(self.dists)
 
