@@ -76,11 +76,12 @@ def _picks(names: list, rng: np.random.Generator, most: int, whole: float) -> tu
 
 
 def neighbour(dists: dict, values: dict, rng: np.random.Generator, most: int = MOST_CHANGED,
-              whole: float = 0.0) -> dict:
+              whole: float = 0.0, among: list | None = None) -> dict:
     """Parameters a move from ``values`` (name -> value over the distributions ``dists``): at most
-    ``most`` of them changed, or, for a share ``whole`` of the moves, one tendon's every value (see the
-    module's docstring). A parameter with no value (the base leaves it unset) is drawn whole."""
-    picks, choice_p = _picks(list(dists), rng, most, whole)
+    ``most`` of them changed (of the names ``among``, where given), or, for a share ``whole`` of the
+    moves, one tendon's every value (see the module's docstring). A parameter with no value (the base
+    leaves it unset) is drawn whole."""
+    picks, choice_p = _picks(list(among or dists), rng, most, whole)
     scale = SCALES[int(rng.integers(len(SCALES)))]
     out = dict(values)
     for name in picks:
