@@ -86,6 +86,24 @@ def test_a_move_stays_in_the_space_on_its_grid_and_changes_one_to_three_values()
     assert changed.count(1) > changed.count(2) > 0 and changed.count(3) > 0      # 1 half the time
 
 
+def test_a_whole_tendon_move_changes_one_tendons_numbers_together():
+    """A share of the moves from a passing design changes every value of one tendon (a helix's half
+    turns with its phase and amplitude): all its numbers move, no other tendon's value does."""
+    loaded = derive.load(PROTOTYPE, "stiffness")
+    dists = tune_run.distributions(loaded)
+    start = {n: (v if tune_run._within(dists[n], v) else dists[n].low) for n, v in zip(loaded.names, loaded.base_values)}
+    rng = np.random.default_rng(1)
+    wholes = 0
+    for _ in range(200):
+        got = local.neighbour(dists, start, rng, whole=1.0)
+        moved = {local.tendon_of(n) for n in dists if got[n] != start[n]}
+        assert len(moved) == 1 and all(tune_run._within(dists[n], v) for n, v in got.items())
+        [tendon] = moved
+        numbers = [n for n in dists if local.tendon_of(n) == tendon and getattr(dists[n], "choices", None) is None]
+        wholes += all(got[n] != start[n] for n in numbers)
+    assert wholes >= 180          # a number stays only where a step is clamped at its bound
+
+
 def test_the_tune_screens_the_stiffening_hwgen_check_fails():
     """The lab robot states 2.5× (its base layer's check.min_stiffening): its trials are judged on
     it with the statics, as hwgen check judges the build, the figure the row's own states' ratio."""

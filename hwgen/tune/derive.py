@@ -27,8 +27,10 @@ from an earlier search's answers.
     most of them such; a push at the tip then has the lever ∫ a·cos(kπs/L + φ)(L - s) ds = -aL² sin φ/(kπ)
     at even k, largest across the circle's quarter turns, where odd k and a phase of 0 or 180° give
     2aL²/(kπ)²);
-  - its pre-tension ``pretension_n``, from :data:`LEAST_TENSION_N` up to the allowable load
-    (``tendon_material.break_load`` / ``check.tendon_safety_factor``), on a :data:`TENSION_STEP_N` grid;
+  - its pre-tension ``pretension_n``, from the design's own floor (``check.taut_floor_n``, what
+    ``tendon.taut`` holds every locked tendon to, on the grid) up to the allowable load
+    (``tendon_material.break_load`` / ``check.tendon_safety_factor``), on a :data:`TENSION_STEP_N` grid
+    (a floor of its own above the check's left the prototype's base, H at 0.5 N, outside its space);
   - its termination's size ``termination.diameter``, from the material's up to :data:`BEAD_MM` more
     (a bead or a sleeve on the line: a lab's ordinary remedy for a seat that is too wide).
   A base value the rule leaves out (an even cosine k) is kept among the choices: the base is a trial.
@@ -53,7 +55,6 @@ GOALS = ("stiffness", "torsion", "pass")
 LENGTH_STEP = 0.1           # mm: amplitudes and offsets, a little over the ±0.05 mm a resin printer holds
 PHASE_STEP_DEG = 5.0        # deg: a helix's phase; 5° moves an eyelet at r = 25 mm by 2.2 mm around the disk
 TENSION_STEP_N = 0.5        # N: what a lab sets by hand on a spring scale
-LEAST_TENSION_N = 1.0       # N: below it a line through a dozen eyelets is not pulled straight (check.taut_floor_n is 0.5)
 BEAD_MM = 1.5               # mm: a bead or sleeve up to this much wider than the knot
 K_MAX = 7                   # half waves: beyond it a stiffening tendon's lever (1/k²) is under 2 % of one at k 1
 REQUIRE = ("actuation.coupling", "tendon.taut", "eyelet.shared_sliding")
@@ -72,7 +73,7 @@ def fixed_terminations(design: params.Design, free: list[tune_spec.Free]) -> dic
     out = {}
     for f in free:
         if f.path.endswith(".termination.diameter"):
-            i = int(f.path.split("[")[1].split("]")[0])
+            i = designfile.parse_path(f.path)[1]
             if design.tendons[i].termination is None:
                 out[f"tendons[{i}].termination"] = design.tendon_material.termination.model_dump(exclude_none=True)
     return out
@@ -87,6 +88,7 @@ def free_space(design: params.Design) -> list[tune_spec.Free]:
     slot_h = plan.disks[0].slot_height / 2
     height = design.backbone.height / 2
     allowable = design.tendon_material.break_load / design.check.tendon_safety_factor
+    floor = max(_grid(design.check.taut_floor_n, TENSION_STEP_N, True), TENSION_STEP_N)
     knot = design.tendon_material.termination.diameter
     out: list[tune_spec.Free] = []
     for i, t in enumerate(design.tendons):
@@ -113,8 +115,8 @@ def free_space(design: params.Design) -> list[tune_spec.Free]:
             out.append(tune_spec.Free(path=f"{at}.routing.function.phase_deg", low=0, high=360 - PHASE_STEP_DEG,
                                       step=PHASE_STEP_DEG))
         hi = _grid(allowable, TENSION_STEP_N, False)
-        if hi > LEAST_TENSION_N:
-            out.append(tune_spec.Free(path=f"{at}.pretension_n", low=LEAST_TENSION_N, high=hi, step=TENSION_STEP_N))
+        if hi > floor:
+            out.append(tune_spec.Free(path=f"{at}.pretension_n", low=floor, high=hi, step=TENSION_STEP_N))
         own = t.termination.diameter if t.termination is not None else knot
         out.append(tune_spec.Free(path=f"{at}.termination.diameter", low=min(own, knot),
                                   high=round(max(own, knot) + BEAD_MM, 6), step=LENGTH_STEP))

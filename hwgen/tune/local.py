@@ -14,6 +14,11 @@ incumbent that does not pass yet, one parameter a move: the prototype's base sit
 bound, trial 0 (its tensions on the grid) 0.3 % under it, and moves of up to three parameters from
 there found no trial that passes in 40 (each changed routing breaks eq. (2) or the torsion far more
 than the one tension that restores it).
+From an incumbent that passes, a share of the moves (:data:`WHOLE_TENDON`) changes every value of one
+tendon at once (its routing, pre-tension and termination; each choice among them half the time): the
+prototype's climbs of 1-3 values stalled at 1.12x and 1.26x with C2's and the helix's routing still the
+base's, where a helix of other half turns is stiffer only at another phase and amplitude together (at
+even k its lever is -aL² sin φ/(kπ): nothing at the base's phase 0).
 Pure: the values and the generator in, the values out (the generator is the tune's, seeded, so a
 seed draws the same moves).
 """
@@ -23,8 +28,11 @@ import math
 
 import numpy as np
 
+from ..designfile import parse_path
+
 SCALES = (0.02, 0.06, 0.2)      # the normal step's spread, a share of the parameter's range
 MOST_CHANGED = 3                # free parameters changed by one move, at most
+WHOLE_TENDON = 0.3              # of the moves from a passing incumbent, those that change one tendon's every value
 
 
 def _number(dist, v: float, rng: np.random.Generator, scale: float) -> float | int:
@@ -50,20 +58,38 @@ def _number(dist, v: float, rng: np.random.Generator, scale: float) -> float | i
     return int(x) if isinstance(lo, int) and isinstance(step, int) else round(float(x), 9)
 
 
-def neighbour(dists: dict, values: dict, rng: np.random.Generator, most: int = MOST_CHANGED) -> dict:
-    """Parameters a move from ``values`` (name -> value over the distributions ``dists``), at most
-    ``most`` of them changed: see the module's docstring. A parameter with no value (the base leaves it
-    unset) is drawn whole."""
-    names = list(dists)
+def tendon_of(name: str) -> tuple:
+    """The tendon a free parameter belongs to (``('tendons', 2)`` of ``tendons[2].routing.function.a``;
+    another field, its first key)."""
+    return tuple(parse_path(name)[:2])
+
+
+def _picks(names: list, rng: np.random.Generator, most: int, whole: float) -> tuple[list, float]:
+    """(the names a move changes, the chance each choice among them changes): one tendon's every value
+    for a share ``whole`` of the moves (choices half the time), else 1 to ``most`` names at random."""
+    tendons = sorted({tendon_of(n) for n in names})
+    if whole > 0 and len(tendons) > 1 and rng.random() < whole:
+        tendon = tendons[int(rng.integers(len(tendons)))]
+        return [n for n in names if tendon_of(n) == tendon], 0.5
     changed = min(int(rng.geometric(0.5)), most, len(names))     # 1 half the time, 2 a quarter, ...
-    picks = rng.choice(len(names), size=changed, replace=False)
+    return [names[int(i)] for i in rng.choice(len(names), size=changed, replace=False)], 1.0
+
+
+def neighbour(dists: dict, values: dict, rng: np.random.Generator, most: int = MOST_CHANGED,
+              whole: float = 0.0, among: list | None = None) -> dict:
+    """Parameters a move from ``values`` (name -> value over the distributions ``dists``): at most
+    ``most`` of them changed (of the names ``among``, where given), or, for a share ``whole`` of the
+    moves, one tendon's every value (see the module's docstring). A parameter with no value (the base
+    leaves it unset) is drawn whole."""
+    picks, choice_p = _picks(list(among or dists), rng, most, whole)
     scale = SCALES[int(rng.integers(len(SCALES)))]
     out = dict(values)
-    for i in picks:
-        name = names[int(i)]
+    for name in picks:
         dist, v = dists[name], values.get(name)
         choices = getattr(dist, "choices", None)
         if choices is not None:
+            if v in choices and choice_p < 1.0 and rng.random() >= choice_p:
+                continue
             others = [c for c in choices if c != v] or list(choices)
             out[name] = others[int(rng.integers(len(others)))]
         elif v is None or not dist.low <= v <= dist.high:
