@@ -7,6 +7,8 @@ from dataclasses import dataclass
 import numpy as np
 
 AXIS_BAND_MM = (0.05, 0.01)   # crest vertices: within this of the largest radius, first pass then second
+CREST_MIN_MM = 0.5            # a crest narrower than this along the axis found (a ring) does not fix the axis's tilt
+NORMAL_BIN = 0.005            # triangles' normals binned this finely (about 0.3°) to find a part's largest flat area
 
 
 def across(direction: np.ndarray) -> np.ndarray:
@@ -56,8 +58,23 @@ def fit_axis(mesh) -> Axis:
     """The axis of a turned part from its surface alone. First guess: the principal axis of
     inertia whose two companion moments agree best (a part with 3-fold or higher symmetry).
     Then the vertices at the largest radius (tooth tips, thread crest: tessellation puts
-    vertices on the true surface) are fitted by a cylinder in least squares, twice."""
-    from scipy.optimize import least_squares
+    vertices on the true surface) are fitted by a cylinder in least squares, twice. A part whose
+    three moments nearly agree (a wheel as long as it is wide) has no good principal axis: a guess
+    off by degrees finds its crest as a thin ring, whose cylinder fit cannot tell the axis's tilt.
+    Where the crest spans less than :data:`CREST_MIN_MM` along the axis found, the fit starts
+    again from the normal of the part's largest flat area (its faces and shoulders are square to
+    its axis), and the fit whose crest spans more is kept."""
+    v = np.asarray(mesh.vertices, dtype=float)
+    c = np.asarray(mesh.center_mass, dtype=float)
+    got = _crest_fit(v, c, _principal_guess(mesh))
+    if got.crest[1] - got.crest[0] < CREST_MIN_MM:
+        again = _crest_fit(v, c, _flat_normal(mesh))
+        if again.crest[1] - again.crest[0] > got.crest[1] - got.crest[0]:
+            return again
+    return got
+
+
+def _principal_guess(mesh) -> np.ndarray:
     comp = np.asarray(mesh.principal_inertia_components, dtype=float)
     vecs = np.asarray(mesh.principal_inertia_vectors, dtype=float)
 
@@ -65,9 +82,26 @@ def fit_axis(mesh) -> Axis:
         a, b = (comp[j] for j in range(3) if j != i)
         return abs(a - b) / max(a, b)
     d = vecs[min(range(3), key=spread)]
-    d = d / np.linalg.norm(d)
-    c = np.asarray(mesh.center_mass, dtype=float)
-    v = np.asarray(mesh.vertices, dtype=float)
+    return d / np.linalg.norm(d)
+
+
+def _flat_normal(mesh) -> np.ndarray:
+    """The normal of the largest flat area of a mesh: its triangles' normals (folded onto one
+    hemisphere) binned at :data:`NORMAL_BIN`, the bin of most area, its area-weighted mean."""
+    n = np.asarray(mesh.face_normals, dtype=float)
+    area = np.asarray(mesh.area_faces, dtype=float)
+    n = np.where((n @ np.array([0.27, 0.53, 0.80]))[:, None] < 0, -n, n)
+    _, inverse = np.unique(np.round(n / NORMAL_BIN).astype(np.int64), axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    pick = inverse == np.bincount(inverse, weights=area).argmax()
+    d = (n[pick] * area[pick, None]).sum(axis=0)
+    return d / np.linalg.norm(d)
+
+
+def _crest_fit(v: np.ndarray, c: np.ndarray, d: np.ndarray) -> Axis:
+    """The cylinder through the vertices ``v`` at the largest radius about an axis first guessed
+    along ``d`` through the centre of mass ``c``, in least squares (:data:`AXIS_BAND_MM`)."""
+    from scipy.optimize import least_squares
     p, r, rms = c, 0.0, math.inf
     for band in AXIS_BAND_MM:
         rad = Axis(p, d, 0.0, 0.0, (0.0, 0.0)).radial(v)[0]
