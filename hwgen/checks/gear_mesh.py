@@ -361,8 +361,9 @@ FILE_Z = Axis(np.zeros(3), np.array([0.0, 0.0, 1.0]), 0.0, 0.0, (0.0, 0.0))    #
 
 def _drive_checks(folder: Path, parts, plan) -> list[Check]:
     """``gear.drive_wall`` measured on the first channel's drive shaft (one shaft serves every channel),
-    remembered under its file's bytes."""
-    drives = sorted((p for p in parts if p.role == "tensioner_drive"), key=lambda p: p.channel or "")
+    remembered under its file's bytes; ``parts`` manifest records or entries."""
+    drives = sorted((p for p in map(ManifestPart.of, parts) if p.role == "tensioner_drive"),
+                    key=lambda p: p.channel or "")
     if not drives:
         return []
     drive = drives[0]
