@@ -416,8 +416,10 @@ class _Measurer:
 
     def bore(self, d: DistinctPair) -> dict:
         """The worm's thinnest wall round the bores on its axis (:func:`hwgen.checks.gear_walls.bore_wall`)."""
-        return remembered("worm bore", (d.files, d.pose), lambda: bore_wall(self._measured(d)["worm"],
-                                                                            self._measured(d)["worm_axis"]))
+        def measure():
+            m = self._measured(d)
+            return bore_wall(m["worm"], m["worm_axis"])
+        return remembered("worm bore", (d.files, d.pose), measure)
 
 
 def measure_distinct_pair(m: dict, search: float) -> dict:

@@ -28,8 +28,9 @@ import numpy as np
 
 from ..model import gear_choice
 from ..model.gearing import WormPair
-from ..model.tensioner_layout.sizes import DRIVE_HEX, DRIVE_SHAFT, KEY_SOCKET_CLEARANCE, VENT
+from ..model.tensioner_layout.sizes import DRIVE_HEX, DRIVE_SHAFT, KEY_SOCKET_CLEARANCE, VENT, key_socket
 from .base import REBUILD, Check, Fix, Screen, fix_text
+from .polygons import loop_gap, signed_area
 
 TIP_TOL_MM = 0.02             # each flank of a tip tessellated up to 0.01 mm inside the solid
 TIP_DEPTHS_MM = (0.05, 0.1, 0.15, 0.2)   # under the tip, where the width is cut, then extrapolated to it
@@ -129,35 +130,18 @@ def bore_wall(mesh, axis) -> dict:
     best = {"wall_mm": math.inf, "from_end_mm": None, "bore": None}
     for z in np.arange(lo + END_CLEAR_MM, hi - END_CLEAR_MM + 1e-9, BORE_STEP_MM):
         polys = [np.asarray(p, dtype=float) for p in solid.slice(float(z)).to_polygons()]
-        area = [_signed_area(p) for p in polys]
+        area = [signed_area(p) for p in polys]
         outer = [p for p, a in zip(polys, area) if a > 0]
         for hole, a in zip(polys, area):
             if a >= 0 or not outer:
                 continue
-            wall = min(_ring_distance(hole, o) for o in outer)
+            wall = min(loop_gap(hole, o) for o in outer)
             if wall < best["wall_mm"]:
                 perimeter = float(np.linalg.norm(np.roll(hole, -1, axis=0) - hole, axis=1).sum())
                 kind = ("hex" if perimeter ** 2 / (4 * math.pi * -a) > HEX_ROUNDNESS else
                         f"round Ø{2 * math.sqrt(-a / math.pi):.2f} mm")
                 best = {"wall_mm": wall, "from_end_mm": float(min(z - lo, hi - z)), "bore": kind}
     return best
-
-
-def _signed_area(p: np.ndarray) -> float:
-    x, y = p[:, 0], p[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
-
-
-def _ring_distance(a: np.ndarray, b: np.ndarray) -> float:
-    """The least distance between two closed outlines that do not cross: each one's corners to the
-    other's edges, both ways."""
-    def corners_to_edges(p: np.ndarray, q: np.ndarray) -> float:
-        s0, d = q, np.roll(q, -1, axis=0) - q
-        length2 = np.maximum((d * d).sum(1), 1e-30)
-        rel = p[:, None, :] - s0[None]
-        t = np.clip((rel * d[None]).sum(2) / length2[None], 0.0, 1.0)
-        return float(np.sqrt(((rel - t[..., None] * d[None]) ** 2).sum(2)).min())
-    return min(corners_to_edges(a, b), corners_to_edges(b, a))
 
 
 def _manifold(mesh, frame: np.ndarray):
@@ -215,7 +199,7 @@ def bore_check(got: dict, pair: WormPair, lay, min_wall: float, on: str) -> Chec
 def drive_wall_model(hex_key: float) -> float:
     """The drive shaft's thinnest wall as generated, mm: round the key's socket in its Ø shaft, or round
     the vent in its hex end (the vent's wall to the hexagon's flats)."""
-    socket = (DRIVE_SHAFT - (hex_key + KEY_SOCKET_CLEARANCE) * 2 / math.sqrt(3)) / 2
+    socket = (DRIVE_SHAFT - key_socket(hex_key)) / 2
     return min(socket, (DRIVE_HEX - VENT) / 2)
 
 

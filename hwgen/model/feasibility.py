@@ -23,7 +23,7 @@ from .materials import material_problem
 from .routing import sample_function
 from .specs import slot_size
 from .tensioner_layout import spool_wall_problem
-from .tensioner_layout.sizes import DRIVE_HEX, DRIVE_SHAFT, KEY_SOCKET_CLEARANCE
+from .tensioner_layout.sizes import DRIVE_HEX, DRIVE_SHAFT, KEY_SOCKET_CLEARANCE, key_socket
 
 
 SLOT = "the slot"       # the cause the problems of what stands in or around the strip's slot follow from
@@ -67,7 +67,7 @@ def _drive_problems(d: Design) -> list[tuple[str, str]]:
     process's is built, and ``gear.drive_wall`` and ``gear.bore_wall`` measure it."""
     ts = d.tensioner
     out = []
-    socket = (ts.hex_key + KEY_SOCKET_CLEARANCE) * 2 / math.sqrt(3)      # across corners
+    socket = key_socket(ts.hex_key)
     if socket >= DRIVE_SHAFT:
         largest = math.ceil((DRIVE_SHAFT * math.sqrt(3) / 2 - KEY_SOCKET_CLEARANCE) * 10 - 1) / 10
         out.append(("tensioner.hex_key", f"a {ts.hex_key:g} mm key's socket ({socket:.2f} mm across corners) breaks "

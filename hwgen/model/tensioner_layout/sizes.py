@@ -51,6 +51,13 @@ DRIVE_HEX_LENGTH = _SIZE["drive_hex_length"]
 DRIVE_FLANGE = _SIZE["drive_flange"]         # Ø, thickness
 KEY_SOCKET_CLEARANCE = 0.1   # the hex key's socket in the drive shaft, across flats over the key, mm
 KEY_SOCKET_DEPTH = 5.0       # that socket's depth from the flange's face, mm (a 2.5 mm key engages fully at 5 mm)
+
+
+def key_socket(hex_key: float) -> float:
+    """The hex key's socket in the drive shaft across its corners, mm."""
+    return (hex_key + KEY_SOCKET_CLEARANCE) * 2 / math.sqrt(3)
+
+
 VENT = 1.2                   # through every blind bore of the worm and drive: resin drains and no cup forms while printing, mm
 AXIAL_PLAY = _SIZE["axial_play"]
 POST = _SIZE["post"]
